@@ -1,0 +1,87 @@
+"""The flight-controller contract and the telemetry value type it produces."""
+
+from __future__ import annotations
+
+from collections.abc import AsyncIterator
+from dataclasses import dataclass, fields
+from typing import Any, Protocol, runtime_checkable
+
+
+@dataclass(frozen=True, slots=True)
+class Telemetry:
+    """The newest known value of every telemetry field; None where nothing has arrived yet.
+
+    Angles are degrees, positions metres (NED relative to the autopilot's local origin, i.e. home),
+    velocities m/s, times nanoseconds. ``t_mono_ns``/``t_wall_ns`` are when the last field changed on
+    this computer; ``fc_boot_ms`` is the autopilot's own clock where MAVLink carries it.
+    """
+
+    t_mono_ns: int = 0
+    t_wall_ns: int = 0
+    fc_boot_ms: int | None = None
+    lat_deg: float | None = None
+    lon_deg: float | None = None
+    abs_alt_m: float | None = None
+    rel_alt_m: float | None = None
+    roll_deg: float | None = None
+    pitch_deg: float | None = None
+    yaw_deg: float | None = None
+    north_m: float | None = None
+    east_m: float | None = None
+    down_m: float | None = None
+    vn_ms: float | None = None
+    ve_ms: float | None = None
+    vd_ms: float | None = None
+    battery_v: float | None = None
+    battery_pct: float | None = None
+    flight_mode: str | None = None
+    armed: bool | None = None
+    in_air: bool | None = None
+    gps_fix: str | None = None
+    satellites: int | None = None
+    health_ok: bool | None = None
+    heartbeat_age_s: float | None = None
+
+
+TELEMETRY_FIELDS: tuple[str, ...] = tuple(f.name for f in fields(Telemetry))
+"""Column order of ``Telemetry`` (and of telemetry.csv)."""
+
+
+@runtime_checkable
+class FlightController(Protocol):
+    """What the platform needs from a flight controller.
+
+    Every command either completes or raises a :class:`uav_tui.errors.ControllerError` carrying the
+    autopilot's answer; none is a silent no-op.
+
+    ``set_fly_vector`` returns as soon as the vector is running; the controller streams the
+    body-frame velocity setpoint at >= 10 Hz for ``t`` seconds, then sends zero and puts the vehicle
+    in a holding mode itself. A new vector replaces the running one.
+    """
+
+    description: str
+    """Human-readable: autopilot kind and connection string."""
+
+    async def connect(self, system_address: str) -> None: ...
+    async def close(self) -> None: ...
+    async def arm(self) -> None: ...
+    async def disarm(self) -> None: ...
+    async def takeoff(self, altitude_m: float | None = None) -> None: ...
+    async def land(self) -> None: ...
+    async def set_fly_vector(self, vx: float, vy: float, t: float) -> None: ...
+    async def do_orbit(self, radius_m: float, velocity_ms: float) -> None: ...
+    async def return_to_home(self) -> None: ...
+    async def hold(self) -> None: ...
+
+    @property
+    def vector_active(self) -> bool:
+        """True while a vector's setpoints are being streamed."""
+        ...
+
+    def heartbeat_age_s(self) -> float:
+        """Seconds since the last heartbeat from the autopilot (inf before the first)."""
+        ...
+
+    def telemetry(self) -> AsyncIterator[dict[str, Any]]:
+        """Partial telemetry updates keyed by :class:`Telemetry` field names, as they arrive."""
+        ...

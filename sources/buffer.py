@@ -1,0 +1,93 @@
+"""The single-slot frame buffer between a capture thread and its readers."""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True, slots=True)
+class Frame:
+    """One captured image and when it was taken.
+
+    Attributes:
+        image: BGR uint8 array, H x W x 3. Readers must not assume they own it.
+        seq: capture sequence number, 1 for the first frame of a source, rising by one per capture.
+        t_mono_ns: ``time.monotonic_ns()`` at capture (system-wide on Linux, comparable across processes).
+        t_wall_ns: ``time.time_ns()`` at capture.
+    """
+
+    image: np.ndarray
+    seq: int
+    t_mono_ns: int
+    t_wall_ns: int
+
+    @property
+    def age_s(self) -> float:
+        """Seconds since capture."""
+        return (time.monotonic_ns() - self.t_mono_ns) / 1e9
+
+
+class FrameBuffer:
+    """Holds the newest frame only: a writer replaces it, readers never see a queue.
+
+    ``put`` is called by the capture thread; ``latest`` and ``wait_newer`` by anyone.
+    Listeners are called on the capture thread after each ``put`` and must only hand off
+    (for example ``loop.call_soon_threadsafe(event.set)``).
+    """
+
+    def __init__(self) -> None:
+        self._cond = threading.Condition()
+        self._frame: Frame | None = None
+        self._read_seq = 0
+        self._listeners: list[Callable[[Frame], None]] = []
+        self.captured = 0
+        """Frames put since creation."""
+        self.overwritten = 0
+        """Frames replaced before any reader took them."""
+
+    def put(self, image: np.ndarray) -> Frame:
+        """Stamp ``image`` with the next sequence number and the capture times, and publish it."""
+        t_mono, t_wall = time.monotonic_ns(), time.time_ns()
+        with self._cond:
+            if self._frame is not None and self._frame.seq > self._read_seq:
+                self.overwritten += 1
+            self.captured += 1
+            frame = Frame(image, self.captured, t_mono, t_wall)
+            self._frame = frame
+            self._cond.notify_all()
+            listeners = tuple(self._listeners)
+        for listener in listeners:
+            listener(frame)
+        return frame
+
+    def latest(self) -> Frame | None:
+        """The newest frame, or None before the first capture. Marks it as read."""
+        with self._cond:
+            if self._frame is not None:
+                self._read_seq = max(self._read_seq, self._frame.seq)
+            return self._frame
+
+    def wait_newer(self, seq: int, timeout: float) -> Frame | None:
+        """Block up to ``timeout`` s for a frame newer than ``seq``; None if none came."""
+        with self._cond:
+            if not self._cond.wait_for(lambda: self._frame is not None and self._frame.seq > seq, timeout):
+                return None
+            assert self._frame is not None
+            self._read_seq = max(self._read_seq, self._frame.seq)
+            return self._frame
+
+    def add_listener(self, listener: Callable[[Frame], None]) -> None:
+        """Call ``listener(frame)`` on the capture thread after every put."""
+        with self._cond:
+            self._listeners.append(listener)
+
+    def remove_listener(self, listener: Callable[[Frame], None]) -> None:
+        """Stop calling ``listener``; unknown listeners are ignored."""
+        with self._cond:
+            if listener in self._listeners:
+                self._listeners.remove(listener)
