@@ -48,7 +48,7 @@ class NetworkSource(VideoCaptureSource):
 
     def __init__(self, url: str, *, open_timeout_s: float = OPEN_TIMEOUT_S,
                  read_timeout_s: float = READ_TIMEOUT_S) -> None:
-        super().__init__(url, redact(url))
+        super().__init__(redact(url), redact(url))
         self.url = url
         self.kind = urlsplit(url).scheme.lower()
         self.open_timeout_s = open_timeout_s
