@@ -18,6 +18,9 @@ import numpy as np
 DEFAULT_ALTITUDE_M = 10.0
 """Altitude of the pose used before the vehicle reports one."""
 
+MIN_CAMERA_HEIGHT_M = 0.2
+"""Camera height above the ground when the vehicle sits on it (``d = 0``): the camera is above the skids."""
+
 
 @dataclass(frozen=True, slots=True)
 class Pose:
@@ -80,10 +83,15 @@ def rotation_world_camera(pose: Pose, camera: PinholeCamera) -> np.ndarray:
     return rotation_world_body(pose.roll, pose.pitch, pose.yaw) @ rotation_body_camera(camera.tilt_deg)
 
 
+def camera_centre(pose: Pose) -> np.ndarray:
+    """The camera's NED position: the vehicle's, never lower than ``MIN_CAMERA_HEIGHT_M`` above the ground."""
+    return np.array([pose.n, pose.e, min(pose.d, -MIN_CAMERA_HEIGHT_M)])
+
+
 def ground_to_image(pose: Pose, camera: PinholeCamera) -> np.ndarray:
     """The homography taking a ground point ``(n, e, 1)`` to homogeneous image pixels."""
     r_cw = rotation_world_camera(pose, camera).T
-    t = -r_cw @ np.array([pose.n, pose.e, pose.d])
+    t = -r_cw @ camera_centre(pose)
     return camera.intrinsics @ np.column_stack([r_cw[:, 0], r_cw[:, 1], t])
 
 
@@ -111,5 +119,5 @@ def ground_sample_distance(pose: Pose, camera: PinholeCamera, pixel: tuple[float
     direction = rotation_world_camera(pose, camera) @ np.linalg.inv(camera.intrinsics) @ np.array([*pixel, 1.0])
     if direction[2] <= 1e-9:
         return None
-    distance = -pose.d / direction[2] * float(np.linalg.norm(direction))
+    distance = -camera_centre(pose)[2] / direction[2] * float(np.linalg.norm(direction))
     return distance / camera.focal_px

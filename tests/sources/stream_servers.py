@@ -241,14 +241,14 @@ class MjpegTestServer:
                 self.send_response(200)
                 self.send_header("Content-Type", "multipart/x-mixed-replace; boundary=frame")
                 self.end_headers()
-                index = 0
+                index, start = 0, time.monotonic()
                 with contextlib.suppress(OSError):
                     while not server._stopping.is_set():
                         jpeg = cv2.imencode(".jpg", server.scene.render(index))[1].tobytes()
                         self.wfile.write(b"--frame\r\nContent-Type: image/jpeg\r\n"
                                          + f"Content-Length: {len(jpeg)}\r\n\r\n".encode() + jpeg + b"\r\n")
                         index += 1
-                        server._stopping.wait(1 / server.fps)
+                        server._stopping.wait(max(0.0, start + index / server.fps - time.monotonic()))
 
             def log_message(self, *args: object) -> None:
                 pass

@@ -12,18 +12,16 @@ from sources.buffer import FrameBuffer
 from uav_tui.errors import SourceError
 
 
-def _collect(buffer: FrameBuffer, duration_s: float) -> list[int]:
-    """Capture timestamps (monotonic ns) of every frame seen in ``duration_s``."""
-    stamps, seq, end = [], 0, time.monotonic() + duration_s
+def _collect(buffer: FrameBuffer, duration_s: float) -> list[tuple[int, int]]:
+    """(seq, capture monotonic ns) of every frame the reader saw in ``duration_s``."""
+    seen, seq, end = [], 0, time.monotonic() + duration_s
     while time.monotonic() < end:
         frame = buffer.wait_newer(seq, timeout=1)
         if frame is None:
             break
-        if frame.seq != seq + 1 and seq:
-            pytest.fail(f"skipped frames {seq + 1}..{frame.seq - 1}: the reader is too slow for this check")
         seq = frame.seq
-        stamps.append(frame.t_mono_ns)
-    return stamps
+        seen.append((frame.seq, frame.t_mono_ns))
+    return seen
 
 
 def test_loops_at_end_of_file(video_file) -> None:
@@ -42,13 +40,15 @@ def test_paces_at_the_file_frame_rate(video_file) -> None:
     source = open_source(f"file:{video_file(frames=40, fps=20)}")
     try:
         assert source.get_properties()["fps"] == pytest.approx(20)
-        stamps = _collect(source.buffer, 1.2)
+        seen = _collect(source.buffer, 1.2)
     finally:
         source.close()
-    intervals_ms = [(b - a) / 1e6 for a, b in zip(stamps, stamps[1:], strict=False)]
+    # Capture timestamps come from the capture thread, so a slow reader does not distort them.
+    intervals_ms = [(t1 - t0) / 1e6 for (s0, t0), (s1, t1) in zip(seen, seen[1:], strict=False) if s1 == s0 + 1]
     assert len(intervals_ms) >= 10
     assert 35 <= statistics.median(intervals_ms) <= 70  # 50 ms per frame, generous for a loaded machine
-    assert len(stamps) <= 1.2 * 20 + 3  # never faster than the file
+    (first_seq, first_t), (last_seq, last_t) = seen[0], seen[-1]
+    assert (last_t - first_t) / 1e6 / (last_seq - first_seq) >= 40  # never faster than the file on average
 
 
 def test_realtime_off_delivers_faster_than_the_file_rate(video_file) -> None:

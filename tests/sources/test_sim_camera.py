@@ -79,6 +79,12 @@ def test_project_ground_point() -> None:
     assert project_ground_point(10, 0, Pose(), forward) == pytest.approx((160, 120 + CAMERA.focal_px))
 
 
+def test_a_landed_vehicle_still_renders_the_ground_close_up(renderer) -> None:
+    landed = renderer.render(Pose(d=0.0))
+    assert landed.std() > 5  # texture, not a degenerate fill
+    assert project_ground_point(0, 0.1, Pose(d=0.0), CAMERA)[0] == pytest.approx(160 + CAMERA.focal_px * 0.1 / 0.2)
+
+
 def test_forward_mount_sees_the_horizon_and_a_downward_one_does_not() -> None:
     forward = create_source("sim:?width=160&height=120&mount=forward&noise=0")
     down = create_source("sim:?width=160&height=120&noise=0")
