@@ -55,6 +55,7 @@ class SimCameraSource(CaptureSource):
         self.renderer: SimRenderer | None = None
         self._pacer: Pacer | None = None
         self._t0 = 0.0
+        self._t = 0.0
         self._index = 0
 
     @classmethod
@@ -87,7 +88,8 @@ class SimCameraSource(CaptureSource):
         if not self._pacer.wait():
             return None
         self.pose, self.pose_from_vehicle = self._current_pose()
-        image = self.renderer.render(self.pose, time.monotonic() - self._t0, self._index)
+        self._t = time.monotonic() - self._t0
+        image = self.renderer.render(self.pose, self._t, self._index)
         self._index += 1
         return image
 
@@ -103,6 +105,8 @@ class SimCameraSource(CaptureSource):
 
     def _extra_properties(self) -> dict[str, Any]:
         p = self.pose
-        return {"hfov": self.camera.hfov_deg, "tilt": self.camera.tilt_deg, "targets": self.target_count,
+        targets = self.renderer.targets if self.renderer else []
+        positions = [dict(zip(("n", "e"), target.position(self._t)[:2], strict=True)) for target in targets]
+        return {"hfov": self.camera.hfov_deg, "tilt": self.camera.tilt_deg, "targets": positions,
                 "pose": {"n": p.n, "e": p.e, "d": p.d, "roll": p.roll, "pitch": p.pitch, "yaw": p.yaw},
                 "pose_source": "vehicle" if self.pose_from_vehicle else "default hover at 10 m (no pose yet)"}

@@ -228,6 +228,8 @@ class MjpegTestServer:
         self._httpd: ThreadingHTTPServer | None = None
         self._thread: threading.Thread | None = None
         self._stopping = threading.Event()
+        self.frozen = threading.Event()
+        """While set, connections stay open but no data is sent: a stream that hangs."""
 
     @property
     def url(self) -> str:
@@ -244,6 +246,9 @@ class MjpegTestServer:
                 index, start = 0, time.monotonic()
                 with contextlib.suppress(OSError):
                     while not server._stopping.is_set():
+                        if server.frozen.is_set():
+                            server._stopping.wait(0.05)
+                            continue
                         jpeg = cv2.imencode(".jpg", server.scene.render(index))[1].tobytes()
                         self.wfile.write(b"--frame\r\nContent-Type: image/jpeg\r\n"
                                          + f"Content-Length: {len(jpeg)}\r\n\r\n".encode() + jpeg + b"\r\n")

@@ -48,6 +48,21 @@ def test_recovers_by_itself_when_the_stream_is_killed_and_restarted(server_fixtu
         source.close()
 
 
+def test_a_hung_stream_is_detected_by_the_read_timeout(mjpeg_server, fast_retry) -> None:
+    source = NetworkSource(mjpeg_server.url, read_timeout_s=1.0)
+    assert source.open()
+    try:
+        assert source.buffer.wait_newer(2, timeout=10) is not None
+        mjpeg_server.frozen.set()  # the connection stays open, nothing arrives
+        assert _wait_for(lambda: source.get_properties()["stalled_since"] is not None, timeout=8)
+        stalled_at = source.get_properties()["frames_captured"]
+        mjpeg_server.frozen.clear()
+        assert source.buffer.wait_newer(stalled_at + 2, timeout=15) is not None, source.get_properties()
+        assert source.get_properties()["stalled_since"] is None
+    finally:
+        source.close()
+
+
 def test_rtsp_properties_and_low_latency_options(rtsp_server) -> None:
     source = open_source(rtsp_server.url)
     try:

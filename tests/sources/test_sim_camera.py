@@ -138,12 +138,17 @@ def test_pose_provider_drives_the_view_and_failures_are_reported() -> None:
         source.close()
 
 
-def test_no_pose_renders_the_default_hover() -> None:
-    source = create_source("sim:?width=64&height=48")
+def test_no_pose_renders_the_default_hover_and_targets_are_reported() -> None:
+    source = create_source("sim:?width=160&height=120&targets=2&noise=0")
     assert source.open()
     try:
-        assert source.buffer.wait_newer(0, 5) is not None
-        assert source.get_properties()["pose_source"].startswith("default hover at 10 m")
+        frame = source.buffer.wait_newer(0, 5)
+        assert frame is not None
+        props = source.get_properties()
+        assert props["pose_source"].startswith("default hover at 10 m")
+        assert len(props["targets"]) == 2
+        first = props["targets"][0]
+        assert math.hypot(first["n"], first["e"]) == pytest.approx(6.0)  # the first ring
     finally:
         source.close()
 
