@@ -24,6 +24,9 @@ logger = logging.getLogger(__name__)
 PIXEL_FORMAT = "RGB888"
 """Picamera2 format whose arrays are BGR in memory (see the module docstring)."""
 
+FRAME_TIMEOUT_S = 2.0
+"""A camera that delivers nothing for this long (or three frame times) is stalled and gets reopened."""
+
 INSTALL_HINT = ("picamera2 is not available: on Raspberry Pi OS run `sudo apt install python3-picamera2` and "
                 "create the virtual environment with `python3 -m venv --system-site-packages .venv` so it can see "
                 "the system package")
@@ -61,6 +64,7 @@ class PicamSource(CaptureSource):
             self.controls["AnalogueGain"] = gain
         self.sensor_model: str | None = None
         self._camera: Any = None
+        self._frame_timeout_s = FRAME_TIMEOUT_S
 
     @classmethod
     def from_uri(cls, uri: SourceUri, **_context: Any) -> PicamSource:
@@ -99,10 +103,17 @@ class PicamSource(CaptureSource):
         self.width, self.height = granted["main"]["size"]
         limits = granted.get("controls", {}).get("FrameDurationLimits")
         self.fps = 1e6 / limits[0] if limits else fps
+        self._frame_timeout_s = max(FRAME_TIMEOUT_S, 3 * self.controls.get("ExposureTime", 0) / 1e6, 3 / self.fps)
         self.sensor_model = camera.camera_properties.get("Model")
 
     def _grab(self) -> np.ndarray | None:
-        return self._camera.capture_array("main")
+        # Asynchronous request + bounded wait: a camera that stops delivering becomes a stall
+        # (and a reopen by the capture base) instead of a thread blocked forever.
+        job = self._camera.capture_array("main", wait=False)
+        try:
+            return self._camera.wait(job, timeout=self._frame_timeout_s)
+        except TimeoutError:
+            return None
 
     def _close_device(self) -> None:
         camera, self._camera = self._camera, None

@@ -51,6 +51,7 @@ def picamera2_standin(monkeypatch: pytest.MonkeyPatch) -> type[Picamera2StandIn]
     module.Picamera2 = Picamera2StandIn  # type: ignore[attr-defined]
     monkeypatch.setitem(sys.modules, "picamera2", module)
     Picamera2StandIn.instances.clear()
+    monkeypatch.setattr(Picamera2StandIn, "frames_before_stall", [])
     return Picamera2StandIn
 
 

@@ -9,6 +9,7 @@ It is not a camera: it fails loudly when used out of order, as the real one does
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from typing import Any, ClassVar
 
 import numpy as np
@@ -17,11 +18,27 @@ RED, BLUE = (255, 0, 0), (0, 0, 255)
 """Scene colours as (R, G, B)."""
 
 
+class _Job:
+    """Like picamera2's job: ``get_result(timeout)`` raises TimeoutError when nothing came in time."""
+
+    def __init__(self, produce: Callable[[], np.ndarray | None]) -> None:
+        self._produce = produce
+
+    def get_result(self, timeout: float | None = None) -> np.ndarray:
+        result = self._produce()
+        if result is None:
+            time.sleep(timeout or 0)
+            raise TimeoutError
+        return result
+
+
 class Picamera2StandIn:
     """Stand-in for ``Picamera2(camera_num, tuning=None)``."""
 
     instances: ClassVar[list[Picamera2StandIn]] = []
     cameras: ClassVar[int] = 1
+    frames_before_stall: ClassVar[list[int | None]] = []
+    """Per instance in creation order: frames it delivers before going silent (None or absent: forever)."""
 
     def __init__(self, camera_num: int = 0, tuning: dict[str, Any] | None = None) -> None:
         if camera_num >= self.cameras:
@@ -32,6 +49,8 @@ class Picamera2StandIn:
         self.controls: dict[str, Any] = {}
         self.started = False
         self.stop_calls = self.close_calls = 0
+        plan = Picamera2StandIn.frames_before_stall
+        self.frames_left = plan[len(self.instances)] if len(self.instances) < len(plan) else None
         Picamera2StandIn.instances.append(self)
 
     @staticmethod
@@ -64,9 +83,21 @@ class Picamera2StandIn:
             raise RuntimeError("Camera has not been configured")
         self.started = True
 
-    def capture_array(self, name: str = "main") -> np.ndarray:
+    def capture_array(self, name: str = "main", wait: bool | None = None) -> np.ndarray | _Job:
+        """With ``wait=False`` returns a job for :meth:`wait`, as the real one does."""
         if not self.started:
             raise RuntimeError("Camera is not running")
+        job = _Job(lambda: self._next_frame(name))
+        return job if wait is False else job.get_result()
+
+    def wait(self, job: _Job, timeout: float | None = None) -> np.ndarray:
+        return job.get_result(timeout)
+
+    def _next_frame(self, name: str) -> np.ndarray | None:
+        if self.frames_left is not None:
+            if self.frames_left <= 0:
+                return None  # the sensor stopped delivering
+            self.frames_left -= 1
         frame_us = self.controls.get("FrameDurationLimits", (33333, 33333))[0]
         time.sleep(frame_us / 1e6)  # the real call waits for the next frame
         assert self.config is not None

@@ -49,6 +49,21 @@ def test_close_stops_and_closes_the_camera_once(picamera2_standin) -> None:
     assert (camera.stop_calls, camera.close_calls, camera.started) == (1, 1, False)
 
 
+def test_a_silent_camera_is_a_stall_and_gets_reopened(picamera2_standin, fast_retry, monkeypatch) -> None:
+    monkeypatch.setattr("sources.picam.FRAME_TIMEOUT_S", 0.2)
+    picamera2_standin.frames_before_stall = [5]  # the first camera goes silent after 5 frames; the next is fine
+    source = open_source("picam:0?width=32&height=24&fps=100")
+    try:
+        frame = source.buffer.wait_newer(5, timeout=10)
+        assert frame is not None, source.get_properties()
+        props = source.get_properties()
+        assert props["stalled_since"] is None and "no frame" in props["last_error"]
+        first, second = picamera2_standin.instances[:2]
+        assert (first.stop_calls, first.close_calls) == (1, 1) and second.started
+    finally:
+        source.close()
+
+
 def test_missing_camera_index(picamera2_standin) -> None:
     source = create_source("picam:3")
     assert source.open() is False
