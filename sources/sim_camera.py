@@ -48,7 +48,8 @@ class SimCameraSource(CaptureSource):
         self.camera = camera or PinholeCamera()
         super().__init__(uri, f"pinhole {self.camera.hfov_deg:g} deg, tilt {self.camera.tilt_deg:g} deg")
         self.width, self.height, self.fps = self.camera.width, self.camera.height, fps
-        self.target_count, self.target_speed, self.noise, self.seed = targets, target_speed, noise, seed
+        self.targets = default_targets(targets, target_speed)
+        self.noise, self.seed = noise, seed
         self.pose_provider = pose_provider
         self.pose = Pose()
         self.pose_from_vehicle = False
@@ -77,14 +78,13 @@ class SimCameraSource(CaptureSource):
         return source
 
     def _open_device(self) -> None:
-        if self.renderer is None:
-            self.renderer = SimRenderer(self.camera, default_ground(self.seed),
-                                        default_targets(self.target_count, self.target_speed), self.noise, self.seed)
         self._pacer = Pacer(self.fps, self._stop)
         self._t0 = time.monotonic()
 
     def _grab(self) -> np.ndarray | None:
-        assert self._pacer is not None and self.renderer is not None
+        assert self._pacer is not None
+        if self.renderer is None:  # built here, on the capture thread: the first ground texture takes ~1.5 s
+            self.renderer = SimRenderer(self.camera, default_ground(self.seed), self.targets, self.noise, self.seed)
         if not self._pacer.wait():
             return None
         self.pose, self.pose_from_vehicle = self._current_pose()
@@ -105,8 +105,7 @@ class SimCameraSource(CaptureSource):
 
     def _extra_properties(self) -> dict[str, Any]:
         p = self.pose
-        targets = self.renderer.targets if self.renderer else []
-        positions = [dict(zip(("n", "e"), target.position(self._t)[:2], strict=True)) for target in targets]
+        positions = [dict(zip(("n", "e"), target.position(self._t)[:2], strict=True)) for target in self.targets]
         return {"hfov": self.camera.hfov_deg, "tilt": self.camera.tilt_deg, "targets": positions,
                 "pose": {"n": p.n, "e": p.e, "d": p.d, "roll": p.roll, "pitch": p.pitch, "yaw": p.yaw},
                 "pose_source": "vehicle" if self.pose_from_vehicle else "default hover at 10 m (no pose yet)"}
