@@ -59,6 +59,10 @@ class UavCore:
         self.started_wall_ns = 0
         self._frame_listeners: list[Callable[[ProcessedFrame], None]] = []
         self._tasks: list[asyncio.Task[Any]] = []
+        self.web: Any = None
+        """The web page's WebServer (``web.url`` has the token) when ``web`` is on, else None."""
+        self.camera_tracking: Any = None
+        """The MAVLink camera component when ``camera_mavlink`` is set, else None."""
 
     # -- lifecycle -------------------------------------------------------------------------------
 
@@ -93,6 +97,26 @@ class UavCore:
         self.state = CoreState.RUNNING
         self.events.emit("info", "platform", f"started: source {self.config.source}, processor "
                          f"{processor.info.name}, fc {self.config.fc}")
+        try:
+            await self._start_side_channels()
+        except BaseException:
+            await self._release()
+            raise
+
+    async def _start_side_channels(self) -> None:
+        """The web page and MAVLink click-to-track, when configured (aiortc is imported only then)."""
+        if self.config.web.web:
+            from uav_tui.web import WebServer
+
+            self.web = WebServer(self, self.config.web)
+            await self.web.start()
+            self.events.emit("info", "web", f"web page: {self.web.url}")
+        if self.config.web.camera_mavlink:
+            from uav_tui.web.mavlink_tracking import CameraTracking
+
+            self.camera_tracking = CameraTracking(self, self.config.web.camera_mavlink)
+            await self.camera_tracking.start()
+            self.events.emit("info", "web", f"camera tracking on {self.config.web.camera_mavlink}")
 
     async def stop(self, reason: str = "quit") -> None:
         """Hold the vehicle if a vector could be flying, then release everything. Idempotent."""
@@ -109,6 +133,9 @@ class UavCore:
         await self._release()
 
     async def _release(self) -> None:
+        for side in (self.web, self.camera_tracking):
+            if side is not None:
+                await side.stop()
         for task in self._tasks:
             task.cancel()
         await asyncio.gather(*self._tasks, return_exceptions=True)
