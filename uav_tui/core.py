@@ -12,7 +12,7 @@ import functools
 import logging
 import time
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from controllers import connect_controller
 from controllers.base import FlightController
@@ -26,6 +26,10 @@ from uav_tui.events import EventLog
 from uav_tui.status import CoreStatus
 from uav_tui.telemetry import TelemetryManager
 from uav_tui.worker import ProcessedFrame, ProcessorWorker
+
+if TYPE_CHECKING:  # aiortc and pymavlink are imported only when the side channels are switched on
+    from uav_tui.web import WebServer
+    from uav_tui.web.mavlink_tracking import CameraTracking
 
 logger = logging.getLogger(__name__)
 
@@ -59,9 +63,9 @@ class UavCore:
         self.started_wall_ns = 0
         self._frame_listeners: list[Callable[[ProcessedFrame], None]] = []
         self._tasks: list[asyncio.Task[Any]] = []
-        self.web: Any = None
+        self.web: WebServer | None = None
         """The web page's WebServer (``web.url`` has the token) when ``web`` is on, else None."""
-        self.camera_tracking: Any = None
+        self.camera_tracking: CameraTracking | None = None
         """The MAVLink camera component when ``camera_mavlink`` is set, else None."""
 
     # -- lifecycle -------------------------------------------------------------------------------

@@ -29,6 +29,7 @@ from aiortc import RTCConfiguration, RTCPeerConnection, RTCSessionDescription
 
 from uav_tui.commands import Command, parse
 from uav_tui.config import WebConfig
+from uav_tui.core import CoreState
 from uav_tui.errors import CommandError, UavError
 from uav_tui.events import Event
 from uav_tui.web.roi import roi_from_message
@@ -204,7 +205,7 @@ class WebServer:
     def _status_message(self) -> dict[str, Any]:
         source = self.core.source
         width, height = source.get_frame_size() if source is not None else (0, 0)
-        status = self.core.status().as_dict() if self.core.state.value == "running" else {}
+        status = self.core.status().as_dict() if self.core.state is CoreState.RUNNING else {}
         return {"type": "status", "status": status, "frame": [width, height], "viewers": self.video.viewers}
 
     def _on_event(self, event: Event) -> None:

@@ -3,10 +3,15 @@
 from __future__ import annotations
 
 import io
+import socket
+
+import pytest
 
 from tests.web.conftest import TOKEN, free_port
 from uav_tui.cli import build_parser
 from uav_tui.config import load_config, overrides_from_args
+from uav_tui.core import CoreState, UavCore
+from uav_tui.errors import UavError
 from uav_tui.headless import HeadlessRunner
 
 
@@ -28,8 +33,6 @@ async def test_no_ui_prints_the_url_with_the_token() -> None:
 
 
 async def test_random_token_when_none_is_configured() -> None:
-    from uav_tui.core import UavCore
-
     tokens = []
     for _ in range(2):
         core = UavCore(load_config(None, {"source": "synthetic:", "fc": "none", "record": False, "web": True,
@@ -39,3 +42,16 @@ async def test_random_token_when_none_is_configured() -> None:
         assert core.web.url.endswith(f"?token={core.web.token}")
         await core.stop()
     assert tokens[0] != tokens[1] and all(len(t) >= 20 for t in tokens)
+
+
+async def test_busy_port_fails_the_start_and_releases_everything() -> None:
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        port = taken.getsockname()[1]
+        core = UavCore(load_config(None, {"source": "synthetic:", "fc": "none", "record": False, "web": True,
+                                          "web_host": "127.0.0.1", "web_port": port}))
+        with pytest.raises(UavError, match="another --web-port"):
+            await core.start()
+    assert core.state is CoreState.STOPPED
+    assert core.source is not None and core.source.get_properties()["running"] is False
