@@ -95,8 +95,24 @@ async def test_page_streams_video_and_selects_targets(web_core: UavCore, tmp_pat
             await page.screenshot(path=str(tmp_path / "page.png"))
             shot = Path("/tmp/uav_web_page.png")
             shutil.copy(tmp_path / "page.png", shot)
+
+            # a second viewer watches the same relayed track
+            second = await context.new_page()
+            await second.goto(web_core.web.url)
+            await second.wait_for_function(f"{frames} > 5", timeout=20000)
+            assert web_core.web.video.viewers == 2
             await page.close()
+            await wait_for(lambda: web_core.web.video.viewers == 1, what="the first viewer to leave")
+            assert web_core.web.video.source is not None
+            await second.close()
+            await wait_for(lambda: web_core.web.video.viewers == 0, what="the second viewer to leave")
+            assert web_core.web.video.source is None  # no viewer: no listener, no conversion
+
+            # stopping the core with a viewer watching closes its peer connection
+            third = await context.new_page()
+            await third.goto(web_core.web.url)
+            await third.wait_for_function(f"{frames} > 5", timeout=20000)
+            await web_core.stop("test finished")
+            assert not web_core.web._peers and web_core.web.video.source is None
         finally:
             await browser.close()
-    await wait_for(lambda: web_core.web.video.viewers == 0, what="the viewer to leave")
-    assert web_core.web.video.source is None  # no viewer: no listener, no conversion
