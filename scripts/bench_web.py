@@ -35,14 +35,15 @@ CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic"
 BITS, BLOCK = 16, 16
 """The stamp: BITS blocks of BLOCK x BLOCK pixels per row, two rows."""
 
-READER_JS = """([bits, block]) => {
+READER_JS = """([bits, block, frameWidth]) => {
   const video = document.getElementById('video');
+  const scale = video.videoWidth / frameWidth;  // the stream may be scaled down from the frame
   const canvas = document.createElement('canvas');
-  canvas.width = bits * block; canvas.height = 2 * block;
+  canvas.width = Math.ceil(bits * block * scale); canvas.height = Math.ceil(2 * block * scale);
   const ctx = canvas.getContext('2d', { willReadFrequently: true });
   window.__stamps = [];
   const read = (row, i) => {
-    const px = ctx.getImageData(i * block + block / 2, row * block + block / 2, 1, 1).data;
+    const px = ctx.getImageData((i + 0.5) * block * scale, (row + 0.5) * block * scale, 1, 1).data;
     return (px[0] + px[1] + px[2]) / 3 > 128 ? 1 : 0;
   };
   const onFrame = (now, meta) => {
@@ -116,7 +117,7 @@ async def bench(seconds: float, source: str) -> dict[str, Any]:
                 pages.append(page)
                 if len(pages) == 1:
                     await asyncio.sleep(2.0)  # warm-up: encoder ramp-up, jitter buffer
-                    await page.evaluate(READER_JS, [BITS, BLOCK])
+                    await page.evaluate(READER_JS, [BITS, BLOCK, core.source.get_frame_size()[0]])
                     cpu["one_viewer"] = await cpu_percent(seconds)
                     stamps = await page.evaluate("window.__stamps")
                     shown = await page.evaluate(
