@@ -107,6 +107,7 @@ async def test_page_streams_video_and_selects_targets(web_core: UavCore, tmp_pat
             await second.close()
             await wait_for(lambda: web_core.web.video.viewers == 0, what="the second viewer to leave")
             assert web_core.web.video.source is None  # no viewer: no listener, no conversion
+            assert sum("viewer left" in e.message for e in web_core.events.recent) == 2
 
             # stopping the core with a viewer watching closes its peer connection
             third = await context.new_page()

@@ -156,7 +156,7 @@ class WebServer:
 
         @pc.on("connectionstatechange")
         async def on_state() -> None:
-            if pc.connectionState in ("failed", "closed"):
+            if pc.connectionState in ("failed", "closed") and pc in self._peers:  # once, not again on close
                 await self._close_peer(pc, track)
                 self.core.events.emit("info", "web", f"viewer left ({self.video.viewers} watching)", origin)
 
