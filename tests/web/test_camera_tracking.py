@@ -74,6 +74,11 @@ async def test_track_rectangle_and_point_reach_catch_cmd(tracking: tuple[UavCore
     origins = {e.origin for e in core.events.recent if e.kind == "command" and e.message.startswith("roi")}
     assert origins == {"mavlink:255/190"}
 
+    await station.command(mavlink.MAV_CMD_CAMERA_STOP_TRACKING)
+    ack = await station.receive("COMMAND_ACK", command=mavlink.MAV_CMD_CAMERA_STOP_TRACKING)
+    assert ack.result == mavlink.MAV_RESULT_ACCEPTED
+    await station.receive("CAMERA_TRACKING_IMAGE_STATUS", tracking_status=mavlink.CAMERA_TRACKING_STATUS_FLAGS_IDLE)
+
 
 async def test_bad_and_unknown_commands_are_refused(tracking: tuple[UavCore, GroundStation]) -> None:
     core, station = tracking

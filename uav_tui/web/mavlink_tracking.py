@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import asyncio
 import logging
+from collections.abc import Callable
 from typing import Any
 
 from pymavlink.dialects.v20 import common as mavlink
@@ -128,33 +129,32 @@ class CameraTracking:
     async def _handle_commands(self) -> None:
         while True:
             message = await self._commands.get()
-            result = await self._dispatch(message)
-            if result is not None:
-                self.mav.command_ack_send(message.command, result, target_system=message.get_srcSystem(),
-                                          target_component=message.get_srcComponent())
+            result, reply = await self._dispatch(message)
+            self.mav.command_ack_send(message.command, result, target_system=message.get_srcSystem(),
+                                      target_component=message.get_srcComponent())
+            if reply is not None:  # requested messages follow their ACK
+                reply()
 
-    async def _dispatch(self, message: Any) -> int | None:
+    async def _dispatch(self, message: Any) -> tuple[int, Callable[[], None] | None]:
+        """(MAV_RESULT, what to send after the ACK) for one COMMAND_LONG."""
         command, origin = message.command, f"mavlink:{message.get_srcSystem()}/{message.get_srcComponent()}"
         params = (message.param1, message.param2, message.param3, message.param4)
         if command == mavlink.MAV_CMD_CAMERA_TRACK_RECTANGLE:
-            return await self._select(mavlink.CAMERA_TRACKING_MODE_RECTANGLE, params, origin)
+            return await self._select(mavlink.CAMERA_TRACKING_MODE_RECTANGLE, params, origin), self._send_status
         if command == mavlink.MAV_CMD_CAMERA_TRACK_POINT:
-            return await self._select(mavlink.CAMERA_TRACKING_MODE_POINT, params, origin)
+            return await self._select(mavlink.CAMERA_TRACKING_MODE_POINT, params, origin), self._send_status
         if command == mavlink.MAV_CMD_CAMERA_STOP_TRACKING:
             self.selection = None
             self.core.events.emit("info", "command", "ground station stopped tracking (the processor keeps its "
                                   "target until the next selection)", origin)
-            self._send_status()
-            return mavlink.MAV_RESULT_ACCEPTED
+            return mavlink.MAV_RESULT_ACCEPTED, self._send_status
         requested = int(message.param1) if command == mavlink.MAV_CMD_REQUEST_MESSAGE else None
         if command == mavlink.MAV_CMD_REQUEST_CAMERA_INFORMATION or \
                 requested == mavlink.MAVLINK_MSG_ID_CAMERA_INFORMATION:
-            self._send_information()
-            return mavlink.MAV_RESULT_ACCEPTED
+            return mavlink.MAV_RESULT_ACCEPTED, self._send_information
         if requested == mavlink.MAVLINK_MSG_ID_CAMERA_TRACKING_IMAGE_STATUS:
-            self._send_status()
-            return mavlink.MAV_RESULT_ACCEPTED
-        return mavlink.MAV_RESULT_UNSUPPORTED
+            return mavlink.MAV_RESULT_ACCEPTED, self._send_status
+        return mavlink.MAV_RESULT_UNSUPPORTED, None
 
     async def _select(self, mode: int, params: tuple[float, ...], origin: str) -> int:
         source = self.core.source
@@ -173,7 +173,6 @@ class CameraTracking:
             return mavlink.MAV_RESULT_FAILED
         x, y, w, h = roi
         self.selection = (mode, (x / size[0], y / size[1], (x + w) / size[0], (y + h) / size[1]))
-        self._send_status()
         return mavlink.MAV_RESULT_ACCEPTED
 
     # -- sending ---------------------------------------------------------------------------------
