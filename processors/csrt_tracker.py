@@ -20,9 +20,17 @@ _MODES: dict[str, dict[str, Any]] = {
     # lighter CSRT (no segmentation / colour names, fewer ADMM iterations and scales: the template
     # size, which decides accuracy, is kept), SIFT on a 320-px-wide frame, capped features,
     # search every other frame while lost
-    "fast": {"sift_width": 320, "sift_features": 1500, "reacquire_every": 2,
-             "csrt": {"use_segmentation": False, "use_color_names": False, "admm_iterations": 2,
-                      "number_of_scales": 17}},
+    "fast": {
+        "sift_width": 320,
+        "sift_features": 1500,
+        "reacquire_every": 2,
+        "csrt": {
+            "use_segmentation": False,
+            "use_color_names": False,
+            "admm_iterations": 2,
+            "number_of_scales": 17,
+        },
+    },
     # the paper: default CSRT, SIFT at full resolution, unlimited features, search every frame
     "paper": {"sift_width": 0, "sift_features": 0, "reacquire_every": 1, "csrt": {}},
 }
@@ -94,7 +102,8 @@ class CSRTTrackingProcessor:
         if mode not in _MODES:
             raise ValueError(f"mode must be one of {sorted(_MODES)}, got {mode!r}")
         cfg = dict(_MODES[mode])
-        overrides = {"sift_width": sift_width, "sift_features": sift_features, "reacquire_every": reacquire_every}
+        overrides = {"sift_width": sift_width, "sift_features": sift_features}
+        overrides["reacquire_every"] = reacquire_every
         cfg.update({k: v for k, v in overrides.items() if v is not None})
         self.tmMgr = None
         self.mode = mode
@@ -211,7 +220,9 @@ class CSRTTrackingProcessor:
         if ok and self.similarity >= self.min_similarity:
             self._box = tuple(float(v) for v in bb)  # type: ignore[assignment]
         else:
-            logger.info("CSRTTrackingProcessor: target lost (csrt ok=%s, similarity %.2f)", ok, self.similarity)
+            logger.info(
+                "CSRTTrackingProcessor: target lost (csrt ok=%s, similarity %.2f)", ok, self.similarity
+            )
             self._box = None
             self._lost_frames = 0
 

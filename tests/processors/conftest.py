@@ -27,4 +27,3 @@ class FakeTelemetryManager:
 @pytest.fixture
 def tm_mgr() -> FakeTelemetryManager:
     return FakeTelemetryManager(rel_alt_m=20.0)
-
