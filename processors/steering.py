@@ -53,7 +53,7 @@ class Steering:
         if self.camera not in CAMERA_ORIENTATIONS:
             raise ValueError(f"camera must be one of {CAMERA_ORIENTATIONS}, got {self.camera!r}")
         self.max_speed = min(abs(self.max_speed), 1.0)
-        self.t = min(max(self.t, 0.05), 2.0)
+        self.t = float(min(max(self.t, 0.05), 2.0))
 
     def vector(self, box: Box, frame_size: tuple[int, int], ref_height: float | None = None) -> Vector:
         """Velocity that brings the target towards the frame centre.
@@ -87,6 +87,21 @@ class Steering:
         logger.info("Steering gain now %.2f", self.gain)
 
 
+def velocity_toward(
+    forward_m: float, right_m: float, gain: float, max_speed: float, dead_band_m: float, t: float
+) -> Vector:
+    """Proportional velocity towards a point ``forward_m``/``right_m`` away (body frame).
+
+    Speed is ``gain`` (1/s) x distance, scaled down (direction kept) so neither component exceeds
+    ``max_speed``; inside ``dead_band_m`` the velocity is zero.
+    """
+    if math.hypot(forward_m, right_m) < dead_band_m:
+        return 0.0, 0.0, t
+    vx, vy = gain * float(forward_m), gain * float(right_m)
+    k = min(1.0, max_speed / max(abs(vx), abs(vy), 1e-9))
+    return vx * k, vy * k, float(t)
+
+
 def normalised_offset(box: Box, frame_size: tuple[int, int]) -> tuple[float, float]:
     """Offset of the box centre from the frame centre, -1..1 on each axis (x right, y down)."""
     w, h = frame_size
@@ -102,20 +117,25 @@ def draw_target(
     color: tuple[int, int, int] = (0, 255, 0),
     label: str | None = None,
 ) -> None:
-    """Draw box, its centre, a frame-centre cross and the commanded vector, in place.
-
-    The vector arrow starts at the frame centre; a 1 m/s component spans a quarter of the frame.
-    Its direction is drawn as seen by a nadir camera (forward = up), whatever the camera.
-    """
-    h, w = frame.shape[:2]
+    """Draw box, its centre and label, then :func:`draw_vector`, in place."""
     x, y, bw, bh = (int(round(v)) for v in box)
     cv2.rectangle(frame, (x, y), (x + bw, y + bh), color, 2)
     centre = (x + bw // 2, y + bh // 2)
     cv2.circle(frame, centre, 3, color, -1)
-    fc = (w // 2, h // 2)
-    cv2.drawMarker(frame, fc, (255, 255, 255), cv2.MARKER_CROSS, 12, 1)
     if label:
         cv2.putText(frame, label, (x, max(12, y - 4)), cv2.FONT_HERSHEY_SIMPLEX, 0.45, color, 1, cv2.LINE_AA)
+    draw_vector(frame, vector)
+
+
+def draw_vector(frame: np.ndarray, vector: Vector | None) -> None:
+    """Draw the frame-centre cross and the commanded vector as an arrow from the centre, in place.
+
+    A 1 m/s component spans a quarter of the frame; the direction is drawn as seen by a nadir camera
+    (forward = up).
+    """
+    h, w = frame.shape[:2]
+    fc = (w // 2, h // 2)
+    cv2.drawMarker(frame, fc, (255, 255, 255), cv2.MARKER_CROSS, 12, 1)
     if vector is not None:
         vx, vy, _ = vector
         tip = (fc[0] + int(vy * w / 4), fc[1] - int(vx * h / 4))
