@@ -5,6 +5,8 @@ imported only when a scene is built. Nothing is downloaded.
 
 * :func:`tracking_sequence` - a textured target moving over a textured background along a known
   trajectory, with a partial and a full occlusion by a brick-textured occluder.
+* :func:`detection_sequence` - the astronaut photograph (a person) moving over ground, with the
+  person's true box per frame (from a hand-drawn box on the photograph).
 * :func:`iou` scores a tracked box against the truth.
 * :func:`ground_view` - a nadir camera's view of a flat ground texture at a known position, yaw and
   zoom, and :func:`spot_offset_m` the true body-frame offset of a reference spot (position hold).
@@ -93,6 +95,43 @@ def tracking_sequence(size: tuple[int, int] = (320, 240), n_frames: int = 80) ->
         frames.append(frame)
         boxes.append(box)
     return TrackingSequence(frames, boxes, partial, full, (w, h))
+
+
+ASTRONAUT_PERSON: Box = (20.0, 15.0, 340.0, 497.0)
+"""Hand-drawn box of the person in ``skimage.data.astronaut()`` (512 x 512)."""
+
+CHELSEA_CAT: Box = (0.0, 0.0, 420.0, 300.0)
+"""Hand-drawn box of the cat in ``skimage.data.chelsea()`` (451 x 300)."""
+
+
+def detection_sequence(
+    size: tuple[int, int] = (640, 480), n_frames: int = 40
+) -> tuple[list[np.ndarray], list[Box]]:
+    """The astronaut photograph, scaled to 60 % of the frame height, sliding over ground.
+
+    Returns:
+        (frames, true person box per frame).
+    """
+    from skimage import data
+
+    w, h = size
+    side = int(0.6 * h)
+    k = side / 512.0
+    photo = cv2.resize(
+        cv2.cvtColor(data.astronaut(), cv2.COLOR_RGB2BGR), (side, side), interpolation=cv2.INTER_AREA
+    )
+    bg = cv2.resize(ground_texture(1024), (w, h), interpolation=cv2.INTER_AREA)
+    frames, boxes = [], []
+    for i in range(n_frames):
+        s = i / max(n_frames - 1, 1)
+        x = int(0.05 * w + s * (w - side - 0.1 * w))
+        y = int(0.2 * h + 0.15 * h * math.sin(2 * math.pi * s))
+        frame = bg.copy()
+        frame[y : y + side, x : x + side] = photo
+        px, py, pw, ph = ASTRONAUT_PERSON
+        frames.append(frame)
+        boxes.append((x + px * k, y + py * k, pw * k, min(ph * k, side - py * k)))
+    return frames, boxes
 
 
 def ground_view(

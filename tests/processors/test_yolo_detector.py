@@ -10,13 +10,11 @@ import pytest
 from skimage import data
 
 from processors.detection import DATA_DIR_ENV, find_data_dir
-from processors.synthetic import iou
+from processors.synthetic import ASTRONAUT_PERSON, CHELSEA_CAT, detection_sequence, iou
 from processors.yolo_detector import YoloDetector
 
-PERSON = (20.0, 15.0, 340.0, 497.0)
-"""Hand-drawn box of the astronaut in skimage.data.astronaut() (x, y, w, h)."""
-CAT = (0.0, 0.0, 420.0, 300.0)
-"""Hand-drawn box of the cat in skimage.data.chelsea()."""
+PERSON = ASTRONAUT_PERSON
+CAT = CHELSEA_CAT
 
 
 def _bgr(rgb: np.ndarray) -> np.ndarray:
@@ -130,3 +128,14 @@ def test_ultralytics_backend(tmp_path, astronaut: np.ndarray) -> None:
     det = YoloDetector(model=tmp_path / "random.pt", conf=0.0, input_size=160)
     det.photo_processing(astronaut.copy())
     assert all(0 <= d.class_id < 80 and d.box[2] >= 0 for d in det.detections)
+
+
+@pytest.mark.parametrize("mode", ["fast", "paper"])
+def test_follows_a_moving_person(mode: str) -> None:
+    frames, truth = detection_sequence((320, 240), 12)
+    det = YoloDetector(mode=mode, follow="person")
+    ious = []
+    for frame, box in zip(frames, truth, strict=True):
+        det.photo_processing(frame.copy())
+        ious.append(iou(det.followed.box if det.followed else None, box))
+    assert np.mean(ious) >= 0.5
