@@ -220,9 +220,7 @@ class CSRTTrackingProcessor:
         if ok and self.similarity >= self.min_similarity:
             self._box = tuple(float(v) for v in bb)  # type: ignore[assignment]
         else:
-            logger.info(
-                "CSRTTrackingProcessor: target lost (csrt ok=%s, similarity %.2f)", ok, self.similarity
-            )
+            logger.info("CSRTTrackingProcessor: target lost (csrt ok=%s, similarity %.2f)", ok, self.similarity)
             self._box = None
             self._lost_frames = 0
 

@@ -169,12 +169,8 @@ class SIFTPositionHold:
         logger.info("SIFTPositionHold: reference stored, %d SIFT keypoints", len(self._ref_feat))
 
     def _estimate(self, work: np.ndarray, frame: np.ndarray) -> None:
-        ref = (
-            self._ref_feat if self._cfg["reuse_reference"] else sift_match.detect(self._sift, self._ref_gray)
-        )
-        found = sift_match.match_homography(
-            ref, sift_match.detect(self._sift, work), self.ratio, self.min_inliers
-        )
+        ref = self._ref_feat if self._cfg["reuse_reference"] else sift_match.detect(self._sift, self._ref_gray)
+        found = sift_match.match_homography(ref, sift_match.detect(self._sift, work), self.ratio, self.min_inliers)
         det = np.linalg.det(found.homography[:2, :2]) if found is not None else 0.0
         if found is None or not 0.4 < det < 2.5:
             logger.info("SIFTPositionHold: no reliable match (det %.2f)", det)
@@ -192,9 +188,7 @@ class SIFTPositionHold:
             right += alt * (math.tan(math.radians(self._ref_tilt[0])) - math.tan(math.radians(roll)))
             forward += alt * (math.tan(math.radians(pitch)) - math.tan(math.radians(self._ref_tilt[1])))
         self.offset_m = (forward, right)
-        self._vector = velocity_toward(
-            forward, right, self.gain, self.max_speed, self.dead_band_m, self.vector_t
-        )
+        self._vector = velocity_toward(forward, right, self.gain, self.max_speed, self.dead_band_m, self.vector_t)
         self._fresh = True
         self._overlay = (found.homography, (float(spot[0]), float(spot[1])))
         if self.tmMgr is not None:

@@ -104,9 +104,7 @@ CHELSEA_CAT: Box = (0.0, 0.0, 420.0, 300.0)
 """Hand-drawn box of the cat in ``skimage.data.chelsea()`` (451 x 300)."""
 
 
-def detection_sequence(
-    size: tuple[int, int] = (640, 480), n_frames: int = 40
-) -> tuple[list[np.ndarray], list[Box]]:
+def detection_sequence(size: tuple[int, int] = (640, 480), n_frames: int = 40) -> tuple[list[np.ndarray], list[Box]]:
     """The astronaut photograph, scaled to 60 % of the frame height, sliding over ground.
 
     Returns:
@@ -117,9 +115,7 @@ def detection_sequence(
     w, h = size
     side = int(0.6 * h)
     k = side / 512.0
-    photo = cv2.resize(
-        cv2.cvtColor(data.astronaut(), cv2.COLOR_RGB2BGR), (side, side), interpolation=cv2.INTER_AREA
-    )
+    photo = cv2.resize(cv2.cvtColor(data.astronaut(), cv2.COLOR_RGB2BGR), (side, side), interpolation=cv2.INTER_AREA)
     bg = cv2.resize(ground_texture(1024), (w, h), interpolation=cv2.INTER_AREA)
     frames, boxes = [], []
     for i in range(n_frames):

@@ -88,6 +88,8 @@ class YoloDetector:
     ) -> None:
         if mode not in _DETECT_EVERY:
             raise ValueError(f"mode must be one of {sorted(_DETECT_EVERY)}, got {mode!r}")
+        if input_size is not None and (input_size < 32 or input_size % 32):
+            raise ValueError(f"input_size must be a multiple of 32 (e.g. 320, 416, 640), got {input_size}")
         self.tmMgr = None
         self.mode = mode
         self.backend = load_backend(model, DetectorConfig(conf, nms, input_size))
@@ -205,9 +207,7 @@ class YoloDetector:
             boxes.append(self.followed.box)
         moved = shift_boxes(self._prev_gray, gray, boxes)
         self.detections = [
-            dataclasses.replace(d, box=b)
-            for d, b in zip(self.detections, moved, strict=False)
-            if b is not None
+            dataclasses.replace(d, box=b) for d, b in zip(self.detections, moved, strict=False) if b is not None
         ]
         if self.followed is not None and moved[-1] is not None:
             self.followed = dataclasses.replace(self.followed, box=moved[-1])

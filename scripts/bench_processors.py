@@ -160,9 +160,7 @@ def bench_yolo(n_frames: int) -> dict[str, Any]:
     for mode in ("fast", "paper"):
         proc = YoloDetector(mode=mode, follow="person")
         boxes: list[Any] = []
-        times = _timed(
-            proc, frames, lambda _i, p=proc, b=boxes: b.append(p.followed.box if p.followed else None)
-        )
+        times = _timed(proc, frames, lambda _i, p=proc, b=boxes: b.append(p.followed.box if p.followed else None))
         out[mode] = {
             **_speed(times),
             "mean_iou": round(float(np.mean([iou(b, t) for b, t in zip(boxes, truth, strict=True)])), 3),
@@ -174,9 +172,7 @@ def bench_yolo(n_frames: int) -> dict[str, Any]:
 
         out["ultralytics"] = "installed, but no .pt weights ship with the project: not benchmarked"
     except ImportError:
-        out["ultralytics"] = (
-            "not installed: the >= 2.5x over Ultralytics-PyTorch goal cannot be measured here"
-        )
+        out["ultralytics"] = "not installed: the >= 2.5x over Ultralytics-PyTorch goal cannot be measured here"
     return out
 
 

@@ -24,9 +24,7 @@ def _model_pair(path: Path) -> tuple[Path, Path]:
     cfg, weights = path.with_suffix(".cfg"), path.with_suffix(".weights")
     for p in (cfg, weights):
         if not p.is_file():
-            raise FileNotFoundError(
-                f"Darknet model needs {cfg.name} and {weights.name} side by side: {p} missing"
-            )
+            raise FileNotFoundError(f"Darknet model needs {cfg.name} and {weights.name} side by side: {p} missing")
     return cfg, weights
 
 
@@ -49,9 +47,7 @@ class DarknetBackend:
         self.out_names = self.net.getUnconnectedOutLayersNames()
         self.config = config
         self.size = config.input_size or _net_size(cfg)
-        names_file = next(
-            (p for p in (cfg.with_suffix(".names"), cfg.parent / "coco.names") if p.is_file()), None
-        )
+        names_file = next((p for p in (cfg.with_suffix(".names"), cfg.parent / "coco.names") if p.is_file()), None)
         self.names = names_file.read_text().splitlines() if names_file else list(COCO_NAMES)
         logger.info("DarknetBackend(%s): input %d, %d classes", cfg.name, self.size, len(self.names))
 

@@ -52,9 +52,7 @@ class OnnxBackend:
         h, w = inp.shape[2:4]
         fixed = isinstance(h, int) and isinstance(w, int)
         if config.input_size and fixed and (h, w) != (config.input_size,) * 2:
-            logger.warning(
-                "OnnxBackend(%s): model input is fixed at %dx%d, input_size ignored", path.name, w, h
-            )
+            logger.warning("OnnxBackend(%s): model input is fixed at %dx%d, input_size ignored", path.name, w, h)
         self.size = (w, h) if fixed else (config.input_size or 640,) * 2
         meta = self.session.get_modelmeta().custom_metadata_map
         names = ast.literal_eval(meta["names"]) if "names" in meta else None

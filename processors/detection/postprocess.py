@@ -152,9 +152,7 @@ def select(
     centres, best, class_ids = centres[keep], best[keep], class_ids[keep]
     if len(centres) == 0:
         return []
-    xywh = np.column_stack(
-        [centres[:, 0] - centres[:, 2] / 2, centres[:, 1] - centres[:, 3] / 2, centres[:, 2:]]
-    )
+    xywh = np.column_stack([centres[:, 0] - centres[:, 2] / 2, centres[:, 1] - centres[:, 3] / 2, centres[:, 2:]])
     idx = cv2.dnn.NMSBoxesBatched(
         xywh.tolist(), best.astype(float).tolist(), class_ids.tolist(), config.conf, config.nms
     )

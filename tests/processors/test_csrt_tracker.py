@@ -39,9 +39,7 @@ def test_mean_iou_over_visible_frames(run: tuple[list, list], seq: TrackingSeque
     assert np.mean(ious) >= 0.6
 
 
-def test_full_occlusion_is_detected_and_target_reacquired(
-    run: tuple[list, list], seq: TrackingSequence
-) -> None:
+def test_full_occlusion_is_detected_and_target_reacquired(run: tuple[list, list], seq: TrackingSequence) -> None:
     boxes, vectors = run
     occluded = [boxes[i] for i in seq.full]
     # confidence collapse: lost within two frames of the occluder arriving, no vector while lost

@@ -42,6 +42,7 @@ def _frames(kind: str) -> list[np.ndarray]:
         ("position_hold", "wait 0.2\nf 1\nwait 3\n", []),
         ("yolo", "wait 3\n", ["--processor-arg", 'follow="person"']),
     ],
+    ids=["csrt", "position_hold", "yolo"],
 )
 def test_runs_under_platform_with_file_source(processor: str, script: str, args: list[str], tmp_path: Path) -> None:
     video = _write_video(tmp_path / "in.avi", _frames(processor))

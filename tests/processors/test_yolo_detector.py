@@ -36,9 +36,7 @@ def chelsea() -> np.ndarray:
     [("astronaut", "person", PERSON), ("chelsea", "cat", CAT)],
     ids=["person", "cat"],
 )
-def test_darknet_finds_the_object(
-    image: str, label: str, truth: tuple, request: pytest.FixtureRequest
-) -> None:
+def test_darknet_finds_the_object(image: str, label: str, truth: tuple, request: pytest.FixtureRequest) -> None:
     frame = request.getfixturevalue(image)
     det = YoloDetector(mode="paper")
     det.photo_processing(frame.copy())
@@ -107,6 +105,8 @@ def test_model_errors_are_explicit(tmp_path, monkeypatch: pytest.MonkeyPatch) ->
     (tmp_path / "m.tflite").write_bytes(b"x")
     with pytest.raises(ValueError, match=r"expected \.pt, \.onnx"):
         YoloDetector(model=tmp_path / "m.tflite")
+    with pytest.raises(ValueError, match="multiple of 32"):
+        YoloDetector(input_size=300)
     with pytest.raises(ValueError, match="not one of the model's classes"):
         YoloDetector(follow="unicorn")
     monkeypatch.setenv(DATA_DIR_ENV, str(tmp_path / "nowhere"))
