@@ -21,14 +21,8 @@ BUILTINS: dict[str, str] = {
 """Short names of the built-in processors."""
 
 __all__ = [
-    "BUILTINS",
-    "ENTRY_POINT_GROUP",
-    "OPTIONAL_METHODS",
-    "FrameProcessor",
-    "LoadedProcessor",
-    "ProcessorInfo",
-    "load_processor",
-    "validate_processor",
+    "BUILTINS", "ENTRY_POINT_GROUP", "OPTIONAL_METHODS", "FrameProcessor", "LoadedProcessor", "ProcessorInfo",
+    "load_processor", "validate_processor",
 ]
 
 

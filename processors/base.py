@@ -54,28 +54,19 @@ def validate_processor(instance: object, *, name: str, path: str | None) -> Proc
     if not callable(method):
         raise ProcessorLoadError(
             f"{where} has no photo_processing(self, frame) method: it is the one method a processor must have",
-            path=path,
-            class_name=class_name,
-            missing="photo_processing",
+            path=path, class_name=class_name, missing="photo_processing",
         )
     _require_arity(method, 1, where, path, class_name, "photo_processing(self, frame)")
     capabilities = set()
-    for optional, signature in zip(
-        OPTIONAL_METHODS,
-        ("catch_cmd(self, roi)", "customize_processing(self, id)", "getPreparedVector(self)"),
-        strict=True,
-    ):
+    for optional, signature in zip(OPTIONAL_METHODS, ("catch_cmd(self, roi)", "customize_processing(self, id)",
+                                                      "getPreparedVector(self)"), strict=True):
         candidate = getattr(instance, optional, None)
         if candidate is None:
             continue
         if not callable(candidate):
-            raise ProcessorLoadError(
-                f"{where}.{optional} is not a method; expected {signature}",
-                path=path,
-                class_name=class_name,
-                missing=optional,
-            )
-        _require_arity(candidate, signature.count(","), where, path, class_name, signature)
+            raise ProcessorLoadError(f"{where}.{optional} is not a method; expected {signature}",
+                                     path=path, class_name=class_name, missing=optional)
+        _require_arity(candidate, signature.count(",") , where, path, class_name, signature)
         capabilities.add(optional)
     if not hasattr(instance, "tmMgr"):
         instance.tmMgr = None  # type: ignore[attr-defined]
@@ -86,11 +77,7 @@ def _require_arity(method: Any, count: int, where: str, path: str | None, class_
     try:
         inspect.signature(method).bind(*([None] * count))
     except TypeError:
-        raise ProcessorLoadError(
-            f"{where}: wrong signature for {method.__name__}; expected {signature}",
-            path=path,
-            class_name=class_name,
-            missing=signature,
-        ) from None
+        raise ProcessorLoadError(f"{where}: wrong signature for {method.__name__}; expected {signature}",
+                                 path=path, class_name=class_name, missing=signature) from None
     except ValueError:  # builtins without a signature: accept
         pass

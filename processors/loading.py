@@ -30,9 +30,8 @@ class LoadedProcessor:
     kwargs: dict[str, Any] = field(default_factory=dict)
 
 
-def load(
-    spec: str, builtins: dict[str, str], kwargs: dict[str, Any] | None = None, *, fresh: bool = False
-) -> LoadedProcessor:
+def load(spec: str, builtins: dict[str, str], kwargs: dict[str, Any] | None = None, *,
+         fresh: bool = False) -> LoadedProcessor:
     """Load ``spec``: a short name, an entry-point name, ``module:Class`` or ``path/file.py:Class``.
 
     ``fresh=True`` re-imports the code (for reloading an edited file without restarting).
@@ -52,25 +51,17 @@ def load(
         module, path = _import_module(location, class_name, fresh)
     cls = getattr(module, class_name, None)
     if not isinstance(cls, type):
-        defined = sorted(
-            name
-            for name, value in vars(module).items()
-            if isinstance(value, type) and value.__module__ == module.__name__
-        )
+        defined = sorted(name for name, value in vars(module).items()
+                         if isinstance(value, type) and value.__module__ == module.__name__)
         raise ProcessorLoadError(
             f"{path or location} has no class {class_name}; classes defined there: {', '.join(defined) or 'none'}",
-            path=path,
-            class_name=class_name,
-            missing=class_name,
+            path=path, class_name=class_name, missing=class_name,
         )
     try:
         instance = cls(**kwargs)
     except Exception as exc:
-        raise ProcessorLoadError(
-            f"{class_name}({_kwargs_text(kwargs)}) raised while constructing: {_describe(exc, path)}",
-            path=path,
-            class_name=class_name,
-        ) from exc
+        raise ProcessorLoadError(f"{class_name}({_kwargs_text(kwargs)}) raised while constructing: "
+                                 f"{_describe(exc, path)}", path=path, class_name=class_name) from exc
     info = validate_processor(instance, name=f"{location}:{class_name}", path=path)
     return LoadedProcessor(instance=instance, info=info, spec=spec, kwargs=kwargs)
 
@@ -88,12 +79,9 @@ def _import_module(name: str, class_name: str, fresh: bool) -> tuple[ModuleType,
             module = importlib.reload(module)
     except ModuleNotFoundError as exc:
         if exc.name == name or name.startswith(f"{exc.name}."):
-            raise ProcessorLoadError(
-                f"no module named {name!r} (for class {class_name}); is it installed or on "
-                "PYTHONPATH? For a file, give its path: path/to/file.py:Class",
-                class_name=class_name,
-                missing=name,
-            ) from exc
+            raise ProcessorLoadError(f"no module named {name!r} (for class {class_name}); is it installed or on "
+                                     "PYTHONPATH? For a file, give its path: path/to/file.py:Class",
+                                     class_name=class_name, missing=name) from exc
         raise _import_error(exc, None, class_name) from exc
     except Exception as exc:
         raise _import_error(exc, None, class_name) from exc
@@ -102,12 +90,8 @@ def _import_module(name: str, class_name: str, fresh: bool) -> tuple[ModuleType,
 
 def _import_file(path: Path, class_name: str, fresh: bool) -> tuple[ModuleType, str]:
     if not path.is_file():
-        raise ProcessorLoadError(
-            f"processor file {path} does not exist (working directory: {Path.cwd()})",
-            path=str(path),
-            class_name=class_name,
-            missing=str(path),
-        )
+        raise ProcessorLoadError(f"processor file {path} does not exist (working directory: {Path.cwd()})",
+                                 path=str(path), class_name=class_name, missing=str(path))
     resolved = path.resolve()
     module_name = f"uav_tui_user_{resolved.stem}_{hashlib.sha1(str(resolved).encode()).hexdigest()[:8]}"
     if not fresh and module_name in sys.modules:
@@ -130,12 +114,8 @@ def _import_file(path: Path, class_name: str, fresh: bool) -> tuple[ModuleType, 
 def _import_error(exc: BaseException, path: str | None, class_name: str) -> ProcessorLoadError:
     missing = exc.name if isinstance(exc, ModuleNotFoundError) else None
     hint = f"; install it (pip install {missing})" if missing else ""
-    return ProcessorLoadError(
-        f"importing {path or 'the processor module'} for {class_name} failed: {_describe(exc, path)}{hint}",
-        path=path,
-        class_name=class_name,
-        missing=missing,
-    )
+    return ProcessorLoadError(f"importing {path or 'the processor module'} for {class_name} failed: "
+                              f"{_describe(exc, path)}{hint}", path=path, class_name=class_name, missing=missing)
 
 
 def _describe(exc: BaseException, path: str | None) -> str:

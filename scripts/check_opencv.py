@@ -12,10 +12,8 @@ from importlib.metadata import PackageNotFoundError, version
 
 WANTED = "opencv-contrib-python-headless"
 OTHERS = ("opencv-python", "opencv-python-headless", "opencv-contrib-python")
-FIX = (
-    f"fix: pip uninstall -y {' '.join(OTHERS)} {WANTED} && pip install '{WANTED}>=4.9,<5'"
-    "   (or: bash scripts/fix_opencv.sh)"
-)
+FIX = (f"fix: pip uninstall -y {' '.join(OTHERS)} {WANTED} && pip install '{WANTED}>=4.9,<5'"
+       "   (or: bash scripts/fix_opencv.sh)")
 
 
 def problems() -> list[str]:

@@ -12,7 +12,7 @@ import pytest
 from processors import load_processor
 from uav_tui.errors import ProcessorLoadError
 
-PAPER_TEMPLATE = """
+PAPER_TEMPLATE = '''
 class MyAnalyzer:
     def __init__(self):
         self.tmMgr = None
@@ -28,7 +28,7 @@ class MyAnalyzer:
 
     def getPreparedVector(self):
         return 0.1, 0.0, 1.0
-"""
+'''
 
 
 def write(tmp_path: Path, text: str, name: str = "mine.py") -> Path:
@@ -86,11 +86,8 @@ def test_syntax_error_names_file_and_line(tmp_path: Path) -> None:
 
 
 def test_exception_in_constructor_names_line(tmp_path: Path) -> None:
-    path = write(
-        tmp_path,
-        "class A:\n    def __init__(self):\n        raise RuntimeError('no camera model')\n"
-        "    def photo_processing(self, frame):\n        pass\n",
-    )
+    path = write(tmp_path, "class A:\n    def __init__(self):\n        raise RuntimeError('no camera model')\n"
+                           "    def photo_processing(self, frame):\n        pass\n")
     with pytest.raises(ProcessorLoadError, match=r"mine.py:3: RuntimeError: no camera model"):
         load_processor(f"{path}:A")
 
@@ -102,9 +99,8 @@ def test_missing_class_lists_the_classes_there(tmp_path: Path) -> None:
     assert info.value.class_name == "MyAnalyser"
 
 
-@pytest.mark.parametrize(
-    "spec", ["no_such_module:Thing", "bogus", "missing_file.py:A"], ids=["module", "not-a-spec", "file"]
-)
+@pytest.mark.parametrize("spec", ["no_such_module:Thing", "bogus", "missing_file.py:A"],
+                         ids=["module", "not-a-spec", "file"])
 def test_unknown_specs(spec: str) -> None:
     with pytest.raises(ProcessorLoadError):
         load_processor(spec)
