@@ -200,6 +200,13 @@ class CSRTTrackingProcessor:
         self._force_search = False
 
     def _start(self, frame: np.ndarray, gray: np.ndarray, roi: Box) -> None:
+        fw, fh = self._frame_size
+        x0, y0 = max(roi[0], 0.0), max(roi[1], 0.0)
+        x1, y1 = min(roi[0] + roi[2], float(fw)), min(roi[1] + roi[3], float(fh))
+        if x1 - x0 < 4 or y1 - y0 < 4:
+            logger.warning("CSRTTrackingProcessor: ROI %s is outside the %dx%d frame, ignored", roi, fw, fh)
+            return
+        roi = (x0, y0, x1 - x0, y1 - y0)
         small, scale = self._sift_gray(gray)
         box = tuple(v * scale for v in roi)
         mask = np.zeros(small.shape, np.uint8)

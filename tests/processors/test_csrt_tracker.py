@@ -110,3 +110,14 @@ def test_bad_arguments_are_refused() -> None:
         CSRTTrackingProcessor(mode="slow")
     with pytest.raises(ValueError, match="camera"):
         CSRTTrackingProcessor(camera="sideways")
+
+
+def test_roi_is_clipped_to_the_frame(seq: TrackingSequence) -> None:
+    proc = CSRTTrackingProcessor()
+    proc.catch_cmd((-50, -50, 40, 40))  # entirely outside: ignored
+    proc.photo_processing(seq.frames[0].copy())
+    assert proc.box is None and not proc.lost
+    x, y, w, h = seq.boxes[0]
+    proc.catch_cmd((int(x), int(y), 1000, int(h)))  # runs off the right edge: clipped
+    proc.photo_processing(seq.frames[0].copy())
+    assert proc.box is not None and proc.box[0] + proc.box[2] <= seq.size[0]
