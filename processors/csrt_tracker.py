@@ -52,13 +52,21 @@ def _similarity(a: np.ndarray | None, b: np.ndarray | None) -> float:
     return float((a * b).sum()) if a is not None and b is not None else 0.0
 
 
+_ADAPT_ABOVE = 0.6
+"""Similarity above which the tracked patch is blended into the adaptive appearance template."""
+
+_ADAPT_RATE = 0.1
+"""Weight of the newest patch in the adaptive template."""
+
+
 class CSRTTrackingProcessor:
     """Track an operator-selected target with CSRT; re-acquire it with SIFT when it is lost.
 
     ``catch_cmd(roi)`` starts a CSRT tracker on the region and stores its appearance (SIFT keypoints
     and a normalised grayscale patch). Each frame updates the tracker; the target counts as lost when
-    CSRT reports failure or the appearance similarity of the tracked box collapses (occlusion,
-    drift). While lost, SIFT matching against the stored appearance (ratio test + RANSAC homography)
+    CSRT reports failure or the appearance similarity of the tracked box (normalised cross-correlation
+    with the selected patch, or with a slowly adapted copy of it) collapses (occlusion, drift).
+    While lost, SIFT matching against the stored appearance (ratio test + RANSAC homography)
     searches the frame and re-initialises the tracker on success.
 
     Vector: body-frame velocity (vx forward, vy right, m/s, clamped to ``max_speed`` <= 1) that
@@ -117,7 +125,8 @@ class CSRTTrackingProcessor:
         self._pending_roi: Box | None = None
         self._ref_feat: sift_match.Features | None = None  # SIFT-frame pixels
         self._ref_box: Box | None = None  # SIFT-frame pixels, where the reference features were taken
-        self._ref_patch: np.ndarray | None = None
+        self._ref_patch: np.ndarray | None = None  # appearance at selection
+        self._recent_patch: np.ndarray | None = None  # slowly adapted appearance (pose, light)
         self._ref_height = 0.0
         self._box: Box | None = None  # frame pixels; None = lost / no target
         self._frame_size = (0, 0)
@@ -215,6 +224,7 @@ class CSRTTrackingProcessor:
         self._ref_feat = sift_match.detect(self._sift, small, mask)
         self._ref_box = box  # type: ignore[assignment]
         self._ref_patch = _patch(gray, roi)
+        self._recent_patch = self._ref_patch
         self._ref_height = roi[3]
         self._new_tracker(frame, roi)
         logger.info("CSRTTrackingProcessor: target %s selected, %d SIFT keypoints", roi, len(self._ref_feat))
@@ -223,9 +233,13 @@ class CSRTTrackingProcessor:
 
     def _update(self, frame: np.ndarray, gray: np.ndarray) -> None:
         ok, bb = self._tracker.update(frame)
-        self.similarity = _similarity(_patch(gray, bb), self._ref_patch) if ok else 0.0
+        patch = _patch(gray, bb) if ok else None
+        self.similarity = self._appearance(patch)
         if ok and self.similarity >= self.min_similarity:
             self._box = tuple(float(v) for v in bb)  # type: ignore[assignment]
+            if self.similarity >= _ADAPT_ABOVE and patch is not None and self._recent_patch is not None:
+                blend = (1 - _ADAPT_RATE) * self._recent_patch + _ADAPT_RATE * patch
+                self._recent_patch = blend / max(float(np.linalg.norm(blend)), 1e-6)
         else:
             logger.info("CSRTTrackingProcessor: target lost (csrt ok=%s, similarity %.2f)", ok, self.similarity)
             self._box = None
@@ -246,7 +260,7 @@ class CSRTTrackingProcessor:
         x1, y1 = corners.max(axis=0) / scale
         box = (float(x0), float(y0), float(x1 - x0), float(y1 - y0))
         area_ratio = (box[2] * box[3]) * scale**2 / (self._ref_box[2] * self._ref_box[3])
-        sim = _similarity(_patch(gray, box), self._ref_patch)
+        sim = self._appearance(_patch(gray, box))
         if not 0.25 < area_ratio < 4.0 or sim < self.min_similarity:
             return
         self._new_tracker(frame, box)
@@ -254,6 +268,10 @@ class CSRTTrackingProcessor:
         logger.info("CSRTTrackingProcessor: re-acquired (%d inliers, similarity %.2f)", found.inliers, sim)
         if self.tmMgr is not None:
             self.tmMgr.save(frame, event="reacquired", inliers=found.inliers, similarity=round(sim, 3))
+
+    def _appearance(self, patch: np.ndarray | None) -> float:
+        """Similarity of ``patch`` to the target: the better of the selection and the adapted template."""
+        return max(_similarity(patch, self._ref_patch), _similarity(patch, self._recent_patch))
 
     def _draw(self, frame: np.ndarray) -> None:
         if self._box is not None:
