@@ -113,7 +113,7 @@ class HeadlessRunner:
     def _print_event(self, event: Event) -> None:
         if self.json_lines:
             self._say(json.dumps({"event": asdict(event)}))
-        elif event.level != "info" or event.kind in ("command", "autonomy"):
+        else:
             self._say(f"[{event.level}] {event.kind}: {event.message}")
 
     async def _run_script(self) -> None:
