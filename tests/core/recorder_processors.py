@@ -28,3 +28,17 @@ class SaveEveryFrame:
     def photo_processing(self, frame):
         self.count += 1
         self.tmMgr.save(frame, n=self.count)
+
+
+class SavesInCatchCmd:
+    """Calls tmMgr.save from catch_cmd, where there is no frame being processed."""
+
+    def __init__(self):
+        self.tmMgr = None
+        self.frame = None
+
+    def photo_processing(self, frame):
+        self.frame = frame
+
+    def catch_cmd(self, roi):
+        self.tmMgr.save(self.frame, roi=list(roi))

@@ -30,6 +30,9 @@ DISCRETE: tuple[str, ...] = ("flight_mode", "armed", "in_air", "gps_fix", "satel
 FIELDS: tuple[str, ...] = CONTINUOUS + DISCRETE
 """Every field a frame row carries, in column order."""
 
+STATIC_NS = 300_000_000
+"""A field unchanged for this long, while other telemetry keeps arriving, is taken as constant."""
+
 KEEP_NS = 5_000_000_000
 """History older than this (behind the newest sample) is forgotten."""
 
@@ -64,11 +67,16 @@ class TelemetryHistory:
         self._trim(t_ns - self.keep_ns)
 
     def covers(self, t_ns: int) -> bool:
-        """True when every continuous field that has data has changed again after ``t_ns``.
+        """True when telemetry after ``t_ns`` arrived and every continuous field changed again after it.
 
-        Until then a later sample could still refine the interpolation at ``t_ns``.
+        Until then a later sample could still refine the interpolation at ``t_ns``. A field that has
+        not changed for :data:`STATIC_NS` counts as constant (a battery percentage, a parked vehicle).
         """
-        return all(not times or times[-1] >= t_ns for times, _ in self._series.values())
+        newest = self.newest_ns
+        if newest is None or newest < t_ns:
+            return False
+        return all(not times or times[-1] >= t_ns or newest - times[-1] >= STATIC_NS
+                   for times, _ in self._series.values())
 
     def at(self, t_ns: int) -> tuple[dict[str, Any], str]:
         """Every field of :data:`FIELDS` at ``t_ns`` and how it was obtained.

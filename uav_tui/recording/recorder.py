@@ -63,11 +63,11 @@ class Recorder:
         config: the recording section of the configuration.
         info: what ``run.json`` says about the run (config, versions, source, processor, controller).
         telemetry_expected: False without a flight controller: frame rows need not wait for telemetry.
-        writer_factory: builds the :class:`DiskWriter` (tests pass a throttled one).
+        writer_factory: builds the writer (default :class:`DiskWriter`; tests pass a throttled one).
     """
 
     def __init__(self, run_dir: Path, config: RecordingConfig, info: dict[str, Any], *,
-                 telemetry_expected: bool, writer_factory: Callable[..., DiskWriter] = DiskWriter) -> None:
+                 telemetry_expected: bool, writer_factory: Callable[..., DiskWriter] | None = None) -> None:
         self.run_dir = run_dir
         self.config = config
         self.info = info
@@ -81,7 +81,7 @@ class Recorder:
         self._saves: dict[int, _Save] = {}
         self._delivered: ProcessedFrame | None = None
         self._last: tuple[ProcessedFrame, int] | None = None
-        self.writer = writer_factory(
+        self.writer = (writer_factory or DiskWriter)(
             run_dir, TABLES, stage=FrameAligner(telemetry_expected=telemetry_expected),
             jpeg_quality=config.jpeg_quality, max_disk_bytes=int(config.max_disk_mb * MB),
             min_free_bytes=int(config.min_free_mb * MB), on_problem=self._problem)

@@ -118,15 +118,19 @@ class FrameAligner:
 
     A frame waits until every continuous telemetry field has a sample after its capture time, or
     ``hold_ns`` has passed since capture (then the newest values are held), so it is interpolated,
-    not extrapolated. Without a flight controller frames go out at once.
+    not extrapolated. Every frame waits at least ``min_hold_ns``, so a ``snapshot`` of the newest
+    frame still finds its row and marks it saved.
 
     Args:
         hold_ns: longest wait for telemetry after a capture.
-        telemetry_expected: False with ``--fc none``.
+        min_hold_ns: shortest wait.
+        telemetry_expected: False with ``--fc none``: frames wait only ``min_hold_ns``.
     """
 
-    def __init__(self, hold_ns: int = 500_000_000, telemetry_expected: bool = True) -> None:
+    def __init__(self, hold_ns: int = 500_000_000, min_hold_ns: int = 200_000_000,
+                 telemetry_expected: bool = True) -> None:
         self.hold_ns = hold_ns
+        self.min_hold_ns = min_hold_ns
         self.telemetry_expected = telemetry_expected
         self.history = TelemetryHistory()
         self._waiting: deque[FrameRecord] = deque()
@@ -149,8 +153,9 @@ class FrameAligner:
         rows = []
         while self._waiting:
             record = self._waiting[0]
-            if (self.telemetry_expected and now_ns - record.t_mono_ns < self.hold_ns
-                    and not (self.history.newest_ns is not None and self.history.covers(record.t_mono_ns))):
+            age = now_ns - record.t_mono_ns
+            if age < self.min_hold_ns or (age < self.hold_ns and self.telemetry_expected
+                                          and not self.history.covers(record.t_mono_ns)):
                 break
             rows.append(self._row(self._waiting.popleft()))
         return rows
