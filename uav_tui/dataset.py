@@ -102,7 +102,7 @@ def _expand_extra(frames: pd.DataFrame) -> tuple[pd.DataFrame, list[str]]:
         return frames, []
     names = {key: f"extra_{key}" if key in frames.columns else key for key in keys}
     table = pd.DataFrame([{names[k]: v for k, v in fields.items()} for fields in parsed], index=frames.index,
-                         columns=list(names.values()))
+                         columns=list(names.values()), dtype=object)
     table = table.apply(_best_dtype)
     return pd.concat([frames, table], axis=1), list(names.values())
 
@@ -111,6 +111,8 @@ def _best_dtype(column: pd.Series) -> pd.Series:
     values = column.dropna()
     if values.map(lambda v: isinstance(v, bool)).all() and len(values):
         return column.astype("boolean")
+    if values.map(lambda v: isinstance(v, int) and not isinstance(v, bool)).all():
+        return column.astype("Int64")
     if values.map(lambda v: isinstance(v, int | float) and not isinstance(v, bool)).all():
         return pd.to_numeric(column).astype("float64")
     if values.map(lambda v: isinstance(v, str)).all():

@@ -133,9 +133,10 @@ def _processing(run: Dataset, figure: Figure) -> None:
     if frames.empty:
         _nothing(rate, "no frames processed")
         return
-    seconds = np.floor(frames["t_s"].to_numpy()).astype(int)
-    counts = np.bincount(seconds - seconds.min())
-    rate.step(seconds.min() + np.arange(len(counts)), counts, where="post")
+    done_s = frames["t_end_ns"].astype("float64") / 1e9
+    interval = done_s.diff().rolling(10, min_periods=1).mean()  # over the last 10 frames
+    rate.plot(frames["t_s"], 1 / interval.where(interval > 0), color="tab:blue")
+    rate.set_ylim(bottom=0)
     latency.plot(frames["t_s"], _latency_ms(frames), ".", markersize=2, label="capture -> result")
     busy = (frames["t_end_ns"] - frames["t_start_ns"]).astype("float64") / 1e6
     latency.plot(frames["t_s"], busy, ".", markersize=2, label="processing")
