@@ -77,7 +77,7 @@ async def test_a_slow_disk_drops_frames_but_never_slows_processing(tmp_path, mon
     assert (~frames["saved"]).sum() == core.recorder.writer.dropped["queue_full"]
     for name in saved["image"]:
         assert cv2.imread(str(run.path / name)) is not None
-    assert not list(run.path.rglob("*.tmp"))
+    assert not list(run.path.rglob("*.tmp")) and not (run.path / ".pending").exists()
 
 
 def test_a_full_disk_keeps_whole_lines_and_reports_once(tmp_path):

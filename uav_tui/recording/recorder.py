@@ -4,17 +4,18 @@ Threads: ``save`` runs on the processor thread (it is ``tmMgr.saver``); ``on_fra
 ``on_telemetry``, ``on_event`` and ``snapshot`` on the event loop; all of them only queue work. The
 writer thread encodes, interpolates and writes. ``open`` and ``close`` block: run them in an executor.
 
-Frame ids count processed frames from 1 for the whole run, so they stay unique when the camera is
-switched (a new source's ``seq`` starts at 1 again). ``tmMgr.save`` runs while the frame it belongs
-to is being processed and its row is built only after processing, on the loop; the worker hands the
-next frame to the processor only after the previous frame's listeners ran, so taking the next id at
-save time keeps ids in row order.
+Frame ids count processed frames from 1 for the whole run, in processing order, so they stay unique
+when the camera is switched (a new source's ``seq`` starts at 1 again). An id is given on the loop
+when the frame's result arrives; ``tmMgr.save`` runs earlier, on the processor thread, so its image is
+written under a provisional name in ``.pending/`` and renamed to ``frames/<id>.jpg`` by the writer
+thread once the id is known (the writer handles items in order: image, rename, row).
 """
 
 from __future__ import annotations
 
 import itertools
 import logging
+import shutil
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -38,7 +39,7 @@ from uav_tui.recording.rows import (
     image_name,
 )
 from uav_tui.recording.run_info import new_run_dir, write_json
-from uav_tui.recording.writer import MB, DiskWriter
+from uav_tui.recording.writer import MB, DiskWriter, Rename
 from uav_tui.worker import ProcessedFrame
 
 if TYPE_CHECKING:
@@ -46,13 +47,16 @@ if TYPE_CHECKING:
 
 logger = logging.getLogger(__name__)
 
+PENDING = ".pending"
+"""Run sub-folder for images saved before their frame id was known."""
+
 
 @dataclass(slots=True)
 class _Save:
     result: ProcessedFrame
-    frame_id: int
+    pending: str = ""
+    """Provisional image name (``.pending/<n>.jpg``), empty when the image was dropped."""
     extra: dict[str, Any] = field(default_factory=dict)
-    image: str = ""
 
 
 class Recorder:
@@ -78,11 +82,12 @@ class Recorder:
         self._emit: Callable[[str, str], None] = lambda level, message: None
         self._current: Callable[[], ProcessedFrame | None] = lambda: None
         self._ids = itertools.count(1)
+        self._provisional = itertools.count(1)
         self._saves: dict[int, _Save] = {}
         self._delivered: ProcessedFrame | None = None
         self._last: tuple[ProcessedFrame, int] | None = None
         self.writer = (writer_factory or DiskWriter)(
-            run_dir, TABLES, stage=FrameAligner(telemetry_expected=telemetry_expected),
+            run_dir, TABLES, stage=FrameAligner(telemetry_expected=telemetry_expected, run_dir=run_dir),
             jpeg_quality=config.jpeg_quality, max_disk_bytes=int(config.max_disk_mb * MB),
             min_free_bytes=int(config.min_free_mb * MB), on_problem=self._problem)
 
@@ -98,6 +103,7 @@ class Recorder:
         try:
             run_dir = new_run_dir(Path(config.runs_dir).expanduser().resolve(), started)
             (run_dir / "frames").mkdir()
+            (run_dir / PENDING).mkdir()
             info = {**info, "start_wall_ns": started, "start_mono_ns": time.monotonic_ns()}
             recorder = cls(run_dir, config, info, telemetry_expected=telemetry_expected, **kwargs)
             write_json(run_dir / "run.json", recorder.info)
@@ -138,32 +144,34 @@ class Recorder:
             raise TypeError(f"tmMgr.save(frame, **extra): frame must be an image array, got {type(image).__name__}")
         entry = self._saves.get(id(result))
         if entry is None or entry.result is not result:
-            entry = _Save(result, next(self._ids))
+            entry = self._saves[id(result)] = _Save(result)
         entry.extra.update(extra)
-        name = image_name(entry.frame_id)
-        if self.writer.put_image(name, image, copy=True):
-            entry.image = name
-            result.saved = True
         result.extra.update(extra)
-        self._saves[id(result)] = entry
+        name = entry.pending or f"{PENDING}/{next(self._provisional)}.jpg"
+        if self.writer.put_image(name, image, copy=True):
+            entry.pending = name
+            result.saved = True
 
     # -- event loop ------------------------------------------------------------------------------
 
     def on_frame(self, result: ProcessedFrame) -> None:
         """Queue the frame's row (and every Nth frame's image when ``record_every`` is set)."""
         self._delivered = result
+        frame_id = next(self._ids)
+        name = image_name(frame_id)
         entry = self._saves.pop(id(result), None)
-        if entry is None or entry.result is not result:
-            entry = _Save(result, next(self._ids))
+        if entry is not None and entry.result is result:
+            extra = extra_json(entry.extra)
+            image = name if entry.pending and self.writer.put(Rename(entry.pending, name)) else ""
+        else:
+            extra, image = "", ""
             every = self.config.record_every
-            if every and entry.frame_id % every == 0:
-                # The processor is done with this array and sources hand out a new one per capture: no copy.
-                name = image_name(entry.frame_id)
-                if self.writer.put_image(name, result.frame.image):
-                    entry.image = name
+            # The processor is done with this array and sources hand out a new one per capture: no copy.
+            if every and frame_id % every == 0 and self.writer.put_image(name, result.frame.image):
+                image = name
         self.frames += 1
-        self._last = (result, entry.frame_id)
-        self.writer.put(frame_record(result, entry.frame_id, entry.image, extra_json(entry.extra)))
+        self._last = (result, frame_id)
+        self.writer.put(frame_record(result, frame_id, image, extra))
 
     def on_telemetry(self, telemetry: Telemetry) -> None:
         t_mono = telemetry.t_mono_ns or time.monotonic_ns()
@@ -198,6 +206,8 @@ class Recorder:
     def close(self, end: dict[str, Any] | None = None) -> None:
         """Write everything queued, then finish ``run.json`` with the end time and counts. Blocks."""
         self.writer.close()
+        # Images of frames whose results never arrived (in flight at the stop) have no row: drop them.
+        shutil.rmtree(self.run_dir / PENDING, ignore_errors=True)
         self.info.update(end or {}, end_wall_ns=time.time_ns(), recording=self.status())
         try:
             write_json(self.run_dir / "run.json", self.info)

@@ -7,6 +7,7 @@ import math
 from collections import deque
 from collections.abc import Iterable
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -121,16 +122,21 @@ class FrameAligner:
     not extrapolated. Every frame waits at least ``min_hold_ns``, so a ``snapshot`` of the newest
     frame still finds its row and marks it saved.
 
+    A row's ``saved`` says whether its image file is on disk when the row is written (images are
+    queued before their rows, so a frame dropped by a full disk or the size cap is not claimed).
+
     Args:
         hold_ns: longest wait for telemetry after a capture.
         min_hold_ns: shortest wait.
         telemetry_expected: False with ``--fc none``: frames wait only ``min_hold_ns``.
+        run_dir: where image names point (None: do not check the files).
     """
 
     def __init__(self, hold_ns: int = 500_000_000, min_hold_ns: int = 200_000_000,
-                 telemetry_expected: bool = True) -> None:
+                 telemetry_expected: bool = True, run_dir: Path | None = None) -> None:
         self.hold_ns = hold_ns
         self.min_hold_ns = min_hold_ns
+        self.run_dir = run_dir
         self.telemetry_expected = telemetry_expected
         self.history = TelemetryHistory()
         self._waiting: deque[FrameRecord] = deque()
@@ -166,6 +172,9 @@ class FrameAligner:
         return rows
 
     def _row(self, record: FrameRecord) -> Row:
+        image = record.values[_SAVED + 1]
+        if image and self.run_dir is not None and not (self.run_dir / image).is_file():
+            record.values[_SAVED:_SAVED + 2] = [False, ""]
         values, how = self.history.at(record.t_mono_ns)
         return Row("frames", [*record.values, how, *(_finite(values[name]) for name in FIELDS)])
 

@@ -1,7 +1,8 @@
 """The disk writer: one thread behind a bounded queue; nothing that feeds it ever waits for the disk.
 
-Items are CSV rows (:class:`Row`), JPEG frames (queued with :meth:`DiskWriter.put_image`) or anything
-a :class:`Stage` understands (the stage runs on the writer thread and turns items into rows). When
+Items are CSV rows (:class:`Row`), JPEG frames (queued with :meth:`DiskWriter.put_image`), renames
+of written files (:class:`Rename`) or anything a :class:`Stage` understands (the stage runs on the
+writer thread and turns items into rows). Items are handled in the order they were queued. When
 the queue is full, the disk is full, the run folder reached its size cap or the disk its free-space
 floor, the item is dropped and counted, and the first drop of each kind is reported once through
 ``on_problem``.
@@ -45,6 +46,14 @@ class Row:
 
     table: str
     values: list[Any]
+
+
+@dataclass(slots=True)
+class Rename:
+    """Move ``source`` to ``target`` (paths relative to the run folder) if ``source`` was written."""
+
+    source: str
+    target: str
 
 
 @dataclass(slots=True)
@@ -245,6 +254,10 @@ class DiskWriter:
                     self._write_image(item)
                 finally:
                     self._image_done(item.image.nbytes)
+            elif isinstance(item, Rename):
+                source = self.run_dir / item.source
+                if source.exists():
+                    os.replace(source, self.run_dir / item.target)
             elif self.stage is not None:
                 self._collect(self.stage.handle, item)
                 self._collect(self.stage.due, time.monotonic_ns())
