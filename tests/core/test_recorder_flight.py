@@ -12,6 +12,7 @@ import numpy as np
 from uav_tui import dataset
 from uav_tui.config import Config, with_overrides
 from uav_tui.core import UavCore
+from uav_tui.errors import ControllerError
 from uav_tui.recording import image_name
 
 POSITION_BOUND_M = 0.08
@@ -59,6 +60,18 @@ async def _wait_for(predicate, timeout: float) -> None:
         await asyncio.sleep(0.1)
 
 
+async def _arm_when_ready(core: UavCore, timeout: float = 20.0) -> None:
+    """Arm as soon as the simulator accepts it (it refuses until its GPS has a fix)."""
+    deadline = time.monotonic() + timeout
+    while True:
+        try:
+            await core.execute("arm")
+            return
+        except ControllerError:
+            assert time.monotonic() < deadline, "the simulated vehicle never accepted arming"
+            await asyncio.sleep(0.5)
+
+
 async def test_recorded_flight_matches_simulator_truth(tmp_path):
     config = with_overrides(Config(), source="synthetic:?fps=30", fc="sim", runs_dir=str(tmp_path),
                             processor="tests.core.recorder_processors:SaveEveryFifth")
@@ -66,7 +79,7 @@ async def test_recorded_flight_matches_simulator_truth(tmp_path):
     await core.start()
     truth = TruthRecorder(core.controller.sim.truth())
     try:
-        await core.execute("arm")
+        await _arm_when_ready(core)
         await core.execute("takeoff 3")
         await _wait_for(lambda: (core.telemetry.snapshot().rel_alt_m or 0) > 2.6, 20)
         await core.execute("vector 1 0.6 2")
