@@ -3,27 +3,21 @@
 from __future__ import annotations
 
 import time
-from types import SimpleNamespace
 
 import numpy as np
 import pandas as pd
 import pytest
 
-from sources.buffer import Frame
 from uav_tui import dataset
 from uav_tui.config import RecordingConfig
 from uav_tui.errors import UavError
-from uav_tui.events import EventLog
 from uav_tui.recording import Recorder
-from uav_tui.telemetry import TelemetryManager
-from uav_tui.worker import ProcessedFrame
+
+from .recorder_fakes import FakeCore
 
 
 def _record_run(tmp_path):
-    """Drive a Recorder through a real EventLog and TelemetryManager, the way a core does."""
-    core = SimpleNamespace(events=EventLog(), telemetry=TelemetryManager(None), worker=SimpleNamespace(current=None),
-                           frame_listeners=[])
-    core.add_frame_listener = core.frame_listeners.append
+    core = FakeCore()
     recorder = Recorder.open(RecordingConfig(runs_dir=str(tmp_path)), {"processor": {"name": "test"}},
                              telemetry_expected=True)
     recorder.attach(core)
@@ -31,25 +25,22 @@ def _record_run(tmp_path):
                           "flight_mode": "HOLD", "fc_boot_ms": 1_000, "satellites": 10, "battery_v": 16.1})
     time.sleep(0.01)
     image = np.full((48, 64, 3), 90, np.uint8)
-    frames = []
-    for seq, vector, error in ((1, (0.5, -0.25, 1.0), None), (2, None, "Traceback (most recent call last):\n"
-                                                                        "ValueError: bad frame")):
-        frame = Frame(image, seq, time.monotonic_ns(), time.time_ns())
-        result = ProcessedFrame(frame, t_start_ns=frame.t_mono_ns + 1_000)
-        core.worker.current = result
-        if seq == 1:
-            core.telemetry.save(image, score=0.5, label='a, "b"', hits=3, ok=True, box=[1, 2, 3, 4])
-        result.t_end_ns, result.vector, result.error = frame.t_mono_ns + 5_000_000, vector, error
-        result.decision = "executed" if vector else "no vector"
-        for listener in core.frame_listeners:
-            listener(result)
-        frames.append(frame)
-        time.sleep(0.005)
+
+    def saves(result):
+        core.telemetry.save(image, score=0.5, label='a, "b"', hits=3, ok=True, box=[1, 2, 3, 4])
+        result.vector, result.decision = (0.5, -0.25, 1.0), "executed"
+
+    def fails(result):
+        result.error, result.decision = "Traceback (most recent call last):\nValueError: bad frame", "no vector"
+
+    first = core.process(image, 1, saves)
+    time.sleep(0.005)
+    second = core.process(image, 2, fails)
     time.sleep(0.01)
     core.telemetry.apply({"north_m": 2.0, "yaw_deg": -179.0, "armed": True, "flight_mode": "OFFBOARD"})
     core.events.emit("warning", "autonomy", "vector rejected: vx is nan,\nsecond line", "tui")
     recorder.close()
-    return recorder, frames
+    return recorder, [first.frame, second.frame]
 
 
 def test_load_round_trips_values_and_dtypes(tmp_path):

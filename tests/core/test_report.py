@@ -2,29 +2,31 @@
 
 from __future__ import annotations
 
+import functools
 import math
 import time
-from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
-from sources.buffer import Frame
 from uav_tui.config import RecordingConfig
-from uav_tui.events import EventLog
 from uav_tui.recording import Recorder
 from uav_tui.report import PLOTS, write_report
 from uav_tui.runs_cli import main
-from uav_tui.telemetry import TelemetryManager
-from uav_tui.worker import ProcessedFrame
+
+from .recorder_fakes import FakeCore
+
+
+def _circle_processor(core, i, result):
+    core.telemetry.save(result.frame.image, target_x=float(i), confidence=0.5 + i / 200)
+    result.vector = (0.5, 0.0, 1.0) if i % 10 == 1 else None
+    result.decision = "executed" if result.vector else "no vector"
 
 
 @pytest.fixture
 def circle_run(tmp_path):
     """A run flown on a 5 m circle: 80 telemetry samples, a frame after every second one, vectors on some."""
-    core = SimpleNamespace(events=EventLog(), telemetry=TelemetryManager(None), worker=SimpleNamespace(current=None),
-                           frame_listeners=[])
-    core.add_frame_listener = core.frame_listeners.append
+    core = FakeCore()
     recorder = Recorder.open(RecordingConfig(runs_dir=str(tmp_path)), {"processor": {"name": "circle"}},
                              telemetry_expected=True)
     recorder.attach(core)
@@ -36,15 +38,7 @@ def circle_run(tmp_path):
                               "pitch_deg": -2.0, "yaw_deg": math.degrees(angle) - 180, "in_air": True})
         time.sleep(0.004)
         if i % 2:
-            frame = Frame(image, i, time.monotonic_ns(), time.time_ns())
-            result = ProcessedFrame(frame, t_start_ns=frame.t_mono_ns + 500_000)
-            core.worker.current = result
-            core.telemetry.save(image, target_x=float(i), confidence=0.5 + i / 200)
-            result.t_end_ns = frame.t_mono_ns + 3_000_000
-            result.vector = (0.5, 0.0, 1.0) if i % 10 == 1 else None
-            result.decision = "executed" if result.vector else "no vector"
-            for listener in core.frame_listeners:
-                listener(result)
+            core.process(image, i, functools.partial(_circle_processor, core, i))
     core.events.emit("error", "processor", "frame 7: ValueError")
     recorder.close()
     return recorder.run_dir

@@ -84,7 +84,6 @@ class Recorder:
         self._ids = itertools.count(1)
         self._provisional = itertools.count(1)
         self._saves: dict[int, _Save] = {}
-        self._delivered: ProcessedFrame | None = None
         self._last: tuple[ProcessedFrame, int] | None = None
         self.writer = (writer_factory or DiskWriter)(
             run_dir, TABLES, stage=FrameAligner(telemetry_expected=telemetry_expected, run_dir=run_dir),
@@ -117,9 +116,12 @@ class Recorder:
     def attach(self, core: UavCore) -> None:
         """Become the core's ``tmMgr`` saver and listen to its frames, telemetry and events."""
         self._emit = lambda level, message: core.events.emit(level, "recorder", message)  # type: ignore[arg-type]
-        self._current = lambda: core.worker.current if core.worker is not None else None
+        # Only while a frame is being processed (busy) does ``current`` belong to the calling processor.
+        self._current = lambda: core.worker.current if core.worker is not None and core.worker.busy_s > 0 else None
         core.telemetry.saver = self.save
         core.telemetry.add_listener(self.on_telemetry)
+        for event in core.events.recent:  # what happened before the recorder existed (e.g. a source warning)
+            self.on_event(event)
         core.events.add_listener(self.on_event)
         core.add_frame_listener(self.on_frame)
 
@@ -133,7 +135,7 @@ class Recorder:
         less than encoding on this thread would.
         """
         result = self._current()
-        if result is None or result is self._delivered:
+        if result is None:
             self.misplaced_saves += 1
             if self.misplaced_saves == 1:
                 self._emit("warning", "tmMgr.save() called outside photo_processing(): ignored (it stores "
@@ -156,7 +158,6 @@ class Recorder:
 
     def on_frame(self, result: ProcessedFrame) -> None:
         """Queue the frame's row (and every Nth frame's image when ``record_every`` is set)."""
-        self._delivered = result
         frame_id = next(self._ids)
         name = image_name(frame_id)
         entry = self._saves.pop(id(result), None)
