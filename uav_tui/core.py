@@ -12,7 +12,7 @@ import functools
 import logging
 import time
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from controllers import connect_controller
 from controllers.base import FlightController
@@ -27,6 +27,10 @@ from uav_tui.recording import Recorder, describe
 from uav_tui.status import CoreStatus
 from uav_tui.telemetry import TelemetryManager
 from uav_tui.worker import ProcessedFrame, ProcessorWorker
+
+if TYPE_CHECKING:  # aiortc and pymavlink are imported only when the side channels are switched on
+    from uav_tui.web import WebServer
+    from uav_tui.web.mavlink_tracking import CameraTracking
 
 logger = logging.getLogger(__name__)
 
@@ -62,6 +66,10 @@ class UavCore:
         self.started_wall_ns = 0
         self._frame_listeners: list[Callable[[ProcessedFrame], None]] = []
         self._tasks: list[asyncio.Task[Any]] = []
+        self.web: WebServer | None = None
+        """The web page's WebServer (``web.url`` has the token) when ``web`` is on, else None."""
+        self.camera_tracking: CameraTracking | None = None
+        """The MAVLink camera component when ``camera_mavlink`` is set, else None."""
 
     # -- lifecycle -------------------------------------------------------------------------------
 
@@ -101,6 +109,26 @@ class UavCore:
         self.state = CoreState.RUNNING
         self.events.emit("info", "platform", f"started: source {self.config.source}, processor "
                          f"{processor.info.name}, fc {self.config.fc}")
+        try:
+            await self._start_side_channels()
+        except BaseException:
+            await self._release()
+            raise
+
+    async def _start_side_channels(self) -> None:
+        """The web page and MAVLink click-to-track, when configured (aiortc is imported only then)."""
+        if self.config.web.web:
+            from uav_tui.web import WebServer
+
+            self.web = WebServer(self, self.config.web)
+            await self.web.start()
+            self.events.emit("info", "web", f"web page: {self.web.url}")
+        if self.config.web.camera_mavlink:
+            from uav_tui.web.mavlink_tracking import CameraTracking
+
+            self.camera_tracking = CameraTracking(self, self.config.web.camera_mavlink)
+            await self.camera_tracking.start()
+            self.events.emit("info", "web", f"camera tracking on {self.config.web.camera_mavlink}")
 
     async def stop(self, reason: str = "quit") -> None:
         """Hold the vehicle if a vector could be flying, then release everything. Idempotent."""
@@ -117,6 +145,9 @@ class UavCore:
         await self._release()
 
     async def _release(self) -> None:
+        for side in (self.web, self.camera_tracking):
+            if side is not None:
+                await side.stop()
         for task in self._tasks:
             task.cancel()
         await asyncio.gather(*self._tasks, return_exceptions=True)

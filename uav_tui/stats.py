@@ -37,28 +37,27 @@ class RollingStats:
 
     def __init__(self) -> None:
         self._samples: deque[tuple[int, int, int, int, int]] = deque()  # done_ns, seq, capture, start, end/vector
-        self._captures: deque[tuple[int, int]] = deque()  # (now_ns, frames captured so far)
+        self._captures: deque[tuple[int, int]] = deque([(time.monotonic_ns(), 0)])  # (now_ns, frames captured)
         self.frames_processed = 0
         self.frames_skipped = 0
         self.errors = 0
         self._last_seq = 0
 
     def add(self, seq: int, t_capture_ns: int, t_start_ns: int, t_end_ns: int, t_ready_ns: int) -> None:
-        if self._last_seq and seq > self._last_seq + 1:
+        if self._last_seq and seq > self._last_seq + 1:  # a new source restarts at 1: no skips counted
             self.frames_skipped += seq - self._last_seq - 1
         self._last_seq = seq
         self.frames_processed += 1
         self._samples.append((t_ready_ns, t_capture_ns, t_start_ns, t_end_ns, t_ready_ns))
         self._trim(self._samples, t_ready_ns)
 
-    def restart_sequence(self) -> None:
-        """A new source starts counting at 1 again."""
-        self._last_seq = 0
-
     def snapshot(self, frames_captured: int, busy_since_ns: int | None) -> PipelineStats:
         now = time.monotonic_ns()
+        if frames_captured < self._captures[-1][1]:  # a new source counts from zero again
+            self._captures.clear()
         self._captures.append((now, frames_captured))
-        self._trim(self._captures, now)
+        while len(self._captures) > 2 and self._captures[0][0] < now - WINDOW_NS:
+            self._captures.popleft()
         self._trim(self._samples, now)
         samples = np.array(self._samples, dtype=np.int64).reshape(-1, 5)
         span_ns = (now - samples[0, 0]) if len(samples) > 1 else 0
