@@ -56,6 +56,7 @@ class SimVehicleServer:
         self.setpoint_log: deque[SetpointRecord] = deque(maxlen=20_000)
         self.failsafe_since_ns: int | None = None
         self._stop = threading.Event()
+        self._peers: set[tuple[int, int]] = set()
         self._shown: tuple[Mode, bool] | None = None
         """(mode, armed) in the last tick: a change is announced by an extra HEARTBEAT at once."""
 
@@ -100,6 +101,10 @@ class SimVehicleServer:
             self.commands.on_command(msg)
         elif kind in ("PARAM_REQUEST_READ", "PARAM_REQUEST_LIST", "PARAM_SET"):
             self.commands.on_param(msg)
+        elif kind == "HEARTBEAT" and (msg.get_srcSystem(), msg.get_srcComponent()) not in self._peers:
+            # greet a new ground station at once instead of making it wait up to a second
+            self._peers.add((msg.get_srcSystem(), msg.get_srcComponent()))
+            self.link.send(self.streams.heartbeat())
         elif kind == "PING" and msg.target_system == 0:
             enc = self.link.encoder
             self.link.send(
