@@ -42,7 +42,7 @@ class PhysicsConfig:
     fast_descent_ms: float = 1.5
     land_alt1_m: float = 5.0
     cruise_speed_ms: float = 5.0
-    position_gain: float = 1.0
+    position_gain: float = 1.5
     max_yaw_rate_dps: float = 90.0
     attitude_time_constant_s: float = 0.1
     drag_per_ms: float = 0.15

@@ -4,6 +4,7 @@ supervision (PX4's setpoint-stream rule and loss failsafe) and the ground-truth 
 from __future__ import annotations
 
 import logging
+import os
 import threading
 import time
 from collections import deque
@@ -36,6 +37,8 @@ class ServerConfig:
     offboard_loss_timeout_s: float = 1.0
     offboard_stream_window_s: float = 0.5
     failsafe_land_after_s: float = 10.0
+    parent_pid: int | None = None
+    """Exit when this process is no longer our parent (the launcher died without stopping us)."""
     physics: PhysicsConfig = field(default_factory=PhysicsConfig)
 
 
@@ -170,6 +173,9 @@ class SimVehicleServer:
                 for msg in due:
                     self.link.send(msg)
                 self.truth.publish(truth)
+                if self.cfg.parent_pid is not None and os.getppid() != self.cfg.parent_pid:
+                    logger.warning("SimVehicle: parent process %d is gone; exiting", self.cfg.parent_pid)
+                    break
                 self._stop.wait(max(0.0, next_tick - time.monotonic()))
         finally:
             self._stop.set()
