@@ -94,6 +94,7 @@ def config_from_args(args: argparse.Namespace) -> ServerConfig:
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the simulator; prints one ``ready`` line on stdout, returns 0 after SIGTERM/SIGINT."""
     args = build_parser().parse_args(argv)
+    sys.setswitchinterval(0.001)  # the MAVLink reader gets the interpreter promptly when a command arrives
     logging.basicConfig(
         level=args.log_level.upper(),
         stream=sys.stderr,

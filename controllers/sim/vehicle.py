@@ -169,10 +169,11 @@ class SimVehicleServer:
                     if shown != self._shown and not any(m.get_msgId() == 0 for m in due):
                         due.append(self.streams.heartbeat())
                     self._shown = shown
-                    truth = self.truth.snapshot()
+                    truth = self.truth.snapshot() if self.truth.has_subscribers else None
                 for msg in due:
                     self.link.send(msg)
-                self.truth.publish(truth)
+                if truth is not None:
+                    self.truth.publish(truth)
                 if self.cfg.parent_pid is not None and os.getppid() != self.cfg.parent_pid:
                     logger.warning("SimVehicle: parent process %d is gone; exiting", self.cfg.parent_pid)
                     break

@@ -86,6 +86,8 @@ async def test_connects_as_px4_quadrotor_with_telemetry_flowing(sim_vehicle: Sim
         assert home.absolute_altitude_m == pytest.approx(488.0, abs=0.01)
         gps = await drone.telemetry.gps_info()
         assert gps.num_satellites >= 8
+        battery = await drone.telemetry.battery()
+        assert battery.voltage_v == pytest.approx(16.8, abs=0.1) and battery.remaining_percent > 99.0
         counts: dict[str, int] = {"attitude": 0, "position": 0}
 
         async def count(name: str, stream: AsyncIterator[object]) -> None:

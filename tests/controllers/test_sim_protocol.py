@@ -197,3 +197,20 @@ def test_message_interval_changes_and_stops_a_stream(shared_gcs: mavutil.mavfile
         == M.MAV_RESULT_ACCEPTED
     )
     assert count(shared_gcs, "ATTITUDE", 0.3) >= 8  # back to the default rate
+
+
+def test_setpoint_arrivals_are_stamped_on_the_shared_monotonic_clock(
+    sim_vehicle: SimVehicle, gcs: mavutil.mavfile
+) -> None:
+    stamps = []
+    for vx in (0.1, 0.2, 0.3):
+        before = time.monotonic_ns()
+        send_velocity(gcs, vx)
+        stamps.append((before, time.monotonic_ns()))
+        time.sleep(0.05)
+    with sim_vehicle.truth(subscribe=False) as truth:
+        records = truth.request({"cmd": "setpoints", "since_mono_ns": stamps[0][0] - 1})["records"]
+    assert [r["vx"] for r in records] == pytest.approx([0.1, 0.2, 0.3])
+    assert all(r["frame"] == M.MAV_FRAME_BODY_NED for r in records)
+    for (before, after), record in zip(stamps, records, strict=True):
+        assert before - 1_000_000 <= record["t_mono_ns"] <= after + 20_000_000
