@@ -164,6 +164,9 @@ class SimVehicleServer:
                     next_tick = now + dt
                 with self.lock:
                     self._supervise_offboard(time.monotonic_ns())
+                    for text in self.vehicle.events:
+                        self.status_text(mavlink.MAV_SEVERITY_INFO, text)
+                    self.vehicle.events.clear()
                     due = self.streams.due(now)
                     shown = (self.vehicle.mode, self.vehicle.armed)
                     if shown != self._shown and not any(m.get_msgId() == 0 for m in due):

@@ -107,6 +107,8 @@ def test_land_descends_touches_down_and_disarms() -> None:
     assert v.vel[2] == pytest.approx(0.7, abs=0.05)
     run(v, 2.0 / 0.7 + v.cfg.land_disarm_delay_s)
     assert not v.in_air and not v.armed and v.altitude == 0.0
+    assert "Takeoff detected" in v.events
+    assert v.events[-2:] == ["Landing detected at n=0.0 e=0.0", "Disarmed by landing"]
 
 
 def test_disarm_in_air_refused_unless_forced() -> None:

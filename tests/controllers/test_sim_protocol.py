@@ -138,6 +138,8 @@ def test_force_disarm_in_air_drops_the_vehicle(sim_vehicle: SimVehicle, gcs: mav
         time.sleep(0.05)
     assert command(gcs, M.MAV_CMD_COMPONENT_ARM_DISARM, 0) == M.MAV_RESULT_DENIED
     assert command(gcs, M.MAV_CMD_COMPONENT_ARM_DISARM, 0, 21196) == M.MAV_RESULT_ACCEPTED
+    text = receive(gcs, "STATUSTEXT")
+    assert text is not None and text.text == "Disarmed in the air (forced)"
     time.sleep(1.0)
     state = truth.latest()
     assert not state["armed"] and not state["in_air"] and state["d"] == 0.0
