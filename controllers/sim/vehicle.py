@@ -183,6 +183,8 @@ class SimVehicleServer:
                 self._stop.wait(max(0.0, next_tick - time.monotonic()))
         finally:
             self._stop.set()
+            self.link.wake()
+            self.truth.wake()
             for t in threads:
                 t.join(timeout=1.0)
             self.link.close()
