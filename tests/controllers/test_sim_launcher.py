@@ -45,9 +45,7 @@ def test_simulator_exits_when_its_parent_dies_without_stopping_it() -> None:
         "time.sleep(30)\n"
     )
     env = {**os.environ, "PYTHONPATH": str(REPO_ROOT)}
-    with subprocess.Popen(
-        [sys.executable, "-c", script], stdout=subprocess.PIPE, env=env, cwd=REPO_ROOT
-    ) as parent:
+    with subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, env=env, cwd=REPO_ROOT) as parent:
         assert parent.stdout is not None
         pid = int(parent.stdout.readline())
         assert _alive(pid)
