@@ -62,7 +62,10 @@ async def wait_until(condition: Callable[[], Any], timeout: float, what: str) ->
 
 @asynccontextmanager
 async def flying_core(tmp_path: Path, *, altitude: float = 3.0, **overrides: Any) -> AsyncIterator[UavCore]:
-    """A core on the simulated vehicle with the steering test processor, airborne at ``altitude``."""
+    """A core on the simulated vehicle, airborne at ``altitude``; by default with the steering test processor.
+
+    ``overrides`` are config keys (``processor=``, ``source=``, ``max_t=`` ...).
+    """
     processor = tmp_path / "steering.py"
     processor.write_text(STEERING_PROCESSOR)
     settings = {"fc": "sim", "source": "synthetic:?width=160&height=120", "processor": f"{processor}:Steering",
