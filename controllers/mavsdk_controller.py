@@ -166,14 +166,14 @@ class MavsdkController:
         """Stop a running vector (zero, hold: best effort), stop streams, release MAVSDK. Idempotent."""
         if self._closed:
             return
-        self._closed = True
-        self._stop.set()
         if self._vectors.active or self._vectors.engaged:
             try:
                 async with asyncio.timeout(CLOSE_HOLD_TIMEOUT_S):
                     await self._vectors.stop_and_hold()
             except (ControllerError, TimeoutError) as exc:
                 logger.error("MavsdkController: could not put the vehicle in hold while closing: %s", exc)
+        self._closed = True
+        self._stop.set()
         await self._vectors.cancel()
         if self._heartbeat_task is not None:
             self._heartbeat_task.cancel()
@@ -243,10 +243,17 @@ class MavsdkController:
                 lambda: ardupilot.start_circle(self._direct, self._param, self._sysid, radius_m, velocity_ms),
             )
             return
-        # NaN centre: orbit around the current position.
-        nan, behaviour = math.nan, OrbitYawBehavior.HOLD_FRONT_TO_CIRCLE_CENTER
+        # Centre: the current position, given explicitly, because MAVSDK sends a NaN latitude as
+        # COMMAND_INT x = INT32_MIN (not INT32_MAX, "current position"). Altitude NaN: keep the current one
+        # (MAVSDK labels z GLOBAL_RELATIVE_ALT while the API takes AMSL; NaN avoids the ambiguity).
+        here = await self._command("do_orbit", self._telemetry.position)
+        lat, lon, behaviour = (
+            here.latitude_deg,
+            here.longitude_deg,
+            OrbitYawBehavior.HOLD_FRONT_TO_CIRCLE_CENTER,
+        )
         await self._command(
-            "do_orbit", lambda: self._action.do_orbit(radius_m, velocity_ms, behaviour, nan, nan, nan)
+            "do_orbit", lambda: self._action.do_orbit(radius_m, velocity_ms, behaviour, lat, lon, math.nan)
         )
 
     async def set_fly_vector(self, vx: float, vy: float, t: float) -> None:
