@@ -32,7 +32,8 @@ ACCEPTED, DENIED, TEMP_REJECTED, UNSUPPORTED = (
     M.MAV_RESULT_TEMPORARILY_REJECTED,
     M.MAV_RESULT_UNSUPPORTED,
 )
-_INT_UNSET = 0x7FFFFFFF
+_INT_UNSET = (0, 0x7FFFFFFF, -0x80000000)
+"""COMMAND_INT x/y values that mean 'not given' (MAVSDK sends NaN as INT32_MIN)."""
 
 
 class Cmd:
@@ -43,8 +44,8 @@ class Cmd:
         self.src = (msg.get_srcSystem(), msg.get_srcComponent())
         self.p = [msg.param1, msg.param2, msg.param3, msg.param4]
         if msg.get_type() == "COMMAND_INT":
-            self.x = None if msg.x in (_INT_UNSET, 0) else msg.x * 1e-7
-            self.y = None if msg.y in (_INT_UNSET, 0) else msg.y * 1e-7
+            self.x = None if msg.x in _INT_UNSET else msg.x * 1e-7
+            self.y = None if msg.y in _INT_UNSET else msg.y * 1e-7
             self.z = msg.z
         else:
             self.x = msg.param5 if math.isfinite(msg.param5) and msg.param5 != 0 else None
@@ -113,6 +114,7 @@ class CommandHandler:
         if msg.target_system not in (0, 1):
             return
         cmd = Cmd(msg)
+        logger.debug("SimVehicle: %s", msg)
         handler = self._handlers.get(cmd.id)
         if handler is None:
             result = UNSUPPORTED

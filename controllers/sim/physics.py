@@ -49,7 +49,7 @@ class PhysicsConfig:
     land_disarm_delay_s: float = 1.0
     preflight_disarm_s: float = 10.0
     battery_flight_minutes: float = 20.0
-    gps_fix_after_s: float = 1.0
+    gps_fix_after_s: float = 0.5
     takeoff_alt_m: float = 2.5
     rtl_alt_m: float = 10.0
     noise: bool = False

@@ -18,7 +18,7 @@ from controllers.sim.physics import Multicopter
 M = mavlink
 DEFAULT_RATES_HZ: dict[int, float] = {
     M.MAVLINK_MSG_ID_HEARTBEAT: 1.0,
-    M.MAVLINK_MSG_ID_SYS_STATUS: 2.0,
+    M.MAVLINK_MSG_ID_SYS_STATUS: 5.0,
     M.MAVLINK_MSG_ID_EXTENDED_SYS_STATE: 5.0,
     M.MAVLINK_MSG_ID_ATTITUDE: 50.0,
     M.MAVLINK_MSG_ID_ATTITUDE_QUATERNION: 50.0,

@@ -56,6 +56,8 @@ class SimVehicleServer:
         self.setpoint_log: deque[SetpointRecord] = deque(maxlen=20_000)
         self.failsafe_since_ns: int | None = None
         self._stop = threading.Event()
+        self._shown: tuple[Mode, bool] | None = None
+        """(mode, armed) in the last tick: a change is announced by an extra HEARTBEAT at once."""
 
     # ------------------------------------------------------------- offboard
     def setpoint_fresh(self, now_ns: int | None = None) -> bool:
@@ -155,6 +157,10 @@ class SimVehicleServer:
                 with self.lock:
                     self._supervise_offboard(time.monotonic_ns())
                     due = self.streams.due(now)
+                    shown = (self.vehicle.mode, self.vehicle.armed)
+                    if shown != self._shown and not any(m.get_msgId() == 0 for m in due):
+                        due.append(self.streams.heartbeat())
+                    self._shown = shown
                     truth = self.truth.snapshot()
                 for msg in due:
                     self.link.send(msg)
