@@ -120,8 +120,10 @@ class MavsdkController:
             await self._mavsdk.add_any_connection(conn.url)
         except MavsdkConnectionError as exc:
             raise connection_failed(conn, str(exc)) from exc
-        async with asyncio.timeout(heartbeat_timeout + 2.0):
-            system = await self._mavsdk.first_autopilot(timeout_s=heartbeat_timeout)
+        system = None
+        with contextlib.suppress(TimeoutError):  # belt and braces over MAVSDK's own timeout
+            async with asyncio.timeout(heartbeat_timeout + 2.0):
+                system = await self._mavsdk.first_autopilot(timeout_s=heartbeat_timeout)
         if system is None:
             raise await no_heartbeat_error(conn, heartbeat_timeout)
         self._system = system
@@ -178,7 +180,7 @@ class MavsdkController:
         if self._heartbeat_task is not None:
             self._heartbeat_task.cancel()
             await asyncio.gather(self._heartbeat_task, return_exceptions=True)
-        await asyncio.sleep(0)  # let telemetry generators run their finally (unsubscribe) first
+        # Telemetry iterators end on _stop; their unsubscribe is a no-op once MAVSDK is destroyed.
         mavsdk, self._mavsdk = self._mavsdk, None
         if mavsdk is not None:
             await asyncio.to_thread(mavsdk.destroy)

@@ -21,6 +21,7 @@ from controllers import connect_controller
 from controllers.mavsdk_controller import MavsdkController
 from controllers.sim.launcher import SimVehicle
 from controllers.sim.truth import TruthClient
+from controllers.sim_controller import SimController
 from uav_tui.errors import CommandDenied, ConnectError
 
 pytestmark = pytest.mark.asyncio(loop_scope="module")
@@ -74,8 +75,8 @@ class Flight:
         return await self.until(settled, 3, "teleport")
 
 
-async def start_flight(*extra_args: str) -> Flight:
-    sim = await asyncio.to_thread(SimVehicle(extra_args=extra_args).start)
+async def start_flight(sim: SimVehicle) -> Flight:
+    """Connect a MavsdkController to a running simulator."""
     fc = MavsdkController()
     await fc.connect(sim.connection_string, heartbeat_timeout=10)
     flight = Flight(fc, sim, sim.truth())
@@ -83,21 +84,18 @@ async def start_flight(*extra_args: str) -> Flight:
     return flight
 
 
-async def end_flight(flight: Flight) -> None:
-    await flight.fc.close()
-    await asyncio.to_thread(flight.sim.stop)
-
-
 @pytest_asyncio.fixture(loop_scope="module", scope="module")
 async def airborne() -> AsyncIterator[Flight]:
-    flight = await start_flight()
+    sim = await asyncio.to_thread(SimVehicle().start)
+    flight = await start_flight(sim)
     try:
         await arm_when_ready(flight.fc)
         await flight.fc.takeoff(ALT_M)
         await flight.until(lambda s: -s["d"] > ALT_M - 0.15 and abs(s["vd"]) < 0.1, 15, "takeoff")
         yield flight
     finally:
-        await end_flight(flight)
+        await flight.fc.close()
+        await asyncio.to_thread(sim.stop)
 
 
 async def arm_when_ready(fc: MavsdkController) -> None:
@@ -175,8 +173,22 @@ async def test_none_means_no_vehicle() -> None:
     assert await connect_controller("none") is None
 
 
-async def test_connect_detects_px4_and_telemetry_arrives_at_documented_rates() -> None:
-    flight = await start_flight()
+async def test_sim_starts_its_own_vehicle_and_stops_it_on_close() -> None:
+    fc = await connect_controller("sim")
+    assert isinstance(fc, SimController)
+    try:
+        assert fc.sim.running
+        assert fc.description.startswith("simulated vehicle (PX4 via udpin://0.0.0.0:")
+        truth = fc.sim.truth()  # the platform reaches ground truth this way
+        states = [await asyncio.to_thread(truth.wait_latest, 2.0) for _ in range(2)]
+        assert any("n" in state for state in states)
+    finally:
+        await fc.close()
+    assert not fc.sim.running
+
+
+async def test_connect_detects_px4_and_telemetry_arrives_at_documented_rates(sim_vehicle: SimVehicle) -> None:
+    flight = await start_flight(sim_vehicle)
     try:
         assert flight.fc.autopilot == "px4"
         assert flight.fc.description == f"PX4 via {flight.sim.connection_string}"
@@ -196,7 +208,7 @@ async def test_connect_detects_px4_and_telemetry_arrives_at_documented_rates() -
         await flight.fc.close()  # ends the telemetry stream
         await asyncio.wait_for(task, 2.0)
     finally:
-        await end_flight(flight)
+        await flight.fc.close()
     per_s = {key: n / 2.0 for key, n in counts.items()}
     for key in ("lat_deg", "roll_deg", "vn_ms", "north_m"):  # documented 10 Hz
         assert per_s[key] >= 6.0, (key, per_s)
@@ -321,8 +333,9 @@ async def test_close_during_a_vector_holds_and_stops_streaming(airborne: Flight)
 # ---- a whole flight: RTL and land ----------------------------------------------------------------
 
 
-async def test_rtl_returns_home_and_land_lands() -> None:
-    flight = await start_flight("--rtl-alt", "2")
+@pytest.mark.parametrize("sim_vehicle", [{"extra_args": ["--rtl-alt", "2"]}], indirect=True)
+async def test_rtl_returns_home_and_land_lands(sim_vehicle: SimVehicle) -> None:
+    flight = await start_flight(sim_vehicle)
     try:
         await arm_when_ready(flight.fc)
         await flight.fc.takeoff(2.0)
@@ -335,4 +348,4 @@ async def test_rtl_returns_home_and_land_lands() -> None:
         await flight.until(lambda s: s["mode"] == "LAND", 1, "land mode")
         await flight.until(lambda s: not s["in_air"], 10, "landed")
     finally:
-        await end_flight(flight)
+        await flight.fc.close()

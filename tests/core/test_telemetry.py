@@ -12,6 +12,8 @@ import numpy as np
 import pytest
 
 from controllers.base import TELEMETRY_FIELDS, Telemetry
+from controllers.mavsdk_controller import MavsdkController
+from controllers.sim.launcher import SimVehicle
 from uav_tui.telemetry import TelemetryManager
 
 
@@ -81,3 +83,33 @@ def test_a_failing_listener_does_not_stop_the_others() -> None:
     tm.add_listener(seen.append)
     tm.apply({"battery_v": 12.1})
     assert seen[0].battery_v == 12.1
+
+
+async def test_manager_follows_the_simulated_vehicle_and_notices_link_loss(sim_vehicle: SimVehicle) -> None:
+    fc = MavsdkController()
+    await fc.connect(sim_vehicle.connection_string)
+    tm = TelemetryManager(fc)
+    rows: list[Telemetry] = []
+    tm.add_listener(rows.append)
+    task = asyncio.create_task(tm.run())
+    try:
+        await asyncio.sleep(1.5)
+        snap = await asyncio.to_thread(tm.snapshot)  # processors read it from their own thread
+        assert snap.lat_deg == pytest.approx(sim_vehicle.home.lat_deg, abs=1e-5)
+        assert snap.lon_deg == pytest.approx(sim_vehicle.home.lon_deg, abs=1e-5)
+        assert snap.rel_alt_m == pytest.approx(0.0, abs=0.2)
+        assert snap.armed is False and snap.in_air is False
+        assert snap.flight_mode is not None and snap.battery_v is not None and snap.fc_boot_ms is not None
+        assert 0.0 <= snap.heartbeat_age_s < 1.5
+        assert time.monotonic_ns() - snap.t_mono_ns < 0.5e9
+        assert tm.link_alive(1.5)
+        assert len(rows) == tm.updates > 20
+        assert rows == sorted(rows, key=lambda t: t.t_mono_ns)
+
+        await asyncio.to_thread(sim_vehicle.stop)
+        await asyncio.sleep(2.0)
+        assert not tm.link_alive(1.5)
+        assert tm.snapshot().heartbeat_age_s > 1.5
+    finally:
+        await fc.close()
+    await asyncio.wait_for(task, 2.0)  # the stream ends when the controller closes
