@@ -14,7 +14,6 @@ from typing import Any, TypeVar
 from mavsdk.asyncio import Autopilot, ComponentType, Configuration, Mavsdk, MavsdkConnectionError, System
 from mavsdk.asyncio.plugins.action import ActionAsync, OrbitYawBehavior
 from mavsdk.asyncio.plugins.mavlink_direct import MavlinkDirectAsync
-from mavsdk.asyncio.plugins.offboard import OffboardAsync, VelocityBodyYawspeed
 from mavsdk.asyncio.plugins.param import ParamAsync
 from mavsdk.asyncio.plugins.telemetry import TelemetryAsync
 
@@ -26,6 +25,7 @@ from controllers.connection import (
     no_heartbeat_error,
     parse_connection,
 )
+from controllers.mavlink_commands import px4_set_mode, send_command, velocity_body_setpoint
 from controllers.mavsdk_errors import map_mavsdk_errors
 from controllers.mavsdk_log import route_mavsdk_log
 from controllers.mavsdk_telemetry import merged_updates, set_rates
@@ -77,12 +77,12 @@ class MavsdkController:
         self._system: System | None = None
         self._sysid = 1
         self._action: ActionAsync
-        self._offboard: OffboardAsync
         self._telemetry: TelemetryAsync
         self._param: ParamAsync
         self._direct: MavlinkDirectAsync
         self._last_heartbeat = -math.inf
-        self._heartbeat_task: asyncio.Task[None] | None = None
+        self._flight_mode: tuple[str | None, float] = (None, -math.inf)
+        self._watchers: list[asyncio.Task[None]] = []
         self._stop = asyncio.Event()
         self._closed = False
         self._vectors = VectorStream(self, rate_hz=vector_rate_hz, name="MavsdkController")
@@ -132,11 +132,13 @@ class MavsdkController:
         kind = await system.autopilot_type()
         self.autopilot = {Autopilot.PX4: "px4", Autopilot.ARDUPILOT: "ardupilot"}.get(kind, "unknown")
         self._action = ActionAsync(system)
-        self._offboard = OffboardAsync(system)
         self._telemetry = TelemetryAsync(system)
         self._param = ParamAsync(system)
         self._direct = MavlinkDirectAsync(system)
-        self._heartbeat_task = asyncio.create_task(self._watch_heartbeats(), name="mavsdk-heartbeat")
+        self._watchers = [
+            asyncio.create_task(self._watch_heartbeats(), name="mavsdk-heartbeat"),
+            asyncio.create_task(self._watch_flight_mode(), name="mavsdk-flight-mode"),
+        ]
         await self._ask_for_telemetry()
 
     async def _ask_for_telemetry(self) -> None:
@@ -160,6 +162,16 @@ class MavsdkController:
                     continue
             self._last_heartbeat = time.monotonic()
 
+    async def _watch_flight_mode(self) -> None:
+        async for mode in self._telemetry.subscribe_flight_mode():
+            self._flight_mode = (mode.name, time.monotonic())
+
+    def flight_mode_since(self, t_mono: float) -> str | None:
+        """The flight mode MAVSDK last reported, if it arrived after ``t_mono`` (ArduCopter GUIDED
+        reads OFFBOARD, LOITER reads HOLD)."""
+        mode, received = self._flight_mode
+        return mode if received > t_mono else None
+
     def heartbeat_age_s(self) -> float:
         """Seconds since the last heartbeat from the autopilot (inf before the first)."""
         return time.monotonic() - self._last_heartbeat
@@ -177,9 +189,9 @@ class MavsdkController:
         self._closed = True
         self._stop.set()
         await self._vectors.cancel()
-        if self._heartbeat_task is not None:
-            self._heartbeat_task.cancel()
-            await asyncio.gather(self._heartbeat_task, return_exceptions=True)
+        for task in self._watchers:
+            task.cancel()
+        await asyncio.gather(*self._watchers, return_exceptions=True)
         # Telemetry iterators end on _stop; their unsubscribe is a no-op once MAVSDK is destroyed.
         mavsdk, self._mavsdk = self._mavsdk, None
         if mavsdk is not None:
@@ -279,25 +291,31 @@ class MavsdkController:
         """True while a vector's setpoints are being streamed."""
         return self._vectors.active
 
+    @property
+    def last_vector_end(self) -> str:
+        """How the last vector ended: completed, stopped, vehicle left offboard (MODE), failed: ..."""
+        return self._vectors.last_end
+
     # ---- OffboardPort (used by VectorStream) -----------------------------------------------------
 
     async def send_velocity_body(self, forward_ms: float, right_ms: float) -> None:
-        setpoint = VelocityBodyYawspeed(forward_ms, right_ms, 0.0, 0.0)
-        await self._command("set_fly_vector", lambda: self._offboard.set_velocity_body(setpoint))
+        setpoint = velocity_body_setpoint(self._sysid, forward_ms, right_ms)
+        await self._command("set_fly_vector", lambda: self._direct.send_message(setpoint))
 
     async def start_offboard(self) -> None:
         if self.autopilot == "ardupilot":
             # GUIDED takes velocity targets; they must be renewed within GUID_TIMEOUT (3 s).
             await self._ardupilot_mode("GUIDED", "set_fly_vector")
         else:
-            await self._command("set_fly_vector", self._offboard.start)
+            # PX4 accepts OFFBOARD only while setpoints stream (VectorStream streams first).
+            command = px4_set_mode(self._sysid, "OFFBOARD")
+            await self._command("set_fly_vector", lambda: send_command(self._direct, command))
 
     async def stop_offboard(self) -> None:
         if self.autopilot == "ardupilot":
             await self._ardupilot_mode("LOITER", "hold")
         else:
-            # PX4: offboard.stop() switches to HOLD, and MAVSDK stops re-sending setpoints.
-            await self._command("hold", self._offboard.stop)
+            await self._command("hold", self._action.hold)
 
     # ---- telemetry -------------------------------------------------------------------------------
 

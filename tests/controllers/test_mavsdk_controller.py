@@ -253,6 +253,7 @@ async def test_vector_moves_along_the_heading_then_holds(
     await airborne.until(lambda s: s["mode"] == "OFFBOARD", 1.0, "offboard")
     ended = await airborne.until(lambda s: s["mode"] == "HOLD", 3.5, "hold after the vector")
     assert not airborne.fc.vector_active
+    assert airborne.fc.last_vector_end == "completed"
     assert ended["t_mono_ns"] - since < 3.0e9
     after = await airborne.until(lambda s: math.hypot(s["vn"], s["ve"]) < 0.05, 3.0, "stopped")
     moved_forward, moved_right = body_displacement(before, after)
@@ -302,8 +303,29 @@ async def test_hold_preempts_a_running_vector(airborne: Flight) -> None:
     assert records == []  # nothing keeps streaming (MAVSDK's own re-sending stopped too)
 
 
+async def test_a_stalled_loop_stops_the_setpoints_and_the_vehicle_fails_safe(airborne: Flight) -> None:
+    """Nothing re-sends setpoints behind our back: when our loop stalls, the vehicle's failsafe holds."""
+    await airborne.reset(0.0)
+    await airborne.fc.set_fly_vector(0.5, 0.0, 2.0)
+    await asyncio.sleep(0.3)
+    stalled_at = time.monotonic_ns()
+    time.sleep(1.5)  # a blocked event loop (the simulator's offboard-loss timeout is 1 s)
+    resumed_at = time.monotonic_ns()
+    assert airborne.now()["mode"] == "HOLD"
+    records = (await airborne.request(cmd="setpoints", since_mono_ns=stalled_at))["records"]
+    assert [r for r in records if stalled_at + 0.1e9 < r["t_mono_ns"] < resumed_at - 0.1e9] == []
+    await asyncio.sleep(0.2)  # the stream sees the mode change and gives up the vector
+    assert not airborne.fc.vector_active
+    assert airborne.fc.last_vector_end == "vehicle left offboard (HOLD)"
+    since = time.monotonic_ns()
+    await asyncio.sleep(0.3)
+    assert (await airborne.request(cmd="setpoints", since_mono_ns=since))["records"] == []
+    assert airborne.now()["mode"] == "HOLD"
+
+
 async def test_orbit_holds_its_radius(airborne: Flight) -> None:
     centre = await airborne.reset(0.0)
+    await asyncio.sleep(0.3)  # the orbit centre is the position telemetry reports: let it see the teleport
     await airborne.fc.do_orbit(3.0, 2.0)
     await airborne.until(lambda s: s["mode"] == "ORBIT", 1.0, "orbit mode")
     await asyncio.sleep(3.0)  # fly out to the circle
