@@ -46,6 +46,8 @@ class TelemetryManager:
         """Updates received from the controller."""
         self.saves_dropped = 0
         """``save()`` calls made while no saver was set (recording off)."""
+        self.listener_errors = 0
+        """Exceptions raised by listeners (each listener's first one is logged)."""
         self._lock = threading.Lock()
         self._latest = Telemetry()
         self._listeners: list[Listener] = []
@@ -86,7 +88,10 @@ class TelemetryManager:
             try:
                 listener(latest)
             except Exception:
-                logger.exception("TelemetryManager: listener %r failed", listener)
+                self.listener_errors += 1
+                if f"listener-{id(listener)}" not in self._warned:
+                    self._warned.add(f"listener-{id(listener)}")
+                    logger.exception("TelemetryManager: listener %r failed (logged once)", listener)
         return latest
 
     def snapshot(self) -> Telemetry:
