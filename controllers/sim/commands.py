@@ -73,6 +73,8 @@ class CommandHandler:
             M.MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES: self._capabilities,
         }
         self.params = ParamStore(self._param_list())
+        self._after_ack: list[mavlink.MAVLink_message] = []
+        """Messages a command asked for, sent right after its COMMAND_ACK."""
 
     def _param_list(self) -> list[Param]:
         cfg, pc = self.s.cfg, self.v.cfg
@@ -133,6 +135,9 @@ class CommandHandler:
             _name(M.enums["MAV_RESULT"], result),
         )
         self.s.link.send(self.s.link.encoder.command_ack_encode(cmd.id, result, 0, 0, *cmd.src))
+        for reply in self._after_ack:
+            self.s.link.send(reply)
+        self._after_ack.clear()
 
     def _mode_action(self, action: Callable[[Cmd], None]) -> Callable[[Cmd], int]:
         def run(cmd: Cmd) -> int:
@@ -224,11 +229,11 @@ class CommandHandler:
         msg_id = int(cmd.p[0])
         if not self.s.streams.can_build(msg_id):
             return UNSUPPORTED
-        self.s.link.send(self.s.streams.build(msg_id))
+        self._after_ack.append(self.s.streams.build(msg_id))
         return ACCEPTED
 
     def _capabilities(self, cmd: Cmd) -> int:
-        self.s.link.send(self.s.streams.autopilot_version())
+        self._after_ack.append(self.s.streams.autopilot_version())
         return ACCEPTED
 
     # ----------------------------------------------------------- parameters

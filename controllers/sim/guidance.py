@@ -161,8 +161,9 @@ class Guidance:
         cfg = self.v.cfg
         vel = self._toward(self.target, cfg.cruise_speed_ms, cfg.takeoff_speed_ms, cfg.fast_descent_ms)
         if abs(self.v.pos[2] - self.target[2]) < 0.1:
-            self.hold()
-            self.target = self.target.copy()
+            goal = self.target
+            self.hold()  # PX4 switches to HOLD at the takeoff altitude
+            self.target = goal
         return vel, self._yaw_goal, None
 
     def _descent_speed(self) -> float:

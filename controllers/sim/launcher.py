@@ -92,6 +92,8 @@ class SimVehicle:
             f"{self.wind[0]},{self.wind[1]}",
             "--seed",
             str(self.seed),
+            "--parent-pid",
+            str(os.getpid()),
             *self.extra_args,
         ]
 

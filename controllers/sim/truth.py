@@ -112,11 +112,13 @@ class TruthClient:
                 msg = json.loads(data)
             except (TimeoutError, OSError, ValueError):
                 continue
+            if not isinstance(msg, dict):
+                continue
             with self._cond:
-                if "id" in msg:
+                if "ok" not in msg:
+                    self._latest = msg
+                elif "id" in msg:
                     self._replies[msg["id"]] = msg
                     if len(self._replies) > 64:
                         self._replies.pop(next(iter(self._replies)))
-                else:
-                    self._latest = msg
                 self._cond.notify_all()

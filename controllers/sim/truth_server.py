@@ -75,6 +75,10 @@ class TruthServer:
         self._subscribers: dict[tuple[str, int], None] = {}
         self._sub_lock = threading.Lock()
 
+    @property
+    def has_subscribers(self) -> bool:
+        return bool(self._subscribers)
+
     def snapshot(self) -> dict[str, Any]:
         """Truth now (the caller holds the server lock)."""
         return truth_dict(self.s.vehicle, self.s)

@@ -86,6 +86,8 @@ async def test_connects_as_px4_quadrotor_with_telemetry_flowing(sim_vehicle: Sim
         assert home.absolute_altitude_m == pytest.approx(488.0, abs=0.01)
         gps = await drone.telemetry.gps_info()
         assert gps.num_satellites >= 8
+        battery = await drone.telemetry.battery()
+        assert battery.voltage_v == pytest.approx(16.8, abs=0.1) and battery.remaining_percent > 99.0
         counts: dict[str, int] = {"attitude": 0, "position": 0}
 
         async def count(name: str, stream: AsyncIterator[object]) -> None:
@@ -125,44 +127,33 @@ async def request(truth: TruthClient, cmd: dict[str, Any]) -> dict[str, Any]:
     return reply
 
 
-async def test_body_velocity_moves_the_vehicle_along_its_heading(sim_vehicle: SimVehicle) -> None:
+@pytest.mark.parametrize("sim_vehicle", [{"extra_args": ["--failsafe-land-after", "1.0"]}], indirect=True)
+async def test_body_velocity_follows_heading_and_setpoint_loss_holds_then_lands(
+    sim_vehicle: SimVehicle,
+) -> None:
     truth = sim_vehicle.truth()
     async with connect(sim_vehicle) as drone:
         await take_off(drone, truth)
-        start = (
-            await request(truth, {"cmd": "teleport", "n": 0.0, "e": 0.0, "d": -TAKEOFF_ALT, "yaw": 90.0})
-        )["state"]
+        teleport = {"cmd": "teleport", "n": 0.0, "e": 0.0, "d": -TAKEOFF_ALT, "yaw": 90.0}
+        start = (await request(truth, teleport))["state"]
         await drone.offboard.set_velocity_body(VelocityBodyYawspeed(1.0, 0.0, 0.0, 0.0))
         await drone.offboard.start()
         await wait_truth(truth, lambda s: s["mode"] == "OFFBOARD", 1.0, "OFFBOARD")
-        await asyncio.sleep(2.0)
-        await drone.offboard.set_velocity_body(VelocityBodyYawspeed(0.0, 0.0, 0.0, 0.0))
-        await drone.offboard.stop()
-        end = await wait_truth(
-            truth,
-            lambda s: s["mode"] == "HOLD" and math.hypot(s["vn"], s["ve"]) < 0.05,
-            3.0,
-            "stopped in HOLD",
-        )
-    assert 1.3 < end["e"] - start["e"] < 2.6
-    assert abs(end["n"] - start["n"]) < 0.15
-    assert abs(end["d"] - start["d"]) < 0.15
-    assert end["yaw"] == pytest.approx(90.0, abs=1.0)
-
-
-@pytest.mark.parametrize("sim_vehicle", [{"extra_args": ["--failsafe-land-after", "1.0"]}], indirect=True)
-async def test_setpoints_stopping_triggers_hold_then_land(sim_vehicle: SimVehicle) -> None:
-    truth = sim_vehicle.truth()
-    async with connect(sim_vehicle) as drone:
-        await take_off(drone, truth)
-        await drone.offboard.set_velocity_body(VelocityBodyYawspeed(0.5, 0.0, 0.0, 0.0))
-        await drone.offboard.start()
-        await wait_truth(truth, lambda s: s["mode"] == "OFFBOARD", 1.0, "OFFBOARD")
-        await asyncio.sleep(0.5)
-    # the ground station is gone: no more setpoints
+        await asyncio.sleep(1.5)
+        forward = truth.latest()
+        await drone.offboard.set_velocity_body(VelocityBodyYawspeed(0.0, 1.0, 0.0, 0.0))
+        await asyncio.sleep(1.2)
+        right = truth.latest()
+    # facing east: forward is east, right is south; altitude and heading held
+    assert forward["ve"] == pytest.approx(1.0, abs=0.1) and abs(forward["vn"]) < 0.05
+    assert forward["e"] - start["e"] > 0.8 and abs(forward["n"] - start["n"]) < 0.1
+    assert right["vn"] == pytest.approx(-1.0, abs=0.15) and abs(right["ve"]) < 0.15
+    assert abs(right["d"] - start["d"]) < 0.1 and right["yaw"] == pytest.approx(90.0, abs=1.0)
+    # the ground station is gone, so are the setpoints: HOLD after COM_OF_LOSS_T, then LAND
     held = await wait_truth(truth, lambda s: s["mode"] != "OFFBOARD", 3.0, "offboard-loss failsafe")
     records = (await request(truth, {"cmd": "setpoints", "since_mono_ns": 0}))["records"]
     assert held["mode"] == "HOLD" and held["in_air"]
+    assert records[-1]["frame"] == 8 and records[-1]["vy"] == 1.0  # MAV_FRAME_BODY_NED
     loss_s = (held["t_mono_ns"] - records[-1]["t_mono_ns"]) / 1e9
     assert 0.9 < loss_s < 1.5, loss_s
     landing = await wait_truth(truth, lambda s: s["mode"] == "LAND", 2.0, "failsafe LAND")
@@ -170,12 +161,12 @@ async def test_setpoints_stopping_triggers_hold_then_land(sim_vehicle: SimVehicl
     await wait_truth(truth, lambda s: s["vd"] > 0.5, 2.0, "descending")
 
 
-@pytest.mark.parametrize("sim_vehicle", [{"extra_args": ["--rtl-alt", "2.5"]}], indirect=True)
+@pytest.mark.parametrize("sim_vehicle", [{"extra_args": ["--rtl-alt", "2.0"]}], indirect=True)
 async def test_return_to_launch_climbs_flies_home_and_descends(sim_vehicle: SimVehicle) -> None:
     truth = sim_vehicle.truth()
     async with connect(sim_vehicle) as drone:
         await take_off(drone, truth)
-        await request(truth, {"cmd": "teleport", "n": 4.0, "e": -2.0, "d": -TAKEOFF_ALT, "yaw": 0.0})
+        await request(truth, {"cmd": "teleport", "n": 3.0, "e": -1.0, "d": -TAKEOFF_ALT, "yaw": 0.0})
         await drone.action.return_to_launch()
         max_alt = 0.0
 
@@ -187,7 +178,7 @@ async def test_return_to_launch_climbs_flies_home_and_descends(sim_vehicle: SimV
         end = await wait_truth(truth, landing_at_home, 12.0, "RTL descending at home")
         assert await drone.telemetry.flight_mode() == FlightMode.RETURN_TO_LAUNCH
     assert end["mode"] == "RTL" and end["in_air"]
-    assert max_alt == pytest.approx(2.5, abs=0.2)
+    assert max_alt == pytest.approx(2.0, abs=0.2)
 
 
 async def test_orbit_holds_its_radius_and_shows_as_posctl(sim_vehicle: SimVehicle) -> None:

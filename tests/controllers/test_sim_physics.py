@@ -107,6 +107,8 @@ def test_land_descends_touches_down_and_disarms() -> None:
     assert v.vel[2] == pytest.approx(0.7, abs=0.05)
     run(v, 2.0 / 0.7 + v.cfg.land_disarm_delay_s)
     assert not v.in_air and not v.armed and v.altitude == 0.0
+    assert "Takeoff detected" in v.events
+    assert v.events[-2:] == ["Landing detected at n=0.0 e=0.0", "Disarmed by landing"]
 
 
 def test_disarm_in_air_refused_unless_forced() -> None:
@@ -200,3 +202,25 @@ def test_flat_earth_round_trip() -> None:
     assert Home.parse("1.5, 2.5, 3") == Home(1.5, 2.5, 3.0)
     with pytest.raises(ValueError):
         Home.parse("1,2")
+
+
+def test_reposition_flies_at_cruise_speed_and_holds_there() -> None:
+    v = hovering(2.0)
+    v.guidance.goto(30.0, 0.0, -4.0)
+    top_speed = 0.0
+    for _ in range(round(12.0 / DT)):
+        v.step(DT)
+        top_speed = max(top_speed, math.hypot(v.vel[0], v.vel[1]))
+    assert top_speed == pytest.approx(v.cfg.cruise_speed_ms, abs=0.3)
+    assert v.mode == Mode.HOLD
+    assert v.pos == pytest.approx([30.0, 0.0, -4.0], abs=0.1)
+    assert np.linalg.norm(v.vel) < 0.05
+
+
+def test_battery_drains_in_flight_and_voltage_follows() -> None:
+    v = hovering(2.0)
+    full = v.battery_voltage()
+    level = v.battery
+    run(v, 60.0)
+    assert level - v.battery == pytest.approx(60.0 / (v.cfg.battery_flight_minutes * 60.0), rel=0.01)
+    assert v.battery_voltage() < full
