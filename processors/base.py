@@ -1,0 +1,83 @@
+"""The frame-processor contract: one required method, three optional ones, names as published."""
+
+from __future__ import annotations
+
+import inspect
+from dataclasses import dataclass
+from typing import Any, Protocol, runtime_checkable
+
+import numpy as np
+
+from uav_tui.errors import ProcessorLoadError
+
+OPTIONAL_METHODS = ("catch_cmd", "customize_processing", "getPreparedVector")
+"""Detected once at load time; a processor without ``getPreparedVector`` never moves the vehicle."""
+
+
+@runtime_checkable
+class FrameProcessor(Protocol):
+    """What a researcher writes. No base class is needed; this Protocol is for type checkers.
+
+    ``photo_processing(frame)`` gets the newest BGR uint8 frame and may draw its overlay on it
+    in place (previews show that array). The optional methods::
+
+        catch_cmd(roi)            operator selected (x, y, w, h) in frame pixels
+        customize_processing(id)  operator pressed F1..F4 (id 1..4)
+        getPreparedVector()       (vx, vy, t): body-frame m/s, vx forward, vy right, t seconds; or None
+
+    ``tmMgr`` is set by the platform after construction (the TelemetryManager:
+    ``snapshot()``, ``save(frame, **extra)``). All calls come from one thread.
+    """
+
+    tmMgr: Any
+
+    def photo_processing(self, frame: np.ndarray) -> Any: ...
+
+
+@dataclass(frozen=True)
+class ProcessorInfo:
+    """What the platform learned about a processor class when it loaded it."""
+
+    name: str
+    """``module:Class`` or ``file.py:Class`` as loaded."""
+    path: str | None
+    """The source file, for reloads and error messages."""
+    capabilities: frozenset[str]
+    """Which of OPTIONAL_METHODS it implements."""
+
+
+def validate_processor(instance: object, *, name: str, path: str | None) -> ProcessorInfo:
+    """Check ``instance`` against the contract; raises ProcessorLoadError naming what is missing."""
+    class_name = type(instance).__name__
+    method = getattr(instance, "photo_processing", None)
+    where = f"{class_name} in {path}" if path else class_name
+    if not callable(method):
+        raise ProcessorLoadError(
+            f"{where} has no photo_processing(self, frame) method: it is the one method a processor must have",
+            path=path, class_name=class_name, missing="photo_processing",
+        )
+    _require_arity(method, 1, where, path, class_name, "photo_processing(self, frame)")
+    capabilities = set()
+    for optional, signature in zip(OPTIONAL_METHODS, ("catch_cmd(self, roi)", "customize_processing(self, id)",
+                                                      "getPreparedVector(self)"), strict=True):
+        candidate = getattr(instance, optional, None)
+        if candidate is None:
+            continue
+        if not callable(candidate):
+            raise ProcessorLoadError(f"{where}.{optional} is not a method; expected {signature}",
+                                     path=path, class_name=class_name, missing=optional)
+        _require_arity(candidate, signature.count(",") , where, path, class_name, signature)
+        capabilities.add(optional)
+    if not hasattr(instance, "tmMgr"):
+        instance.tmMgr = None  # type: ignore[attr-defined]
+    return ProcessorInfo(name=name, path=path, capabilities=frozenset(capabilities))
+
+
+def _require_arity(method: Any, count: int, where: str, path: str | None, class_name: str, signature: str) -> None:
+    try:
+        inspect.signature(method).bind(*([None] * count))
+    except TypeError:
+        raise ProcessorLoadError(f"{where}: wrong signature for {method.__name__}; expected {signature}",
+                                 path=path, class_name=class_name, missing=signature) from None
+    except ValueError:  # builtins without a signature: accept
+        pass

@@ -1,0 +1,132 @@
+"""Finding, importing, constructing and validating a processor named by a spec string."""
+
+from __future__ import annotations
+
+import hashlib
+import importlib
+import importlib.util
+import sys
+import traceback
+from dataclasses import dataclass, field
+from importlib.metadata import entry_points
+from pathlib import Path
+from types import ModuleType
+from typing import Any
+
+from processors.base import ProcessorInfo, validate_processor
+from uav_tui.errors import ProcessorLoadError
+
+ENTRY_POINT_GROUP = "uav_tui.processors"
+"""Installed packages register processors here: ``name = "package.module:Class"``."""
+
+
+@dataclass
+class LoadedProcessor:
+    """A constructed, validated processor and how to load it again."""
+
+    instance: Any
+    info: ProcessorInfo
+    spec: str
+    kwargs: dict[str, Any] = field(default_factory=dict)
+
+
+def load(spec: str, builtins: dict[str, str], kwargs: dict[str, Any] | None = None, *,
+         fresh: bool = False) -> LoadedProcessor:
+    """Load ``spec``: a short name, an entry-point name, ``module:Class`` or ``path/file.py:Class``.
+
+    ``fresh=True`` re-imports the code (for reloading an edited file without restarting).
+    """
+    kwargs = dict(kwargs or {})
+    target = builtins.get(spec) or _entry_point_target(spec) or spec
+    location, sep, class_name = target.rpartition(":")
+    if not sep or not location or not class_name:
+        known = ", ".join(sorted(builtins))
+        raise ProcessorLoadError(
+            f"processor {spec!r} is not a known name ({known}) and not of the form module:Class or path/file.py:Class",
+            class_name=class_name or None,
+        )
+    if location.endswith(".py") or "/" in location or location.startswith("~"):
+        module, path = _import_file(Path(location).expanduser(), class_name, fresh)
+    else:
+        module, path = _import_module(location, class_name, fresh)
+    cls = getattr(module, class_name, None)
+    if not isinstance(cls, type):
+        defined = sorted(name for name, value in vars(module).items()
+                         if isinstance(value, type) and value.__module__ == module.__name__)
+        raise ProcessorLoadError(
+            f"{path or location} has no class {class_name}; classes defined there: {', '.join(defined) or 'none'}",
+            path=path, class_name=class_name, missing=class_name,
+        )
+    try:
+        instance = cls(**kwargs)
+    except Exception as exc:
+        raise ProcessorLoadError(f"{class_name}({_kwargs_text(kwargs)}) raised while constructing: "
+                                 f"{_describe(exc, path)}", path=path, class_name=class_name) from exc
+    info = validate_processor(instance, name=f"{location}:{class_name}", path=path)
+    return LoadedProcessor(instance=instance, info=info, spec=spec, kwargs=kwargs)
+
+
+def _entry_point_target(name: str) -> str | None:
+    for entry in entry_points(group=ENTRY_POINT_GROUP, name=name):
+        return entry.value
+    return None
+
+
+def _import_module(name: str, class_name: str, fresh: bool) -> tuple[ModuleType, str | None]:
+    try:
+        module = importlib.import_module(name)
+        if fresh:
+            module = importlib.reload(module)
+    except ModuleNotFoundError as exc:
+        if exc.name == name or name.startswith(f"{exc.name}."):
+            raise ProcessorLoadError(f"no module named {name!r} (for class {class_name}); is it installed or on "
+                                     "PYTHONPATH? For a file, give its path: path/to/file.py:Class",
+                                     class_name=class_name, missing=name) from exc
+        raise _import_error(exc, None, class_name) from exc
+    except Exception as exc:
+        raise _import_error(exc, None, class_name) from exc
+    return module, getattr(module, "__file__", None)
+
+
+def _import_file(path: Path, class_name: str, fresh: bool) -> tuple[ModuleType, str]:
+    if not path.is_file():
+        raise ProcessorLoadError(f"processor file {path} does not exist (working directory: {Path.cwd()})",
+                                 path=str(path), class_name=class_name, missing=str(path))
+    resolved = path.resolve()
+    module_name = f"uav_tui_user_{resolved.stem}_{hashlib.sha1(str(resolved).encode()).hexdigest()[:8]}"
+    if not fresh and module_name in sys.modules:
+        return sys.modules[module_name], str(resolved)
+    spec = importlib.util.spec_from_file_location(module_name, resolved)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    # The file's own folder first, so a researcher's helper modules beside it import.
+    sys.path.insert(0, str(resolved.parent))
+    try:
+        spec.loader.exec_module(module)
+    except Exception as exc:
+        raise _import_error(exc, str(resolved), class_name) from exc
+    finally:
+        sys.path.remove(str(resolved.parent))
+    sys.modules[module_name] = module
+    return module, str(resolved)
+
+
+def _import_error(exc: BaseException, path: str | None, class_name: str) -> ProcessorLoadError:
+    missing = exc.name if isinstance(exc, ModuleNotFoundError) else None
+    hint = f"; install it (pip install {missing})" if missing else ""
+    return ProcessorLoadError(f"importing {path or 'the processor module'} for {class_name} failed: "
+                              f"{_describe(exc, path)}{hint}", path=path, class_name=class_name, missing=missing)
+
+
+def _describe(exc: BaseException, path: str | None) -> str:
+    """``file:line: Type: message`` for the deepest frame in the researcher's code (or the last one)."""
+    if isinstance(exc, SyntaxError):
+        return f"{exc.filename}:{exc.lineno}: SyntaxError: {exc.msg}"
+    frames = traceback.extract_tb(exc.__traceback__)
+    own = [f for f in frames if path and f.filename == path] or [f for f in frames if "importlib" not in f.filename]
+    where = f"{own[-1].filename}:{own[-1].lineno}: " if own else ""
+    return f"{where}{type(exc).__name__}: {exc}"
+
+
+def _kwargs_text(kwargs: dict[str, Any]) -> str:
+    return ", ".join(f"{key}={value!r}" for key, value in kwargs.items())

@@ -1,0 +1,175 @@
+"""The autonomy gate: the only path from a processor's vector to the flight controller.
+
+It enforces the safety rules of ARCHITECTURE.md: vectors are validated and clamped (rule 1), executed
+only while autonomy is on, the vehicle is armed and in the air, the link is alive and the frame is
+fresh (rule 2), and a watchdog stops autonomy (zero velocity, hold) on a processor stall, repeated
+processor errors, a camera stall or link loss (rule 4). Streaming at >= 10 Hz and the final
+zero + hold of each vector (rule 3) are the controller's ``set_fly_vector``.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import math
+from collections.abc import Callable
+from numbers import Real
+from typing import Any
+
+from controllers.base import FlightController
+from uav_tui.config import SafetyConfig
+from uav_tui.errors import UavError
+from uav_tui.events import EventLog
+from uav_tui.telemetry import TelemetryManager
+from uav_tui.worker import ProcessedFrame
+
+logger = logging.getLogger(__name__)
+
+WATCHDOG_PERIOD_S = 0.1
+
+Vector = tuple[float, float, float]
+
+
+def check_vector(raw: Any, safety: SafetyConfig) -> tuple[Vector | None, str]:
+    """Validate and clamp a processor's vector.
+
+    Returns ``(vector, note)``: the clamped vector and "" or what was clamped; or ``(None, reason)``
+    when it must be rejected (wrong shape or type, NaN/inf, t <= 0).
+    """
+    if not isinstance(raw, (tuple, list)) or len(raw) != 3:
+        return None, f"rejected: expected (vx, vy, t), got {_short(raw)}"
+    if not all(isinstance(v, Real) and not isinstance(v, bool) for v in raw):
+        return None, f"rejected: non-numeric vector {_short(raw)}"
+    vx, vy, t = (float(v) for v in raw)
+    if not all(math.isfinite(v) for v in (vx, vy, t)):
+        return None, f"rejected: non-finite vector {_short(raw)}"
+    if t <= 0:
+        return None, f"rejected: duration t={t:g} must be > 0"
+    limit = safety.max_speed
+    clamped = (max(-limit, min(limit, vx)), max(-limit, min(limit, vy)), min(t, safety.max_t))
+    note = "" if clamped == (vx, vy, t) else f"clamped {_short((vx, vy, t))} to {_short(clamped)}"
+    return clamped, note
+
+
+def _short(value: Any) -> str:
+    if isinstance(value, (tuple, list)):
+        return "(" + ", ".join(f"{v:.3g}" if isinstance(v, float) else repr(v) for v in value) + ")"
+    text = repr(value)
+    return text if len(text) < 40 else text[:37] + "..."
+
+
+class AutonomyGate:
+    """Decides, per processed frame, whether its vector flies; stops autonomy when something fails."""
+
+    def __init__(self, safety: SafetyConfig, telemetry: TelemetryManager, events: EventLog) -> None:
+        self.safety = safety
+        self.telemetry = telemetry
+        self.events = events
+        self.controller: FlightController | None = None
+        self.enabled = False
+        self.stop_reason = ""
+        """Why autonomy last stopped by itself (shown on every interface)."""
+        self.executed = 0
+        self.rejected = 0
+        self.last_vector: Vector | None = None
+        self.last_decision = ""
+        self._pending: tuple[Vector, ProcessedFrame] | None = None
+        self._wake = asyncio.Event()
+
+    def enable(self, origin: str) -> None:
+        if self.controller is None:
+            raise UavError("autonomy needs a flight controller; start with --fc sim or a connection string")
+        self.enabled, self.stop_reason = True, ""
+        self.events.emit("info", "autonomy", "autonomy ON", origin)
+
+    async def disable(self, origin: str, reason: str = "operator", *, hold: bool = True) -> None:
+        """Turn autonomy off; with ``hold`` and a vector running, zero it and hold at once."""
+        was_enabled, self.enabled, self._pending = self.enabled, False, None
+        if reason != "operator":
+            self.stop_reason = reason
+        if was_enabled or reason != "operator":
+            level = "info" if reason == "operator" else "warning"
+            self.events.emit(level, "autonomy", f"autonomy OFF: {reason}", origin)
+        if hold and self.controller is not None and self.controller.vector_active:
+            try:
+                await self.controller.hold()
+            except UavError as exc:
+                self.events.emit("error", "autonomy", f"hold after stopping autonomy failed: {exc}", origin)
+
+    def consider(self, result: ProcessedFrame) -> None:
+        """Decide on ``result``'s vector (on the loop, right after processing); sets ``result.decision``."""
+        if result.vector is None:
+            result.decision = "error" if result.error else "no vector"
+            return
+        vector, note = check_vector(result.vector, self.safety)
+        if vector is None:
+            self.rejected += 1
+            result.decision = note
+            self.last_decision = note
+            self.events.emit("warning", "autonomy", f"frame {result.frame.seq}: vector {note}", "processor")
+            return
+        self.last_vector = vector
+        result.decision = self._why_not(result) or ("executed" + (f" ({note})" if note else ""))
+        self.last_decision = result.decision
+        if result.decision.startswith("executed"):
+            self._pending = (vector, result)
+            self._wake.set()
+
+    def _why_not(self, result: ProcessedFrame) -> str:
+        if not self.enabled:
+            return "not executed: autonomy off"
+        if self.controller is None:
+            return "not executed: no flight controller"
+        snapshot = self.telemetry.snapshot()
+        if not snapshot.armed:
+            return "not executed: vehicle not armed"
+        if not snapshot.in_air:
+            return "not executed: vehicle not in the air"
+        age = self.controller.heartbeat_age_s()
+        if age >= self.safety.link_timeout:
+            return f"not executed: link lost (heartbeat {age:.1f} s old)"
+        if result.frame.age_s >= self.safety.max_frame_age:
+            return f"not executed: frame {result.frame.age_s:.2f} s old"
+        return ""
+
+    async def run(self) -> None:
+        """Send accepted vectors to the controller, newest first; until cancelled."""
+        while True:
+            await self._wake.wait()
+            self._wake.clear()
+            pending, self._pending = self._pending, None
+            if pending is None or not self.enabled or self.controller is None:
+                continue
+            (vx, vy, t), result = pending
+            if result.frame.age_s >= self.safety.max_frame_age:  # it waited too long for the previous command
+                continue
+            try:
+                await self.controller.set_fly_vector(vx, vy, t)
+                self.executed += 1
+            except UavError as exc:
+                await self.disable("autonomy", f"vector failed: {exc}")
+
+    async def watch(self, frame_age: Callable[[], float | None], processor_busy_s: Callable[[], float],
+                    processor_errors: Callable[[], int]) -> None:
+        """Stop autonomy when the processor stalls or keeps failing, the camera stalls or the link is lost."""
+        while True:
+            await asyncio.sleep(WATCHDOG_PERIOD_S)
+            if not self.enabled:
+                continue
+            reason = self._failure(frame_age(), processor_busy_s(), processor_errors())
+            if reason:
+                await self.disable("watchdog", reason)
+
+    def _failure(self, frame_age: float | None, busy_s: float, errors: int) -> str:
+        s = self.safety
+        if busy_s > s.max_t:
+            return f"processor stalled ({busy_s:.1f} s in one call)"
+        if errors >= s.max_processor_errors:
+            return f"processor raised {errors} times in a row"
+        if frame_age is None or frame_age > s.camera_stall:
+            return "camera stalled" if frame_age is None else f"camera stalled (newest frame {frame_age:.1f} s old)"
+        if self.controller is not None:
+            age = self.controller.heartbeat_age_s()
+            if age > s.link_timeout:
+                return f"link lost (heartbeat {age:.1f} s old)"
+        return ""

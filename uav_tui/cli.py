@@ -1,0 +1,81 @@
+"""The ``uav-tui`` command: run the platform (TUI or ``--no-ui``) and its tools.
+
+``uav-tui [options]`` runs; ``uav-tui sim`` starts the simulated vehicle on its own;
+``uav-tui runs`` lists recorded runs; ``uav-tui report RUN`` draws a run's plots.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import logging
+import sys
+from pathlib import Path
+
+from uav_tui.commands import help_text
+from uav_tui.config import add_config_flags, find_config_file, load_config, overrides_from_args
+from uav_tui.errors import ConfigError
+
+TOOLS = ("sim", "runs", "report")
+"""Sub-commands; anything else on the command line configures a run."""
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="uav-tui",
+        description="Camera -> your algorithm -> flight controller, with an operator dashboard.",
+        epilog=f"tools: uav-tui sim | runs | report RUN (each has --help)\n\ncommands (keys, --script, web):\n"
+               f"{help_text()}",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    parser.add_argument("--config", metavar="PATH", help="TOML file (default: $UAV_TUI_CONFIG, ./uav.toml, "
+                        "~/.config/uav-tui/uav.toml)")
+    parser.add_argument("--no-ui", action="store_true", help="run headless: a status line every second")
+    parser.add_argument("--json", action="store_true", help="with --no-ui: print JSON lines instead")
+    parser.add_argument("--duration", type=float, metavar="S", help="stop by itself after S seconds")
+    parser.add_argument("--script", metavar="FILE", help="run operator commands from FILE, one per line")
+    parser.add_argument("--on-hangup", choices=("stop", "continue"), default="stop",
+                        help="when the terminal is lost (SIGHUP): hold and exit (default), or keep running headless")
+    parser.add_argument("--log-level", default="WARNING", choices=("DEBUG", "INFO", "WARNING", "ERROR"))
+    add_config_flags(parser)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else argv
+    if argv and argv[0] in TOOLS:
+        return _run_tool(argv[0], argv[1:])
+    args = build_parser().parse_args(argv)
+    logging.basicConfig(level=args.log_level, format="%(asctime)s %(levelname)s %(name)s: %(message)s")
+    try:
+        config = load_config(find_config_file(args.config), overrides_from_args(args))
+        script = None
+        if args.script:
+            from uav_tui.headless import load_script
+
+            script = load_script(Path(args.script))
+    except ConfigError as exc:
+        print(f"uav-tui: {exc}", file=sys.stderr)
+        return 2
+    if args.no_ui:
+        from uav_tui.headless import HeadlessRunner
+
+        runner = HeadlessRunner(config, duration=args.duration, script=script, json_lines=args.json,
+                                on_hangup=args.on_hangup)
+        try:
+            return asyncio.run(runner.run())
+        except KeyboardInterrupt:
+            return 130
+    from uav_tui.tui import run_tui
+
+    return run_tui(config, duration=args.duration, script=script, on_hangup=args.on_hangup)
+
+
+def _run_tool(name: str, argv: list[str]) -> int:
+    if name == "sim":
+        from controllers.sim.__main__ import main as sim_main
+
+        return sim_main(argv)
+    from uav_tui import runs_cli
+
+    return runs_cli.main(name, argv)

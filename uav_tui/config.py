@@ -1,0 +1,245 @@
+"""Configuration: one TOML file (``uav.toml``), every key overridable by a CLI flag.
+
+Search order for the file: ``--config PATH``, ``$UAV_TUI_CONFIG``, ``./uav.toml``,
+``$XDG_CONFIG_HOME/uav-tui/uav.toml`` (``~/.config/uav-tui/uav.toml``); the first that exists wins,
+none is fine. Keys are unique across sections, so each has one flag: ``max_speed`` -> ``--max-speed``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import difflib
+import math
+import os
+import tomllib
+from dataclasses import MISSING, dataclass, field, fields, replace
+from pathlib import Path
+from typing import Any
+
+from uav_tui.errors import ConfigError
+
+
+def _key(help: str, *, minimum: float | None = None, maximum: float | None = None, default: Any = MISSING,
+         factory: Any = MISSING) -> Any:
+    metadata = {"help": help, "min": minimum, "max": maximum}
+    if factory is not MISSING:
+        return field(default_factory=factory, metadata=metadata)
+    return field(default=default, metadata=metadata)
+
+
+@dataclass(frozen=True)
+class SafetyConfig:
+    """Limits the platform enforces on every vector (ARCHITECTURE.md, safety rules)."""
+
+    max_speed: float = _key("largest |vx|, |vy| executed, m/s", minimum=0.05, maximum=20, default=1.0)
+    max_t: float = _key("longest vector duration, s; also the processor-stall limit", minimum=0.1, maximum=10,
+                        default=2.0)
+    max_frame_age: float = _key("a vector from a frame older than this (s) is not executed", minimum=0.01,
+                                maximum=5, default=0.5)
+    link_timeout: float = _key("heartbeat age (s) after which the link counts as lost", minimum=0.2, maximum=30,
+                               default=1.5)
+    camera_stall: float = _key("no new frame for this long (s) stops autonomy", minimum=0.1, maximum=30,
+                               default=1.0)
+    max_processor_errors: int = _key("consecutive processor exceptions that stop autonomy", minimum=1,
+                                     maximum=1000, default=3)
+    takeoff_alt: float = _key("default takeoff altitude, m", minimum=1, maximum=120, default=5.0)
+
+
+@dataclass(frozen=True)
+class RecordingConfig:
+    """The flight dataset written under ``runs_dir``."""
+
+    record: bool = _key("record the run (telemetry, frames, events)", default=True)
+    runs_dir: str = _key("folder that holds one sub-folder per run", default="runs")
+    record_every: int = _key("also save every Nth raw frame (0 = only frames the processor saves)", minimum=0,
+                             maximum=100000, default=0)
+    jpeg_quality: int = _key("JPEG quality of saved frames", minimum=10, maximum=100, default=90)
+    max_disk_mb: float = _key("stop saving frames when the run folder reaches this size (0 = no cap)",
+                              minimum=0, maximum=1e7, default=0)
+    min_free_mb: float = _key("stop saving frames when the disk has less free space than this", minimum=0,
+                              maximum=1e7, default=200)
+
+
+@dataclass(frozen=True)
+class WebConfig:
+    """The optional WebRTC side page."""
+
+    web: bool = _key("serve the WebRTC page", default=False)
+    web_host: str = _key("address the page binds to", default="0.0.0.0")
+    web_port: int = _key("port of the page", minimum=1, maximum=65535, default=8080)
+    web_token: str = _key("access token (empty = a random one per start)", default="")
+    web_width: int = _key("width of the streamed video, px", minimum=64, maximum=4096, default=640)
+    web_fps: float = _key("frame rate of the streamed video", minimum=1, maximum=60, default=15)
+    camera_mavlink: str = _key("MAVLink camera endpoint for ground-station click-to-track, e.g. "
+                               "udpin:0.0.0.0:14580 (empty = off)", default="")
+
+
+@dataclass(frozen=True)
+class Config:
+    """Everything uav-tui can be told. The first three keys are the three plug-in levels."""
+
+    source: str = _key("camera URI: file:PATH, synthetic:, usb:0, picam:0, rtsp://..., sim:", default="synthetic:")
+    processor: str = _key("processor: short name, module:Class or path/file.py:Class", default="template")
+    fc: str = _key("flight controller: MAVLink connection string, 'sim' (built-in vehicle) or 'none'",
+                   default="none")
+    connect_timeout: float = _key("seconds to wait for the autopilot's first heartbeat", minimum=0.5, maximum=300,
+                                  default=10.0)
+    processor_args: dict[str, Any] = _key("keyword arguments for the processor's constructor", factory=dict)
+    safety: SafetyConfig = field(default_factory=SafetyConfig)
+    recording: RecordingConfig = field(default_factory=RecordingConfig)
+    web: WebConfig = field(default_factory=WebConfig)
+
+
+SECTIONS = {"safety": SafetyConfig, "recording": RecordingConfig, "web": WebConfig}
+"""TOML table name -> the dataclass its keys go to."""
+
+_TOP_LEVEL = tuple(f.name for f in fields(Config) if f.name not in SECTIONS)
+
+
+def default_config_paths() -> list[Path]:
+    """Where ``uav.toml`` is looked for, in order, when ``--config`` is not given."""
+    paths = [Path(p) for p in [os.environ.get("UAV_TUI_CONFIG")] if p]
+    xdg = Path(os.environ.get("XDG_CONFIG_HOME") or Path.home() / ".config")
+    return [*paths, Path("uav.toml"), xdg / "uav-tui" / "uav.toml"]
+
+
+def find_config_file(explicit: str | None) -> Path | None:
+    """The file to load: ``explicit`` (must exist) or the first default path that exists."""
+    if explicit:
+        path = Path(explicit).expanduser()
+        if not path.is_file():
+            raise ConfigError(f"config file {path} does not exist", key="config")
+        return path
+    return next((p for p in default_config_paths() if p.is_file()), None)
+
+
+def load_config(path: Path | None, overrides: dict[str, Any] | None = None) -> Config:
+    """Read ``path`` (None: defaults only), then apply ``overrides`` (flat key -> value, from the CLI)."""
+    data: dict[str, Any] = {}
+    if path is not None:
+        try:
+            data = tomllib.loads(path.read_text())
+        except tomllib.TOMLDecodeError as exc:
+            raise ConfigError(f"{path}: not valid TOML: {exc}", key="config") from None
+    where = str(path) if path else "configuration"
+    top: dict[str, Any] = {}
+    sections: dict[str, dict[str, Any]] = {name: {} for name in SECTIONS}
+    for key, value in data.items():
+        if key in SECTIONS:
+            if not isinstance(value, dict):
+                raise ConfigError(f"{where}: [{key}] must be a table", key=key)
+            for sub, sub_value in value.items():
+                sections[key][sub] = _check(SECTIONS[key], sub, sub_value, f"{key}.{sub}", where)
+        else:
+            top[key] = _check(Config, key, value, key, where)
+    for key, value in (overrides or {}).items():
+        section = section_of(key)
+        target = top if section is None else sections[section]
+        if key == "processor_args":
+            target[key] = {**top.get(key, {}), **value}
+        else:
+            target[key] = _check(Config if section is None else SECTIONS[section], key, value, f"--{_flag(key)}",
+                                 "command line")
+    return Config(**top, **{name: cls(**sections[name]) for name, cls in SECTIONS.items()})
+
+
+def section_of(key: str) -> str | None:
+    """The section a flat key lives in (None for top-level keys)."""
+    if key in _TOP_LEVEL:
+        return None
+    for name, cls in SECTIONS.items():
+        if key in {f.name for f in fields(cls)}:
+            return name
+    raise ConfigError(f"unknown configuration key {key!r}", key=key)
+
+
+def add_config_flags(parser: argparse.ArgumentParser) -> None:
+    """One flag per key (``--max-speed``, ``--no-record`` ...), all defaulting to 'not given'."""
+    for cls in (Config, *SECTIONS.values()):
+        group = parser.add_argument_group(cls.__doc__.splitlines()[0] if cls.__doc__ else cls.__name__)
+        for f in fields(cls):
+            if cls is Config and f.name in SECTIONS:
+                continue
+            if f.name == "processor_args":
+                group.add_argument("--processor-arg", dest="processor_args", action="append", default=None,
+                                   metavar="KEY=VALUE", help="processor constructor argument (TOML value), repeatable")
+            elif f.type == "bool":
+                group.add_argument(f"--{_flag(f.name)}", action=argparse.BooleanOptionalAction, default=None,
+                                   help=f.metadata["help"])
+            else:
+                group.add_argument(f"--{_flag(f.name)}", default=None, metavar=f.type.upper(),
+                                   help=f"{f.metadata['help']} (default: {f.default})")
+
+
+def overrides_from_args(args: argparse.Namespace) -> dict[str, Any]:
+    """The config keys the command line set, converted to their types (errors name the flag)."""
+    result: dict[str, Any] = {}
+    for cls in (Config, *SECTIONS.values()):
+        for f in fields(cls):
+            value = getattr(args, f.name, None)
+            if value is None or cls is Config and f.name in SECTIONS:
+                continue
+            if f.name == "processor_args":
+                result[f.name] = _parse_processor_args(value)
+            else:
+                result[f.name] = _convert_flag(f.type, value, f.name)
+    return result
+
+
+def with_overrides(config: Config, **changes: Any) -> Config:
+    """A copy of ``config`` with flat keys changed (validated like the CLI)."""
+    sections = {name: {} for name in SECTIONS}
+    top = {}
+    for key, value in changes.items():
+        section = section_of(key)
+        cls = Config if section is None else SECTIONS[section]
+        (top if section is None else sections[section])[key] = _check(cls, key, value, key, "override")
+    return replace(config, **top, **{n: replace(getattr(config, n), **v) for n, v in sections.items() if v})
+
+
+def _check(cls: type, key: str, value: Any, name: str, where: str) -> Any:
+    known = {f.name: f for f in fields(cls) if cls is not Config or f.name not in SECTIONS}
+    f = known.get(key)
+    if f is None:
+        close = difflib.get_close_matches(key, known, n=1)
+        hint = f"; did you mean {close[0]!r}?" if close else f"; known keys: {', '.join(known)}"
+        raise ConfigError(f"{where}: unknown key {name!r}{hint}", key=name)
+    expected = {"bool": bool, "int": int, "float": (int, float), "str": str}.get(f.type, dict)
+    if isinstance(value, bool) and f.type != "bool" or not isinstance(value, expected):
+        raise ConfigError(f"{where}: {name} must be {f.type.split('[')[0]}, got {value!r}", key=name)
+    if f.type == "float":
+        value = float(value)
+        if not math.isfinite(value):
+            raise ConfigError(f"{where}: {name} must be a finite number, got {value!r}", key=name)
+    low, high = f.metadata.get("min"), f.metadata.get("max")
+    if low is not None and not low <= value <= high:
+        raise ConfigError(f"{where}: {name} = {value!r} is out of range [{low}, {high}]", key=name)
+    if f.type == "str" and key in ("source", "processor", "fc") and not value.strip():
+        raise ConfigError(f"{where}: {name} must not be empty", key=name)
+    return value
+
+
+def _convert_flag(type_name: str, text: Any, key: str) -> Any:
+    if type_name == "bool" or not isinstance(text, str):
+        return text
+    try:
+        return {"int": int, "float": float}.get(type_name, str)(text)
+    except ValueError:
+        raise ConfigError(f"--{_flag(key)} must be {type_name}, got {text!r}", key=key) from None
+
+
+def _parse_processor_args(items: list[str]) -> dict[str, Any]:
+    result = {}
+    for item in items:
+        key, sep, raw = item.partition("=")
+        if not sep or not key.strip():
+            raise ConfigError(f"--processor-arg {item!r}: expected KEY=VALUE", key="processor_args")
+        try:
+            result[key.strip()] = tomllib.loads(f"v = {raw}")["v"]
+        except tomllib.TOMLDecodeError:
+            result[key.strip()] = raw  # a bare word is a string
+    return result
+
+
+def _flag(key: str) -> str:
+    return key.replace("_", "-")

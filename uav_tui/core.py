@@ -1,0 +1,348 @@
+"""The platform core: source, processor worker, flight controller, telemetry and autonomy on one loop.
+
+Interfaces (TUI, headless runner, web page) start a :class:`UavCore`, read :meth:`UavCore.status`,
+listen to processed frames and events, and send operator commands through :meth:`UavCore.execute`.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import enum
+import functools
+import logging
+import time
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
+
+from controllers import connect_controller
+from controllers.base import FlightController
+from processors import LoadedProcessor, load_processor
+from sources import CameraSource, open_source
+from uav_tui.autonomy import AutonomyGate, check_vector
+from uav_tui.commands import VEHICLE_COMMANDS, Command, parse
+from uav_tui.config import Config
+from uav_tui.errors import CommandError, NoVehicle, ProcessorLoadError, SourceError, UavError
+from uav_tui.events import EventLog
+from uav_tui.status import CoreStatus
+from uav_tui.telemetry import TelemetryManager
+from uav_tui.worker import ProcessedFrame, ProcessorWorker
+
+if TYPE_CHECKING:  # aiortc and pymavlink are imported only when the side channels are switched on
+    from uav_tui.web import WebServer
+    from uav_tui.web.mavlink_tracking import CameraTracking
+
+logger = logging.getLogger(__name__)
+
+
+class CoreState(enum.Enum):
+    NEW = "new"  # constructed, nothing opened
+    RUNNING = "running"  # start() finished: frames flow, commands are accepted
+    STOPPED = "stopped"  # stop() finished: everything released
+
+
+class UavCore:
+    """Owns every long-lived part of a run and the tasks that drive them.
+
+    Args:
+        config: the run's configuration.
+    """
+
+    def __init__(self, config: Config) -> None:
+        self.config = config
+        self.state = CoreState.NEW
+        self.events = EventLog()
+        self.telemetry = TelemetryManager(None)
+        self.gate = AutonomyGate(config.safety, self.telemetry, self.events)
+        self.controller: FlightController | None = None
+        self.source: CameraSource | None = None
+        self.worker: ProcessorWorker | None = None
+        self.quit_requested = asyncio.Event()
+        """Set by the ``quit`` command; the interface that runs the core then stops it."""
+        self.processor_error: str | None = None
+        """Last line of the newest processor traceback."""
+        self.started_wall_ns = 0
+        self._frame_listeners: list[Callable[[ProcessedFrame], None]] = []
+        self._tasks: list[asyncio.Task[Any]] = []
+        self.web: WebServer | None = None
+        """The web page's WebServer (``web.url`` has the token) when ``web`` is on, else None."""
+        self.camera_tracking: CameraTracking | None = None
+        """The MAVLink camera component when ``camera_mavlink`` is set, else None."""
+
+    # -- lifecycle -------------------------------------------------------------------------------
+
+    async def start(self) -> None:
+        """Load the processor, connect the vehicle, open the camera, start the loop's tasks.
+
+        Raises a UavError subclass that says what to fix; nothing stays open when it does.
+        """
+        if self.state is not CoreState.NEW:
+            raise RuntimeError(f"UavCore.start() called in state {self.state.value}; a core starts once")
+        loop = asyncio.get_running_loop()
+        self.events.bind(loop)
+        self.started_wall_ns = time.time_ns()
+        try:
+            processor = await loop.run_in_executor(
+                None, functools.partial(load_processor, self.config.processor, self.config.processor_args))
+            self.controller = await connect_controller(self.config.fc, heartbeat_timeout=self.config.connect_timeout)
+            self.telemetry = TelemetryManager(self.controller)
+            self.gate.telemetry, self.gate.controller = self.telemetry, self.controller
+            processor.instance.tmMgr = self.telemetry
+            self.source = await self._open_source(self.config.source)
+        except BaseException:
+            await self._release()
+            raise
+        self.worker = ProcessorWorker(processor, self._on_result)
+        self.worker.attach(self.source.buffer)
+        self._spawn(self.worker.run(), "processor")
+        self._spawn(self.telemetry.run(), "telemetry")
+        self._spawn(self.gate.run(), "autonomy")
+        self._spawn(self.gate.watch(self._newest_frame_age, lambda: self.worker.busy_s,
+                                    lambda: self.worker.consecutive_errors), "watchdog")
+        self.state = CoreState.RUNNING
+        self.events.emit("info", "platform", f"started: source {self.config.source}, processor "
+                         f"{processor.info.name}, fc {self.config.fc}")
+        try:
+            await self._start_side_channels()
+        except BaseException:
+            await self._release()
+            raise
+
+    async def _start_side_channels(self) -> None:
+        """The web page and MAVLink click-to-track, when configured (aiortc is imported only then)."""
+        if self.config.web.web:
+            from uav_tui.web import WebServer
+
+            self.web = WebServer(self, self.config.web)
+            await self.web.start()
+            self.events.emit("info", "web", f"web page: {self.web.url}")
+        if self.config.web.camera_mavlink:
+            from uav_tui.web.mavlink_tracking import CameraTracking
+
+            self.camera_tracking = CameraTracking(self, self.config.web.camera_mavlink)
+            await self.camera_tracking.start()
+            self.events.emit("info", "web", f"camera tracking on {self.config.web.camera_mavlink}")
+
+    async def stop(self, reason: str = "quit") -> None:
+        """Hold the vehicle if a vector could be flying, then release everything. Idempotent."""
+        if self.state is CoreState.STOPPED:
+            return
+        self.events.emit("info", "platform", f"stopping: {reason}")
+        await self.gate.disable("platform", reason if self.gate.enabled else "operator", hold=False)
+        if self.controller is not None and (self.controller.vector_active or self.telemetry.snapshot().in_air):
+            try:
+                await asyncio.wait_for(self.controller.hold(), 5)
+                self.events.emit("info", "platform", "vehicle put in hold before exit")
+            except (UavError, TimeoutError) as exc:
+                self.events.emit("error", "platform", f"hold before exit failed: {exc!r}")
+        await self._release()
+
+    async def _release(self) -> None:
+        for side in (self.web, self.camera_tracking):
+            if side is not None:
+                await side.stop()
+        for task in self._tasks:
+            task.cancel()
+        await asyncio.gather(*self._tasks, return_exceptions=True)
+        self._tasks.clear()
+        if self.worker is not None:
+            self.worker.close()
+        if self.source is not None:
+            await asyncio.get_running_loop().run_in_executor(None, self.source.close)
+        if self.controller is not None:
+            await self.controller.close()
+        self.state = CoreState.STOPPED
+
+    def _spawn(self, coro: Any, name: str) -> None:
+        task = asyncio.create_task(coro, name=name)
+        task.add_done_callback(self._task_done)
+        self._tasks.append(task)
+
+    def _task_done(self, task: asyncio.Task[Any]) -> None:
+        if not task.cancelled() and task.exception() is not None:
+            self.events.emit("error", "platform", f"{task.get_name()} task failed: {task.exception()!r}")
+            self.quit_requested.set()
+
+    # -- frames ----------------------------------------------------------------------------------
+
+    def add_frame_listener(self, listener: Callable[[ProcessedFrame], None]) -> None:
+        """Call ``listener(result)`` on the loop for every processed frame, after the autonomy decision."""
+        self._frame_listeners.append(listener)
+
+    def remove_frame_listener(self, listener: Callable[[ProcessedFrame], None]) -> None:
+        if listener in self._frame_listeners:
+            self._frame_listeners.remove(listener)
+
+    def _on_result(self, result: ProcessedFrame) -> None:
+        if result.error:
+            last_line = result.error.strip().splitlines()[-1]
+            if last_line != self.processor_error:
+                self.events.emit("error", "processor", f"frame {result.frame.seq}: {result.error.strip()}")
+            self.processor_error = last_line
+        self.gate.consider(result)
+        for listener in tuple(self._frame_listeners):
+            listener(result)
+
+    def _newest_frame_age(self) -> float | None:
+        frame = self.source.buffer.latest() if self.source is not None else None
+        return None if frame is None else frame.age_s
+
+    async def _open_source(self, uri: str) -> CameraSource:
+        context: dict[str, Any] = {}
+        if uri.startswith("sim:"):
+            sim = getattr(self.controller, "sim", None)
+            if sim is None:
+                raise SourceError("the sim: camera renders the simulated vehicle's view: use it with --fc sim")
+            context["pose_provider"] = sim.truth().latest
+        return await asyncio.get_running_loop().run_in_executor(None, functools.partial(open_source, uri, **context))
+
+    # -- commands --------------------------------------------------------------------------------
+
+    async def execute(self, command: Command | str, origin: str = "script") -> str:
+        """Run one operator command; returns what happened, raises UavError saying why it could not."""
+        parsed = parse(command) if isinstance(command, str) else command
+        if parsed is None:
+            return ""
+        if self.state is not CoreState.RUNNING:
+            raise UavError(f"{parsed}: the platform is not running")
+        self.events.emit("info", "command", str(parsed), origin)
+        try:
+            if parsed.word in VEHICLE_COMMANDS:
+                if self.controller is None:
+                    raise NoVehicle(f"{parsed.word}: no flight controller (--fc none); use --fc sim or a "
+                                    "MAVLink connection string")
+                if self.gate.enabled:  # any operator command pre-empts autonomy at once
+                    await self.gate.disable(origin, f"pre-empted by operator command '{parsed}'", hold=False)
+            handler = getattr(self, f"_do_{parsed.word}")
+            message = await handler(*parsed.args, origin=origin)
+        except UavError as exc:
+            self.events.emit("error", "command", f"{parsed}: {exc}", origin)
+            raise
+        if message:
+            self.events.emit("info", "command", message, origin)
+        return message
+
+    async def _do_arm(self, *, origin: str) -> str:
+        await self._vehicle().arm()
+        return "armed"
+
+    async def _do_disarm(self, *, origin: str) -> str:
+        await self._vehicle().disarm()
+        return "disarmed"
+
+    async def _do_takeoff(self, altitude: float | None = None, *, origin: str) -> str:
+        altitude = altitude or self.config.safety.takeoff_alt
+        await self._vehicle().takeoff(altitude)
+        return f"taking off to {altitude:g} m"
+
+    async def _do_land(self, *, origin: str) -> str:
+        await self._vehicle().land()
+        return "landing"
+
+    async def _do_rtl(self, *, origin: str) -> str:
+        await self._vehicle().return_to_home()
+        return "returning to launch"
+
+    async def _do_hold(self, *, origin: str) -> str:
+        await self._vehicle().hold()
+        return "holding"
+
+    async def _do_orbit(self, radius: float, speed: float, *, origin: str) -> str:
+        await self._vehicle().do_orbit(radius, speed)
+        return f"orbiting at {radius:g} m, {speed:g} m/s"
+
+    async def _do_vector(self, vx: float, vy: float, t: float, *, origin: str) -> str:
+        vector, note = check_vector((vx, vy, t), self.config.safety)
+        assert vector is not None  # parse() already rejected non-finite values and t <= 0
+        await self._vehicle().set_fly_vector(*vector)
+        return f"flying vector {vector}" + (f" ({note})" if note else "")
+
+    async def _do_autonomy(self, switch: str, *, origin: str) -> str:
+        if switch == "on" or (switch == "toggle" and not self.gate.enabled):
+            self.gate.enable(origin)
+        else:
+            await self.gate.disable(origin)
+        return ""
+
+    async def _do_f(self, button: int, *, origin: str) -> str:
+        await self._call_processor("customize_processing", button)
+        return f"F{button} sent to the processor"
+
+    async def _do_roi(self, x: int, y: int, w: int, h: int, *, origin: str) -> str:
+        width, height = self.source.get_frame_size() if self.source else (0, 0)
+        if w <= 0 or h <= 0 or x + w > width or y + h > height:
+            raise CommandError(f"roi ({x}, {y}, {w}, {h}) is not inside the {width}x{height} frame", key="roi")
+        await self._call_processor("catch_cmd", (x, y, w, h))
+        return f"target region ({x}, {y}, {w}, {h}) sent to the processor"
+
+    async def _do_snapshot(self, *, origin: str) -> str:
+        raise UavError("snapshot needs the recorder, which is not part of this build yet")
+
+    async def _do_reload(self, *, origin: str) -> str:
+        assert self.worker is not None
+        current = self.worker.processor
+        try:
+            fresh = await asyncio.get_running_loop().run_in_executor(None, functools.partial(
+                load_processor, current.spec, current.kwargs, fresh=True))
+        except ProcessorLoadError as exc:
+            raise ProcessorLoadError(f"reload failed, {current.info.name} keeps running: {exc}", path=exc.path,
+                                     class_name=exc.class_name, missing=exc.missing) from exc
+        fresh.instance.tmMgr = self.telemetry
+        await self.worker.replace(fresh)
+        self.processor_error = None
+        return f"processor {fresh.info.name} reloaded"
+
+    async def _do_source(self, uri: str, *, origin: str) -> str:
+        assert self.worker is not None
+        new = await self._open_source(uri)
+        old, self.source = self.source, new
+        self.worker.attach(new.buffer)
+        if old is not None:
+            await asyncio.get_running_loop().run_in_executor(None, old.close)
+        width, height = new.get_frame_size()
+        return f"camera switched to {uri} ({width}x{height})"
+
+    async def _do_wait(self, seconds: float, *, origin: str) -> str:
+        raise CommandError("wait is for --script files only", key="command")
+
+    async def _do_quit(self, *, origin: str) -> str:
+        self.quit_requested.set()
+        return "quit requested"
+
+    def _vehicle(self) -> FlightController:
+        assert self.controller is not None
+        return self.controller
+
+    async def _call_processor(self, method: str, *args: Any) -> None:
+        assert self.worker is not None
+        loaded: LoadedProcessor = self.worker.processor
+        if method not in loaded.info.capabilities:
+            raise UavError(f"processor {loaded.info.name} has no {method}() method")
+        try:
+            await self.worker.call(method, *args)
+        except Exception as exc:  # the researcher's code raised: report it, keep running
+            raise UavError(f"{loaded.info.name}.{method}{args!r} raised {type(exc).__name__}: {exc}") from exc
+
+    # -- status ----------------------------------------------------------------------------------
+
+    def status(self) -> CoreStatus:
+        """Everything an interface shows, as one immutable snapshot."""
+        assert self.worker is not None and self.source is not None
+        loaded = self.worker.processor
+        return CoreStatus(
+            telemetry=self.telemetry.snapshot(),
+            pipeline=self.worker.snapshot(),
+            source_uri=self.source.get_properties().get("uri", self.config.source),
+            source=self.source.get_properties(),
+            processor=loaded.info.name,
+            capabilities=loaded.info.capabilities,
+            processor_error=self.processor_error,
+            fc=self.config.fc,
+            fc_description=getattr(self.controller, "description", "none"),
+            heartbeat_age_s=self.controller.heartbeat_age_s() if self.controller else None,
+            autonomy=self.gate.enabled,
+            autonomy_stop_reason=self.gate.stop_reason,
+            last_vector=self.gate.last_vector,
+            last_decision=self.gate.last_decision,
+            vectors_executed=self.gate.executed,
+            vectors_rejected=self.gate.rejected,
+        )

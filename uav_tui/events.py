@@ -1,0 +1,72 @@
+"""The event log: operator commands, autonomy decisions, warnings and errors, in order."""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import threading
+import time
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Literal
+
+logger = logging.getLogger(__name__)
+
+Level = Literal["info", "warning", "error"]
+Kind = Literal["command", "autonomy", "processor", "source", "link", "recorder", "web", "platform"]
+
+
+@dataclass(frozen=True, slots=True)
+class Event:
+    """Something an operator should be able to see, and read again in events.csv."""
+
+    t_wall_ns: int
+    t_mono_ns: int
+    level: Level
+    kind: Kind
+    message: str
+    origin: str = "platform"
+    """Who caused it: ``tui``, ``script``, ``web``, ``mavlink``, ``platform`` ..."""
+
+
+class EventLog:
+    """Keeps the recent events and tells listeners, always on the event loop.
+
+    ``emit`` may be called from any thread; listeners run on the loop thread in emission order.
+    """
+
+    def __init__(self, keep: int = 500) -> None:
+        self.recent: deque[Event] = deque(maxlen=keep)
+        self._listeners: list[Callable[[Event], None]] = []
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._loop_thread: int | None = None
+
+    def bind(self, loop: asyncio.AbstractEventLoop) -> None:
+        """Deliver events on ``loop`` from now on."""
+        self._loop, self._loop_thread = loop, threading.get_ident()
+
+    def add_listener(self, listener: Callable[[Event], None]) -> None:
+        self._listeners.append(listener)
+
+    def remove_listener(self, listener: Callable[[Event], None]) -> None:
+        if listener in self._listeners:
+            self._listeners.remove(listener)
+
+    def emit(self, level: Level, kind: Kind, message: str, origin: str = "platform") -> Event:
+        event = Event(time.time_ns(), time.monotonic_ns(), level, kind, message, origin)
+        logger.debug("[%s/%s/%s] %s", level, kind, origin, message)  # interfaces show events; logs keep them
+        loop = self._loop
+        if loop is None or threading.get_ident() == self._loop_thread:
+            self._deliver(event)
+        elif not loop.is_closed():
+            loop.call_soon_threadsafe(self._deliver, event)
+        return event
+
+    def _deliver(self, event: Event) -> None:
+        self.recent.append(event)
+        for listener in tuple(self._listeners):
+            try:
+                listener(event)
+            except Exception:  # a broken listener must not silence the others
+                logger.exception("event listener %r failed", listener)

@@ -1,0 +1,150 @@
+"""``uav-tui --no-ui``: the same core without a screen, with a status line, scripts and signals."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import json
+import signal
+import sys
+import time
+from dataclasses import asdict
+from pathlib import Path
+from typing import TextIO
+
+from uav_tui.commands import Command, parse
+from uav_tui.config import Config
+from uav_tui.core import UavCore
+from uav_tui.errors import CommandError, UavError
+from uav_tui.events import Event
+from uav_tui.status import CoreStatus
+
+EXIT_OK, EXIT_SCRIPT_FAILED, EXIT_START_FAILED = 0, 1, 2
+
+
+def load_script(path: Path) -> list[tuple[int, Command]]:
+    """Parse a whole ``--script`` file up front, so a typo on line 9 is found before takeoff."""
+    try:
+        lines = path.read_text().splitlines()
+    except OSError as exc:
+        raise CommandError(f"cannot read script {path}: {exc.strerror}", key="script") from None
+    commands, problems = [], []
+    for number, line in enumerate(lines, start=1):
+        try:
+            command = parse(line)
+        except CommandError as exc:
+            problems.append(f"{path}:{number}: {exc}")
+            continue
+        if command is not None:
+            commands.append((number, command))
+    if problems:
+        raise CommandError("\n".join(problems), key="script")
+    return commands
+
+
+def format_status(status: CoreStatus, elapsed_s: float) -> str:
+    """One line, short enough for an 80-column terminal's scrollback to stay readable."""
+    p, t = status.pipeline, status.telemetry
+    line = (f"{elapsed_s:6.1f}s cam {p.capture_fps:4.1f}fps proc {p.processed_fps:4.1f}fps "
+            f"age {p.frame_age_ms:3.0f}ms p50/p95 {p.processing_ms_p50:.1f}/{p.processing_ms_p95:.1f}ms "
+            f"skip {p.frames_skipped} err {p.errors}")
+    if status.fc != "none":
+        hb = "-" if status.heartbeat_age_s is None else f"{status.heartbeat_age_s:.1f}s"
+        alt = "-" if t.rel_alt_m is None else f"{t.rel_alt_m:.1f}m"
+        state = "armed" if t.armed else "disarmed"
+        line += f" | hb {hb} {t.flight_mode or '?'} {state}{' air' if t.in_air else ''} alt {alt}"
+    line += f" | auto {'ON' if status.autonomy else 'OFF'}"
+    if status.last_decision:
+        line += f" ({status.last_decision})"
+    return line
+
+
+class HeadlessRunner:
+    """Runs a core until Ctrl-C, SIGTERM, SIGHUP, ``quit``, the end of the script or ``--duration``."""
+
+    def __init__(self, config: Config, *, duration: float | None = None, script: list[tuple[int, Command]] | None
+                 = None, json_lines: bool = False, on_hangup: str = "stop", out: TextIO = sys.stdout) -> None:
+        self.core = UavCore(config)
+        self.duration = duration
+        self.script = script
+        self.json_lines = json_lines
+        self.on_hangup = on_hangup
+        self.out = out
+        self.exit_code = EXIT_OK
+        self._stop = asyncio.Event()
+        self._reason = "finished"
+
+    async def run(self) -> int:
+        loop = asyncio.get_running_loop()
+        for signum, name in ((signal.SIGINT, "Ctrl-C"), (signal.SIGTERM, "SIGTERM"), (signal.SIGHUP, "SIGHUP")):
+            if signum == signal.SIGHUP and self.on_hangup == "continue":
+                loop.add_signal_handler(signum, self._say, "SIGHUP: terminal lost, continuing headless")
+            else:
+                loop.add_signal_handler(signum, self.request_stop, name)
+        try:
+            await self.core.start()
+        except UavError as exc:
+            self._say(f"error: {exc}")
+            return EXIT_START_FAILED
+        self.core.events.add_listener(self._print_event)
+        if self.core.web is not None:
+            url = self.core.web.url
+            self._say(json.dumps({"web_url": url}) if self.json_lines else f"web page: {url}")
+        started = time.monotonic()
+        tasks = [asyncio.create_task(self._print_status(started))]
+        if self.script is not None:
+            tasks.append(asyncio.create_task(self._run_script()))
+        if self.duration is not None:
+            loop.call_later(self.duration, self.request_stop, f"--duration {self.duration:g} s reached")
+        quit_watch = asyncio.create_task(self.core.quit_requested.wait())
+        stop_watch = asyncio.create_task(self._stop.wait())
+        await asyncio.wait([quit_watch, stop_watch], return_when=asyncio.FIRST_COMPLETED)
+        if self.core.quit_requested.is_set() and not self._stop.is_set():
+            self._reason = "quit"
+        for task in (*tasks, quit_watch, stop_watch):
+            task.cancel()
+        await asyncio.gather(*tasks, quit_watch, stop_watch, return_exceptions=True)
+        await self.core.stop(self._reason)
+        self._say(f"stopped: {self._reason}")
+        return self.exit_code
+
+    def request_stop(self, reason: str) -> None:
+        if not self._stop.is_set():
+            self._reason = reason
+            self._stop.set()
+
+    def _print_event(self, event: Event) -> None:
+        if self.json_lines:
+            self._say(json.dumps({"event": asdict(event)}))
+        else:
+            self._say(f"[{event.level}] {event.kind}: {event.message}")
+
+    async def _run_script(self) -> None:
+        assert self.script is not None
+        for number, command in self.script:
+            try:
+                if command.word == "wait":
+                    await asyncio.sleep(command.args[0])
+                else:
+                    await self.core.execute(command, origin="script")
+            except UavError as exc:
+                self._say(f"script line {number} ({command}) failed: {exc}")
+                self.exit_code = EXIT_SCRIPT_FAILED
+                self.request_stop(f"script line {number} failed")
+                return
+        if self.duration is None:
+            self.request_stop("script finished")
+
+    async def _print_status(self, started: float) -> None:
+        while True:
+            await asyncio.sleep(1.0)
+            status = self.core.status()
+            if self.json_lines:
+                self._say(json.dumps({"t": round(time.monotonic() - started, 3), **status.as_dict()}, default=str))
+            else:
+                self._say(format_status(status, time.monotonic() - started))
+
+    def _say(self, text: str) -> None:
+        # A lost terminal must not stop the run: the safety rules decide that, not print().
+        with contextlib.suppress(BrokenPipeError, OSError):
+            print(text, file=self.out, flush=True)

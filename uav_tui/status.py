@@ -1,0 +1,39 @@
+"""The snapshot of a running core that every interface renders."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+from controllers.base import Telemetry
+from uav_tui.stats import PipelineStats
+
+
+@dataclass(frozen=True)
+class CoreStatus:
+    """What the TUI, the headless status line and the web page show."""
+
+    telemetry: Telemetry
+    pipeline: PipelineStats
+    source_uri: str
+    source: dict[str, Any]
+    processor: str
+    capabilities: frozenset[str]
+    processor_error: str | None
+    fc: str
+    fc_description: str
+    heartbeat_age_s: float | None
+    autonomy: bool
+    autonomy_stop_reason: str
+    last_vector: tuple[float, float, float] | None
+    last_decision: str
+    vectors_executed: int
+    vectors_rejected: int
+    recording: dict[str, Any] = field(default_factory=dict)
+    """Run folder, frames saved, rows written, drops (empty when recording is off)."""
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-ready form (for ``--json`` and the web page)."""
+        data = asdict(self)
+        data["capabilities"] = sorted(self.capabilities)
+        return data

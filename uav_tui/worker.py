@@ -1,0 +1,211 @@
+"""The processor worker: every call into the researcher's code runs on one thread, newest frame first."""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import threading
+import time
+import traceback
+from collections import deque
+from collections.abc import Callable
+from concurrent.futures import Future
+from dataclasses import dataclass, field
+from typing import Any
+
+from processors import LoadedProcessor
+from sources.buffer import Frame, FrameBuffer
+from uav_tui.stats import PipelineStats, RollingStats
+
+logger = logging.getLogger(__name__)
+
+
+@dataclass(slots=True)
+class ProcessedFrame:
+    """One frame's trip through the processor, with the time of each stage (monotonic ns)."""
+
+    frame: Frame
+    """The frame as captured; the processor may have drawn its overlay on ``frame.image``."""
+    t_start_ns: int
+    t_end_ns: int = 0
+    t_vector_ns: int = 0
+    """When getPreparedVector returned (0 if the processor has none)."""
+    vector: Any = None
+    """What getPreparedVector returned, unchecked (the autonomy gate validates it)."""
+    error: str | None = None
+    """Traceback text if the processor raised."""
+    decision: str = ""
+    """What the autonomy gate did with the vector: ``executed`` or why not."""
+    extra: dict[str, Any] = field(default_factory=dict)
+    """Fields the processor stored with ``tmMgr.save(frame, **extra)`` for this frame."""
+    saved: bool = False
+    """True when the processor saved this frame's image."""
+
+
+class ProcessorWorker:
+    """Runs a processor on one dedicated thread, always on the newest frame of a buffer.
+
+    The thread waits on the frame buffer itself, processes the newest frame and posts the result to
+    the event loop without waiting for it, so the only hand-off on the per-frame path is capture ->
+    processor. Frames that arrive meanwhile replace each other, so a slow processor skips frames and
+    never queues them. ``call`` runs an operator command (``catch_cmd``, ``customize_processing``) on
+    the same thread between two frames, so researchers never need a lock.
+    """
+
+    def __init__(self, processor: LoadedProcessor, on_result: Callable[[ProcessedFrame], None]) -> None:
+        self.processor = processor
+        self.stats = RollingStats()
+        self.current: ProcessedFrame | None = None
+        """The frame being processed (read on the processor thread by ``tmMgr.save``)."""
+        self.last: ProcessedFrame | None = None
+        """The newest finished frame."""
+        self.consecutive_errors = 0
+        self._on_result = on_result
+        self._wake = threading.Condition()
+        self._jobs: deque[tuple[Callable[[], Any], Future[Any]]] = deque()
+        self._buffer: FrameBuffer | None = None
+        self._stopping = False
+        self._thread: threading.Thread | None = None
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._busy_since_ns: int | None = None
+
+    # -- loop side -------------------------------------------------------------------------------
+
+    def attach(self, buffer: FrameBuffer) -> None:
+        """Take frames from ``buffer`` from now on (a new source)."""
+        with self._wake:
+            if self._buffer is not None:
+                self._buffer.remove_listener(self._on_frame)
+            self._buffer = buffer
+            buffer.add_listener(self._on_frame)
+            self._wake.notify()
+
+    async def run(self) -> None:
+        """Start the processor thread and keep it running until cancelled."""
+        if self._thread is not None:
+            raise RuntimeError("ProcessorWorker.run() is already running")
+        self._loop = asyncio.get_running_loop()
+        self._thread = threading.Thread(target=self._thread_main, name="processor", daemon=True)
+        self._thread.start()
+        try:
+            await asyncio.Event().wait()
+        finally:
+            self.close()
+
+    async def call(self, method: str, *args: Any) -> Any:
+        """Call ``processor.<method>(*args)`` on the processor thread; its exception propagates."""
+        bound = getattr(self.processor.instance, method)
+        return await self._submit(lambda: bound(*args))
+
+    async def replace(self, processor: LoadedProcessor) -> LoadedProcessor:
+        """Swap in another processor between two frames; returns the old one."""
+        def swap() -> LoadedProcessor:
+            old, self.processor = self.processor, processor
+            self.consecutive_errors = 0
+            return old
+        return await self._submit(swap)
+
+    def snapshot(self) -> PipelineStats:
+        captured = self._buffer.captured if self._buffer is not None else 0
+        return self.stats.snapshot(captured, self._busy_since_ns)
+
+    @property
+    def busy_s(self) -> float:
+        """Seconds the current call into the processor has been running (0 when idle)."""
+        since = self._busy_since_ns
+        return (time.monotonic_ns() - since) / 1e9 if since else 0.0
+
+    def close(self) -> None:
+        """Stop taking frames; the thread ends after its current call (a hung processor is abandoned)."""
+        with self._wake:
+            self._stopping = True
+            if self._buffer is not None:
+                self._buffer.remove_listener(self._on_frame)
+            jobs, self._jobs = list(self._jobs), deque()
+            self._wake.notify()
+        for _, future in jobs:
+            future.cancel()
+
+    def _submit(self, job: Callable[[], Any]) -> asyncio.Future[Any]:
+        if self._stopping:
+            raise RuntimeError("the processor worker is closed")
+        future: Future[Any] = Future()
+        with self._wake:
+            self._jobs.append((job, future))
+            self._wake.notify()
+        return asyncio.wrap_future(future)
+
+    def _deliver(self, result: ProcessedFrame) -> None:
+        self.stats.add(result.frame.seq, result.frame.t_mono_ns, result.t_start_ns, result.t_end_ns,
+                       result.t_vector_ns or result.t_end_ns)
+        self.last = result
+        self._on_result(result)
+
+    def _on_frame(self, frame: Frame) -> None:  # capture thread
+        with self._wake:
+            self._wake.notify()
+
+    # -- processor thread ------------------------------------------------------------------------
+
+    def _thread_main(self) -> None:
+        last_seq, last_buffer = 0, None
+        while True:
+            with self._wake:
+                seen = (last_seq, last_buffer)
+                self._wake.wait_for(lambda seen=seen: self._stopping or self._jobs or self._has_newer(*seen))
+                if self._stopping:
+                    return
+                job = self._jobs.popleft() if self._jobs else None
+                buffer = self._buffer
+            if job is not None:
+                _run_job(*job)
+                continue
+            assert buffer is not None
+            if buffer is not last_buffer:
+                last_seq, last_buffer = 0, buffer
+            frame = buffer.latest()
+            if frame is None or frame.seq <= last_seq:
+                continue
+            last_seq = frame.seq
+            result = self._process(frame)
+            loop = self._loop
+            if loop is not None and not loop.is_closed():
+                loop.call_soon_threadsafe(self._deliver, result)
+
+    def _has_newer(self, seq: int, buffer: FrameBuffer | None) -> bool:
+        if self._buffer is None:
+            return False
+        if self._buffer is not buffer:
+            return True
+        return self._buffer.newest_seq > seq
+
+    def _process(self, frame: Frame) -> ProcessedFrame:
+        instance = self.processor.instance
+        start = time.monotonic_ns()
+        self._busy_since_ns = start
+        result = ProcessedFrame(frame=frame, t_start_ns=start)
+        self.current = result
+        try:
+            instance.photo_processing(frame.image)
+            result.t_end_ns = time.monotonic_ns()
+            if "getPreparedVector" in self.processor.info.capabilities:
+                result.vector = instance.getPreparedVector()
+                result.t_vector_ns = time.monotonic_ns()
+            self.consecutive_errors = 0
+        except Exception:  # noqa: BLE001 - counted and reported, never fatal
+            result.t_end_ns = result.t_end_ns or time.monotonic_ns()
+            result.error = traceback.format_exc()
+            self.stats.errors += 1
+            self.consecutive_errors += 1
+        finally:
+            self._busy_since_ns = None
+        return result
+
+
+def _run_job(job: Callable[[], Any], future: Future[Any]) -> None:
+    if not future.set_running_or_notify_cancel():
+        return
+    try:
+        future.set_result(job())
+    except BaseException as exc:  # noqa: BLE001 - handed to the awaiting caller
+        future.set_exception(exc)
