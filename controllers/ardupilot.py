@@ -56,9 +56,7 @@ def request_data_streams_message(target_system: int, rate_hz: int = STREAM_RATE_
 
 def set_mode_command(target_system: int, mode: str) -> MavlinkMessage:
     """DO_SET_MODE with an ArduCopter custom mode (``"GUIDED"``, ``"LOITER"``, ``"CIRCLE"``...)."""
-    return command_long(
-        target_system, MAV_CMD_DO_SET_MODE, MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, COPTER_MODES[mode]
-    )
+    return command_long(target_system, MAV_CMD_DO_SET_MODE, MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, COPTER_MODES[mode])
 
 
 async def set_mode(direct: MavlinkDirectAsync, target_system: int, mode: str) -> None:

@@ -149,9 +149,7 @@ class MavsdkController:
             async with asyncio.timeout(SETUP_TIMEOUT_S):
                 await set_rates(self._telemetry)
         except TimeoutError:
-            logger.warning(
-                "telemetry rates: no answer within %.0f s; keeping the current rates", SETUP_TIMEOUT_S
-            )
+            logger.warning("telemetry rates: no answer within %.0f s; keeping the current rates", SETUP_TIMEOUT_S)
 
     async def _watch_heartbeats(self) -> None:
         async for msg in self._direct.subscribe_message("HEARTBEAT"):
@@ -171,6 +169,18 @@ class MavsdkController:
         reads OFFBOARD, LOITER reads HOLD)."""
         mode, received = self._flight_mode
         return mode if received > t_mono else None
+
+    async def wait_ready(self, timeout_s: float = 30.0) -> bool:
+        """Wait until the autopilot reports it could arm (position estimate, home, pre-arm checks).
+
+        PX4 needs ~5 s after boot; the simulator ~1 s. Returns False after ``timeout_s``.
+        """
+        with contextlib.suppress(TimeoutError):
+            async with asyncio.timeout(timeout_s):
+                async for health in self._telemetry.subscribe_health():
+                    if health.is_armable and health.is_global_position_ok and health.is_home_position_ok:
+                        return True
+        return False
 
     def heartbeat_age_s(self) -> float:
         """Seconds since the last heartbeat from the autopilot (inf before the first)."""
@@ -214,9 +224,7 @@ class MavsdkController:
             await self._ardupilot_mode("GUIDED", command)
 
     async def _ardupilot_mode(self, mode: str, command: str) -> None:
-        await self._command(
-            command, lambda: ardupilot.set_mode(self._direct, self._sysid, mode, command=command)
-        )
+        await self._command(command, lambda: ardupilot.set_mode(self._direct, self._sysid, mode, command=command))
 
     async def arm(self) -> None:
         await self._guided("arm")

@@ -18,7 +18,8 @@ logger = logging.getLogger(__name__)
 Listener = Callable[[Telemetry], None]
 Saver = Callable[[Any, dict[str, Any]], None]
 
-_UPDATABLE = frozenset(TELEMETRY_FIELDS) - {"t_mono_ns", "t_wall_ns", "heartbeat_age_s"}
+_FIELDS = frozenset(TELEMETRY_FIELDS)
+_UPDATABLE = _FIELDS - {"t_mono_ns", "t_wall_ns", "heartbeat_age_s"}
 """Fields a controller update may set; receive stamps and heartbeat age are set here."""
 
 
@@ -70,10 +71,9 @@ class TelemetryManager:
             The new newest Telemetry.
         """
         known = {k: v for k, v in update.items() if k in _UPDATABLE}
-        if len(known) != len(update):
-            self._warn_once(
-                "unknown", "TelemetryManager: ignoring unknown fields %s", sorted(set(update) - _UPDATABLE)
-            )
+        unknown = set(update) - _FIELDS  # a heartbeat_age_s tick is known: it refreshes the age
+        if unknown:
+            self._warn_once("unknown", "TelemetryManager: ignoring unknown fields %s", sorted(unknown))
         with self._lock:
             self._latest = dataclasses.replace(
                 self._latest,

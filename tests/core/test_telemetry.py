@@ -22,9 +22,7 @@ async def test_without_controller_everything_is_none() -> None:
     await asyncio.wait_for(tm.run(), 1.0)  # returns at once: nothing to consume
     snap = tm.snapshot()
     assert snap == Telemetry()
-    assert all(
-        getattr(snap, name) is None for name in TELEMETRY_FIELDS if name not in ("t_mono_ns", "t_wall_ns")
-    )
+    assert all(getattr(snap, name) is None for name in TELEMETRY_FIELDS if name not in ("t_mono_ns", "t_wall_ns"))
     assert not tm.link_alive(1.5)
 
 
@@ -45,9 +43,7 @@ def test_save_forwards_frame_and_extra_from_another_thread() -> None:
     received: list[tuple[Any, dict[str, Any], str]] = []
     tm.saver = lambda frame, extra: received.append((frame, extra, threading.current_thread().name))
     frame = np.zeros((4, 4, 3), np.uint8)
-    worker = threading.Thread(
-        target=tm.save, args=(frame,), kwargs={"cx": 3, "label": "car"}, name="processor_0"
-    )
+    worker = threading.Thread(target=tm.save, args=(frame,), kwargs={"cx": 3, "label": "car"}, name="processor_0")
     worker.start()
     worker.join()
     assert len(received) == 1
@@ -87,7 +83,10 @@ def test_a_failing_listener_does_not_stop_the_others() -> None:
     assert tm.listener_errors == 2
 
 
-async def test_manager_follows_the_simulated_vehicle_and_notices_link_loss(sim_vehicle: SimVehicle) -> None:
+async def test_manager_follows_the_simulated_vehicle_and_notices_link_loss(
+    sim_vehicle: SimVehicle, caplog: pytest.LogCaptureFixture
+) -> None:
+    caplog.set_level(logging.WARNING, logger="uav_tui.telemetry")
     fc = MavsdkController()
     await fc.connect(sim_vehicle.connection_string)
     tm = TelemetryManager(fc)
@@ -107,6 +106,7 @@ async def test_manager_follows_the_simulated_vehicle_and_notices_link_loss(sim_v
         assert tm.link_alive(1.5)
         assert len(rows) == tm.updates > 20
         assert rows == sorted(rows, key=lambda t: t.t_mono_ns)
+        assert caplog.records == []  # every field the controller sends is a Telemetry field
 
         await asyncio.to_thread(sim_vehicle.stop)
         await asyncio.sleep(2.0)
