@@ -182,6 +182,8 @@ async def test_sim_starts_its_own_vehicle_and_stops_it_on_close() -> None:
         truth = fc.sim.truth()  # the platform reaches ground truth this way
         states = [await asyncio.to_thread(truth.wait_latest, 2.0) for _ in range(2)]
         assert any("n" in state for state in states)
+        await fc.arm()  # ready at once: the factory waited for the GPS fix
+        await fc.disarm()
     finally:
         await fc.close()
     assert not fc.sim.running
