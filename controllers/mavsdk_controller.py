@@ -4,10 +4,8 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import json
 import logging
 import math
-import time
 from collections.abc import AsyncIterator, Awaitable, Callable
 from typing import Any, TypeVar
 
@@ -27,6 +25,7 @@ from controllers.connection import (
 )
 from controllers.mavlink_commands import px4_set_mode, send_command, velocity_body_setpoint
 from controllers.mavsdk_errors import map_mavsdk_errors
+from controllers.mavsdk_link import LinkMonitor
 from controllers.mavsdk_log import route_mavsdk_log
 from controllers.mavsdk_telemetry import merged_updates, set_rates
 from controllers.vector_stream import VectorStream
@@ -46,9 +45,6 @@ CLOSE_HOLD_TIMEOUT_S = 2.0
 """close() during a vector: how long it tries to put the vehicle in hold before letting go."""
 
 AUTOPILOT_NAMES = {"px4": "PX4", "ardupilot": "ArduPilot", "unknown": "unknown autopilot"}
-
-MAV_AUTOPILOT_INVALID = 8
-"""HEARTBEAT.autopilot of ground stations and other non-autopilot components."""
 
 
 class MavsdkController:
@@ -80,9 +76,7 @@ class MavsdkController:
         self._telemetry: TelemetryAsync
         self._param: ParamAsync
         self._direct: MavlinkDirectAsync
-        self._last_heartbeat = -math.inf
-        self._flight_mode: tuple[str | None, float] = (None, -math.inf)
-        self._watchers: list[asyncio.Task[None]] = []
+        self._link: LinkMonitor | None = None
         self._stop = asyncio.Event()
         self._closed = False
         self._vectors = VectorStream(self, rate_hz=vector_rate_hz, name="MavsdkController")
@@ -127,7 +121,6 @@ class MavsdkController:
         if system is None:
             raise await no_heartbeat_error(conn, heartbeat_timeout)
         self._system = system
-        self._last_heartbeat = time.monotonic()
         self._sysid = await system.get_system_id()
         kind = await system.autopilot_type()
         self.autopilot = {Autopilot.PX4: "px4", Autopilot.ARDUPILOT: "ardupilot"}.get(kind, "unknown")
@@ -135,10 +128,8 @@ class MavsdkController:
         self._telemetry = TelemetryAsync(system)
         self._param = ParamAsync(system)
         self._direct = MavlinkDirectAsync(system)
-        self._watchers = [
-            asyncio.create_task(self._watch_heartbeats(), name="mavsdk-heartbeat"),
-            asyncio.create_task(self._watch_flight_mode(), name="mavsdk-flight-mode"),
-        ]
+        self._link = LinkMonitor(self._direct, self._telemetry, self._sysid)
+        self._link.start()
         await self._ask_for_telemetry()
 
     async def _ask_for_telemetry(self) -> None:
@@ -151,40 +142,21 @@ class MavsdkController:
         except TimeoutError:
             logger.warning("telemetry rates: no answer within %.0f s; keeping the current rates", SETUP_TIMEOUT_S)
 
-    async def _watch_heartbeats(self) -> None:
-        async for msg in self._direct.subscribe_message("HEARTBEAT"):
-            if msg.system_id != self._sysid:
-                continue
-            with contextlib.suppress(ValueError):
-                if json.loads(msg.fields_json).get("autopilot") == MAV_AUTOPILOT_INVALID:
-                    continue
-            self._last_heartbeat = time.monotonic()
-
-    async def _watch_flight_mode(self) -> None:
-        async for mode in self._telemetry.subscribe_flight_mode():
-            self._flight_mode = (mode.name, time.monotonic())
-
-    def flight_mode_since(self, t_mono: float) -> str | None:
-        """The flight mode MAVSDK last reported, if it arrived after ``t_mono`` (ArduCopter GUIDED
-        reads OFFBOARD, LOITER reads HOLD)."""
-        mode, received = self._flight_mode
-        return mode if received > t_mono else None
-
-    async def wait_ready(self, timeout_s: float = 30.0) -> bool:
-        """Wait until the autopilot reports it could arm (position estimate, home, pre-arm checks).
-
-        PX4 needs ~5 s after boot; the simulator ~1 s. Returns False after ``timeout_s``.
-        """
-        with contextlib.suppress(TimeoutError):
-            async with asyncio.timeout(timeout_s):
-                async for health in self._telemetry.subscribe_health():
-                    if health.is_armable and health.is_global_position_ok and health.is_home_position_ok:
-                        return True
-        return False
-
     def heartbeat_age_s(self) -> float:
         """Seconds since the last heartbeat from the autopilot (inf before the first)."""
-        return time.monotonic() - self._last_heartbeat
+        return self._link.heartbeat_age_s() if self._link is not None else math.inf
+
+    def flight_mode_since(self, t_mono: float) -> str | None:
+        """The flight mode last reported, if it arrived after ``t_mono`` (see :class:`LinkMonitor`)."""
+        return self._link.flight_mode_since(t_mono) if self._link is not None else None
+
+    async def wait_ready(self, timeout_s: float = 30.0) -> bool:
+        """Wait until the autopilot reports it could arm; False after ``timeout_s``.
+
+        PX4 needs ~5 s after boot, the simulator ~1 s (ArduCopter's flags look good before its EKF
+        allows GUIDED arming, ~40 s after boot).
+        """
+        return await self._link.wait_ready(timeout_s) if self._link is not None else False
 
     async def close(self) -> None:
         """Stop a running vector (zero, hold: best effort), stop streams, release MAVSDK. Idempotent."""
@@ -199,9 +171,8 @@ class MavsdkController:
         self._closed = True
         self._stop.set()
         await self._vectors.cancel()
-        for task in self._watchers:
-            task.cancel()
-        await asyncio.gather(*self._watchers, return_exceptions=True)
+        if self._link is not None:
+            await self._link.stop()
         # Telemetry iterators end on _stop; their unsubscribe is a no-op once MAVSDK is destroyed.
         mavsdk, self._mavsdk = self._mavsdk, None
         if mavsdk is not None:
