@@ -130,9 +130,7 @@ def free_udp_port() -> int:
 async def test_dead_port_gives_no_heartbeat_within_bounded_time() -> None:
     fc = MavsdkController()
     started = time.monotonic()
-    with pytest.raises(
-        ConnectError, match=r"no heartbeat on udpin://0\.0\.0\.0:\d+ within 1 s: check wiring"
-    ):
+    with pytest.raises(ConnectError, match=r"no heartbeat on udpin://0\.0\.0\.0:\d+ within 1 s: check wiring"):
         await fc.connect(f"udpin://0.0.0.0:{free_udp_port()}", heartbeat_timeout=1.0)
     assert time.monotonic() - started < 4.0
     await fc.close()
@@ -167,6 +165,17 @@ async def test_bad_connection_strings_fail_at_once(address: str, says: str) -> N
     with pytest.raises(ConnectError, match=says):
         await connect_controller(address)
     assert time.monotonic() - started < 1.0
+
+
+@pytest.mark.parametrize("form", ["udp://:{port}", "udp://127.0.0.1:{port}"], ids=["udp-empty-host", "udp-host"])
+async def test_the_papers_udp_forms_listen_like_they_used_to(sim_vehicle: SimVehicle, form: str) -> None:
+    fc = await connect_controller(form.format(port=sim_vehicle.mavlink_port), heartbeat_timeout=5.0)
+    assert isinstance(fc, MavsdkController)
+    try:
+        assert fc.connection is not None and fc.connection.scheme == "udpin"
+        assert fc.heartbeat_age_s() < 1.5
+    finally:
+        await fc.close()
 
 
 async def test_none_means_no_vehicle() -> None:
