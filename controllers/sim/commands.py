@@ -169,7 +169,9 @@ class CommandHandler:
         g = self.v.guidance
         if mode is None or mode == Mode.ORBIT:
             return DENIED
-        if mode == Mode.OFFBOARD:
+        if mode == self.v.mode and mode != Mode.OFFBOARD:
+            pass  # already there: PX4 does not restart the mode
+        elif mode == Mode.OFFBOARD:
             if not self.s.setpoint_fresh():
                 raise CommandRefused("offboard: no setpoints streaming")
             self.v.set_offboard(self.s.setpoint)
@@ -179,7 +181,7 @@ class CommandHandler:
             g.land()
         elif mode == Mode.RTL:
             g.rtl()
-        elif mode != self.v.mode:
+        else:
             g.hold(mode)
         self.s.client_took_over()
         return ACCEPTED

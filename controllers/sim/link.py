@@ -13,6 +13,8 @@ import time
 
 os.environ.setdefault("MAVLINK20", "1")
 
+import contextlib
+
 from pymavlink.dialects.v20 import common as mavlink  # noqa: E402
 
 logger = logging.getLogger(__name__)
@@ -85,6 +87,11 @@ class MavlinkLink:
         good = [m for m in msgs if m.get_type() != "BAD_DATA"]
         self.received += len(good)
         return good, t_ns
+
+    def wake(self) -> None:
+        """Unblock a reader waiting in :meth:`receive` (an empty datagram to ourselves)."""
+        with contextlib.suppress(OSError):
+            self._sock.sendto(b"", self._sock.getsockname())
 
     def close(self) -> None:
         self._sock.close()

@@ -30,6 +30,8 @@ DEFAULT_RATES_HZ: dict[int, float] = {
     M.MAVLINK_MSG_ID_VFR_HUD: 4.0,
 }
 """Streamed at boot, in Hz."""
+_SLACK_S = 0.005
+"""A message due this close to the current tick goes now, so 50 Hz streams survive tick jitter."""
 
 _SENSORS = (
     M.MAV_SYS_STATUS_SENSOR_3D_GYRO
@@ -125,8 +127,9 @@ class TelemetryStreams:
         """Messages whose time has come; at most one of each per call."""
         out = []
         for mid, interval in self._interval.items():
-            if self._next.get(mid, 0.0) <= now_s:
-                self._next[mid] = max(self._next.get(mid, 0.0) + interval, now_s - interval)
+            if self._next.get(mid, 0.0) <= now_s + _SLACK_S:
+                planned = self._next.get(mid, 0.0) + interval
+                self._next[mid] = planned if planned > now_s else now_s + interval
                 out.append(self._builders[mid]())
         return out
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
 import logging
 import math
@@ -102,6 +103,8 @@ class TruthServer:
                 data, addr = self.sock.recvfrom(65535)
             except (TimeoutError, OSError):
                 continue
+            if not data:
+                continue
             request: Any = None
             try:
                 request = json.loads(data)
@@ -154,6 +157,11 @@ class TruthServer:
                     "more": more,
                 }
         return {"ok": False, "error": f"unknown cmd {cmd!r}"}
+
+    def wake(self) -> None:
+        """Unblock :meth:`serve` waiting for a request."""
+        with contextlib.suppress(OSError):
+            self.sock.sendto(b"", self.sock.getsockname())
 
     def close(self) -> None:
         self.sock.close()

@@ -162,31 +162,39 @@ class SimVehicleServer:
                     steps += 1
                 if next_tick <= now:
                     next_tick = now + dt
-                with self.lock:
-                    self._supervise_offboard(time.monotonic_ns())
-                    for text in self.vehicle.events:
-                        self.status_text(mavlink.MAV_SEVERITY_INFO, text)
-                    self.vehicle.events.clear()
-                    due = self.streams.due(now)
-                    shown = (self.vehicle.mode, self.vehicle.armed)
-                    if shown != self._shown and not any(m.get_msgId() == 0 for m in due):
-                        due.append(self.streams.heartbeat())
-                    self._shown = shown
-                    truth = self.truth.snapshot() if self.truth.has_subscribers else None
-                for msg in due:
-                    self.link.send(msg)
-                if truth is not None:
-                    self.truth.publish(truth)
+                self._publish(now)
                 if self.cfg.parent_pid is not None and os.getppid() != self.cfg.parent_pid:
                     logger.warning("SimVehicle: parent process %d is gone; exiting", self.cfg.parent_pid)
                     break
                 self._stop.wait(max(0.0, next_tick - time.monotonic()))
         finally:
             self._stop.set()
+            self.link.wake()
+            self.truth.wake()
             for t in threads:
                 t.join(timeout=1.0)
             self.link.close()
             self.truth.close()
+
+    def _publish(self, now: float) -> None:
+        """Once per tick: failsafes, announcements, due telemetry, the truth datagram."""
+        with self.lock:
+            self._supervise_offboard(time.monotonic_ns())
+            for text in self.vehicle.events:
+                self.status_text(mavlink.MAV_SEVERITY_INFO, text)
+            self.vehicle.events.clear()
+            due = self.streams.due(now)
+            shown = (self.vehicle.mode, self.vehicle.armed)
+            if shown != self._shown and not any(
+                m.get_msgId() == mavlink.MAVLINK_MSG_ID_HEARTBEAT for m in due
+            ):
+                due.append(self.streams.heartbeat())
+            self._shown = shown
+            truth = self.truth.snapshot() if self.truth.has_subscribers else None
+        for msg in due:
+            self.link.send(msg)
+        if truth is not None:
+            self.truth.publish(truth)
 
     def describe(self) -> str:
         h = self.cfg.home
