@@ -23,6 +23,7 @@ from uav_tui.commands import VEHICLE_COMMANDS, Command, parse
 from uav_tui.config import Config
 from uav_tui.errors import CommandError, NoVehicle, ProcessorLoadError, SourceError, UavError
 from uav_tui.events import EventLog
+from uav_tui.recording import Recorder, describe
 from uav_tui.status import CoreStatus
 from uav_tui.telemetry import TelemetryManager
 from uav_tui.worker import ProcessedFrame, ProcessorWorker
@@ -56,6 +57,8 @@ class UavCore:
         self.controller: FlightController | None = None
         self.source: CameraSource | None = None
         self.worker: ProcessorWorker | None = None
+        self.recorder: Recorder | None = None
+        """Writes the run's dataset (None with ``--no-record``)."""
         self.quit_requested = asyncio.Event()
         """Set by the ``quit`` command; the interface that runs the core then stops it."""
         self.processor_error: str | None = None
@@ -88,10 +91,15 @@ class UavCore:
             self.gate.telemetry, self.gate.controller = self.telemetry, self.controller
             processor.instance.tmMgr = self.telemetry
             self.source = await self._open_source(self.config.source)
+            self.worker = ProcessorWorker(processor, self._on_result)
+            if self.config.recording.record:
+                self.recorder = await loop.run_in_executor(None, functools.partial(
+                    Recorder.open, self.config.recording, describe(self),
+                    telemetry_expected=self.controller is not None, started_wall_ns=self.started_wall_ns))
+                self.recorder.attach(self)
         except BaseException:
             await self._release()
             raise
-        self.worker = ProcessorWorker(processor, self._on_result)
         self.worker.attach(self.source.buffer)
         self._spawn(self.worker.run(), "processor")
         self._spawn(self.telemetry.run(), "telemetry")
@@ -150,6 +158,9 @@ class UavCore:
             await asyncio.get_running_loop().run_in_executor(None, self.source.close)
         if self.controller is not None:
             await self.controller.close()
+        if self.recorder is not None:
+            self.telemetry.saver = None
+            await asyncio.get_running_loop().run_in_executor(None, self.recorder.close)
         self.state = CoreState.STOPPED
 
     def _spawn(self, coro: Any, name: str) -> None:
@@ -275,7 +286,9 @@ class UavCore:
         return f"target region ({x}, {y}, {w}, {h}) sent to the processor"
 
     async def _do_snapshot(self, *, origin: str) -> str:
-        raise UavError("snapshot needs the recorder, which is not part of this build yet")
+        if self.recorder is None:
+            raise UavError("snapshot: recording is off (started with --no-record)")
+        return self.recorder.snapshot()
 
     async def _do_reload(self, *, origin: str) -> str:
         assert self.worker is not None
@@ -345,4 +358,5 @@ class UavCore:
             last_decision=self.gate.last_decision,
             vectors_executed=self.gate.executed,
             vectors_rejected=self.gate.rejected,
+            recording=self.recorder.status() if self.recorder is not None else {},
         )

@@ -16,7 +16,6 @@ from processors.synthetic import detection_sequence, ground_texture, ground_view
 
 REPO = Path(__file__).resolve().parents[2]
 
-ABORT_AT_EXIT = ("terminate called without an active exception", "FATAL: exception not rethrown")
 """What libstdc++ / glibc print when the interpreter exits while a daemon thread is inside OpenCV."""
 
 
@@ -76,8 +75,4 @@ def test_runs_under_platform_with_file_source(processor: str, script: str, args:
     assert status["pipeline"]["frames_processed"] >= 10
     vx, vy, t = status["last_vector"]
     assert abs(vx) <= 1 and abs(vy) <= 1 and 0 < t <= 2
-    if done.returncode == -6 and any(m in done.stderr for m in ABORT_AT_EXIT):
-        # ProcessorWorker.close() does not join the processor thread: the interpreter can exit while
-        # OpenCV is running on it, and the C++ runtime aborts. Joining it in close() fixes this.
-        pytest.xfail("platform exits without joining the processor thread (abort inside OpenCV)")
     assert done.returncode == 0, done.stderr[-2000:]
