@@ -17,7 +17,7 @@ from typing import Any
 import pytest
 import pytest_asyncio
 
-from controllers import connect_controller
+from controllers import FlightController, connect_controller
 from controllers.mavsdk_controller import MavsdkController
 from controllers.sim.launcher import SimVehicle
 from controllers.sim.truth import TruthClient
@@ -176,6 +176,10 @@ async def test_the_papers_udp_forms_listen_like_they_used_to(sim_vehicle: SimVeh
         assert fc.heartbeat_age_s() < 1.5
     finally:
         await fc.close()
+
+
+def test_implements_the_flight_controller_contract() -> None:
+    assert isinstance(MavsdkController(), FlightController)
 
 
 async def test_none_means_no_vehicle() -> None:
