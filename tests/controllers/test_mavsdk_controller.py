@@ -178,7 +178,7 @@ async def test_the_papers_udp_forms_listen_like_they_used_to(sim_vehicle: SimVeh
         await fc.close()
 
 
-def test_implements_the_flight_controller_contract() -> None:
+async def test_implements_the_flight_controller_contract() -> None:
     assert isinstance(MavsdkController(), FlightController)
 
 
