@@ -29,6 +29,10 @@ MAV_DATA_STREAM_ALL = 0
 STREAM_RATE_HZ = 10
 """Rate asked for with REQUEST_DATA_STREAM (all streams), as MAVProxy and Mission Planner do."""
 
+MAV_CMD_NAV_TAKEOFF = 22
+DEFAULT_TAKEOFF_ALT_M = 2.5
+"""Used when take-off is asked for without an altitude (PX4 has MIS_TAKEOFF_ALT; ArduCopter needs one)."""
+
 CIRCLE_RADIUS_PARAMS = (("CIRCLE_RADIUS_M", 1.0), ("CIRCLE_RADIUS", 100.0))
 """(name, units per metre): 4.8 renamed parameters (RTL_ALT -> RTL_ALT_M); try the new name first."""
 
@@ -66,6 +70,20 @@ async def set_mode(direct: MavlinkDirectAsync, target_system: int, mode: str) ->
     mode is changed to GUIDED first; MAVSDK's hold is PX4-specific, so holding is LOITER here.
     """
     await send_command(direct, set_mode_command(target_system, mode))
+
+
+def takeoff_command(target_system: int, altitude_m: float) -> MavlinkMessage:
+    """NAV_TAKEOFF; ArduCopter reads param7 as metres above home."""
+    return command_long(target_system, MAV_CMD_NAV_TAKEOFF, 0, 0, 0, 0, 0, 0, altitude_m)
+
+
+async def takeoff(direct: MavlinkDirectAsync, target_system: int, altitude_m: float) -> None:
+    """Take off in GUIDED (the caller switched to GUIDED and armed).
+
+    Sent raw rather than through MAVSDK's Action, whose take-off altitude is a PX4 parameter
+    (MIS_TAKEOFF_ALT) that ArduCopter does not have.
+    """
+    await send_command(direct, takeoff_command(target_system, altitude_m))
 
 
 async def request_streams(direct: MavlinkDirectAsync, target_system: int) -> None:

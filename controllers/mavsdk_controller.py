@@ -195,7 +195,7 @@ class MavsdkController:
             await self._ardupilot_mode("GUIDED", command)
 
     async def _ardupilot_mode(self, mode: str, command: str) -> None:
-        await self._command(command, lambda: ardupilot.set_mode(self._direct, self._sysid, mode, command=command))
+        await self._command(command, lambda: ardupilot.set_mode(self._direct, self._sysid, mode))
 
     async def arm(self) -> None:
         await self._guided("arm")
@@ -207,9 +207,13 @@ class MavsdkController:
 
     async def takeoff(self, altitude_m: float | None = None) -> None:
         await self._vectors.stop_and_hold()
+        if self.autopilot == "ardupilot":
+            await self._guided("takeoff")
+            alt = altitude_m if altitude_m is not None else ardupilot.DEFAULT_TAKEOFF_ALT_M
+            await self._command("takeoff", lambda: ardupilot.takeoff(self._direct, self._sysid, alt))
+            return
         if altitude_m is not None:
             await self._command("takeoff", lambda: self._action.set_takeoff_altitude(float(altitude_m)))
-        await self._guided("takeoff")
         await self._command("takeoff", self._action.takeoff)
 
     async def land(self) -> None:

@@ -43,6 +43,11 @@ def test_velocity_setpoint_is_body_frame_velocity_with_yaw_rate_zero() -> None:
     assert not any(f["type_mask"] & (1 << bit) for bit in used)
 
 
+def test_ardupilot_takeoff_altitude_is_param7() -> None:
+    f = fields(ardupilot.takeoff_command(1, 4.0))
+    assert (f["command"], f["param7"], f["param1"]) == (22, 4.0, 0.0)
+
+
 def test_request_data_streams_asks_for_all_streams() -> None:
     assert fields(ardupilot.request_data_streams_message(3)) == {
         "target_system": 3,
@@ -64,9 +69,7 @@ def test_request_data_streams_asks_for_all_streams() -> None:
     ],
 )
 def test_ack_result_names(result: int, name: str) -> None:
-    ack = MavlinkMessage(
-        message_name="COMMAND_ACK", fields_json=json.dumps({"command": 176, "result": result})
-    )
+    ack = MavlinkMessage(message_name="COMMAND_ACK", fields_json=json.dumps({"command": 176, "result": result}))
     assert ack_result(ack) == name
 
 
