@@ -226,11 +226,9 @@ class MavsdkController:
 
     async def hold(self) -> None:
         if self._vectors.active or self._vectors.engaged:
-            await self._vectors.stop_and_hold()
-        elif self.autopilot == "ardupilot":
-            await self.stop_offboard()
+            await self._vectors.stop_and_hold()  # zero first, then the holding mode
         else:
-            await self._command("hold", self._action.hold)
+            await self.stop_offboard()
 
     async def do_orbit(self, radius_m: float, velocity_ms: float) -> None:
         await self._vectors.stop_and_hold()

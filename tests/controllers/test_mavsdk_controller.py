@@ -202,6 +202,9 @@ async def test_sim_starts_its_own_vehicle_and_stops_it_on_close() -> None:
     assert not fc.sim.running
 
 
+WINDOW_S = 3.0
+
+
 async def test_connect_detects_px4_and_telemetry_arrives_at_documented_rates(sim_vehicle: SimVehicle) -> None:
     flight = await start_flight(sim_vehicle)
     try:
@@ -218,17 +221,16 @@ async def test_connect_detects_px4_and_telemetry_arrives_at_documented_rates(sim
                     boot_ms.append(update["fc_boot_ms"])
 
         task = asyncio.create_task(collect())
-        await asyncio.sleep(2.0)
+        await asyncio.sleep(WINDOW_S)
         assert flight.fc.heartbeat_age_s() < 1.5
         await flight.fc.close()  # ends the telemetry stream
         await asyncio.wait_for(task, 2.0)
     finally:
         await flight.fc.close()
-    per_s = {key: n / 2.0 for key, n in counts.items()}
     for key in ("lat_deg", "roll_deg", "vn_ms", "north_m"):  # documented 10 Hz
-        assert per_s[key] >= 6.0, (key, per_s)
+        assert counts[key] >= 6 * WINDOW_S, (key, counts)
     for key in ("battery_v", "gps_fix", "armed", "flight_mode", "in_air", "health_ok", "heartbeat_age_s"):
-        assert per_s[key] >= 0.6, (key, per_s)
+        assert counts[key] >= WINDOW_S - 1, (key, counts)  # documented 1-2 Hz
     assert boot_ms == sorted(boot_ms) and boot_ms[-1] > boot_ms[0]
 
 
