@@ -11,8 +11,9 @@ Two cases:
 - ``start_from_hold``: the first vector after HOLD: the setpoint goes out at once, then the
   controller streams ~0.1 s and switches to offboard; ``call_return_ms`` is when the call returns.
 
-Also reports the setpoint rate seen by the vehicle while a vector runs (MAVSDK's own re-sending
-included). Prints JSON.
+Also reports the setpoint rate seen by the vehicle while vectors are replaced every 0.15 s: our
+20 Hz stream plus one immediate setpoint per replacement (MAVSDK re-sends nothing: setpoints go out
+as raw MAVLink). Prints JSON.
 
 Usage: python scripts/bench_command_latency.py [--replace 60] [--start 10]
 """
