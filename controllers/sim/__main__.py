@@ -61,9 +61,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--rtl-alt", type=float, default=10.0, metavar="M", help="RTL_RETURN_ALT")
     p.add_argument("--gps-delay", type=float, default=0.5, metavar="S", help="seconds until a 3D fix")
     p.add_argument("--rate", type=float, default=50.0, metavar="HZ", help="physics step rate")
-    p.add_argument(
-        "--parent-pid", type=int, default=None, metavar="PID", help="exit when PID stops being our parent"
-    )
+    p.add_argument("--parent-pid", type=int, default=None, metavar="PID", help="exit when PID stops being our parent")
     p.add_argument("--log-level", default="INFO", help="logging level on stderr")
     return p
 

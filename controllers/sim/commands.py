@@ -260,9 +260,7 @@ class CommandHandler:
     def _send_param(self, index: int, param: Param) -> None:
         enc = self.s.link.encoder
         self.s.link.send(
-            enc.param_value_encode(
-                param.name.encode(), encode_value(param), param.kind, len(self.params), index
-            )
+            enc.param_value_encode(param.name.encode(), encode_value(param), param.kind, len(self.params), index)
         )
 
 

@@ -137,9 +137,7 @@ class SimVehicle:
                 return self
         log = self.log_text()
         self.stop()
-        raise ControllerError(
-            f"simulated vehicle did not start within {timeout} s; its output:\n{log[-2000:]}"
-        )
+        raise ControllerError(f"simulated vehicle did not start within {timeout} s; its output:\n{log[-2000:]}")
 
     def log_text(self) -> str:
         """What the simulator printed so far (stdout and stderr)."""

@@ -216,9 +216,7 @@ class TelemetryStreams:
 
     def local_position_ned(self) -> mavlink.MAVLink_message:
         pos, vel, _ = self._nav()
-        return self.enc.local_position_ned_encode(
-            self.boot_ms(), *(float(x) for x in pos), *(float(x) for x in vel)
-        )
+        return self.enc.local_position_ned_encode(self.boot_ms(), *(float(x) for x in pos), *(float(x) for x in vel))
 
     def gps_raw_int(self) -> mavlink.MAVLink_message:
         v = self.v

@@ -32,6 +32,7 @@ def truth_dict(v: Multicopter, server: SimVehicleServer) -> dict[str, Any]:
     return {
         "t_mono_ns": time.monotonic_ns(),
         "t_wall_ns": time.time_ns(),
+        "time_boot_ms": server.streams.boot_ms(),
         "n": n,
         "e": e,
         "d": d,

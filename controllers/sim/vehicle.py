@@ -110,9 +110,7 @@ class SimVehicleServer:
             self.link.send(self.streams.heartbeat())
         elif kind == "PING" and msg.target_system == 0:
             enc = self.link.encoder
-            self.link.send(
-                enc.ping_encode(msg.time_usec, msg.seq, msg.get_srcSystem(), msg.get_srcComponent())
-            )
+            self.link.send(enc.ping_encode(msg.time_usec, msg.seq, msg.get_srcSystem(), msg.get_srcComponent()))
         elif kind not in ("HEARTBEAT", "TIMESYNC", "SYSTEM_TIME"):
             logger.debug("SimVehicle: ignoring %s", kind)
 
@@ -185,9 +183,7 @@ class SimVehicleServer:
             self.vehicle.events.clear()
             due = self.streams.due(now)
             shown = (self.vehicle.mode, self.vehicle.armed)
-            if shown != self._shown and not any(
-                m.get_msgId() == mavlink.MAVLINK_MSG_ID_HEARTBEAT for m in due
-            ):
+            if shown != self._shown and not any(m.get_msgId() == mavlink.MAVLINK_MSG_ID_HEARTBEAT for m in due):
                 due.append(self.streams.heartbeat())
             self._shown = shown
             truth = self.truth.snapshot() if self.truth.has_subscribers else None

@@ -45,9 +45,7 @@ def test_simulator_exits_when_its_parent_dies_without_stopping_it() -> None:
         "time.sleep(30)\n"
     )
     env = {**os.environ, "PYTHONPATH": str(REPO_ROOT)}
-    with subprocess.Popen(
-        [sys.executable, "-c", script], stdout=subprocess.PIPE, env=env, cwd=REPO_ROOT
-    ) as parent:
+    with subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, env=env, cwd=REPO_ROOT) as parent:
         assert parent.stdout is not None
         pid = int(parent.stdout.readline())
         assert _alive(pid)
@@ -90,6 +88,7 @@ def test_truth_stream_and_requests(sim_vehicle: SimVehicle) -> None:
     assert (first["lat"], first["lon"], first["alt"]) == pytest.approx((47.397742, 8.545594, 488.0))
     assert first["mode"] == "HOLD" and not first["armed"]
     assert abs(first["t_mono_ns"] - time.monotonic_ns()) < 1e9  # one clock for every process
+    assert 0 < first["time_boot_ms"] < 10_000
     time.sleep(0.5)
     assert (truth.latest()["t_mono_ns"] - first["t_mono_ns"]) / 1e9 > 0.4  # still streaming
 

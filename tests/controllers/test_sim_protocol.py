@@ -69,9 +69,7 @@ def receive(conn: mavutil.mavfile, kind: str, timeout: float = 2.0) -> mavutil.m
 
 def send_velocity(conn: mavutil.mavfile, vx: float) -> None:
     mask = 0b0000_1101_1100_0111  # velocity + yaw rate
-    conn.mav.set_position_target_local_ned_send(
-        0, 1, 1, M.MAV_FRAME_BODY_NED, mask, 0, 0, 0, vx, 0, 0, 0, 0, 0, 0, 0
-    )
+    conn.mav.set_position_target_local_ned_send(0, 1, 1, M.MAV_FRAME_BODY_NED, mask, 0, 0, 0, vx, 0, 0, 0, 0, 0, 0, 0)
 
 
 def set_mode(conn: mavutil.mavfile, main: int, sub: int = 0) -> int:
@@ -82,9 +80,7 @@ def test_heartbeat_is_px4_quadrotor_with_px4_custom_modes(shared_gcs: mavutil.ma
     drain(shared_gcs)
     hb = receive(shared_gcs, "HEARTBEAT")
     assert (hb.type, hb.autopilot) == (M.MAV_TYPE_QUADROTOR, M.MAV_AUTOPILOT_PX4)
-    assert (
-        hb.base_mode & M.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED and not hb.base_mode & M.MAV_MODE_FLAG_SAFETY_ARMED
-    )
+    assert hb.base_mode & M.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED and not hb.base_mode & M.MAV_MODE_FLAG_SAFETY_ARMED
     assert hb.custom_mode == (4 << 16) | (3 << 24)  # AUTO.LOITER (HOLD)
     assert set_mode(shared_gcs, 3) == M.MAV_RESULT_ACCEPTED
     hb = receive(shared_gcs, "HEARTBEAT")
@@ -109,10 +105,7 @@ def test_every_command_is_acked_unknown_ones_unsupported(shared_gcs: mavutil.mav
     assert command(shared_gcs, M.MAV_CMD_DO_SET_SERVO, 1, 1500) == M.MAV_RESULT_UNSUPPORTED
     assert command(shared_gcs, M.MAV_CMD_NAV_TAKEOFF, *[float("nan")] * 7) == M.MAV_RESULT_DENIED  # not armed
     assert command(shared_gcs, M.MAV_CMD_REQUEST_MESSAGE, 9999) == M.MAV_RESULT_UNSUPPORTED
-    assert (
-        command(shared_gcs, M.MAV_CMD_REQUEST_MESSAGE, M.MAVLINK_MSG_ID_AUTOPILOT_VERSION)
-        == M.MAV_RESULT_ACCEPTED
-    )
+    assert command(shared_gcs, M.MAV_CMD_REQUEST_MESSAGE, M.MAVLINK_MSG_ID_AUTOPILOT_VERSION) == M.MAV_RESULT_ACCEPTED
     version = receive(shared_gcs, "AUTOPILOT_VERSION")
     assert version.capabilities & M.MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_BYTEWISE
     assert version.capabilities & M.MAV_PROTOCOL_CAPABILITY_SET_POSITION_TARGET_LOCAL_NED
@@ -147,9 +140,7 @@ def test_force_disarm_in_air_drops_the_vehicle(sim_vehicle: SimVehicle, gcs: mav
     assert not state["armed"] and not state["in_air"] and state["d"] == 0.0
 
 
-def read_param(
-    conn: mavutil.mavfile, name: str, timeout: float = 2.0
-) -> mavutil.mavlink.MAVLink_message | None:
+def read_param(conn: mavutil.mavfile, name: str, timeout: float = 2.0) -> mavutil.mavlink.MAVLink_message | None:
     drain(conn)
     conn.mav.param_request_read_send(1, 1, name.encode(), -1)
     deadline = time.monotonic() + timeout
