@@ -39,7 +39,7 @@ class TruthClient:
         self._thread = threading.Thread(target=self._read, name=f"truth-client:{port}", daemon=True)
         self._thread.start()
         if subscribe:
-            self._send({"cmd": "subscribe"})
+            self._send({"cmd": "subscribe", "id": next(self._ids)})  # an id keeps the answer out of latest()
 
     def latest(self) -> dict[str, Any] | None:
         """The newest truth datagram received, or None before the first."""
@@ -88,7 +88,7 @@ class TruthClient:
         """Unsubscribe and stop the reader thread; idempotent."""
         if self._closed.is_set():
             return
-        self._send({"cmd": "unsubscribe"})
+        self._send({"cmd": "unsubscribe", "id": next(self._ids)})
         self._closed.set()
         self._thread.join(timeout=1.0)
         self._sock.close()
