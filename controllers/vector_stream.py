@@ -1,8 +1,9 @@
 """Stream a body-frame velocity setpoint for t seconds, then zero and hold (safety rule 3).
 
-MAVSDK re-sends the last offboard setpoint by itself; that is never relied on. This module sends
-every setpoint, ends every vector explicitly (zero velocity, then a holding mode), and replaces a
-running vector without leaving offboard.
+Every setpoint is sent from here (MAVSDK's Offboard plugin, which re-sends the last setpoint from
+its own thread, is not used), every vector ends explicitly (zero velocity, then a holding mode), a
+new vector replaces a running one without leaving offboard, and a vehicle that leaves offboard by
+itself (RC takeover, failsafe) is left alone.
 """
 
 from __future__ import annotations
