@@ -13,9 +13,9 @@ Implementations are imported on first use, so ``--fc none`` never loads MAVSDK.
 
 from __future__ import annotations
 
-from controllers.base import FlightController
+from controllers.base import FlightController, Telemetry
 
-__all__ = ["connect_controller"]
+__all__ = ["FlightController", "Telemetry", "connect_controller"]
 
 
 async def connect_controller(address: str, *, heartbeat_timeout: float = 10.0) -> FlightController | None:

@@ -12,20 +12,26 @@ import math
 from mavsdk.asyncio.plugins.mavlink_direct import MavlinkDirectAsync, MavlinkMessage
 from mavsdk.asyncio.plugins.param import ParamAsync
 
-from uav_tui.errors import CommandDenied
+from controllers.mavlink_commands import (
+    MAV_CMD_DO_SET_MODE,
+    MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
+    CommandAckError,
+    command_long,
+    send_command,
+)
 
 logger = logging.getLogger(__name__)
 
 COPTER_MODES = {"GUIDED": 4, "LOITER": 5, "RTL": 6, "CIRCLE": 7, "LAND": 9, "BRAKE": 17}
 """ArduCopter custom_mode numbers."""
 
-MAV_CMD_DO_SET_MODE = 176
-MAV_MODE_FLAG_CUSTOM_MODE_ENABLED = 1
 MAV_DATA_STREAM_ALL = 0
-MAV_RESULT_NAMES = {0: "ACCEPTED", 1: "TEMPORARILY_REJECTED", 2: "DENIED", 3: "UNSUPPORTED", 4: "FAILED"}
-
 STREAM_RATE_HZ = 10
 """Rate asked for with REQUEST_DATA_STREAM (all streams), as MAVProxy and Mission Planner do."""
+
+MAV_CMD_NAV_TAKEOFF = 22
+DEFAULT_TAKEOFF_ALT_M = 2.5
+"""Used when take-off is asked for without an altitude (PX4 has MIS_TAKEOFF_ALT; ArduCopter needs one)."""
 
 CIRCLE_RADIUS_PARAMS = (("CIRCLE_RADIUS_M", 1.0), ("CIRCLE_RADIUS", 100.0))
 """(name, units per metre): 4.8 renamed parameters (RTL_ALT -> RTL_ALT_M); try the new name first."""
@@ -53,45 +59,31 @@ def request_data_streams_message(target_system: int, rate_hz: int = STREAM_RATE_
 
 
 def set_mode_command(target_system: int, mode: str) -> MavlinkMessage:
-    """COMMAND_LONG MAV_CMD_DO_SET_MODE with an ArduCopter custom mode (``"GUIDED"``, ``"CIRCLE"``...)."""
-    fields = {
-        "target_system": target_system,
-        "target_component": 1,
-        "command": MAV_CMD_DO_SET_MODE,
-        "confirmation": 0,
-        "param1": MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
-        "param2": COPTER_MODES[mode],
-        "param3": 0,
-        "param4": 0,
-        "param5": 0,
-        "param6": 0,
-        "param7": 0,
-    }
-    return MavlinkMessage(
-        message_name="COMMAND_LONG",
-        target_system_id=target_system,
-        target_component_id=1,
-        fields_json=json.dumps(fields),
-    )
+    """DO_SET_MODE with an ArduCopter custom mode (``"GUIDED"``, ``"LOITER"``, ``"CIRCLE"``...)."""
+    return command_long(target_system, MAV_CMD_DO_SET_MODE, MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, COPTER_MODES[mode])
 
 
-def ack_result(ack: MavlinkMessage) -> str:
-    """The MAV_RESULT name in a COMMAND_ACK returned by ``send_command``."""
-    code = json.loads(ack.fields_json or "{}").get("result")
-    return MAV_RESULT_NAMES.get(code, f"RESULT_{code}")
-
-
-async def set_mode(direct: MavlinkDirectAsync, target_system: int, mode: str, *, command: str) -> None:
-    """Switch ArduCopter to ``mode``; raises CommandDenied with the autopilot's answer.
+async def set_mode(direct: MavlinkDirectAsync, target_system: int, mode: str) -> None:
+    """Switch ArduCopter to ``mode``; raises CommandAckError with the autopilot's answer.
 
     Fact: re-arming after RTL/land through MAVSDK 4 fails ("Brake mode not armable") unless the
-    mode is changed to GUIDED first.
+    mode is changed to GUIDED first; MAVSDK's hold is PX4-specific, so holding is LOITER here.
     """
-    ack = await direct.send_command(set_mode_command(target_system, mode))
-    result = ack_result(ack)
-    if result != "ACCEPTED":
-        message = f"{command}: switching to {mode} refused ({result})"
-        raise CommandDenied(message, command=command, result=result)
+    await send_command(direct, set_mode_command(target_system, mode))
+
+
+def takeoff_command(target_system: int, altitude_m: float) -> MavlinkMessage:
+    """NAV_TAKEOFF; ArduCopter reads param7 as metres above home."""
+    return command_long(target_system, MAV_CMD_NAV_TAKEOFF, 0, 0, 0, 0, 0, 0, altitude_m)
+
+
+async def takeoff(direct: MavlinkDirectAsync, target_system: int, altitude_m: float) -> None:
+    """Take off in GUIDED (the caller switched to GUIDED and armed).
+
+    Sent raw rather than through MAVSDK's Action, whose take-off altitude is a PX4 parameter
+    (MIS_TAKEOFF_ALT) that ArduCopter does not have.
+    """
+    await send_command(direct, takeoff_command(target_system, altitude_m))
 
 
 async def request_streams(direct: MavlinkDirectAsync, target_system: int) -> None:
@@ -119,7 +111,6 @@ async def start_circle(
         except Exception as exc:  # noqa: BLE001 - the other name may exist
             logger.debug("ArduCopter has no %s (%s)", name, exc)
     else:
-        message = "do_orbit: cannot set the circle radius parameter"
-        raise CommandDenied(message, command="do_orbit", result="FAILED")
+        raise CommandAckError("FAILED", "set CIRCLE_RADIUS_M / CIRCLE_RADIUS")
     await params.set_param_float("CIRCLE_RATE", circle_rate_deg_s(radius_m, velocity_ms))
-    await set_mode(direct, target_system, "CIRCLE", command="do_orbit")
+    await set_mode(direct, target_system, "CIRCLE")

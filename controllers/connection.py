@@ -118,8 +118,7 @@ def _parse_serial(address: str, scheme: str, rest: str) -> Connection:
         )
     if not device.startswith("/"):
         raise ConnectError(
-            f"serial device in {address!r} must be an absolute path: {scheme}:///dev/ttyAMA0:57600 "
-            "(three slashes)"
+            f"serial device in {address!r} must be an absolute path: {scheme}:///dev/ttyAMA0:57600 (three slashes)"
         )
     if not baud_text.isdigit() or int(baud_text) <= 0:
         raise ConnectError(
@@ -239,9 +238,7 @@ def connection_failed(conn: Connection, reason: str) -> ConnectError:
             "port: is a ground station, mavproxy or another uav-tui running? Pick another port or stop it."
         )
     if conn.is_serial:
-        return ConnectError(
-            f"cannot open {conn.device} at {conn.baud} baud ({reason}): check device and baud"
-        )
+        return ConnectError(f"cannot open {conn.device} at {conn.baud} baud ({reason}): check device and baud")
     if "DESTINATION_IP_UNKNOWN" in reason or "CONNECTION_URL_INVALID" in reason:
         return ConnectError(f"cannot resolve host {conn.host!r} in {conn.given!r}: use an IP address")
     if conn.scheme == "tcpout":

@@ -4,17 +4,14 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import json
 import logging
 import math
-import time
 from collections.abc import AsyncIterator, Awaitable, Callable
 from typing import Any, TypeVar
 
 from mavsdk.asyncio import Autopilot, ComponentType, Configuration, Mavsdk, MavsdkConnectionError, System
 from mavsdk.asyncio.plugins.action import ActionAsync, OrbitYawBehavior
 from mavsdk.asyncio.plugins.mavlink_direct import MavlinkDirectAsync
-from mavsdk.asyncio.plugins.offboard import OffboardAsync, VelocityBodyYawspeed
 from mavsdk.asyncio.plugins.param import ParamAsync
 from mavsdk.asyncio.plugins.telemetry import TelemetryAsync
 
@@ -26,7 +23,9 @@ from controllers.connection import (
     no_heartbeat_error,
     parse_connection,
 )
+from controllers.mavlink_commands import px4_set_mode, send_command, velocity_body_setpoint
 from controllers.mavsdk_errors import map_mavsdk_errors
+from controllers.mavsdk_link import LinkMonitor
 from controllers.mavsdk_log import route_mavsdk_log
 from controllers.mavsdk_telemetry import merged_updates, set_rates
 from controllers.vector_stream import VectorStream
@@ -46,9 +45,6 @@ CLOSE_HOLD_TIMEOUT_S = 2.0
 """close() during a vector: how long it tries to put the vehicle in hold before letting go."""
 
 AUTOPILOT_NAMES = {"px4": "PX4", "ardupilot": "ArduPilot", "unknown": "unknown autopilot"}
-
-MAV_AUTOPILOT_INVALID = 8
-"""HEARTBEAT.autopilot of ground stations and other non-autopilot components."""
 
 
 class MavsdkController:
@@ -77,12 +73,10 @@ class MavsdkController:
         self._system: System | None = None
         self._sysid = 1
         self._action: ActionAsync
-        self._offboard: OffboardAsync
         self._telemetry: TelemetryAsync
         self._param: ParamAsync
         self._direct: MavlinkDirectAsync
-        self._last_heartbeat = -math.inf
-        self._heartbeat_task: asyncio.Task[None] | None = None
+        self._link: LinkMonitor | None = None
         self._stop = asyncio.Event()
         self._closed = False
         self._vectors = VectorStream(self, rate_hz=vector_rate_hz, name="MavsdkController")
@@ -120,21 +114,22 @@ class MavsdkController:
             await self._mavsdk.add_any_connection(conn.url)
         except MavsdkConnectionError as exc:
             raise connection_failed(conn, str(exc)) from exc
-        async with asyncio.timeout(heartbeat_timeout + 2.0):
-            system = await self._mavsdk.first_autopilot(timeout_s=heartbeat_timeout)
+        system = None
+        with contextlib.suppress(TimeoutError):  # belt and braces over MAVSDK's own timeout
+            async with asyncio.timeout(heartbeat_timeout + 2.0):
+                system = await self._mavsdk.first_autopilot(timeout_s=heartbeat_timeout)
         if system is None:
             raise await no_heartbeat_error(conn, heartbeat_timeout)
         self._system = system
-        self._last_heartbeat = time.monotonic()
         self._sysid = await system.get_system_id()
         kind = await system.autopilot_type()
         self.autopilot = {Autopilot.PX4: "px4", Autopilot.ARDUPILOT: "ardupilot"}.get(kind, "unknown")
         self._action = ActionAsync(system)
-        self._offboard = OffboardAsync(system)
         self._telemetry = TelemetryAsync(system)
         self._param = ParamAsync(system)
         self._direct = MavlinkDirectAsync(system)
-        self._heartbeat_task = asyncio.create_task(self._watch_heartbeats(), name="mavsdk-heartbeat")
+        self._link = LinkMonitor(self._direct, self._telemetry, self._sysid)
+        self._link.start()
         await self._ask_for_telemetry()
 
     async def _ask_for_telemetry(self) -> None:
@@ -145,40 +140,40 @@ class MavsdkController:
             async with asyncio.timeout(SETUP_TIMEOUT_S):
                 await set_rates(self._telemetry)
         except TimeoutError:
-            logger.warning(
-                "telemetry rates: no answer within %.0f s; keeping the current rates", SETUP_TIMEOUT_S
-            )
-
-    async def _watch_heartbeats(self) -> None:
-        async for msg in self._direct.subscribe_message("HEARTBEAT"):
-            if msg.system_id != self._sysid:
-                continue
-            with contextlib.suppress(ValueError):
-                if json.loads(msg.fields_json).get("autopilot") == MAV_AUTOPILOT_INVALID:
-                    continue
-            self._last_heartbeat = time.monotonic()
+            logger.warning("telemetry rates: no answer within %.0f s; keeping the current rates", SETUP_TIMEOUT_S)
 
     def heartbeat_age_s(self) -> float:
         """Seconds since the last heartbeat from the autopilot (inf before the first)."""
-        return time.monotonic() - self._last_heartbeat
+        return self._link.heartbeat_age_s() if self._link is not None else math.inf
+
+    def flight_mode_since(self, t_mono: float) -> str | None:
+        """The flight mode last reported, if it arrived after ``t_mono`` (see :class:`LinkMonitor`)."""
+        return self._link.flight_mode_since(t_mono) if self._link is not None else None
+
+    async def wait_ready(self, timeout_s: float = 30.0) -> bool:
+        """Wait until the autopilot reports it could arm; False after ``timeout_s``.
+
+        PX4 needs ~5 s after boot, the simulator ~1 s (ArduCopter's flags look good before its EKF
+        allows GUIDED arming, ~40 s after boot).
+        """
+        return await self._link.wait_ready(timeout_s) if self._link is not None else False
 
     async def close(self) -> None:
         """Stop a running vector (zero, hold: best effort), stop streams, release MAVSDK. Idempotent."""
         if self._closed:
             return
-        self._closed = True
-        self._stop.set()
         if self._vectors.active or self._vectors.engaged:
             try:
                 async with asyncio.timeout(CLOSE_HOLD_TIMEOUT_S):
                     await self._vectors.stop_and_hold()
             except (ControllerError, TimeoutError) as exc:
                 logger.error("MavsdkController: could not put the vehicle in hold while closing: %s", exc)
+        self._closed = True
+        self._stop.set()
         await self._vectors.cancel()
-        if self._heartbeat_task is not None:
-            self._heartbeat_task.cancel()
-            await asyncio.gather(self._heartbeat_task, return_exceptions=True)
-        await asyncio.sleep(0)  # let telemetry generators run their finally (unsubscribe) first
+        if self._link is not None:
+            await self._link.stop()
+        # Telemetry iterators end on _stop; their unsubscribe is a no-op once MAVSDK is destroyed.
         mavsdk, self._mavsdk = self._mavsdk, None
         if mavsdk is not None:
             await asyncio.to_thread(mavsdk.destroy)
@@ -200,9 +195,7 @@ class MavsdkController:
             await self._ardupilot_mode("GUIDED", command)
 
     async def _ardupilot_mode(self, mode: str, command: str) -> None:
-        await self._command(
-            command, lambda: ardupilot.set_mode(self._direct, self._sysid, mode, command=command)
-        )
+        await self._command(command, lambda: ardupilot.set_mode(self._direct, self._sysid, mode))
 
     async def arm(self) -> None:
         await self._guided("arm")
@@ -214,9 +207,13 @@ class MavsdkController:
 
     async def takeoff(self, altitude_m: float | None = None) -> None:
         await self._vectors.stop_and_hold()
+        if self.autopilot == "ardupilot":
+            await self._guided("takeoff")
+            alt = altitude_m if altitude_m is not None else ardupilot.DEFAULT_TAKEOFF_ALT_M
+            await self._command("takeoff", lambda: ardupilot.takeoff(self._direct, self._sysid, alt))
+            return
         if altitude_m is not None:
             await self._command("takeoff", lambda: self._action.set_takeoff_altitude(float(altitude_m)))
-        await self._guided("takeoff")
         await self._command("takeoff", self._action.takeoff)
 
     async def land(self) -> None:
@@ -229,11 +226,9 @@ class MavsdkController:
 
     async def hold(self) -> None:
         if self._vectors.active or self._vectors.engaged:
-            await self._vectors.stop_and_hold()
-        elif self.autopilot == "ardupilot":
-            await self.stop_offboard()
+            await self._vectors.stop_and_hold()  # zero first, then the holding mode
         else:
-            await self._command("hold", self._action.hold)
+            await self.stop_offboard()
 
     async def do_orbit(self, radius_m: float, velocity_ms: float) -> None:
         await self._vectors.stop_and_hold()
@@ -243,10 +238,17 @@ class MavsdkController:
                 lambda: ardupilot.start_circle(self._direct, self._param, self._sysid, radius_m, velocity_ms),
             )
             return
-        # NaN centre: orbit around the current position.
-        nan, behaviour = math.nan, OrbitYawBehavior.HOLD_FRONT_TO_CIRCLE_CENTER
+        # Centre: the current position, given explicitly, because MAVSDK sends a NaN latitude as
+        # COMMAND_INT x = INT32_MIN (not INT32_MAX, "current position"). Altitude NaN: keep the current one
+        # (MAVSDK labels z GLOBAL_RELATIVE_ALT while the API takes AMSL; NaN avoids the ambiguity).
+        here = await self._command("do_orbit", self._telemetry.position)
+        lat, lon, behaviour = (
+            here.latitude_deg,
+            here.longitude_deg,
+            OrbitYawBehavior.HOLD_FRONT_TO_CIRCLE_CENTER,
+        )
         await self._command(
-            "do_orbit", lambda: self._action.do_orbit(radius_m, velocity_ms, behaviour, nan, nan, nan)
+            "do_orbit", lambda: self._action.do_orbit(radius_m, velocity_ms, behaviour, lat, lon, math.nan)
         )
 
     async def set_fly_vector(self, vx: float, vy: float, t: float) -> None:
@@ -270,25 +272,31 @@ class MavsdkController:
         """True while a vector's setpoints are being streamed."""
         return self._vectors.active
 
+    @property
+    def last_vector_end(self) -> str:
+        """How the last vector ended: completed, stopped, vehicle left offboard (MODE), failed: ..."""
+        return self._vectors.last_end
+
     # ---- OffboardPort (used by VectorStream) -----------------------------------------------------
 
     async def send_velocity_body(self, forward_ms: float, right_ms: float) -> None:
-        setpoint = VelocityBodyYawspeed(forward_ms, right_ms, 0.0, 0.0)
-        await self._command("set_fly_vector", lambda: self._offboard.set_velocity_body(setpoint))
+        setpoint = velocity_body_setpoint(self._sysid, forward_ms, right_ms)
+        await self._command("set_fly_vector", lambda: self._direct.send_message(setpoint))
 
     async def start_offboard(self) -> None:
         if self.autopilot == "ardupilot":
             # GUIDED takes velocity targets; they must be renewed within GUID_TIMEOUT (3 s).
             await self._ardupilot_mode("GUIDED", "set_fly_vector")
         else:
-            await self._command("set_fly_vector", self._offboard.start)
+            # PX4 accepts OFFBOARD only while setpoints stream (VectorStream streams first).
+            command = px4_set_mode(self._sysid, "OFFBOARD")
+            await self._command("set_fly_vector", lambda: send_command(self._direct, command))
 
     async def stop_offboard(self) -> None:
         if self.autopilot == "ardupilot":
             await self._ardupilot_mode("LOITER", "hold")
         else:
-            # PX4: offboard.stop() switches to HOLD, and MAVSDK stops re-sending setpoints.
-            await self._command("hold", self._offboard.stop)
+            await self._command("hold", self._action.hold)
 
     # ---- telemetry -------------------------------------------------------------------------------
 

@@ -41,9 +41,7 @@ def result_name(exc: BaseException) -> str:
     return getattr(result, "name", None) or (str(result) if result is not None else "UNKNOWN")
 
 
-def translate(
-    command: str, exc: BaseException, heartbeat_age_s: Callable[[], float] | None = None
-) -> ControllerError:
+def translate(command: str, exc: BaseException, heartbeat_age_s: Callable[[], float] | None = None) -> ControllerError:
     """Translate one MAVSDK (or timeout) exception raised by ``command`` into a ControllerError.
 
     Args:

@@ -10,6 +10,9 @@ from controllers.sim.launcher import SimVehicle
 
 logger = logging.getLogger(__name__)
 
+READY_TIMEOUT_S = 10.0
+"""How long ``--fc sim`` waits for the simulated vehicle to be ready to arm."""
+
 
 class SimController(MavsdkController):
     """A MavsdkController connected to a simulator process it owns; ``close()`` stops the simulator.
@@ -37,6 +40,9 @@ async def start_sim_controller(*, heartbeat_timeout: float = 10.0) -> SimControl
     controller = SimController(sim)
     try:
         await controller.connect(sim.connection_string, heartbeat_timeout=heartbeat_timeout)
+        # So that a script's first "arm" finds the vehicle ready (GPS fix after ~1 s).
+        if not await controller.wait_ready(READY_TIMEOUT_S):
+            logger.warning("simulated vehicle not ready to arm after %.0f s", READY_TIMEOUT_S)
     except BaseException:
         await controller.close()
         raise

@@ -1,8 +1,9 @@
 """Stream a body-frame velocity setpoint for t seconds, then zero and hold (safety rule 3).
 
-MAVSDK re-sends the last offboard setpoint by itself; that is never relied on. This module sends
-every setpoint, ends every vector explicitly (zero velocity, then a holding mode), and replaces a
-running vector without leaving offboard.
+Every setpoint is sent from here (MAVSDK's Offboard plugin, which re-sends the last setpoint from
+its own thread, is not used), every vector ends explicitly (zero velocity, then a holding mode), a
+new vector replaces a running one without leaving offboard, and a vehicle that leaves offboard by
+itself (RC takeover, failsafe) is left alone.
 """
 
 from __future__ import annotations
@@ -35,7 +36,12 @@ class OffboardPort(Protocol):
         ...
 
     async def stop_offboard(self) -> None:
-        """Leave velocity control into a holding mode (PX4 HOLD, ArduCopter LOITER/BRAKE)."""
+        """Leave velocity control into a holding mode (PX4 HOLD, ArduCopter LOITER)."""
+        ...
+
+    def flight_mode_since(self, t_mono: float) -> str | None:
+        """The flight mode telemetry last reported (``"OFFBOARD"``, ``"HOLD"``...) if it arrived after
+        ``t_mono`` (time.monotonic()), else None: an older report may predate our own mode change."""
         ...
 
 
@@ -60,6 +66,10 @@ class VectorStream:
         """True from a successful start_offboard until the vehicle was put back into a holding mode."""
         self.setpoints_sent = 0
         """Setpoints sent since construction (diagnostics)."""
+        self._seen_offboard = False
+        self._engaged_at = 0.0
+        self.last_end = ""
+        """How the last vector ended: completed, stopped, vehicle left offboard (MODE), failed: ..."""
 
     @property
     def active(self) -> bool:
@@ -89,6 +99,8 @@ class VectorStream:
                     await self._cancel_task()
                     raise
                 self.engaged = True
+                self._seen_offboard = False
+                self._engaged_at = time.monotonic()
 
     async def cancel(self) -> bool:
         """Stop streaming at once without changing the mode; returns whether offboard is still engaged.
@@ -96,20 +108,21 @@ class VectorStream:
         Used when an operator command pre-empts the vector: the caller sends the vehicle elsewhere.
         """
         async with self._lock:
-            await self._cancel_task()
+            await self._cancel_task("stopped")
             return self.engaged
 
     async def stop_and_hold(self) -> None:
         """Stop streaming, send zero velocity, and leave offboard into a holding mode (if engaged)."""
         async with self._lock:
-            await self._cancel_task()
+            await self._cancel_task("stopped")
             await self._zero_and_hold()
 
-    async def _cancel_task(self) -> None:
+    async def _cancel_task(self, why: str = "failed: offboard refused") -> None:
         task, self._task = self._task, None
         if task is not None and task is not asyncio.current_task():
             task.cancel()
             await asyncio.gather(task, return_exceptions=True)
+            self.last_end = why
 
     async def _send(self, vx: float, vy: float) -> None:
         await self._port.send_velocity_body(vx, vy)
@@ -126,23 +139,46 @@ class VectorStream:
         next_at = time.monotonic()
         try:
             while True:
-                next_at += self._period_s
                 now = time.monotonic()
+                next_at = max(next_at + self._period_s, now)  # after a stall: no burst of late ticks
                 if now >= self._deadline:
                     async with self._lock:
                         if time.monotonic() < self._deadline:
                             continue  # replaced while we waited for the lock
                         self._task = None
+                        self.last_end = "completed"
                         await self._zero_and_hold()
                         return
                 await asyncio.sleep(max(0.0, min(next_at, self._deadline) - now))
+                if self._vehicle_left_offboard():
+                    return
                 if time.monotonic() < self._deadline:
                     await self._send(*self._target)
         except ControllerError as exc:
             logger.error("%s: streaming failed (%s); trying to hold", self._name, exc)
             self._task = None
+            self.last_end = f"failed: {exc}"
             try:
                 await self._port.stop_offboard()
                 self.engaged = False
             except ControllerError as hold_exc:
                 logger.error("%s: hold after a failed stream failed too: %s", self._name, hold_exc)
+
+    def _vehicle_left_offboard(self) -> bool:
+        """True (and the vector abandoned, no hold sent) once the vehicle was seen leaving offboard.
+
+        Someone else changed the mode: the RC pilot taking over, a failsafe, a ground station. A hold
+        at the end of the vector would take the vehicle back from them.
+        """
+        mode = self._port.flight_mode_since(self._engaged_at)
+        if mode == "OFFBOARD":
+            self._seen_offboard = True
+        elif self._seen_offboard and mode is not None and self.engaged:
+            logger.warning(
+                "%s: the vehicle left offboard (now %s); vector abandoned, mode left alone", self._name, mode
+            )
+            self._task = None
+            self.engaged = False
+            self.last_end = f"vehicle left offboard ({mode})"
+            return True
+        return False

@@ -18,7 +18,8 @@ logger = logging.getLogger(__name__)
 Listener = Callable[[Telemetry], None]
 Saver = Callable[[Any, dict[str, Any]], None]
 
-_UPDATABLE = frozenset(TELEMETRY_FIELDS) - {"t_mono_ns", "t_wall_ns", "heartbeat_age_s"}
+_FIELDS = frozenset(TELEMETRY_FIELDS)
+_UPDATABLE = _FIELDS - {"t_mono_ns", "t_wall_ns", "heartbeat_age_s"}
 """Fields a controller update may set; receive stamps and heartbeat age are set here."""
 
 
@@ -46,6 +47,8 @@ class TelemetryManager:
         """Updates received from the controller."""
         self.saves_dropped = 0
         """``save()`` calls made while no saver was set (recording off)."""
+        self.listener_errors = 0
+        """Exceptions raised by listeners (each listener's first one is logged)."""
         self._lock = threading.Lock()
         self._latest = Telemetry()
         self._listeners: list[Listener] = []
@@ -68,10 +71,9 @@ class TelemetryManager:
             The new newest Telemetry.
         """
         known = {k: v for k, v in update.items() if k in _UPDATABLE}
-        if len(known) != len(update):
-            self._warn_once(
-                "unknown", "TelemetryManager: ignoring unknown fields %s", sorted(set(update) - _UPDATABLE)
-            )
+        unknown = set(update) - _FIELDS  # a heartbeat_age_s tick is known: it refreshes the age
+        if unknown:
+            self._warn_once("unknown", "TelemetryManager: ignoring unknown fields %s", sorted(unknown))
         with self._lock:
             self._latest = dataclasses.replace(
                 self._latest,
@@ -86,7 +88,10 @@ class TelemetryManager:
             try:
                 listener(latest)
             except Exception:
-                logger.exception("TelemetryManager: listener %r failed", listener)
+                self.listener_errors += 1
+                if f"listener-{id(listener)}" not in self._warned:
+                    self._warned.add(f"listener-{id(listener)}")
+                    logger.exception("TelemetryManager: listener %r failed (logged once)", listener)
         return latest
 
     def snapshot(self) -> Telemetry:

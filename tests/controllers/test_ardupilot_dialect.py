@@ -1,0 +1,92 @@
+"""The controller speaks ArduCopter's dialect (through real MAVSDK) to a recording stand-in.
+
+No ArduPilot SITL runs here, so :class:`FakeAutopilot` plays an ArduCopter: these tests check what
+the controller sends (streams requested, GUIDED before arming, NAV_TAKEOFF altitude, CIRCLE for
+orbits, LOITER for hold), not how ArduCopter reacts to it.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import socket
+from collections.abc import AsyncIterator
+
+import pytest
+import pytest_asyncio
+
+from controllers.mavsdk_controller import MavsdkController
+from tests.controllers.fake_autopilot import FakeAutopilot, UdpLink, mavlink
+
+GUIDED, LOITER, CIRCLE = 4, 5, 7
+
+
+def free_udp_port() -> int:
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest_asyncio.fixture
+async def copter() -> AsyncIterator[tuple[MavsdkController, FakeAutopilot]]:
+    port = free_udp_port()
+    link = UdpLink(port)
+    with FakeAutopilot(link, mavlink.MAV_AUTOPILOT_ARDUPILOTMEGA, orbit_supported=False) as fake:
+        fc = MavsdkController()
+        await fc.connect(f"udpin://127.0.0.1:{port}", heartbeat_timeout=5.0)
+        try:
+            yield fc, fake
+        finally:
+            await fc.close()
+
+
+def set_modes(fake: FakeAutopilot) -> list[int]:
+    return [int(p[1]) for c, p in fake.commands() if c == mavlink.MAV_CMD_DO_SET_MODE]
+
+
+async def test_detected_and_asked_for_its_streams(copter: tuple[MavsdkController, FakeAutopilot]) -> None:
+    fc, fake = copter
+    assert fc.autopilot == "ardupilot"
+    assert fc.description.startswith("ArduPilot via udpin://")
+    (request,) = fake.of_type("REQUEST_DATA_STREAM")
+    assert (request.req_stream_id, request.start_stop, request.req_message_rate) == (0, 1, 10)
+
+
+async def test_guided_before_arming_and_takeoff_altitude(copter: tuple[MavsdkController, FakeAutopilot]) -> None:
+    fc, fake = copter
+    await fc.arm()
+    await fc.takeoff(4.0)
+    sequence = [(c, p[1] if c == mavlink.MAV_CMD_DO_SET_MODE else p[0]) for c, p in fake.commands()]
+    flight = {mavlink.MAV_CMD_DO_SET_MODE, mavlink.MAV_CMD_COMPONENT_ARM_DISARM}
+    sequence = [s for s in sequence if s[0] in flight]
+    assert sequence[:2] == [(mavlink.MAV_CMD_DO_SET_MODE, GUIDED), (mavlink.MAV_CMD_COMPONENT_ARM_DISARM, 1.0)]
+    (takeoff,) = [p for c, p in fake.commands() if c == mavlink.MAV_CMD_NAV_TAKEOFF]
+    assert takeoff[6] == 4.0
+
+
+async def test_vector_in_guided_then_loiter(copter: tuple[MavsdkController, FakeAutopilot]) -> None:
+    fc, fake = copter
+    await fc.set_fly_vector(0.5, 0.25, 0.5)
+    while fc.vector_active:
+        await asyncio.sleep(0.05)
+    assert set_modes(fake)[-2:] == [GUIDED, LOITER]
+    setpoints = fake.of_type("SET_POSITION_TARGET_LOCAL_NED")
+    moving = [s for s in setpoints if (s.vx, s.vy) == (0.5, 0.25)]
+    assert len(moving) >= 8  # 0.5 s at 20 Hz, well within GUID_TIMEOUT
+    assert all(s.coordinate_frame == mavlink.MAV_FRAME_BODY_NED for s in setpoints)
+    assert (setpoints[-1].vx, setpoints[-1].vy) == (0.0, 0.0)
+    assert fc.last_vector_end == "completed"
+
+
+async def test_orbit_is_circle_mode_and_hold_is_loiter(copter: tuple[MavsdkController, FakeAutopilot]) -> None:
+    fc, fake = copter
+    await fc.do_orbit(5.0, 2.0)
+    params = {
+        (m.param_id if isinstance(m.param_id, str) else m.param_id.decode()): m.param_value
+        for m in fake.of_type("PARAM_SET")
+    }
+    assert params["CIRCLE_RADIUS_M"] == 5.0
+    assert params["CIRCLE_RATE"] == pytest.approx(22.918, abs=0.01)  # 2 m/s on 5 m
+    assert set_modes(fake)[-1] == CIRCLE
+    assert not [c for c, _ in fake.commands() if c == mavlink.MAV_CMD_DO_ORBIT]
+    await fc.hold()
+    assert set_modes(fake)[-1] == LOITER
