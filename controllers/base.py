@@ -78,6 +78,11 @@ class FlightController(Protocol):
         """True while a vector's setpoints are being streamed."""
         ...
 
+    @property
+    def last_vector_end(self) -> str:
+        """How the last vector ended: ``completed``, ``stopped``, ``vehicle left offboard (MODE)``, ``failed: ...``."""
+        ...
+
     def heartbeat_age_s(self) -> float:
         """Seconds since the last heartbeat from the autopilot (inf before the first)."""
         ...

@@ -27,6 +27,10 @@ logger = logging.getLogger(__name__)
 
 WATCHDOG_PERIOD_S = 0.1
 
+AUTONOMY_MODES = frozenset({"HOLD", "OFFBOARD"})
+"""Flight modes autonomy may fly from: the hold it leaves behind and offboard itself (GUIDED/LOITER on
+ArduCopter read as these). Any other mode means a pilot, a mission or a failsafe has the vehicle."""
+
 Vector = tuple[float, float, float]
 
 
@@ -75,11 +79,13 @@ class AutonomyGate:
         self.last_decision = ""
         self._pending: tuple[Vector, ProcessedFrame] | None = None
         self._wake = asyncio.Event()
+        self._flown = False
+        """A vector was sent since autonomy was last switched on."""
 
     def enable(self, origin: str) -> None:
         if self.controller is None:
             raise UavError("autonomy needs a flight controller; start with --fc sim or a connection string")
-        self.enabled, self.stop_reason = True, ""
+        self.enabled, self.stop_reason, self._flown = True, "", False
         self.events.emit("info", "autonomy", "autonomy ON", origin)
 
     async def disable(self, origin: str, reason: str = "operator", *, hold: bool = True) -> None:
@@ -125,6 +131,8 @@ class AutonomyGate:
             return "not executed: vehicle not armed"
         if not snapshot.in_air:
             return "not executed: vehicle not in the air"
+        if snapshot.flight_mode not in AUTONOMY_MODES:
+            return f"not executed: vehicle in {snapshot.flight_mode} mode"
         age = self.controller.heartbeat_age_s()
         if age >= self.safety.link_timeout:
             return f"not executed: link lost (heartbeat {age:.1f} s old)"
@@ -141,13 +149,26 @@ class AutonomyGate:
             if pending is None or not self.enabled or self.controller is None:
                 continue
             (vx, vy, t), result = pending
-            if result.frame.age_s >= self.safety.max_frame_age:  # it waited too long for the previous command
+            taken_over = self._taken_over()
+            if taken_over:
+                await self.disable("autonomy", taken_over, hold=False)
+                continue
+            if self._why_not(result):  # things changed while it waited for the previous command
                 continue
             try:
                 await self.controller.set_fly_vector(vx, vy, t)
                 self.executed += 1
+                self._flown = True
             except UavError as exc:
                 await self.disable("autonomy", f"vector failed: {exc}")
+
+    def _taken_over(self) -> str:
+        """Why autonomy must let go: the vehicle left offboard under a running vector (pilot, failsafe)."""
+        assert self.controller is not None
+        end = self.controller.last_vector_end
+        if self._flown and not self.controller.vector_active and end.startswith("vehicle left offboard"):
+            return f"{end}: the pilot, a mission or a failsafe took over"
+        return ""
 
     async def watch(self, frame_age: Callable[[], float | None], processor_busy_s: Callable[[], float],
                     processor_errors: Callable[[], int]) -> None:
@@ -158,7 +179,8 @@ class AutonomyGate:
                 continue
             reason = self._failure(frame_age(), processor_busy_s(), processor_errors())
             if reason:
-                await self.disable("watchdog", reason)
+                # Whoever switched modes has the vehicle: a hold from here would override them.
+                await self.disable("watchdog", reason, hold="took over" not in reason)
 
     def _failure(self, frame_age: float | None, busy_s: float, errors: int) -> str:
         s = self.safety
@@ -166,6 +188,11 @@ class AutonomyGate:
             return f"processor stalled ({busy_s:.1f} s in one call)"
         if errors >= s.max_processor_errors:
             return f"processor raised {errors} times in a row"
+        mode = self.telemetry.snapshot().flight_mode
+        if mode is not None and mode not in AUTONOMY_MODES:
+            return f"vehicle switched to {mode}: the pilot, a mission or a failsafe took over"
+        if self.controller is not None and self._taken_over():
+            return self._taken_over()
         if frame_age is None or frame_age > s.camera_stall:
             return "camera stalled" if frame_age is None else f"camera stalled (newest frame {frame_age:.1f} s old)"
         if self.controller is not None:

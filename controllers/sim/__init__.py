@@ -11,6 +11,7 @@ Requests (the simulator replies to the sender with one JSON object; an "id" in t
     {"cmd": "state"}          -> {"ok": true, "state": TRUTH}
     {"cmd": "set_wind", "n": N, "e": E}                       -> {"ok": true}
     {"cmd": "teleport", "n": N, "e": E, "d": D, "yaw": DEG}   -> {"ok": true, "state": TRUTH}
+    {"cmd": "rc_mode", "mode": M}  -> {"ok": true, "state": TRUTH}; M in POSCTL, HOLD, RTL, LAND, as an RC pilot
     {"cmd": "setpoints", "since_mono_ns": T}  -> {"ok": true, "records": [REC, ...], "more": bool}
     anything else             -> {"ok": false, "error": "..."}
 

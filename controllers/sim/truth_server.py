@@ -65,6 +65,15 @@ def teleport(v: Multicopter, north: float, east: float, down: float, yaw_deg: fl
         v.guidance.hold(v.mode)
 
 
+RC_MODES = {
+    "POSCTL": lambda guidance: guidance.hold(Mode.POSCTL),
+    "HOLD": lambda guidance: guidance.hold(),
+    "RTL": lambda guidance: guidance.rtl(),
+    "LAND": lambda guidance: guidance.land(),
+}
+"""Modes an RC pilot (or an onboard failsafe) can switch to behind the ground station's back."""
+
+
 class TruthServer:
     """UDP JSON on 127.0.0.1:port: subscriptions, 50 Hz truth datagrams and control requests."""
 
@@ -147,6 +156,9 @@ class TruthServer:
                     req.get("yaw"),
                 )
                 return {"ok": True, "cmd": "teleport", "state": self.snapshot()}
+            if cmd == "rc_mode":  # the pilot flips the RC mode switch: no MAVLink client is involved
+                RC_MODES[str(req.get("mode"))](v.guidance)
+                return {"ok": True, "cmd": "rc_mode", "state": self.snapshot()}
             if cmd == "setpoints":
                 since = int(req.get("since_mono_ns", 0))
                 records = [r.as_dict() for r in s.setpoint_log if r.t_mono_ns > since]

@@ -138,3 +138,17 @@ async def test_rule5_operator_command_preempts_autonomy_at_once(tmp_path: Path) 
         await asyncio.sleep(0.5)
         assert core.gate.executed == executed  # nothing flew after the operator's command
         assert any("pre-empted by operator command 'hold'" in e.message for e in core.events.recent)
+
+
+async def test_pilot_or_failsafe_mode_change_ends_autonomy_without_overriding_it(tmp_path: Path) -> None:
+    async with flying_core(tmp_path) as core:
+        await core.execute("f 1")
+        await core.execute("autonomy on")
+        await wait_until(lambda: core.truth.latest()["mode"] == "OFFBOARD", 10, "autonomy flying in offboard")
+        await asyncio.to_thread(core.truth.request, {"cmd": "rc_mode", "mode": "POSCTL"})  # the pilot takes over
+        await wait_until(lambda: not core.gate.enabled, 3, "autonomy to stop")
+        assert "POSCTL" in core.status().autonomy_stop_reason
+        executed = core.gate.executed
+        await asyncio.sleep(1.5)
+        assert core.truth.latest()["mode"] == "POSCTL"  # not overridden by a hold or a new vector
+        assert core.gate.executed == executed
