@@ -189,7 +189,7 @@ class AutonomyGate:
         if errors >= s.max_processor_errors:
             return f"processor raised {errors} times in a row"
         mode = self.telemetry.snapshot().flight_mode
-        if mode is not None and mode not in AUTONOMY_MODES:
+        if self._flown and mode is not None and mode not in AUTONOMY_MODES:
             return f"vehicle switched to {mode}: the pilot, a mission or a failsafe took over"
         if self.controller is not None and self._taken_over():
             return self._taken_over()

@@ -59,7 +59,8 @@ async def test_rule2_not_in_the_air_means_no_vector(tmp_path: Path) -> None:
         await wait_until(lambda: not core.telemetry.snapshot().in_air, 20, "landing")
         await core.execute("f 1")
         await core.execute("autonomy on")
-        await wait_until(lambda: "not executed" in core.gate.last_decision, 5, "a decision")
+        await wait_until(lambda: core.gate.last_decision.startswith("not executed: vehicle"), 5,
+                         f"a decision (now {core.gate.last_decision!r}, autonomy {core.gate.enabled})")
         assert core.gate.last_decision in ("not executed: vehicle not in the air", "not executed: vehicle not armed")
         assert core.gate.executed == 0
 
