@@ -66,6 +66,7 @@ class UavCore:
         self.started_wall_ns = 0
         self._frame_listeners: list[Callable[[ProcessedFrame], None]] = []
         self._tasks: list[asyncio.Task[Any]] = []
+        self._told_not_recording = False
         self.web: WebServer | None = None
         """The web page's WebServer (``web.url`` has the token) when ``web`` is on, else None."""
         self.camera_tracking: CameraTracking | None = None
@@ -97,6 +98,8 @@ class UavCore:
                     Recorder.open, self.config.recording, describe(self),
                     telemetry_expected=self.controller is not None, started_wall_ns=self.started_wall_ns))
                 self.recorder.attach(self)
+            else:
+                self.telemetry.saver = self._save_without_recording
         except BaseException:
             await self._release()
             raise
@@ -162,6 +165,12 @@ class UavCore:
             self.telemetry.saver = None
             await asyncio.get_running_loop().run_in_executor(None, self.recorder.close)
         self.state = CoreState.STOPPED
+
+    def _save_without_recording(self, frame: Any, extra: dict[str, Any]) -> None:
+        """``tmMgr.save`` with ``--no-record``: say so once in the event log (not on the terminal)."""
+        if not self._told_not_recording:
+            self._told_not_recording = True
+            self.events.emit("info", "recorder", "recording is off (--no-record): tmMgr.save() stores nothing")
 
     def _spawn(self, coro: Any, name: str) -> None:
         task = asyncio.create_task(coro, name=name)
