@@ -1,0 +1,83 @@
+"""The status bar at the top: link, flight state, GPS, battery, and the autonomy switch."""
+
+from __future__ import annotations
+
+from rich.text import Text
+from textual.app import ComposeResult
+from textual.containers import Horizontal
+from textual.reactive import reactive
+from textual.widgets import Static
+
+from uav_tui.status import CoreStatus
+from uav_tui.tui._panel import MISSING, StatusPanel, num
+
+LINK_TIMEOUT_S = 1.5
+"""Heartbeat age shown as a lost link (the safety default; the gate uses the configured value)."""
+
+
+class VehicleLine(StatusPanel):
+    """Two lines: connection and link age; flight mode, armed / in air, GPS fix, battery."""
+
+    DEFAULT_CSS = """
+    VehicleLine { border-top: none; padding: 0 1; width: 1fr; height: 2; }
+    """
+
+    def describe(self, status: CoreStatus) -> Text:
+        t = status.telemetry
+        line = Text(no_wrap=True, overflow="ellipsis")
+        line.append("fc ", self.get_component_rich_style("panel--label")).append(status.fc_description or status.fc)
+        if status.fc == "none":
+            return line.append("\n").append(self.styled("no vehicle: commands are refused", "warn"))
+        age = status.heartbeat_age_s
+        line.append("  link ", self.get_component_rich_style("panel--label"))
+        if age is None or age >= LINK_TIMEOUT_S:
+            line.append(self.styled("LOST" + ("" if age is None or age == float("inf") else f" {age:.1f}s"), "bad"))
+        else:
+            line.append(self.styled(f"ok {age:.1f}s", "good"))
+        line.append("\n")
+        line.append(t.flight_mode or MISSING).append("  ")
+        line.append(self.styled("ARMED", "warn") if t.armed else Text("disarmed"))
+        line.append("  ").append("IN AIR" if t.in_air else "on ground")
+        line.append("  gps ", self.get_component_rich_style("panel--label"))
+        line.append(f"{t.gps_fix or MISSING} {num(t.satellites, 'd')} sat")
+        battery = num(t.battery_pct, ".0f", "%")
+        line.append("  bat ", self.get_component_rich_style("panel--label"))
+        low = t.battery_pct is not None and t.battery_pct < 25
+        line.append(self.styled(battery, "bad") if low else Text(battery))
+        if t.battery_v is not None:
+            line.append(f" {t.battery_v:.1f}V")
+        return line
+
+
+class AutonomyBadge(Static):
+    """AUTONOMY ON / OFF, in colours no one can miss (set by the ``-on`` class)."""
+
+    DEFAULT_CSS = """
+    AutonomyBadge {
+        width: 14; height: 2; content-align: center middle; text-style: bold;
+        background: $success; color: $text;
+        &.-on { background: $error; color: $text; }
+    }
+    """
+
+    on: reactive[bool] = reactive(False, toggle_class="-on")
+    """Autonomy enabled: the processor's vectors may fly the vehicle."""
+
+    def render(self) -> str:
+        return "AUTONOMY\n>>> ON <<<" if self.on else "AUTONOMY\nOFF"
+
+
+class StatusBar(Horizontal):
+    """The header: :class:`VehicleLine` and :class:`AutonomyBadge`."""
+
+    DEFAULT_CSS = """
+    StatusBar { height: 2; dock: top; background: $panel; }
+    """
+
+    def compose(self) -> ComposeResult:
+        yield VehicleLine()
+        yield AutonomyBadge()
+
+    def show(self, status: CoreStatus) -> None:
+        self.query_one(VehicleLine).status = status
+        self.query_one(AutonomyBadge).on = status.autonomy
