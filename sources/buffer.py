@@ -65,6 +65,12 @@ class FrameBuffer:
             listener(frame)
         return frame
 
+    @property
+    def newest_seq(self) -> int:
+        """Sequence number of the newest frame (0 before the first), without marking it read."""
+        frame = self._frame
+        return 0 if frame is None else frame.seq
+
     def latest(self) -> Frame | None:
         """The newest frame, or None before the first capture. Marks it as read."""
         with self._cond:

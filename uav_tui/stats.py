@@ -44,16 +44,12 @@ class RollingStats:
         self._last_seq = 0
 
     def add(self, seq: int, t_capture_ns: int, t_start_ns: int, t_end_ns: int, t_ready_ns: int) -> None:
-        if self._last_seq and seq > self._last_seq + 1:
+        if self._last_seq and seq > self._last_seq + 1:  # a new source restarts at 1: no skips counted
             self.frames_skipped += seq - self._last_seq - 1
         self._last_seq = seq
         self.frames_processed += 1
         self._samples.append((t_ready_ns, t_capture_ns, t_start_ns, t_end_ns, t_ready_ns))
         self._trim(self._samples, t_ready_ns)
-
-    def restart_sequence(self) -> None:
-        """A new source starts counting at 1 again."""
-        self._last_seq = 0
 
     def snapshot(self, frames_captured: int, busy_since_ns: int | None) -> PipelineStats:
         now = time.monotonic_ns()

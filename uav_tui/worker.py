@@ -4,10 +4,12 @@ from __future__ import annotations
 
 import asyncio
 import logging
+import threading
 import time
 import traceback
+from collections import deque
 from collections.abc import Callable
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import Future
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -43,10 +45,11 @@ class ProcessedFrame:
 class ProcessorWorker:
     """Runs a processor on one dedicated thread, always on the newest frame of a buffer.
 
-    The loop side (``run``) waits for a frame, hands it to the thread with ``run_in_executor`` and
-    gets the result back; frames that arrive meanwhile replace each other in the buffer, so a slow
-    processor skips frames and never queues them. ``call`` runs an operator command
-    (``catch_cmd``, ``customize_processing``) on the same thread, between two frames.
+    The thread waits on the frame buffer itself, processes the newest frame and posts the result to
+    the event loop without waiting for it, so the only hand-off on the per-frame path is capture ->
+    processor. Frames that arrive meanwhile replace each other, so a slow processor skips frames and
+    never queues them. ``call`` runs an operator command (``catch_cmd``, ``customize_processing``) on
+    the same thread between two frames, so researchers never need a lock.
     """
 
     def __init__(self, processor: LoadedProcessor, on_result: Callable[[ProcessedFrame], None]) -> None:
@@ -58,9 +61,11 @@ class ProcessorWorker:
         """The newest finished frame."""
         self.consecutive_errors = 0
         self._on_result = on_result
-        self._executor = ThreadPoolExecutor(max_workers=1, thread_name_prefix="processor")
+        self._wake = threading.Condition()
+        self._jobs: deque[tuple[Callable[[], Any], Future[Any]]] = deque()
         self._buffer: FrameBuffer | None = None
-        self._new_frame = asyncio.Event()
+        self._stopping = False
+        self._thread: threading.Thread | None = None
         self._loop: asyncio.AbstractEventLoop | None = None
         self._busy_since_ns: int | None = None
 
@@ -68,39 +73,29 @@ class ProcessorWorker:
 
     def attach(self, buffer: FrameBuffer) -> None:
         """Take frames from ``buffer`` from now on (a new source)."""
-        if self._buffer is not None:
-            self._buffer.remove_listener(self._on_frame)
-        self._buffer = buffer
-        self.stats.restart_sequence()
-        buffer.add_listener(self._on_frame)
-        self._new_frame.set()
+        with self._wake:
+            if self._buffer is not None:
+                self._buffer.remove_listener(self._on_frame)
+            self._buffer = buffer
+            buffer.add_listener(self._on_frame)
+            self._wake.notify()
 
     async def run(self) -> None:
-        """Process frames until cancelled."""
+        """Start the processor thread and keep it running until cancelled."""
+        if self._thread is not None:
+            raise RuntimeError("ProcessorWorker.run() is already running")
         self._loop = asyncio.get_running_loop()
-        last_seq, last_buffer = 0, None
-        while True:
-            await self._new_frame.wait()
-            self._new_frame.clear()
-            buffer = self._buffer
-            frame = buffer.latest() if buffer is not None else None
-            if frame is None:
-                continue
-            if buffer is not last_buffer:
-                last_seq, last_buffer = 0, buffer
-            if frame.seq <= last_seq:
-                continue
-            last_seq = frame.seq
-            result = await self._loop.run_in_executor(self._executor, self._process, frame)
-            self.stats.add(frame.seq, frame.t_mono_ns, result.t_start_ns, result.t_end_ns,
-                           result.t_vector_ns or result.t_end_ns)
-            self.last = result
-            self._on_result(result)
+        self._thread = threading.Thread(target=self._thread_main, name="processor", daemon=True)
+        self._thread.start()
+        try:
+            await asyncio.Event().wait()
+        finally:
+            self.close()
 
     async def call(self, method: str, *args: Any) -> Any:
         """Call ``processor.<method>(*args)`` on the processor thread; its exception propagates."""
         bound = getattr(self.processor.instance, method)
-        return await asyncio.get_running_loop().run_in_executor(self._executor, bound, *args)
+        return await self._submit(lambda: bound(*args))
 
     async def replace(self, processor: LoadedProcessor) -> LoadedProcessor:
         """Swap in another processor between two frames; returns the old one."""
@@ -108,7 +103,7 @@ class ProcessorWorker:
             old, self.processor = self.processor, processor
             self.consecutive_errors = 0
             return old
-        return await asyncio.get_running_loop().run_in_executor(self._executor, swap)
+        return await self._submit(swap)
 
     def snapshot(self) -> PipelineStats:
         captured = self._buffer.captured if self._buffer is not None else 0
@@ -121,17 +116,68 @@ class ProcessorWorker:
         return (time.monotonic_ns() - since) / 1e9 if since else 0.0
 
     def close(self) -> None:
-        """Detach and let the thread finish its current call (a hung processor is abandoned)."""
-        if self._buffer is not None:
-            self._buffer.remove_listener(self._on_frame)
-        self._executor.shutdown(wait=False, cancel_futures=True)
+        """Stop taking frames; the thread ends after its current call (a hung processor is abandoned)."""
+        with self._wake:
+            self._stopping = True
+            if self._buffer is not None:
+                self._buffer.remove_listener(self._on_frame)
+            jobs, self._jobs = list(self._jobs), deque()
+            self._wake.notify()
+        for _, future in jobs:
+            future.cancel()
+
+    def _submit(self, job: Callable[[], Any]) -> asyncio.Future[Any]:
+        if self._stopping:
+            raise RuntimeError("the processor worker is closed")
+        future: Future[Any] = Future()
+        with self._wake:
+            self._jobs.append((job, future))
+            self._wake.notify()
+        return asyncio.wrap_future(future)
+
+    def _deliver(self, result: ProcessedFrame) -> None:
+        self.stats.add(result.frame.seq, result.frame.t_mono_ns, result.t_start_ns, result.t_end_ns,
+                       result.t_vector_ns or result.t_end_ns)
+        self.last = result
+        self._on_result(result)
 
     def _on_frame(self, frame: Frame) -> None:  # capture thread
-        loop = self._loop
-        if loop is not None and not loop.is_closed():
-            loop.call_soon_threadsafe(self._new_frame.set)
+        with self._wake:
+            self._wake.notify()
 
     # -- processor thread ------------------------------------------------------------------------
+
+    def _thread_main(self) -> None:
+        last_seq, last_buffer = 0, None
+        while True:
+            with self._wake:
+                seen = (last_seq, last_buffer)
+                self._wake.wait_for(lambda seen=seen: self._stopping or self._jobs or self._has_newer(*seen))
+                if self._stopping:
+                    return
+                job = self._jobs.popleft() if self._jobs else None
+                buffer = self._buffer
+            if job is not None:
+                _run_job(*job)
+                continue
+            assert buffer is not None
+            if buffer is not last_buffer:
+                last_seq, last_buffer = 0, buffer
+            frame = buffer.latest()
+            if frame is None or frame.seq <= last_seq:
+                continue
+            last_seq = frame.seq
+            result = self._process(frame)
+            loop = self._loop
+            if loop is not None and not loop.is_closed():
+                loop.call_soon_threadsafe(self._deliver, result)
+
+    def _has_newer(self, seq: int, buffer: FrameBuffer | None) -> bool:
+        if self._buffer is None:
+            return False
+        if self._buffer is not buffer:
+            return True
+        return self._buffer.newest_seq > seq
 
     def _process(self, frame: Frame) -> ProcessedFrame:
         instance = self.processor.instance
@@ -154,3 +200,12 @@ class ProcessorWorker:
         finally:
             self._busy_since_ns = None
         return result
+
+
+def _run_job(job: Callable[[], Any], future: Future[Any]) -> None:
+    if not future.set_running_or_notify_cancel():
+        return
+    try:
+        future.set_result(job())
+    except BaseException as exc:  # noqa: BLE001 - handed to the awaiting caller
+        future.set_exception(exc)

@@ -1,0 +1,85 @@
+"""``uav-tui --no-ui`` as a user runs it: a real process, real output, real exit codes."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def uav(*args: str, cwd: Path, timeout: float = 60) -> subprocess.CompletedProcess[str]:
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    return subprocess.run([sys.executable, "-m", "uav_tui", *args], cwd=cwd, env=env, capture_output=True,
+                          text=True, timeout=timeout)
+
+
+def test_headless_run_prints_stats_and_exits_zero(tmp_path: Path) -> None:
+    result = uav("--no-ui", "--duration", "3", "--source", "synthetic:", "--processor", "template",
+                 "--runs-dir", str(tmp_path / "runs"), cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    lines = [line for line in result.stdout.splitlines() if "proc" in line]
+    assert len(lines) >= 2
+    assert "stopped: --duration 3 s reached" in result.stdout
+    fps = float(lines[-1].split("proc")[1].split("fps")[0])
+    assert 20 < fps < 40  # the synthetic camera runs at 30 FPS and the template keeps up
+
+
+def test_json_lines(tmp_path: Path) -> None:
+    result = uav("--no-ui", "--json", "--duration", "2.5", "--runs-dir", str(tmp_path / "runs"), cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    records = [json.loads(line) for line in result.stdout.splitlines() if line.startswith("{")]
+    status = [r for r in records if "pipeline" in r]
+    assert status and status[-1]["processor"] == "processors.template:MeanBrightnessProcessor"
+    assert status[-1]["pipeline"]["frames_processed"] > 10
+
+
+def test_config_error_names_the_key_and_exits_2(tmp_path: Path) -> None:
+    (tmp_path / "uav.toml").write_text("[safety]\nmax_speed = 50\n")
+    result = uav("--no-ui", "--duration", "1", cwd=tmp_path)
+    assert result.returncode == 2
+    assert "safety.max_speed" in result.stderr and "out of range" in result.stderr
+
+
+def test_processor_import_error_says_file_line_and_what_is_missing(tmp_path: Path) -> None:
+    (tmp_path / "mine.py").write_text("import numpy\nimport missing_dependency\n")
+    result = uav("--no-ui", "--duration", "1", "--processor", "mine.py:Mine", cwd=tmp_path)
+    assert result.returncode == 2
+    assert "mine.py:2" in result.stdout and "missing_dependency" in result.stdout
+
+
+def test_vehicle_command_without_a_vehicle_fails_the_script_clearly(tmp_path: Path) -> None:
+    (tmp_path / "flight.txt").write_text("f 1\narm\n")
+    (tmp_path / "mine.py").write_text("class Mine:\n    def photo_processing(self, frame):\n        pass\n"
+                                      "    def customize_processing(self, id):\n        print('button', id)\n")
+    result = uav("--no-ui", "--fc", "none", "--processor", "mine.py:Mine", "--script", "flight.txt",
+                 "--runs-dir", str(tmp_path / "runs"), cwd=tmp_path)
+    assert result.returncode == 1
+    assert "button 1" in result.stdout
+    assert "script line 2 (arm) failed" in result.stdout and "--fc sim" in result.stdout
+
+
+@pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGINT, signal.SIGHUP], ids=["TERM", "INT", "HUP"])
+def test_signals_stop_cleanly(tmp_path: Path, signum: int) -> None:
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    process = subprocess.Popen([sys.executable, "-m", "uav_tui", "--no-ui", "--runs-dir", str(tmp_path / "runs")],
+                               cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 30
+        assert process.stdout is not None
+        while time.monotonic() < deadline:  # wait for the first status line: the loop is running
+            if "proc" in process.stdout.readline():
+                break
+        process.send_signal(signum)
+        out, err = process.communicate(timeout=20)
+    finally:
+        process.kill()
+    assert process.returncode == 0, err
+    assert "stopped:" in out

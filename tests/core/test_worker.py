@@ -1,0 +1,142 @@
+"""The processor worker: newest frame wins, calls are serialized, exceptions are never fatal."""
+
+from __future__ import annotations
+
+import asyncio
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+
+from processors import load_processor
+from sources.buffer import FrameBuffer
+from sources.synthetic import SyntheticSource
+from uav_tui.worker import ProcessedFrame, ProcessorWorker
+
+SLOW = '''
+import threading, time
+
+class Slow:
+    def __init__(self, delay=0.03):
+        self.tmMgr = None
+        self.delay = delay
+        self.threads = set()
+        self.buttons = []
+
+    def photo_processing(self, frame):
+        self.threads.add(threading.get_ident())
+        time.sleep(self.delay)
+
+    def customize_processing(self, id):
+        self.threads.add(threading.get_ident())
+        self.buttons.append(id)
+'''
+
+FAILING = '''
+class Failing:
+    def __init__(self):
+        self.tmMgr = None
+        self.calls = 0
+
+    def photo_processing(self, frame):
+        self.calls += 1
+        if self.calls % 2:
+            raise ValueError(f"bad frame {self.calls}")
+
+    def getPreparedVector(self):
+        return (0.1, 0.0, 0.5)
+'''
+
+
+async def collect(worker: ProcessorWorker, results: list[ProcessedFrame], count: int, timeout: float = 10) -> None:
+    task = asyncio.create_task(worker.run())
+    deadline = time.monotonic() + timeout
+    try:
+        while len(results) < count and time.monotonic() < deadline:
+            await asyncio.sleep(0.01)
+    finally:
+        task.cancel()
+    assert len(results) >= count, f"only {len(results)} frames processed"
+
+
+async def test_slow_processor_sees_the_newest_frame_and_skips_are_counted(tmp_path: Path) -> None:
+    (tmp_path / "slow.py").write_text(SLOW)
+    processor = load_processor(f"{tmp_path}/slow.py:Slow", {"delay": 0.03})
+    source = SyntheticSource(fps=200, width=160, height=120)
+    results: list[ProcessedFrame] = []
+    worker = ProcessorWorker(processor, results.append)
+    assert source.open()
+    try:
+        worker.attach(source.buffer)
+        await collect(worker, results, 20)
+    finally:
+        source.close()
+        worker.close()
+    period_ms, processing_ms = 1000 / 200, 30
+    ages_ms = [(r.t_start_ns - r.frame.t_mono_ns) / 1e6 for r in results[1:]]
+    # The frame a processor starts on was captured at most one period before it started, plus scheduling
+    # slack on a loaded machine; a queue would make this grow with every frame.
+    assert max(ages_ms) < period_ms + processing_ms, ages_ms
+    seqs = [r.frame.seq for r in results]
+    assert seqs == sorted(seqs) and len(set(seqs)) == len(seqs)
+    stats = worker.snapshot()
+    assert stats.frames_skipped == seqs[-1] - seqs[0] + 1 - len(seqs) > len(seqs)
+    assert stats.processing_ms_p50 >= processing_ms * 0.9
+
+
+async def test_all_calls_run_on_one_thread(tmp_path: Path) -> None:
+    (tmp_path / "slow.py").write_text(SLOW)
+    processor = load_processor(f"{tmp_path}/slow.py:Slow", {"delay": 0.005})
+    buffer = FrameBuffer()
+    results: list[ProcessedFrame] = []
+    worker = ProcessorWorker(processor, results.append)
+    worker.attach(buffer)
+    task = asyncio.create_task(worker.run())
+    for _ in range(5):
+        buffer.put(np.zeros((4, 4, 3), np.uint8))
+        await worker.call("customize_processing", 2)
+        await asyncio.sleep(0.01)
+    task.cancel()
+    worker.close()
+    instance = processor.instance
+    assert instance.buttons == [2] * 5
+    assert len(instance.threads) == 1 and threading.get_ident() not in instance.threads
+
+
+async def test_exceptions_are_caught_counted_and_keep_the_loop_alive(tmp_path: Path) -> None:
+    (tmp_path / "failing.py").write_text(FAILING)
+    processor = load_processor(f"{tmp_path}/failing.py:Failing")
+    buffer = FrameBuffer()
+    results: list[ProcessedFrame] = []
+    worker = ProcessorWorker(processor, results.append)
+    worker.attach(buffer)
+    task = asyncio.create_task(worker.run())
+    for _ in range(6):
+        buffer.put(np.zeros((4, 4, 3), np.uint8))
+        await asyncio.sleep(0.03)
+    task.cancel()
+    worker.close()
+    assert len(results) == 6
+    failed = [r for r in results if r.error]
+    assert len(failed) == 3 and worker.snapshot().errors == 3
+    assert "failing.py\", line 10" in failed[0].error and "ValueError: bad frame 1" in failed[0].error
+    assert all(r.vector is None for r in failed)
+    assert all(r.vector == (0.1, 0.0, 0.5) and r.t_vector_ns >= r.t_end_ns >= r.t_start_ns
+               for r in results if not r.error)
+    assert worker.consecutive_errors == 0  # the last frame succeeded
+
+
+def test_frame_buffer_counts_overwrites_and_stamps() -> None:
+    buffer = FrameBuffer()
+    image = np.zeros((2, 2, 3), np.uint8)
+    first = buffer.put(image)
+    buffer.put(image)
+    third = buffer.put(image)
+    assert (buffer.captured, buffer.overwritten) == (3, 2)
+    assert buffer.latest() is third and third.seq == 3
+    assert third.t_mono_ns >= first.t_mono_ns and abs(third.t_wall_ns - time.time_ns()) < 1e9
+    buffer.put(image)
+    assert buffer.overwritten == 2  # the third frame was read before the fourth replaced it
+    assert buffer.wait_newer(4, timeout=0.01) is None
+    assert buffer.wait_newer(3, timeout=0.01).seq == 4
