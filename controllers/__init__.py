@@ -1,13 +1,46 @@
-"""Flight controllers (placeholder until the fc branch lands)."""
+"""Flight controllers: the contract is in :mod:`controllers.base`; :func:`connect_controller` picks one.
+
+==================================  ==========================================================
+address                              controller
+==================================  ==========================================================
+``none``                             no vehicle (returns None)
+``sim``                              the built-in simulated vehicle, started and stopped with it
+anything else                        :class:`controllers.mavsdk_controller.MavsdkController`
+==================================  ==========================================================
+
+Implementations are imported on first use, so ``--fc none`` never loads MAVSDK.
+"""
 
 from __future__ import annotations
 
-from controllers.base import FlightController, Telemetry
+from controllers.base import FlightController
 
-__all__ = ["FlightController", "Telemetry", "connect_controller"]
+__all__ = ["connect_controller"]
 
 
 async def connect_controller(address: str, *, heartbeat_timeout: float = 10.0) -> FlightController | None:
-    if address == "none":
+    """Connect the flight controller named by ``address``.
+
+    Args:
+        address: ``none``, ``sim``, or a MAVLink connection string (``serial:///dev/ttyAMA0:57600``,
+            ``udpin://0.0.0.0:14540``, ``tcpout://HOST:PORT``, ``udp://:14540``, ...).
+        heartbeat_timeout: seconds to wait for the autopilot's first heartbeat.
+
+    Returns:
+        A connected controller, or None for ``none``.
+
+    Raises:
+        ConnectError: bad address, missing/busy device, no heartbeat in time.
+    """
+    key = address.strip().lower()
+    if key == "none":
         return None
-    raise NotImplementedError(address)
+    if key == "sim":
+        from controllers.sim_controller import start_sim_controller
+
+        return await start_sim_controller(heartbeat_timeout=heartbeat_timeout)
+    from controllers.mavsdk_controller import MavsdkController
+
+    controller = MavsdkController()
+    await controller.connect(address, heartbeat_timeout=heartbeat_timeout)
+    return controller

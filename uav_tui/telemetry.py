@@ -1,35 +1,125 @@
-"""Placeholder until the fc branch lands: TelemetryManager without a controller."""
+"""TelemetryManager: the newest telemetry, readable from any thread; what processors see as ``self.tmMgr``."""
 
 from __future__ import annotations
 
+import dataclasses
 import logging
+import math
+import threading
+import time
 from collections.abc import Callable
 from typing import Any
 
-from controllers.base import Telemetry
+from controllers.base import TELEMETRY_FIELDS, FlightController, Telemetry
+from uav_tui.errors import ControllerError
 
 logger = logging.getLogger(__name__)
 
+Listener = Callable[[Telemetry], None]
+Saver = Callable[[Any, dict[str, Any]], None]
+
+_UPDATABLE = frozenset(TELEMETRY_FIELDS) - {"t_mono_ns", "t_wall_ns", "heartbeat_age_s"}
+"""Fields a controller update may set; receive stamps and heartbeat age are set here."""
+
 
 class TelemetryManager:
-    def __init__(self, controller: Any = None) -> None:
+    """Keeps the newest :class:`Telemetry` from a flight controller's update stream.
+
+    ``run()`` runs on the event loop; ``snapshot()``, ``link_alive()`` and ``save()`` may be called
+    from any thread (processors call them from the processor thread).
+
+    Example (inside a processor)::
+
+        t = self.tmMgr.snapshot()
+        if t.rel_alt_m is not None and t.rel_alt_m > 2.0:
+            self.tmMgr.save(frame, target_px=(x, y))
+
+    Args:
+        controller: where telemetry comes from; None (``--fc none``) gives an all-None Telemetry.
+    """
+
+    def __init__(self, controller: FlightController | None) -> None:
         self.controller = controller
-        self.saver: Callable[[Any, dict[str, Any]], None] | None = None
+        self.saver: Saver | None = None
+        """Set by the platform: ``saver(frame, extra)`` stores a frame with the telemetry of its capture."""
+        self.updates = 0
+        """Updates received from the controller."""
+        self.saves_dropped = 0
+        """``save()`` calls made while no saver was set (recording off)."""
+        self._lock = threading.Lock()
         self._latest = Telemetry()
-        self._listeners: list[Callable[[Telemetry], None]] = []
+        self._listeners: list[Listener] = []
+        self._warned: set[str] = set()
 
     async def run(self) -> None:
-        return None
+        """Consume the controller's telemetry until it ends (the controller closed); no-op without one."""
+        if self.controller is None:
+            return
+        try:
+            async for update in self.controller.telemetry():
+                self.apply(update)
+        except ControllerError as exc:
+            logger.error("TelemetryManager: telemetry stream ended: %s", exc)
+
+    def apply(self, update: dict[str, Any]) -> Telemetry:
+        """Merge one partial update, stamp it with receive times, and tell the listeners.
+
+        Returns:
+            The new newest Telemetry.
+        """
+        known = {k: v for k, v in update.items() if k in _UPDATABLE}
+        if len(known) != len(update):
+            self._warn_once(
+                "unknown", "TelemetryManager: ignoring unknown fields %s", sorted(set(update) - _UPDATABLE)
+            )
+        with self._lock:
+            self._latest = dataclasses.replace(
+                self._latest,
+                **known,
+                t_mono_ns=time.monotonic_ns(),
+                t_wall_ns=time.time_ns(),
+                heartbeat_age_s=self._heartbeat_age(),
+            )
+            latest = self._latest
+        self.updates += 1
+        for listener in list(self._listeners):
+            try:
+                listener(latest)
+            except Exception:
+                logger.exception("TelemetryManager: listener %r failed", listener)
+        return latest
 
     def snapshot(self) -> Telemetry:
-        return self._latest
+        """The newest values, with the heartbeat age as of now. Thread-safe."""
+        with self._lock:
+            latest = self._latest
+        return dataclasses.replace(latest, heartbeat_age_s=self._heartbeat_age())
 
-    def add_listener(self, cb: Callable[[Telemetry], None]) -> None:
-        self._listeners.append(cb)
+    def add_listener(self, callback: Listener) -> None:
+        """Call ``callback(telemetry)`` on the event loop for every update (the recorder writes a row)."""
+        self._listeners.append(callback)
 
-    def link_alive(self, max_age_s: float) -> bool:
-        return False
+    def link_alive(self, max_age_s: float = 1.5) -> bool:
+        """True when the autopilot's last heartbeat is younger than ``max_age_s``."""
+        age = self._heartbeat_age()
+        return age is not None and age < max_age_s
 
     def save(self, frame: Any, **extra: Any) -> None:
-        if self.saver is not None:
-            self.saver(frame, extra)
+        """Store ``frame`` with the telemetry of its capture and ``extra`` columns (one call, any thread)."""
+        saver = self.saver
+        if saver is None:
+            self.saves_dropped += 1
+            self._warn_once("saver", "TelemetryManager.save(): recording is off, frames are not stored")
+            return
+        saver(frame, extra)
+
+    def _heartbeat_age(self) -> float | None:
+        if self.controller is None:
+            return None
+        age = self.controller.heartbeat_age_s()
+        return age if math.isfinite(age) else None
+
+    def _warn_once(self, key: str, message: str, *args: Any) -> None:
+        if key not in self._warned:
+            self._warned.add(key)
+            logger.warning(message, *args)

@@ -1,0 +1,300 @@
+"""FlightController over MAVSDK 4 (the native binding): PX4 and ArduPilot on serial, UDP or TCP."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import json
+import logging
+import math
+import time
+from collections.abc import AsyncIterator, Awaitable, Callable
+from typing import Any, TypeVar
+
+from mavsdk.asyncio import Autopilot, ComponentType, Configuration, Mavsdk, MavsdkConnectionError, System
+from mavsdk.asyncio.plugins.action import ActionAsync, OrbitYawBehavior
+from mavsdk.asyncio.plugins.mavlink_direct import MavlinkDirectAsync
+from mavsdk.asyncio.plugins.offboard import OffboardAsync, VelocityBodyYawspeed
+from mavsdk.asyncio.plugins.param import ParamAsync
+from mavsdk.asyncio.plugins.telemetry import TelemetryAsync
+
+from controllers import ardupilot
+from controllers.connection import (
+    Connection,
+    check_serial_device,
+    connection_failed,
+    no_heartbeat_error,
+    parse_connection,
+)
+from controllers.mavsdk_errors import map_mavsdk_errors
+from controllers.mavsdk_log import route_mavsdk_log
+from controllers.mavsdk_telemetry import merged_updates, set_rates
+from controllers.vector_stream import VectorStream
+from uav_tui.errors import ControllerError
+
+logger = logging.getLogger(__name__)
+
+T = TypeVar("T")
+
+COMMAND_TIMEOUT_S = 10.0
+"""Upper bound on any one command; MAVSDK's own retries end well before it."""
+
+SETUP_TIMEOUT_S = 5.0
+"""Upper bound on asking for telemetry rates after connecting."""
+
+CLOSE_HOLD_TIMEOUT_S = 2.0
+"""close() during a vector: how long it tries to put the vehicle in hold before letting go."""
+
+AUTOPILOT_NAMES = {"px4": "PX4", "ardupilot": "ArduPilot", "unknown": "unknown autopilot"}
+
+MAV_AUTOPILOT_INVALID = 8
+"""HEARTBEAT.autopilot of ground stations and other non-autopilot components."""
+
+
+class MavsdkController:
+    """A flight controller reached through MAVSDK 4.
+
+    Example::
+
+        fc = MavsdkController()
+        await fc.connect("udpin://0.0.0.0:14540")
+        await fc.arm()
+        await fc.takeoff(5.0)
+        await fc.set_fly_vector(0.5, 0.0, 2.0)
+
+    Args:
+        vector_rate_hz: setpoint rate while a vector runs (>= 10).
+        command_timeout_s: upper bound on each command.
+    """
+
+    def __init__(self, *, vector_rate_hz: float = 20.0, command_timeout_s: float = COMMAND_TIMEOUT_S) -> None:
+        self.description = "MAVSDK (not connected)"
+        self.autopilot = "unknown"
+        """``"px4"``, ``"ardupilot"`` or ``"unknown"``, from the heartbeat's autopilot field."""
+        self.connection: Connection | None = None
+        self._command_timeout_s = command_timeout_s
+        self._mavsdk: Mavsdk | None = None
+        self._system: System | None = None
+        self._sysid = 1
+        self._action: ActionAsync
+        self._offboard: OffboardAsync
+        self._telemetry: TelemetryAsync
+        self._param: ParamAsync
+        self._direct: MavlinkDirectAsync
+        self._last_heartbeat = -math.inf
+        self._heartbeat_task: asyncio.Task[None] | None = None
+        self._stop = asyncio.Event()
+        self._closed = False
+        self._vectors = VectorStream(self, rate_hz=vector_rate_hz, name="MavsdkController")
+
+    # ---- connection ------------------------------------------------------------------------------
+
+    async def connect(self, system_address: str, heartbeat_timeout: float = 10.0) -> None:
+        """Connect, wait for the autopilot's heartbeat, detect PX4/ArduPilot, ask for telemetry.
+
+        Raises:
+            ConnectError: bad string, missing/busy/forbidden serial device, port in use, or no
+                heartbeat within ``heartbeat_timeout`` seconds.
+        """
+        if self._mavsdk is not None or self._closed:
+            raise RuntimeError("MavsdkController.connect() can be called once, on a new controller")
+        conn = parse_connection(system_address)
+        if conn.translated:
+            logger.info("connection %r passed to MAVSDK as %s", conn.given, conn.url)
+        if conn.is_serial:
+            await asyncio.to_thread(check_serial_device, conn.device or "")
+        route_mavsdk_log()
+        self.connection = conn
+        self._mavsdk = Mavsdk(Configuration.create_with_component_type(ComponentType.GROUND_STATION))
+        try:
+            await self._attach(conn, heartbeat_timeout)
+        except BaseException:
+            await self.close()
+            raise
+        self.description = f"{AUTOPILOT_NAMES[self.autopilot]} via {conn.url}"
+        logger.info("MavsdkController connected: %s (system %d)", self.description, self._sysid)
+
+    async def _attach(self, conn: Connection, heartbeat_timeout: float) -> None:
+        assert self._mavsdk is not None
+        try:
+            await self._mavsdk.add_any_connection(conn.url)
+        except MavsdkConnectionError as exc:
+            raise connection_failed(conn, str(exc)) from exc
+        async with asyncio.timeout(heartbeat_timeout + 2.0):
+            system = await self._mavsdk.first_autopilot(timeout_s=heartbeat_timeout)
+        if system is None:
+            raise await no_heartbeat_error(conn, heartbeat_timeout)
+        self._system = system
+        self._last_heartbeat = time.monotonic()
+        self._sysid = await system.get_system_id()
+        kind = await system.autopilot_type()
+        self.autopilot = {Autopilot.PX4: "px4", Autopilot.ARDUPILOT: "ardupilot"}.get(kind, "unknown")
+        self._action = ActionAsync(system)
+        self._offboard = OffboardAsync(system)
+        self._telemetry = TelemetryAsync(system)
+        self._param = ParamAsync(system)
+        self._direct = MavlinkDirectAsync(system)
+        self._heartbeat_task = asyncio.create_task(self._watch_heartbeats(), name="mavsdk-heartbeat")
+        await self._ask_for_telemetry()
+
+    async def _ask_for_telemetry(self) -> None:
+        if self.autopilot == "ardupilot":
+            with map_mavsdk_errors("request_data_stream", self.heartbeat_age_s):
+                await ardupilot.request_streams(self._direct, self._sysid)
+        try:
+            async with asyncio.timeout(SETUP_TIMEOUT_S):
+                await set_rates(self._telemetry)
+        except TimeoutError:
+            logger.warning(
+                "telemetry rates: no answer within %.0f s; keeping the current rates", SETUP_TIMEOUT_S
+            )
+
+    async def _watch_heartbeats(self) -> None:
+        async for msg in self._direct.subscribe_message("HEARTBEAT"):
+            if msg.system_id != self._sysid:
+                continue
+            with contextlib.suppress(ValueError):
+                if json.loads(msg.fields_json).get("autopilot") == MAV_AUTOPILOT_INVALID:
+                    continue
+            self._last_heartbeat = time.monotonic()
+
+    def heartbeat_age_s(self) -> float:
+        """Seconds since the last heartbeat from the autopilot (inf before the first)."""
+        return time.monotonic() - self._last_heartbeat
+
+    async def close(self) -> None:
+        """Stop a running vector (zero, hold: best effort), stop streams, release MAVSDK. Idempotent."""
+        if self._closed:
+            return
+        self._closed = True
+        self._stop.set()
+        if self._vectors.active or self._vectors.engaged:
+            try:
+                async with asyncio.timeout(CLOSE_HOLD_TIMEOUT_S):
+                    await self._vectors.stop_and_hold()
+            except (ControllerError, TimeoutError) as exc:
+                logger.error("MavsdkController: could not put the vehicle in hold while closing: %s", exc)
+        await self._vectors.cancel()
+        if self._heartbeat_task is not None:
+            self._heartbeat_task.cancel()
+            await asyncio.gather(self._heartbeat_task, return_exceptions=True)
+        await asyncio.sleep(0)  # let telemetry generators run their finally (unsubscribe) first
+        mavsdk, self._mavsdk = self._mavsdk, None
+        if mavsdk is not None:
+            await asyncio.to_thread(mavsdk.destroy)
+        logger.info("MavsdkController closed (%s)", self.description)
+
+    # ---- commands --------------------------------------------------------------------------------
+
+    async def _command(self, name: str, call: Callable[[], Awaitable[T]]) -> T:
+        """Run one MAVSDK call bounded in time, with its errors translated at one boundary."""
+        if self._system is None or self._closed:
+            raise ControllerError(f"{name}: not connected (call connect() first)")
+        with map_mavsdk_errors(name, self.heartbeat_age_s):
+            async with asyncio.timeout(self._command_timeout_s):
+                return await call()
+
+    async def _guided(self, command: str) -> None:
+        """ArduCopter: switch to GUIDED first (arming, take-off and velocity targets need it)."""
+        if self.autopilot == "ardupilot":
+            await self._ardupilot_mode("GUIDED", command)
+
+    async def _ardupilot_mode(self, mode: str, command: str) -> None:
+        await self._command(
+            command, lambda: ardupilot.set_mode(self._direct, self._sysid, mode, command=command)
+        )
+
+    async def arm(self) -> None:
+        await self._guided("arm")
+        await self._command("arm", self._action.arm)
+
+    async def disarm(self) -> None:
+        await self._vectors.stop_and_hold()
+        await self._command("disarm", self._action.disarm)
+
+    async def takeoff(self, altitude_m: float | None = None) -> None:
+        await self._vectors.stop_and_hold()
+        if altitude_m is not None:
+            await self._command("takeoff", lambda: self._action.set_takeoff_altitude(float(altitude_m)))
+        await self._guided("takeoff")
+        await self._command("takeoff", self._action.takeoff)
+
+    async def land(self) -> None:
+        await self._vectors.stop_and_hold()
+        await self._command("land", self._action.land)
+
+    async def return_to_home(self) -> None:
+        await self._vectors.stop_and_hold()
+        await self._command("return_to_home", self._action.return_to_launch)
+
+    async def hold(self) -> None:
+        if self._vectors.active or self._vectors.engaged:
+            await self._vectors.stop_and_hold()
+        elif self.autopilot == "ardupilot":
+            await self.stop_offboard()
+        else:
+            await self._command("hold", self._action.hold)
+
+    async def do_orbit(self, radius_m: float, velocity_ms: float) -> None:
+        await self._vectors.stop_and_hold()
+        if self.autopilot == "ardupilot":
+            await self._command(
+                "do_orbit",
+                lambda: ardupilot.start_circle(self._direct, self._param, self._sysid, radius_m, velocity_ms),
+            )
+            return
+        # NaN centre: orbit around the current position.
+        nan, behaviour = math.nan, OrbitYawBehavior.HOLD_FRONT_TO_CIRCLE_CENTER
+        await self._command(
+            "do_orbit", lambda: self._action.do_orbit(radius_m, velocity_ms, behaviour, nan, nan, nan)
+        )
+
+    async def set_fly_vector(self, vx: float, vy: float, t: float) -> None:
+        """Fly body-frame (vx forward, vy right) m/s for t s, altitude and yaw held; then zero + hold.
+
+        Returns once the first setpoint is out and offboard is engaged; a new vector replaces a
+        running one without leaving offboard.
+
+        Raises:
+            ValueError: non-finite speeds or t <= 0 (the autonomy gate rejects those first).
+            ControllerError: offboard refused, link lost.
+        """
+        if not all(math.isfinite(v) for v in (vx, vy, t)) or t <= 0:
+            raise ValueError(f"set_fly_vector({vx}, {vy}, {t}): speeds must be finite and t > 0")
+        if self._system is None or self._closed:
+            raise ControllerError("set_fly_vector: not connected (call connect() first)")
+        await self._vectors.start(float(vx), float(vy), float(t))
+
+    @property
+    def vector_active(self) -> bool:
+        """True while a vector's setpoints are being streamed."""
+        return self._vectors.active
+
+    # ---- OffboardPort (used by VectorStream) -----------------------------------------------------
+
+    async def send_velocity_body(self, forward_ms: float, right_ms: float) -> None:
+        setpoint = VelocityBodyYawspeed(forward_ms, right_ms, 0.0, 0.0)
+        await self._command("set_fly_vector", lambda: self._offboard.set_velocity_body(setpoint))
+
+    async def start_offboard(self) -> None:
+        if self.autopilot == "ardupilot":
+            # GUIDED takes velocity targets; they must be renewed within GUID_TIMEOUT (3 s).
+            await self._ardupilot_mode("GUIDED", "set_fly_vector")
+        else:
+            await self._command("set_fly_vector", self._offboard.start)
+
+    async def stop_offboard(self) -> None:
+        if self.autopilot == "ardupilot":
+            await self._ardupilot_mode("LOITER", "hold")
+        else:
+            # PX4: offboard.stop() switches to HOLD, and MAVSDK stops re-sending setpoints.
+            await self._command("hold", self._offboard.stop)
+
+    # ---- telemetry -------------------------------------------------------------------------------
+
+    async def telemetry(self) -> AsyncIterator[dict[str, Any]]:
+        """Partial telemetry updates keyed by Telemetry field names; ends when the controller closes."""
+        if self._system is None:
+            raise ControllerError("telemetry: not connected (call connect() first)")
+        async for update in merged_updates(self._telemetry, self.heartbeat_age_s, self._stop):
+            yield update

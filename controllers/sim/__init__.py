@@ -1,0 +1,29 @@
+"""Built-in simulated vehicle: a PX4-like quadrotor speaking MAVLink 2 on loopback.
+
+Run it with ``python -m controllers.sim`` (or ``uav-tui sim``); start it from code with
+:class:`controllers.sim.launcher.SimVehicle`; connect MAVSDK with ``udpin://0.0.0.0:MAVLINK_PORT``.
+
+Ground-truth channel: UDP JSON datagrams on 127.0.0.1:TRUTH_PORT, one JSON object per datagram.
+
+Requests (the simulator replies to the sender with one JSON object; an "id" in the request is echoed):
+    {"cmd": "subscribe"}      -> {"ok": true}; then truth datagrams at 50 Hz to that address
+    {"cmd": "unsubscribe"}    -> {"ok": true}; the stream to that address stops
+    {"cmd": "state"}          -> {"ok": true, "state": TRUTH}
+    {"cmd": "set_wind", "n": N, "e": E}                       -> {"ok": true}
+    {"cmd": "teleport", "n": N, "e": E, "d": D, "yaw": DEG}   -> {"ok": true, "state": TRUTH}
+    {"cmd": "setpoints", "since_mono_ns": T}  -> {"ok": true, "records": [REC, ...], "more": bool}
+    anything else             -> {"ok": false, "error": "..."}
+
+TRUTH (streamed datagrams carry no "id" and no "ok"):
+    t_mono_ns, t_wall_ns      time.monotonic_ns() and time.time_ns() in the simulator
+    n, e, d, vn, ve, vd       local NED position (m, origin at home, d = 0 on the ground) and velocity (m/s)
+    roll, pitch, yaw          degrees, yaw from north clockwise
+    armed, in_air             booleans
+    mode                      MANUAL, POSCTL, HOLD, TAKEOFF, LAND, RTL, OFFBOARD or ORBIT
+    lat, lon, alt             degrees, degrees, metres AMSL
+    battery, wind_n, wind_e   remaining fraction 0..1, steady wind m/s
+
+REC (one per SET_POSITION_TARGET_LOCAL_NED received, oldest first, at most 400 per reply):
+    t_mono_ns                 time.monotonic_ns() when the simulator read the datagram
+    vx, vy, vz, frame         the velocity fields and MAV_FRAME as sent
+"""

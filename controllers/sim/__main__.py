@@ -1,0 +1,115 @@
+"""``python -m controllers.sim``: run the simulated vehicle until SIGTERM / SIGINT."""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import signal
+import sys
+from collections.abc import Sequence
+
+from controllers.sim.geo import Home
+from controllers.sim.physics import PhysicsConfig
+from controllers.sim.vehicle import ServerConfig, SimVehicleServer
+
+logger = logging.getLogger(__name__)
+
+
+def _pair(text: str) -> tuple[float, float]:
+    parts = text.split(",")
+    if len(parts) != 2:
+        raise argparse.ArgumentTypeError(f"expected N,E got {text!r}")
+    return float(parts[0]), float(parts[1])
+
+
+def _home(text: str) -> Home:
+    try:
+        return Home.parse(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from exc
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog="uav-tui sim",
+        description="Simulated PX4-like quadrotor speaking MAVLink 2 on loopback. "
+        "Connect MAVSDK with udpin://0.0.0.0:MAVLINK_PORT.",
+    )
+    p.add_argument("--mavlink-port", type=int, default=14540, help="ground side's listening UDP port")
+    p.add_argument("--truth-port", type=int, default=14600, help="ground-truth JSON channel (0 = any free)")
+    p.add_argument("--home", type=_home, default=Home(), metavar="LAT,LON,ALT", help="home position")
+    p.add_argument("--wind", type=_pair, default=(0.0, 0.0), metavar="N,E", help="steady wind, m/s")
+    p.add_argument("--seed", type=int, default=0, help="random seed (noise)")
+    p.add_argument("--noise", action="store_true", help="add sensor noise to the telemetry")
+    p.add_argument(
+        "--offboard-loss-timeout",
+        type=float,
+        default=1.0,
+        metavar="S",
+        help="offboard setpoints missing this long -> hold (PX4 COM_OF_LOSS_T)",
+    )
+    p.add_argument(
+        "--failsafe-land-after",
+        type=float,
+        default=10.0,
+        metavar="S",
+        help="after an offboard-loss hold, land if no client takes over within S",
+    )
+    p.add_argument("--speed-time-constant", type=float, default=0.4, metavar="S", help="velocity response")
+    p.add_argument("--max-accel", type=float, default=3.0, metavar="M_S2", help="acceleration limit")
+    p.add_argument("--takeoff-alt", type=float, default=2.5, metavar="M", help="MIS_TAKEOFF_ALT")
+    p.add_argument("--rtl-alt", type=float, default=10.0, metavar="M", help="RTL_RETURN_ALT")
+    p.add_argument("--gps-delay", type=float, default=1.0, metavar="S", help="seconds until a 3D fix")
+    p.add_argument("--rate", type=float, default=50.0, metavar="HZ", help="physics step rate")
+    p.add_argument("--log-level", default="INFO", help="logging level on stderr")
+    return p
+
+
+def config_from_args(args: argparse.Namespace) -> ServerConfig:
+    physics = PhysicsConfig(
+        speed_time_constant_s=args.speed_time_constant,
+        max_accel_ms2=args.max_accel,
+        noise=args.noise,
+        takeoff_alt_m=args.takeoff_alt,
+        rtl_alt_m=args.rtl_alt,
+        gps_fix_after_s=args.gps_delay,
+    )
+    return ServerConfig(
+        mavlink_port=args.mavlink_port,
+        truth_port=args.truth_port,
+        home=args.home,
+        wind=args.wind,
+        seed=args.seed,
+        rate_hz=args.rate,
+        offboard_loss_timeout_s=args.offboard_loss_timeout,
+        failsafe_land_after_s=args.failsafe_land_after,
+        physics=physics,
+    )
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the simulator; prints one ``ready`` line on stdout, returns 0 after SIGTERM/SIGINT."""
+    args = build_parser().parse_args(argv)
+    logging.basicConfig(
+        level=args.log_level.upper(),
+        stream=sys.stderr,
+        format="%(asctime)s %(levelname)s %(name)s: %(message)s",
+    )
+    try:
+        server = SimVehicleServer(config_from_args(args))
+    except OSError as exc:
+        print(f"uav-tui sim: cannot open the truth port {args.truth_port}: {exc}", file=sys.stderr)
+        return 2
+    previous = {sig: signal.signal(sig, lambda *_: server.stop()) for sig in (signal.SIGTERM, signal.SIGINT)}
+    try:
+        print(f"{server.describe()}", flush=True)
+        server.run()
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+    logger.info("sim vehicle stopped")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,180 @@
+"""Start and stop the simulated vehicle as a child process (used by ``--fc sim`` and the tests)."""
+
+from __future__ import annotations
+
+import logging
+import os
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Sequence
+from pathlib import Path
+
+from controllers.sim.geo import Home
+from controllers.sim.truth import TruthClient
+from uav_tui.errors import ControllerError
+
+logger = logging.getLogger(__name__)
+
+REPO_ROOT = Path(__file__).resolve().parents[2]
+"""Put on the child's PYTHONPATH so the simulator runs without the package being installed."""
+
+
+def free_udp_port() -> int:
+    """A UDP port on 127.0.0.1 that was free a moment ago."""
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+class SimVehicle:
+    """The simulator process on its own free ports.
+
+    Example::
+
+        with SimVehicle(wind=(2.0, 0.0)) as sim:
+            await mavsdk.add_any_connection(sim.connection_string)
+            truth = sim.truth().latest()
+
+    Args:
+        home: where the vehicle boots (default: PX4 SITL's Zurich home).
+        wind: steady wind (north, east) in m/s.
+        seed: random seed for the noise.
+        extra_args: more ``python -m controllers.sim`` options, e.g. ``("--noise",)``.
+    """
+
+    def __init__(
+        self,
+        home: Home | tuple[float, float, float] | None = None,
+        wind: tuple[float, float] | None = None,
+        seed: int = 0,
+        extra_args: Sequence[str] = (),
+    ) -> None:
+        self.home = Home(*home) if isinstance(home, tuple) else (home or Home())
+        self.wind = wind or (0.0, 0.0)
+        self.seed = seed
+        self.extra_args = tuple(extra_args)
+        self.mavlink_port = 0
+        self.truth_port = 0
+        self._proc: subprocess.Popen[bytes] | None = None
+        self._log_path: Path | None = None
+        self._clients: list[TruthClient] = []
+
+    @property
+    def connection_string(self) -> str:
+        """The MAVSDK address that reaches this vehicle."""
+        return f"udpin://0.0.0.0:{self.mavlink_port}"
+
+    @property
+    def pid(self) -> int | None:
+        return self._proc.pid if self._proc else None
+
+    @property
+    def running(self) -> bool:
+        return self._proc is not None and self._proc.poll() is None
+
+    def command(self) -> list[str]:
+        h = self.home
+        return [
+            sys.executable,
+            "-m",
+            "controllers.sim",
+            "--mavlink-port",
+            str(self.mavlink_port),
+            "--truth-port",
+            str(self.truth_port),
+            "--home",
+            f"{h.lat_deg},{h.lon_deg},{h.alt_m}",
+            "--wind",
+            f"{self.wind[0]},{self.wind[1]}",
+            "--seed",
+            str(self.seed),
+            *self.extra_args,
+        ]
+
+    def start(self, timeout: float = 10.0) -> SimVehicle:
+        """Spawn the process and wait until its truth channel answers.
+
+        Raises:
+            ControllerError: the process exited or did not answer within ``timeout`` (its log is quoted).
+        """
+        if self.running:
+            return self
+        self.mavlink_port, self.truth_port = free_udp_port(), free_udp_port()
+        env = dict(os.environ)
+        env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(REPO_ROOT), env.get("PYTHONPATH")]))
+        fd, log_name = tempfile.mkstemp(prefix="uav-sim-", suffix=".log")
+        self._log_path = Path(log_name)
+        with os.fdopen(fd, "wb") as log:
+            self._proc = subprocess.Popen(
+                self.command(),
+                env=env,
+                stdout=log,
+                stderr=subprocess.STDOUT,
+                stdin=subprocess.DEVNULL,
+                cwd=REPO_ROOT,
+            )
+        deadline = time.monotonic() + timeout
+        with TruthClient(self.truth_port, subscribe=False) as probe:
+            while time.monotonic() < deadline:
+                if self._proc.poll() is not None:
+                    break
+                try:
+                    probe.request({"cmd": "state"}, timeout=0.3)
+                except TimeoutError:
+                    continue
+                logger.info(
+                    "SimVehicle(pid %s) up: mavlink %d, truth %d",
+                    self.pid,
+                    self.mavlink_port,
+                    self.truth_port,
+                )
+                return self
+        log = self.log_text()
+        self.stop()
+        raise ControllerError(
+            f"simulated vehicle did not start within {timeout} s; its output:\n{log[-2000:]}"
+        )
+
+    def log_text(self) -> str:
+        """What the simulator printed so far (stdout and stderr)."""
+        if self._log_path is None or not self._log_path.exists():
+            return ""
+        return self._log_path.read_text(errors="replace")
+
+    def truth(self, subscribe: bool = True) -> TruthClient:
+        """A new client of the truth channel; closed by :meth:`stop` if still open."""
+        client = TruthClient(self.truth_port, subscribe=subscribe)
+        self._clients.append(client)
+        return client
+
+    def stop(self, timeout: float = 5.0) -> int | None:
+        """SIGTERM, wait, then SIGKILL; idempotent. Returns the exit code (None if never started)."""
+        for client in self._clients:
+            client.close()
+        self._clients.clear()
+        proc, self._proc = self._proc, None
+        code = None
+        if proc is not None:
+            if proc.poll() is None:
+                proc.send_signal(signal.SIGTERM)
+                try:
+                    proc.wait(timeout)
+                except subprocess.TimeoutExpired:
+                    logger.warning("SimVehicle(pid %s) ignored SIGTERM; killing it", proc.pid)
+                    proc.kill()
+                    proc.wait()
+            code = proc.returncode
+        if self._log_path is not None:
+            self._log_path.unlink(missing_ok=True)
+            self._log_path = None
+        return code
+
+    def __enter__(self) -> SimVehicle:
+        return self.start()
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()

@@ -1,0 +1,68 @@
+"""The simulator's MAVLink 2 endpoint: one UDP socket that sends to the ground side's listening port
+(like PX4 SITL's ``udpout``) and reads whatever the ground side sends back to it."""
+
+from __future__ import annotations
+
+import logging
+import os
+import socket
+import threading
+import time
+
+os.environ.setdefault("MAVLINK20", "1")
+
+from pymavlink.dialects.v20 import common as mavlink  # noqa: E402
+
+logger = logging.getLogger(__name__)
+
+SYSTEM_ID = 1
+COMPONENT_ID = mavlink.MAV_COMP_ID_AUTOPILOT1
+
+
+class MavlinkLink:
+    """Encodes and sends messages as system 1 / autopilot component; decodes received datagrams.
+
+    ``send`` is thread-safe; ``receive`` is meant for one reader thread.
+    """
+
+    def __init__(self, remote_port: int, host: str = "127.0.0.1") -> None:
+        self.remote = (host, remote_port)
+        self._sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        self._sock.bind((host, 0))
+        self._sock.settimeout(0.2)
+        self._tx = mavlink.MAVLink(None, srcSystem=SYSTEM_ID, srcComponent=COMPONENT_ID)
+        self._rx = mavlink.MAVLink(None)
+        self._rx.robust_parsing = True
+        self._lock = threading.Lock()
+        self.sent = 0
+        self.received = 0
+
+    @property
+    def encoder(self) -> mavlink.MAVLink:
+        """Use its ``*_encode`` methods to build messages (they do not send)."""
+        return self._tx
+
+    def send(self, msg: mavlink.MAVLink_message) -> None:
+        with self._lock:
+            buf = msg.pack(self._tx)
+            try:
+                self._sock.sendto(buf, self.remote)
+            except OSError as exc:
+                logger.debug("MavlinkLink(%s) send failed: %s", self.remote, exc)
+                return
+            self.sent += 1
+
+    def receive(self) -> tuple[list[mavlink.MAVLink_message], int]:
+        """Block up to 0.2 s for one datagram: (decoded messages, arrival time.monotonic_ns())."""
+        try:
+            data, _addr = self._sock.recvfrom(65535)
+        except (TimeoutError, OSError):
+            return [], 0
+        t_ns = time.monotonic_ns()
+        msgs = self._rx.parse_buffer(data) or []
+        good = [m for m in msgs if m.get_type() != "BAD_DATA"]
+        self.received += len(good)
+        return good, t_ns
+
+    def close(self) -> None:
+        self._sock.close()

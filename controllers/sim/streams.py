@@ -1,0 +1,298 @@
+"""Telemetry the simulated vehicle sends: one builder per MAVLink message and a rate scheduler
+that honours SET_MESSAGE_INTERVAL. Default rates resemble PX4 SITL's."""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+
+import numpy as np
+from pymavlink.dialects.v20 import common as mavlink
+
+from controllers.sim import px4_modes
+from controllers.sim.geo import Home
+from controllers.sim.guidance import Mode
+from controllers.sim.physics import Multicopter
+
+M = mavlink
+DEFAULT_RATES_HZ: dict[int, float] = {
+    M.MAVLINK_MSG_ID_HEARTBEAT: 1.0,
+    M.MAVLINK_MSG_ID_SYS_STATUS: 2.0,
+    M.MAVLINK_MSG_ID_EXTENDED_SYS_STATE: 5.0,
+    M.MAVLINK_MSG_ID_ATTITUDE: 50.0,
+    M.MAVLINK_MSG_ID_ATTITUDE_QUATERNION: 50.0,
+    M.MAVLINK_MSG_ID_GLOBAL_POSITION_INT: 25.0,
+    M.MAVLINK_MSG_ID_LOCAL_POSITION_NED: 25.0,
+    M.MAVLINK_MSG_ID_GPS_RAW_INT: 5.0,
+    M.MAVLINK_MSG_ID_HOME_POSITION: 0.5,
+    M.MAVLINK_MSG_ID_BATTERY_STATUS: 1.0,
+    M.MAVLINK_MSG_ID_VFR_HUD: 4.0,
+}
+"""Streamed at boot, in Hz."""
+
+_SENSORS = (
+    M.MAV_SYS_STATUS_SENSOR_3D_GYRO
+    | M.MAV_SYS_STATUS_SENSOR_3D_ACCEL
+    | M.MAV_SYS_STATUS_SENSOR_3D_MAG
+    | M.MAV_SYS_STATUS_SENSOR_ABSOLUTE_PRESSURE
+    | M.MAV_SYS_STATUS_SENSOR_ANGULAR_RATE_CONTROL
+    | M.MAV_SYS_STATUS_SENSOR_ATTITUDE_STABILIZATION
+    | M.MAV_SYS_STATUS_SENSOR_YAW_POSITION
+    | M.MAV_SYS_STATUS_SENSOR_Z_ALTITUDE_CONTROL
+    | M.MAV_SYS_STATUS_SENSOR_XY_POSITION_CONTROL
+    | M.MAV_SYS_STATUS_SENSOR_MOTOR_OUTPUTS
+    | M.MAV_SYS_STATUS_AHRS
+    | M.MAV_SYS_STATUS_SENSOR_BATTERY
+)
+_GPS = M.MAV_SYS_STATUS_SENSOR_GPS
+_PREARM = M.MAV_SYS_STATUS_PREARM_CHECK
+CAPABILITIES = (
+    M.MAV_PROTOCOL_CAPABILITY_MISSION_FLOAT
+    | M.MAV_PROTOCOL_CAPABILITY_PARAM_FLOAT
+    | M.MAV_PROTOCOL_CAPABILITY_MISSION_INT
+    | M.MAV_PROTOCOL_CAPABILITY_COMMAND_INT
+    | M.MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_BYTEWISE
+    | M.MAV_PROTOCOL_CAPABILITY_SET_ATTITUDE_TARGET
+    | M.MAV_PROTOCOL_CAPABILITY_SET_POSITION_TARGET_LOCAL_NED
+    | M.MAV_PROTOCOL_CAPABILITY_MAVLINK2
+)
+"""AUTOPILOT_VERSION.capabilities, as PX4 reports them (bytewise parameter encoding)."""
+FLIGHT_SW_VERSION = (1 << 24) | (16 << 16) | (0 << 8) | 255
+"""PX4 v1.16.0 release, in PX4's version encoding."""
+
+
+def landed_state(v: Multicopter) -> int:
+    """MAV_LANDED_STATE the way PX4's land detector reports it."""
+    if v.mode == Mode.TAKEOFF and v.armed:
+        return M.MAV_LANDED_STATE_TAKEOFF
+    if not v.in_air:
+        return M.MAV_LANDED_STATE_ON_GROUND
+    if v.mode == Mode.LAND or (v.mode == Mode.RTL and v.guidance.rtl_phase == "land"):
+        return M.MAV_LANDED_STATE_LANDING
+    return M.MAV_LANDED_STATE_IN_AIR
+
+
+class TelemetryStreams:
+    """Builds telemetry messages from a :class:`Multicopter` and decides which are due."""
+
+    def __init__(self, encoder: mavlink.MAVLink, vehicle: Multicopter, home: Home) -> None:
+        self.enc = encoder
+        self.v = vehicle
+        self.home = home
+        self._boot_ns = time.monotonic_ns()
+        self._builders: dict[int, Callable[[], mavlink.MAVLink_message]] = {
+            M.MAVLINK_MSG_ID_HEARTBEAT: self.heartbeat,
+            M.MAVLINK_MSG_ID_SYS_STATUS: self.sys_status,
+            M.MAVLINK_MSG_ID_EXTENDED_SYS_STATE: self.extended_sys_state,
+            M.MAVLINK_MSG_ID_ATTITUDE: self.attitude,
+            M.MAVLINK_MSG_ID_ATTITUDE_QUATERNION: self.attitude_quaternion,
+            M.MAVLINK_MSG_ID_GLOBAL_POSITION_INT: self.global_position_int,
+            M.MAVLINK_MSG_ID_LOCAL_POSITION_NED: self.local_position_ned,
+            M.MAVLINK_MSG_ID_GPS_RAW_INT: self.gps_raw_int,
+            M.MAVLINK_MSG_ID_HOME_POSITION: self.home_position,
+            M.MAVLINK_MSG_ID_BATTERY_STATUS: self.battery_status,
+            M.MAVLINK_MSG_ID_VFR_HUD: self.vfr_hud,
+            M.MAVLINK_MSG_ID_AUTOPILOT_VERSION: self.autopilot_version,
+        }
+        self._interval = {mid: 1.0 / hz for mid, hz in DEFAULT_RATES_HZ.items()}
+        self._next = dict.fromkeys(self._interval, 0.0)
+
+    # ------------------------------------------------------------ scheduling
+    def can_build(self, msg_id: int) -> bool:
+        return msg_id in self._builders
+
+    def build(self, msg_id: int) -> mavlink.MAVLink_message:
+        return self._builders[msg_id]()
+
+    def set_interval(self, msg_id: int, interval_us: float) -> bool:
+        """SET_MESSAGE_INTERVAL: -1 stops, 0 restores the default, >0 sets. False if unknown."""
+        if msg_id not in self._builders:
+            return False
+        if interval_us < 0:
+            self._interval.pop(msg_id, None)
+        elif interval_us == 0:
+            if msg_id in DEFAULT_RATES_HZ:
+                self._interval[msg_id] = 1.0 / DEFAULT_RATES_HZ[msg_id]
+            else:
+                self._interval.pop(msg_id, None)
+        else:
+            self._interval[msg_id] = interval_us * 1e-6
+        self._next[msg_id] = 0.0
+        return True
+
+    def due(self, now_s: float) -> list[mavlink.MAVLink_message]:
+        """Messages whose time has come; at most one of each per call."""
+        out = []
+        for mid, interval in self._interval.items():
+            if self._next.get(mid, 0.0) <= now_s:
+                self._next[mid] = max(self._next.get(mid, 0.0) + interval, now_s - interval)
+                out.append(self._builders[mid]())
+        return out
+
+    # ------------------------------------------------------------- builders
+    def boot_ms(self) -> int:
+        return ((time.monotonic_ns() - self._boot_ns) // 1_000_000) & 0xFFFFFFFF
+
+    def _nav(self) -> tuple[np.ndarray, np.ndarray, tuple[float, float, float]]:
+        v = self.v
+        pos = np.asarray(v.noisy(v.pos, "pos"))
+        vel = np.asarray(v.noisy(v.vel, "vel"))
+        roll, pitch, yaw = v.attitude()
+        if v.cfg.noise:
+            roll, pitch, yaw = (a + math.radians(float(v.noisy(0.0, "att_deg"))) for a in (roll, pitch, yaw))
+        return pos, vel, (roll, pitch, yaw)
+
+    def heartbeat(self) -> mavlink.MAVLink_message:
+        v = self.v
+        status = M.MAV_STATE_ACTIVE if v.armed else M.MAV_STATE_STANDBY
+        return self.enc.heartbeat_encode(
+            M.MAV_TYPE_QUADROTOR,
+            M.MAV_AUTOPILOT_PX4,
+            px4_modes.base_mode(v.mode, v.armed),
+            px4_modes.custom_mode(v.mode),
+            status,
+        )
+
+    def sys_status(self) -> mavlink.MAVLink_message:
+        v = self.v
+        present = _SENSORS | _GPS | _PREARM
+        health = _SENSORS | ((_GPS | _PREARM) if v.gps_fix else 0)
+        return self.enc.sys_status_encode(
+            present,
+            present,
+            health,
+            250,
+            int(v.battery_voltage() * 1000),
+            1200 if v.in_air else 50,
+            int(round(v.battery * 100)),
+            0,
+            0,
+            0,
+            0,
+            0,
+            0,
+        )
+
+    def extended_sys_state(self) -> mavlink.MAVLink_message:
+        return self.enc.extended_sys_state_encode(M.MAV_VTOL_STATE_MC, landed_state(self.v))
+
+    def attitude(self) -> mavlink.MAVLink_message:
+        _, _, (roll, pitch, yaw) = self._nav()
+        return self.enc.attitude_encode(self.boot_ms(), roll, pitch, yaw, 0.0, 0.0, self.v.yaw_rate)
+
+    def attitude_quaternion(self) -> mavlink.MAVLink_message:
+        _, _, (roll, pitch, yaw) = self._nav()
+        cr, sr = math.cos(roll / 2), math.sin(roll / 2)
+        cp, sp = math.cos(pitch / 2), math.sin(pitch / 2)
+        cy, sy = math.cos(yaw / 2), math.sin(yaw / 2)
+        return self.enc.attitude_quaternion_encode(
+            self.boot_ms(),
+            cr * cp * cy + sr * sp * sy,
+            sr * cp * cy - cr * sp * sy,
+            cr * sp * cy + sr * cp * sy,
+            cr * cp * sy - sr * sp * cy,
+            0.0,
+            0.0,
+            self.v.yaw_rate,
+        )
+
+    def global_position_int(self) -> mavlink.MAVLink_message:
+        pos, vel, (_, _, yaw) = self._nav()
+        lat, lon, alt = self.home.to_global(*pos)
+        hdg = int(round(math.degrees(yaw) * 100)) % 36000
+        return self.enc.global_position_int_encode(
+            self.boot_ms(),
+            int(round(lat * 1e7)),
+            int(round(lon * 1e7)),
+            int(round(alt * 1000)),
+            int(round(-pos[2] * 1000)),
+            *(int(round(x * 100)) for x in vel),
+            hdg,
+        )
+
+    def local_position_ned(self) -> mavlink.MAVLink_message:
+        pos, vel, _ = self._nav()
+        return self.enc.local_position_ned_encode(
+            self.boot_ms(), *(float(x) for x in pos), *(float(x) for x in vel)
+        )
+
+    def gps_raw_int(self) -> mavlink.MAVLink_message:
+        v = self.v
+        pos, vel, _ = self._nav()
+        lat, lon, alt = self.home.to_global(*pos)
+        fix, sats = (M.GPS_FIX_TYPE_3D_FIX, 12) if v.gps_fix else (M.GPS_FIX_TYPE_NO_FIX, 3)
+        speed = float(np.hypot(vel[0], vel[1]))
+        cog = int(round(math.degrees(math.atan2(vel[1], vel[0])) * 100)) % 36000 if speed > 0.2 else 65535
+        return self.enc.gps_raw_int_encode(
+            time.time_ns() // 1000,
+            fix,
+            int(round(lat * 1e7)),
+            int(round(lon * 1e7)),
+            int(round(alt * 1000)),
+            80,
+            120,
+            int(round(speed * 100)),
+            cog,
+            sats,
+            0,
+            500,
+            800,
+            200,
+            0,
+        )
+
+    def home_position(self) -> mavlink.MAVLink_message:
+        h = self.home
+        return self.enc.home_position_encode(
+            int(round(h.lat_deg * 1e7)),
+            int(round(h.lon_deg * 1e7)),
+            int(round(h.alt_m * 1000)),
+            0.0,
+            0.0,
+            0.0,
+            [1.0, 0.0, 0.0, 0.0],
+            0.0,
+            0.0,
+            0.0,
+            time.time_ns() // 1000,
+        )
+
+    def battery_status(self) -> mavlink.MAVLink_message:
+        v = self.v
+        voltages = [int(v.battery_voltage() * 1000)] + [65535] * 9
+        used_mah = int((1.0 - v.battery) * 5000)
+        return self.enc.battery_status_encode(
+            0,
+            M.MAV_BATTERY_FUNCTION_ALL,
+            M.MAV_BATTERY_TYPE_LIPO,
+            2500,
+            voltages,
+            1200 if v.in_air else 50,
+            used_mah,
+            -1,
+            int(round(v.battery * 100)),
+        )
+
+    def vfr_hud(self) -> mavlink.MAVLink_message:
+        v = self.v
+        speed = float(np.hypot(v.vel[0], v.vel[1]))
+        heading = int(round(math.degrees(v.yaw))) % 360
+        return self.enc.vfr_hud_encode(
+            speed, speed, heading, 50 if v.in_air else 0, v.altitude + self.home.alt_m, -float(v.vel[2])
+        )
+
+    def autopilot_version(self) -> mavlink.MAVLink_message:
+        return self.enc.autopilot_version_encode(
+            CAPABILITIES,
+            FLIGHT_SW_VERSION,
+            0,
+            0,
+            0,
+            [0] * 8,
+            [0] * 8,
+            [0] * 8,
+            0,
+            0,
+            0x5349_4D55_4156,
+        )

@@ -1,0 +1,176 @@
+"""The simulated vehicle process: physics at a fixed real-time step, MAVLink in and out, offboard
+supervision (PX4's setpoint-stream rule and loss failsafe) and the ground-truth side channel."""
+
+from __future__ import annotations
+
+import logging
+import threading
+import time
+from collections import deque
+from dataclasses import dataclass, field
+
+from pymavlink.dialects.v20 import common as mavlink
+
+from controllers.sim.commands import CommandHandler
+from controllers.sim.geo import Home
+from controllers.sim.guidance import Mode, OffboardSetpoint
+from controllers.sim.link import MavlinkLink
+from controllers.sim.physics import Multicopter, PhysicsConfig
+from controllers.sim.setpoints import SetpointRecord, parse_local_ned
+from controllers.sim.streams import TelemetryStreams
+from controllers.sim.truth_server import TruthServer
+
+logger = logging.getLogger(__name__)
+
+
+@dataclass(slots=True)
+class ServerConfig:
+    """Process-level options of the simulator (see ``python -m controllers.sim --help``)."""
+
+    mavlink_port: int = 14540
+    truth_port: int = 14600
+    home: Home = field(default_factory=Home)
+    wind: tuple[float, float] = (0.0, 0.0)
+    seed: int = 0
+    rate_hz: float = 50.0
+    offboard_loss_timeout_s: float = 1.0
+    offboard_stream_window_s: float = 0.5
+    failsafe_land_after_s: float = 10.0
+    physics: PhysicsConfig = field(default_factory=PhysicsConfig)
+
+
+class SimVehicleServer:
+    """Owns the :class:`Multicopter` and everything that talks to it. One lock guards the state;
+    the MAVLink reader and the truth channel run on their own threads, the physics on ``run``'s."""
+
+    def __init__(self, config: ServerConfig) -> None:
+        self.cfg = config
+        self.lock = threading.RLock()
+        self.vehicle = Multicopter(config.physics, wind=config.wind, seed=config.seed)
+        self.link = MavlinkLink(config.mavlink_port)
+        self.streams = TelemetryStreams(self.link.encoder, self.vehicle, config.home)
+        self.commands = CommandHandler(self)
+        self.truth = TruthServer(self, config.truth_port)
+        self.setpoint: OffboardSetpoint | None = None
+        self.setpoint_ns = 0
+        self.setpoint_log: deque[SetpointRecord] = deque(maxlen=20_000)
+        self.failsafe_since_ns: int | None = None
+        self._stop = threading.Event()
+
+    # ------------------------------------------------------------- offboard
+    def setpoint_fresh(self, now_ns: int | None = None) -> bool:
+        """PX4 accepts OFFBOARD only while setpoints are streaming."""
+        now_ns = time.monotonic_ns() if now_ns is None else now_ns
+        window = self.cfg.offboard_stream_window_s * 1e9
+        return self.setpoint is not None and now_ns - self.setpoint_ns <= window
+
+    def client_took_over(self) -> None:
+        """A command changed what the vehicle does: the offboard-loss failsafe is over."""
+        self.failsafe_since_ns = None
+
+    def _supervise_offboard(self, now_ns: int) -> None:
+        v = self.vehicle
+        if v.mode == Mode.OFFBOARD and v.armed:
+            if now_ns - self.setpoint_ns > self.cfg.offboard_loss_timeout_s * 1e9:
+                v.guidance.hold()
+                self.failsafe_since_ns = now_ns
+                self.status_text(mavlink.MAV_SEVERITY_WARNING, "Failsafe: offboard setpoints lost, holding")
+            return
+        if self.failsafe_since_ns is None:
+            return
+        if not v.armed or v.mode != Mode.HOLD:
+            self.failsafe_since_ns = None
+        elif now_ns - self.failsafe_since_ns > self.cfg.failsafe_land_after_s * 1e9:
+            self.failsafe_since_ns = None
+            v.guidance.land()
+            self.status_text(mavlink.MAV_SEVERITY_WARNING, "Failsafe: no offboard client, landing")
+
+    def status_text(self, severity: int, text: str) -> None:
+        logger.info("SimVehicle: %s", text)
+        self.link.send(self.link.encoder.statustext_encode(severity, text.encode()[:50]))
+
+    # ------------------------------------------------------------- messages
+    def _on_message(self, msg: mavlink.MAVLink_message, t_ns: int) -> None:
+        kind = msg.get_type()
+        if kind == "SET_POSITION_TARGET_LOCAL_NED":
+            self._on_setpoint(msg, t_ns)
+        elif kind in ("COMMAND_LONG", "COMMAND_INT"):
+            self.commands.on_command(msg)
+        elif kind in ("PARAM_REQUEST_READ", "PARAM_REQUEST_LIST", "PARAM_SET"):
+            self.commands.on_param(msg)
+        elif kind == "PING" and msg.target_system == 0:
+            enc = self.link.encoder
+            self.link.send(
+                enc.ping_encode(msg.time_usec, msg.seq, msg.get_srcSystem(), msg.get_srcComponent())
+            )
+        elif kind not in ("HEARTBEAT", "TIMESYNC", "SYSTEM_TIME"):
+            logger.debug("SimVehicle: ignoring %s", kind)
+
+    def _on_setpoint(self, msg: mavlink.MAVLink_message, t_ns: int) -> None:
+        if msg.target_system not in (0, 1):
+            return
+        record, setpoint = parse_local_ned(msg, t_ns, self.vehicle)
+        self.setpoint_log.append(record)
+        if setpoint is None:
+            return
+        self.setpoint, self.setpoint_ns = setpoint, t_ns
+        if self.vehicle.mode == Mode.OFFBOARD:
+            self.vehicle.guidance.offboard(setpoint)
+
+    def _reader(self) -> None:
+        while not self._stop.is_set():
+            msgs, t_ns = self.link.receive()
+            for msg in msgs:
+                try:
+                    with self.lock:
+                        self._on_message(msg, t_ns)
+                except Exception:
+                    logger.exception("SimVehicle: failed to handle %s", msg.get_type())
+
+    # ----------------------------------------------------------------- loop
+    def stop(self) -> None:
+        self._stop.set()
+
+    def run(self) -> None:
+        """Serve until :meth:`stop`; returns after closing the sockets."""
+        threads = [
+            threading.Thread(target=self._reader, name="sim-mavlink-rx", daemon=True),
+            threading.Thread(target=self.truth.serve, args=(self._stop,), name="sim-truth", daemon=True),
+        ]
+        for t in threads:
+            t.start()
+        dt = 1.0 / self.cfg.rate_hz
+        next_tick = time.monotonic()
+        try:
+            while not self._stop.is_set():
+                now = time.monotonic()
+                steps = 0
+                while next_tick <= now and steps < 5:
+                    with self.lock:
+                        self.vehicle.step(dt)
+                    next_tick += dt
+                    steps += 1
+                if next_tick <= now:
+                    next_tick = now + dt
+                with self.lock:
+                    self._supervise_offboard(time.monotonic_ns())
+                    due = self.streams.due(now)
+                    truth = self.truth.snapshot()
+                for msg in due:
+                    self.link.send(msg)
+                self.truth.publish(truth)
+                self._stop.wait(max(0.0, next_tick - time.monotonic()))
+        finally:
+            self._stop.set()
+            for t in threads:
+                t.join(timeout=1.0)
+            self.link.close()
+            self.truth.close()
+
+    def describe(self) -> str:
+        h = self.cfg.home
+        return (
+            f"sim vehicle ready: mavlink udpout 127.0.0.1:{self.cfg.mavlink_port} "
+            f"(connect with udpin://0.0.0.0:{self.cfg.mavlink_port}), truth udp 127.0.0.1:{self.truth.port}, "
+            f"home {h.lat_deg:.6f},{h.lon_deg:.6f},{h.alt_m:.1f}, wind {self.cfg.wind}"
+        )

@@ -1,0 +1,148 @@
+"""Stream a body-frame velocity setpoint for t seconds, then zero and hold (safety rule 3).
+
+MAVSDK re-sends the last offboard setpoint by itself; that is never relied on. This module sends
+every setpoint, ends every vector explicitly (zero velocity, then a holding mode), and replaces a
+running vector without leaving offboard.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import time
+from typing import Protocol
+
+from uav_tui.errors import ControllerError
+
+logger = logging.getLogger(__name__)
+
+DEFAULT_RATE_HZ = 20.0
+"""Setpoint rate; PX4 wants >= 2 Hz, ArduCopter a target within GUID_TIMEOUT (3 s); we promise >= 10."""
+
+PRESTREAM_S = 0.1
+"""PX4 accepts offboard only while setpoints are already streaming; stream this long before asking."""
+
+
+class OffboardPort(Protocol):
+    """What a VectorStream needs from the autopilot side (implemented by the MAVSDK controller)."""
+
+    async def send_velocity_body(self, forward_ms: float, right_ms: float) -> None:
+        """Send one body-frame velocity setpoint (altitude and yaw held)."""
+        ...
+
+    async def start_offboard(self) -> None:
+        """Switch to the velocity-control mode (PX4 OFFBOARD, ArduCopter GUIDED)."""
+        ...
+
+    async def stop_offboard(self) -> None:
+        """Leave velocity control into a holding mode (PX4 HOLD, ArduCopter LOITER/BRAKE)."""
+        ...
+
+
+class VectorStream:
+    """One vector at a time: start (or replace), stream at ``rate_hz``, then zero and hold.
+
+    Args:
+        port: the autopilot side.
+        rate_hz: setpoint rate while a vector runs.
+        name: used in log lines.
+    """
+
+    def __init__(self, port: OffboardPort, *, rate_hz: float = DEFAULT_RATE_HZ, name: str = "vector") -> None:
+        self._port = port
+        self._period_s = 1.0 / rate_hz
+        self._name = name
+        self._lock = asyncio.Lock()
+        self._task: asyncio.Task[None] | None = None
+        self._target = (0.0, 0.0)
+        self._deadline = 0.0
+        self.engaged = False
+        """True from a successful start_offboard until the vehicle was put back into a holding mode."""
+        self.setpoints_sent = 0
+        """Setpoints sent since construction (diagnostics)."""
+
+    @property
+    def active(self) -> bool:
+        """True while a vector's setpoints are being streamed."""
+        return self._task is not None and not self._task.done()
+
+    async def start(self, vx: float, vy: float, t: float) -> None:
+        """Run (vx, vy) for t seconds; replaces a running vector without leaving offboard.
+
+        Returns once the first setpoint is sent and offboard is engaged.
+
+        Raises:
+            ControllerError: offboard could not be started (the stream is stopped again).
+        """
+        async with self._lock:
+            self._target = (vx, vy)
+            self._deadline = time.monotonic() + t
+            await self._send(vx, vy)
+            if self.active:
+                return
+            self._task = asyncio.create_task(self._stream(), name=f"{self._name}-stream")
+            if not self.engaged:
+                try:
+                    await asyncio.sleep(PRESTREAM_S)
+                    await self._port.start_offboard()
+                except BaseException:
+                    await self._cancel_task()
+                    raise
+                self.engaged = True
+
+    async def cancel(self) -> bool:
+        """Stop streaming at once without changing the mode; returns whether offboard is still engaged.
+
+        Used when an operator command pre-empts the vector: the caller sends the vehicle elsewhere.
+        """
+        async with self._lock:
+            await self._cancel_task()
+            return self.engaged
+
+    async def stop_and_hold(self) -> None:
+        """Stop streaming, send zero velocity, and leave offboard into a holding mode (if engaged)."""
+        async with self._lock:
+            await self._cancel_task()
+            await self._zero_and_hold()
+
+    async def _cancel_task(self) -> None:
+        task, self._task = self._task, None
+        if task is not None and task is not asyncio.current_task():
+            task.cancel()
+            await asyncio.gather(task, return_exceptions=True)
+
+    async def _send(self, vx: float, vy: float) -> None:
+        await self._port.send_velocity_body(vx, vy)
+        self.setpoints_sent += 1
+
+    async def _zero_and_hold(self) -> None:
+        if not self.engaged:
+            return
+        await self._send(0.0, 0.0)
+        await self._port.stop_offboard()
+        self.engaged = False
+
+    async def _stream(self) -> None:
+        next_at = time.monotonic()
+        try:
+            while True:
+                next_at += self._period_s
+                now = time.monotonic()
+                if now >= self._deadline:
+                    async with self._lock:
+                        if time.monotonic() < self._deadline:
+                            continue  # replaced while we waited for the lock
+                        self._task = None
+                        await self._zero_and_hold()
+                        return
+                await asyncio.sleep(max(0.0, min(next_at, self._deadline) - now))
+                if time.monotonic() < self._deadline:
+                    await self._send(*self._target)
+        except ControllerError as exc:
+            logger.error("%s: streaming failed (%s); trying to hold", self._name, exc)
+            self._task = None
+            try:
+                await self._port.stop_offboard()
+                self.engaged = False
+            except ControllerError as hold_exc:
+                logger.error("%s: hold after a failed stream failed too: %s", self._name, hold_exc)
