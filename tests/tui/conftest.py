@@ -57,6 +57,7 @@ async def started(pilot: Pilot) -> UavApp:
     return app
 
 
-def log_text(app: UavApp) -> str:
-    """Everything in the event log widget, as plain text."""
-    return "\n".join(strip.text for strip in app.query_one("#events").lines)
+def in_log(app: UavApp, text: str) -> bool:
+    """Whether the event log widget shows ``text`` (compared without whitespace: the log wraps lines)."""
+    shown = "".join(strip.text for strip in app.query_one("#events").lines)
+    return "".join(text.split()) in "".join(shown.split())

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import logging
+import time
 from collections.abc import Callable
 
 import numpy as np
@@ -22,7 +23,10 @@ FrameProvider = Callable[[], "tuple[int, np.ndarray] | None"]
 """Returns ``(frame id, BGR image)`` of the newest processed frame, or None before the first."""
 
 PREVIEW_FPS = 4.0
-"""How often the preview redraws; the terminal, not the camera, sets how much is worth drawing."""
+"""How often the preview redraws at most; the terminal, not the camera, sets how much is worth drawing."""
+
+CPU_BUDGET = 0.05
+"""Largest share of one core the conversion may use: a big terminal on a slow board redraws less often."""
 
 
 MOVE_KEYS = Binding.Group("move box, shift+arrows: resize")
@@ -74,6 +78,7 @@ class FramePreview(Widget, can_focus=True):
         self._drawn: tuple[object, ...] | None = None  # what _strips show: frame id, size, selection
         self._layout: Letterbox | None = None
         self._drag_start: tuple[int, int] | None = None
+        self._next_draw = 0.0
         self.frames_drawn = 0
         """How many frames were converted to cells (for the benchmark and tests)."""
 
@@ -97,11 +102,15 @@ class FramePreview(Widget, can_focus=True):
         key = (frame_id, cols, rows, self.selection)
         if key == self._drawn:
             return
+        now = time.monotonic()
+        if now < self._next_draw and not force:
+            return
         height, width = image.shape[:2]
         layout = self._layout
         if layout is None or (layout.frame_w, layout.frame_h, layout.cols, layout.rows) != (width, height, cols, rows):
             layout = Letterbox.fit(width, height, cols, rows)
         self._strips = render_cells(image, layout, self.selection)
+        self._next_draw = now + (time.monotonic() - now) / CPU_BUDGET
         self._layout, self._drawn = layout, key
         self.frames_drawn += 1
         self.refresh()
