@@ -41,7 +41,8 @@ def test_render_puts_top_pixel_in_foreground_and_bottom_in_background():
     segment = list(strips[0])[0]
     assert segment.text == UPPER_HALF
     top, bottom = segment.style.color.triplet, segment.style.bgcolor.triplet
-    assert max(top.green, top.blue, bottom.red, bottom.green) < 8 and min(top.red, bottom.blue) >= 248  # 5-bit
+    assert max(top.red, top.green, bottom.green, bottom.blue) < 8  # colours are kept to 5 bits per channel
+    assert top.blue >= 248 and bottom.red >= 248  # blue on top (foreground), red below (background)
 
 
 def test_render_fills_the_panel_and_draws_the_selection_outline():
