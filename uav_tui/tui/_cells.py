@@ -19,8 +19,11 @@ from textual.strip import Strip
 UPPER_HALF = "\u2580"
 """``▀``: in every standard terminal font."""
 
-BOX_STYLE = Style(color="black", bgcolor="yellow")
-"""The ROI rectangle drawn over the preview."""
+BOX_CELL = "\u2588"
+"""``█``: the ROI rectangle is drawn with full blocks, visible even without colours."""
+
+BOX_STYLE = Style(color="yellow")
+"""The ROI rectangle's colour."""
 
 QUANT_MASK = 0xF8
 """Colours are kept to 5 bits per channel (invisible at preview size), so cells share cached styles."""
@@ -111,7 +114,7 @@ def render_cells(image: np.ndarray, box: Letterbox, selection: Box | None = None
         marked = edges.get(box.y0 + r, ())
         for c, (t, b) in enumerate(zip(top[r], bottom[r], strict=True)):
             if box.x0 + c in marked:
-                segments.append(Segment(UPPER_HALF, BOX_STYLE))
+                segments.append(Segment(BOX_CELL, BOX_STYLE))
             else:
                 segments.append(Segment(UPPER_HALF, _style(t, b)))
         if right:

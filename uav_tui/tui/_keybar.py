@@ -47,21 +47,32 @@ class KeyBar(Static):
         self.screen.bindings_updated_signal.subscribe(self, lambda _screen: self.redraw())
         self.redraw()
 
+    def on_resize(self) -> None:
+        self.redraw()
+
     def redraw(self) -> None:
-        """Rebuild the text from the screen's bindings (called when they change)."""
+        """Rebuild the text from the screen's bindings (called when they or the width change)."""
         shown = [(binding, enabled) for _node, binding, enabled, _tip in self.screen.active_bindings.values()
                  if binding.show]
         key_style = self.get_component_rich_style("keybar--key")
         label_style = self.get_component_rich_style("keybar--label")
-        text = Text(justify="left")
+        width = self.content_size.width or self.app.size.width - 2
+        text, line_length = Text(no_wrap=True), 0
         for group, members in groupby(shown, key=lambda item: item[0].group or item[0].key):
             items = list(members)
             first, enabled = items[0]
-            keys = _keys_label([binding for binding, _ in items])
             label = group.description if isinstance(group, Binding.Group) else first.description
-            item = Text.assemble((keys, key_style), " ", (label, label_style), "  ")
+            item = Text.assemble((_keys_label([binding for binding, _ in items]), key_style), " ",
+                                 (label, label_style))
             if not enabled:
                 item.stylize("dim")
             item.apply_meta({"@click": f"app.simulate_key({first.key!r})"})
+            if line_length and line_length + 2 + item.cell_len > width:  # a key and its label stay together
+                text.append("\n")
+                line_length = 0
+            elif line_length:
+                text.append("  ")
+                line_length += 2
             text.append_text(item)
+            line_length += item.cell_len
         self.update(text)
