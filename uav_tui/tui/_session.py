@@ -1,8 +1,8 @@
 """One run with the dashboard: the loop, signals, ``--script``, ``--duration`` and ``--on-hangup``.
 
-The session owns the core; the app shows it. On SIGHUP (the SSH session dropped) the terminal is
-gone, so standard input and output are pointed at ``/dev/null`` first (nothing may block or fail
-writing to a dead terminal). Then either the vehicle is put in hold and everything exits
+The session owns the core; the app shows it. When the terminal is lost (the SSH session dropped:
+SIGHUP, or the terminal answering EIO, see :mod:`uav_tui.tui._terminal`), standard input and output
+are pointed at ``/dev/null`` first. Then either the vehicle is put in hold and everything exits
 (``--on-hangup stop``, the safety rule), or the screen closes and the same core keeps running
 headless (``--on-hangup continue``) until ``quit`` (script, web page), SIGTERM, the end of the
 script or ``--duration``; the run keeps being recorded.
@@ -11,9 +11,7 @@ script or ``--duration``; the run keeps being recorded.
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import logging
-import os
 import signal
 from typing import Any
 
@@ -21,6 +19,7 @@ from uav_tui.commands import Command
 from uav_tui.config import Config
 from uav_tui.core import CoreState, UavCore
 from uav_tui.headless import EXIT_SCRIPT_FAILED, run_script
+from uav_tui.tui._terminal import TerminalWatch, driver_for
 from uav_tui.tui.app import UavApp
 
 logger = logging.getLogger(__name__)
@@ -49,7 +48,8 @@ class TuiSession:
     def __init__(self, config: Config, *, duration: float | None = None,
                  script: list[tuple[int, Command]] | None = None, on_hangup: str = "stop") -> None:
         self.core = UavCore(config)
-        self.app = UavApp(self.core, on_started=self._started, owns_core=False)
+        self.watch = TerminalWatch(self._hangup)
+        self.app = UavApp(self.core, on_started=self._started, owns_core=False, driver_class=driver_for(self.watch))
         self.duration = duration
         self.script = script
         self.on_hangup = on_hangup
@@ -66,7 +66,8 @@ class TuiSession:
         handled = {signal.SIGTERM: "SIGTERM", signal.SIGINT: "SIGINT"}
         for signum, name in handled.items():
             loop.add_signal_handler(signum, self.request_stop, name)
-        loop.add_signal_handler(signal.SIGHUP, self._hangup)
+        loop.add_signal_handler(signal.SIGHUP, self.watch.lost, "SIGHUP")
+        self.watch.start()
         try:
             await self.app.run_async()
             if not self.headless and self.app.return_code not in (0, None):
@@ -78,6 +79,7 @@ class TuiSession:
                 task.cancel()
             await asyncio.gather(*self._tasks, return_exceptions=True)
             await self.core.stop(self.reason)
+            self.watch.close()
             for signum in (*handled, signal.SIGHUP):
                 loop.remove_signal_handler(signum)
         return self.app.return_code or self.exit_code
@@ -93,15 +95,13 @@ class TuiSession:
             self.reason = reason
             self._spawn(self.app.shutdown(reason, self.exit_code))
 
-    def _hangup(self) -> None:
-        _detach_from_terminal()
-        self.core.events.emit("warning", "platform", f"SIGHUP: terminal lost (--on-hangup {self.on_hangup})")
+    def _hangup(self, reason: str) -> None:
+        self.core.events.emit("warning", "platform", f"terminal lost ({reason}), --on-hangup {self.on_hangup}")
         if self.on_hangup == "continue" and self.core.state is CoreState.RUNNING:
-            if not self.headless:
-                self.headless = True
-                self.app.exit()
+            self.headless = True
+            self.app.exit()
         else:
-            self.request_stop("SIGHUP: terminal lost")
+            self.request_stop(f"terminal lost ({reason})")
 
     def _started(self) -> None:
         if self.script is not None:
@@ -137,11 +137,3 @@ class TuiSession:
         self._tasks.add(task)
         task.add_done_callback(self._tasks.discard)
 
-
-def _detach_from_terminal() -> None:
-    """Point stdin, stdout and stderr at /dev/null: the terminal is gone, reads and writes would fail."""
-    with contextlib.suppress(OSError):
-        null = os.open(os.devnull, os.O_RDWR)
-        for fd in (0, 1, 2):
-            os.dup2(null, fd)
-        os.close(null)

@@ -10,6 +10,7 @@ from typing import ClassVar
 from textual.app import App, ComposeResult
 from textual.binding import Binding, BindingType
 from textual.containers import Horizontal, Vertical
+from textual.driver import Driver
 
 from uav_tui.commands import VEHICLE_COMMANDS, parse
 from uav_tui.core import CoreState, UavCore
@@ -80,6 +81,7 @@ class UavApp(App[None]):
         frames: where the preview reads frames from (default: the worker's newest processed frame).
         on_started: called once the core runs (the session starts ``--script`` and ``--duration`` there).
         owns_core: stop the core when the app ends, however it ends (False: the caller stops it).
+        driver_class: the Textual driver (the session's survives a lost terminal).
     """
 
     CSS_PATH = "app.tcss"
@@ -95,8 +97,8 @@ class UavApp(App[None]):
 
     def __init__(self, core: UavCore, *, status: Callable[[], CoreStatus] | None = None,
                  frames: FrameProvider | None = None, on_started: Callable[[], None] | None = None,
-                 owns_core: bool = True) -> None:
-        super().__init__()
+                 owns_core: bool = True, driver_class: type[Driver] | None = None) -> None:
+        super().__init__(driver_class=driver_class)
         self.core = core
         self._status = status
         self._frames = frames or self._newest_frame
