@@ -18,6 +18,12 @@ def test_fit_keeps_aspect_and_centres(frame, panel, expected):
     assert (box.x0, box.y0, box.width, box.height) == expected
 
 
+def test_fit_caps_the_image_size_and_keeps_it_centred():
+    box = Letterbox.fit(640, 480, 200, 60, max_cells=2400)  # would be 80x60 cells uncapped
+    assert box.width * box.height <= 2400 and abs(box.width / (2 * box.height) - 4 / 3) < 0.05
+    assert (box.x0, box.y0) == ((200 - box.width) // 2, (60 - box.height) // 2)
+
+
 def test_roi_of_a_cell_box_covers_those_cells_in_frame_pixels():
     box = Letterbox.fit(640, 480, 40, 13)  # image at x0=2, 35x13 cells: 18.29 px per column, 36.92 px per row
     assert box.to_roi((2, 0, 36, 12)) == (0, 0, 640, 480)  # the whole image

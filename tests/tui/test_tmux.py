@@ -37,8 +37,8 @@ class Tmux:
                    str(tmp_path / "runs"), *flags]
         # The shell ignores SIGHUP so that it can write the exit status after a hang-up.
         script = f"trap '' HUP; cd {shlex.quote(str(tmp_path))}; {shlex.join(command)}; echo $? > {self.status}"
-        env = f"PYTHONPATH={shlex.quote(str(ROOT))}"
-        self.tmux("new-session", "-d", "-x", "80", "-y", "24", f"env {env} TERM=xterm-256color sh -c {shlex.quote(script)}")
+        env = f"env PYTHONPATH={shlex.quote(str(ROOT))} TERM=xterm-256color"
+        self.tmux("new-session", "-d", "-x", "80", "-y", "24", f"{env} sh -c {shlex.quote(script)}")
 
     def screen(self) -> str:
         return self.tmux("capture-pane", "-p")

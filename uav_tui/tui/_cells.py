@@ -7,6 +7,7 @@ top pixel, its background the bottom one. A panel of ``cols x rows`` cells is th
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import cv2
@@ -53,9 +54,15 @@ class Letterbox:
     height: int
 
     @classmethod
-    def fit(cls, frame_w: int, frame_h: int, cols: int, rows: int) -> Letterbox:
-        """Fit the frame into the panel (2 pixel rows per cell), centred, aspect ratio kept."""
+    def fit(cls, frame_w: int, frame_h: int, cols: int, rows: int, max_cells: int = 0) -> Letterbox:
+        """Fit the frame into the panel (2 pixel rows per cell), centred, aspect ratio kept.
+
+        Args:
+            max_cells: if > 0, the image covers at most this many cells (it is centred, smaller).
+        """
         scale = min(cols / frame_w, 2 * rows / frame_h) if frame_w and frame_h else 0.0
+        if max_cells and frame_w * frame_h * scale * scale / 2 > max_cells:
+            scale = math.sqrt(2 * max_cells / (frame_w * frame_h))
         width = max(1, min(cols, round(frame_w * scale)))
         height = max(1, min(rows, round(frame_h * scale / 2)))
         return cls(frame_w, frame_h, cols, rows, (cols - width) // 2, (rows - height) // 2, width, height)

@@ -25,6 +25,9 @@ FrameProvider = Callable[[], "tuple[int, np.ndarray] | None"]
 PREVIEW_FPS = 4.0
 """How often the preview redraws at most; the terminal, not the camera, sets how much is worth drawing."""
 
+MAX_CELLS = 2400
+"""Largest image drawn (about 80x30 cells): every cell costs the loop time in Textual's compositor."""
+
 CPU_BUDGET = 0.05
 """Largest share of one core the conversion may use: a big terminal on a slow board redraws less often."""
 
@@ -70,10 +73,10 @@ class FramePreview(Widget, can_focus=True):
             super().__init__()
             self.roi = roi
 
-    def __init__(self, frames: FrameProvider, *, fps: float = PREVIEW_FPS, id: str | None = None) -> None:
+    def __init__(self, frames: FrameProvider, *, fps: float | None = None, id: str | None = None) -> None:
         super().__init__(id=id)
         self._frames = frames
-        self._fps = fps
+        self._fps = fps or PREVIEW_FPS
         self._strips: list[Strip] = []
         self._drawn: tuple[object, ...] | None = None  # what _strips show: frame id, size, selection
         self._layout: Letterbox | None = None
@@ -108,7 +111,7 @@ class FramePreview(Widget, can_focus=True):
         height, width = image.shape[:2]
         layout = self._layout
         if layout is None or (layout.frame_w, layout.frame_h, layout.cols, layout.rows) != (width, height, cols, rows):
-            layout = Letterbox.fit(width, height, cols, rows)
+            layout = Letterbox.fit(width, height, cols, rows, MAX_CELLS)
         self._strips = render_cells(image, layout, self.selection)
         self._next_draw = now + (time.monotonic() - now) / CPU_BUDGET
         self._layout, self._drawn = layout, key
