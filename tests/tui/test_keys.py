@@ -102,3 +102,13 @@ async def test_quit_key_stops_the_core_and_exits(make_app):
         await wait_for(pilot, lambda: app.core.state is CoreState.STOPPED, what="the core to stop")
         await wait_for(pilot, lambda: not app.is_running, what="the app to exit")
     assert app.return_code == 0
+
+
+async def test_a_processor_that_cannot_load_ends_the_app_with_file_and_line(make_app, tmp_path: Path):
+    broken = tmp_path / "broken.py"
+    broken.write_text("import numpy\n\nclass Broken:\n    def photo_processing(self, frame)\n        pass\n")
+    app = make_app(processor=f"{broken}:Broken")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await wait_for(pilot, lambda: not app.is_running, what="the app to exit")
+    assert app.return_code == 2
+    assert f"{broken}:4" in app.start_error and "SyntaxError" in app.start_error

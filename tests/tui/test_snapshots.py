@@ -47,7 +47,7 @@ STATUS = CoreStatus(
     last_decision="executed",
     vectors_executed=42,
     vectors_rejected=1,
-    recording={"run_dir": "runs/2026-11-22T08-00-00Z", "frames_saved": 57, "drops": 0},
+    recording={"run_dir": "runs/2026-11-22T08-00-00Z", "frames_saved": 57, "dropped": 3},
 )
 
 EVENTS = [

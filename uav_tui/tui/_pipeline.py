@@ -22,21 +22,23 @@ class PipelinePanel(StatusPanel):
         age = Text(f"{p.frame_age_ms:.0f} ms")
         if p.busy_ms > 1000:
             age.append(f" busy {p.busy_ms / 1000:.1f} s", self.get_component_rich_style("panel--warn"))
-        return self.rows(
+        rows = [
             ("cam", camera),
             ("fps", f"cam {p.capture_fps:4.1f}  proc {p.processed_fps:4.1f}"),
             ("age", age),
             ("time", f"p50 {p.processing_ms_p50:.1f}  p95 {p.processing_ms_p95:.1f} ms"),
             ("skip", f"{p.frames_skipped} of {p.frames_processed + p.frames_skipped}"),
             ("rec", self._recording(status.recording)),
-        )
+        ]
+        if status.recording:
+            rows.append(("run", str(status.recording.get("run_dir", "")).rstrip("/").rsplit("/", 1)[-1]))
+        return self.rows(*rows)
 
     def _recording(self, recording: dict[str, object]) -> Text:
         if not recording:
             return Text("off")
-        folder = str(recording.get("run_dir") or recording.get("folder") or "")
-        text = Text(f"{folder.rstrip('/').rsplit('/', 1)[-1]} {recording.get('frames_saved', 0)} fr")
-        drops = recording.get("drops") or recording.get("frames_dropped") or 0
-        if drops:
-            text.append(f" {drops} drop", self.get_component_rich_style("panel--warn"))
+        text = Text(f"on, {recording.get('frames_saved', 0)} frames saved")
+        dropped = recording.get("dropped") or 0
+        if dropped:
+            text.append(f" {dropped} dropped", self.get_component_rich_style("panel--warn"))
         return text

@@ -91,7 +91,7 @@ class TuiSession:
             self.reason = reason
             assert self._stop is not None
             self._stop.set()
-        elif self.app.is_running:
+        else:
             self.reason = reason
             self._spawn(self.app.shutdown(reason, self.exit_code))
 

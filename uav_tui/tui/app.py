@@ -105,6 +105,8 @@ class UavApp(App[None]):
         self._on_started = on_started
         self.owns_core = owns_core
         self.stop_reason = "quit"
+        self.start_error = ""
+        """Why the core could not start ("" if it did); also printed when the app exits."""
         self._stopping = False
 
     def compose(self) -> ComposeResult:
@@ -130,11 +132,11 @@ class UavApp(App[None]):
             try:
                 await self.core.start()
             except UavError as exc:
-                self.exit(return_code=2, message=f"uav-tui: cannot start: {exc}")
+                self._start_failed(str(exc))
                 return
             except Exception as exc:
                 logger.exception("UavCore failed to start")
-                self.exit(return_code=2, message=f"uav-tui: cannot start: {type(exc).__name__}: {exc}")
+                self._start_failed(f"{type(exc).__name__}: {exc}")
                 return
         self.set_interval(1 / STATUS_HZ, self.refresh_status)
         self.refresh_status()
@@ -142,6 +144,10 @@ class UavApp(App[None]):
         self.run_worker(self._watch_quit(), name="quit watch", exit_on_error=False)
         if self._on_started is not None:
             self._on_started()
+
+    def _start_failed(self, reason: str) -> None:
+        self.start_error = reason
+        self.exit(return_code=2, message=f"uav-tui: cannot start: {reason}")
 
     async def _watch_quit(self) -> None:
         await self.core.quit_requested.wait()
@@ -174,6 +180,8 @@ class UavApp(App[None]):
 
     def on_core_event(self, event: Event) -> None:
         """Log every event; warnings and errors also pop up."""
+        if not self.is_running:
+            return
         self.query_one(EventLogView).add_event(event)
         if event.level != "info":
             self.notify(event.message, title=event.kind, severity=event.level, timeout=6)
@@ -186,6 +194,8 @@ class UavApp(App[None]):
 
     def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
         """Dim the keys that cannot apply: vehicle commands without a vehicle, methods the processor lacks."""
+        if action == "roi_box":
+            parameters, action = ("roi",), "send"
         if action == "send" and parameters:
             word = str(parameters[0]).split()[0]
             if word in NEEDS_VEHICLE and self.core.state is CoreState.RUNNING and self.core.controller is None:
