@@ -25,16 +25,17 @@ class VehicleLine(StatusPanel):
     def describe(self, status: CoreStatus) -> Text:
         t = status.telemetry
         line = Text(no_wrap=True, overflow="ellipsis")
-        line.append("fc ", self.get_component_rich_style("panel--label")).append(status.fc_description or status.fc)
+        label = self.get_component_rich_style("panel--label")
         if status.fc == "none":
-            return line.append("\n").append(self.styled("no vehicle: commands are refused", "warn"))
+            line.append("fc ", label).append("none").append("\n")
+            return line.append(self.styled("no vehicle: commands are refused", "warn"))
         age = status.heartbeat_age_s
-        line.append("  link ", self.get_component_rich_style("panel--label"))
+        line.append("link ", label)  # first: a long connection string may be cut, the link state never
         if age is None or age >= LINK_TIMEOUT_S:
             line.append(self.styled("LOST" + ("" if age is None or age == float("inf") else f" {age:.1f}s"), "bad"))
         else:
             line.append(self.styled(f"ok {age:.1f}s", "good"))
-        line.append("\n")
+        line.append("  fc ", label).append(status.fc_description or status.fc).append("\n")
         line.append(t.flight_mode or MISSING).append("  ")
         line.append(self.styled("ARMED", "warn") if t.armed else Text("disarmed"))
         line.append("  ").append("IN AIR" if t.in_air else "on ground")

@@ -11,16 +11,21 @@ script or ``--duration``; the run keeps being recorded.
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import logging
 import signal
+import sys
+import threading
+from collections.abc import Iterator
 from typing import Any
 
 from uav_tui.commands import Command
 from uav_tui.config import Config
 from uav_tui.core import CoreState, UavCore
+from uav_tui.events import EventLog
 from uav_tui.headless import EXIT_SCRIPT_FAILED, run_script
 from uav_tui.tui._terminal import TerminalWatch, driver_for
-from uav_tui.tui.app import UavApp
+from uav_tui.tui.app import LOG_ORIGIN, UavApp
 
 logger = logging.getLogger(__name__)
 
@@ -69,7 +74,8 @@ class TuiSession:
         loop.add_signal_handler(signal.SIGHUP, self.watch.lost, "SIGHUP")
         self.watch.start()
         try:
-            await self.app.run_async()
+            with _logging_into(self.core.events):
+                await self.app.run_async()
             if not self.headless and self.app.return_code not in (0, None):
                 await asyncio.sleep(0.2)  # a SIGHUP may still be on its way: the input thread can fail first
             if self.headless and self.core.state is CoreState.RUNNING:
@@ -137,3 +143,40 @@ class TuiSession:
         self._tasks.add(task)
         task.add_done_callback(self._tasks.discard)
 
+
+
+class _EventLogHandler(logging.Handler):
+    """Log records as warning/error events: on the dashboard a line on stderr would tear the screen."""
+
+    def __init__(self, events: EventLog) -> None:
+        super().__init__(logging.WARNING)
+        self.events = events
+        self._inside = threading.local()
+
+    def emit(self, record: logging.LogRecord) -> None:
+        if getattr(self._inside, "active", False) or record.name == "uav_tui.events":
+            return  # EventLog logs what it emits: never loop
+        self._inside.active = True
+        try:
+            level = "error" if record.levelno >= logging.ERROR else "warning"
+            self.events.emit(level, "platform", f"{record.name}: {record.getMessage()}", origin=LOG_ORIGIN)
+        finally:
+            self._inside.active = False
+
+
+@contextlib.contextmanager
+def _logging_into(events: EventLog) -> Iterator[None]:
+    """While the dashboard is up, log records that would go to the terminal go to the event log."""
+    root = logging.getLogger()
+    to_terminal = [h for h in root.handlers if isinstance(h, logging.StreamHandler)
+                   and getattr(h, "stream", None) in (sys.stderr, sys.stdout)]
+    handler = _EventLogHandler(events)
+    for old in to_terminal:
+        root.removeHandler(old)
+    root.addHandler(handler)
+    try:
+        yield
+    finally:
+        root.removeHandler(handler)
+        for old in to_terminal:
+            root.addHandler(old)

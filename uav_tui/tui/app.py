@@ -29,6 +29,9 @@ from uav_tui.tui.screens import ConfirmScreen
 
 logger = logging.getLogger(__name__)
 
+LOG_ORIGIN = "log"
+"""Origin of events that are log records (shown in the log, not popped up: they are for developers)."""
+
 STATUS_HZ = 3.0
 """How often the panels are refreshed from ``core.status()``."""
 
@@ -179,11 +182,11 @@ class UavApp(App[None]):
             panel.status = status
 
     def on_core_event(self, event: Event) -> None:
-        """Log every event; warnings and errors also pop up."""
+        """Log every event; warnings and errors also pop up (except log records)."""
         if not self.is_running:
             return
         self.query_one(EventLogView).add_event(event)
-        if event.level != "info":
+        if event.level != "info" and event.origin != LOG_ORIGIN:
             self.notify(event.message, title=event.kind, severity=event.level, timeout=6)
 
     def _newest_frame(self) -> tuple[int, object] | None:
