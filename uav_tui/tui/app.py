@@ -10,6 +10,7 @@ from typing import ClassVar
 from textual.app import App, ComposeResult
 from textual.binding import Binding, BindingType
 from textual.containers import Horizontal, Vertical
+from textual.css.query import NoMatches
 from textual.driver import Driver
 
 from uav_tui.commands import VEHICLE_COMMANDS, parse
@@ -177,7 +178,10 @@ class UavApp(App[None]):
         if self._status is None and self.core.state is not CoreState.RUNNING:
             return
         status = (self._status or self.core.status)()
-        self.query_one(StatusBar).show(status)
+        try:
+            self.query_one(StatusBar).show(status)
+        except NoMatches:  # its children are not mounted yet (a fast start); the next tick shows it
+            return
         for panel in self.query(StatusPanel):
             panel.status = status
 
