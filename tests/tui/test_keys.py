@@ -112,3 +112,17 @@ async def test_a_processor_that_cannot_load_ends_the_app_with_file_and_line(make
         await wait_for(pilot, lambda: not app.is_running, what="the app to exit")
     assert app.return_code == 2
     assert f"{broken}:4" in app.start_error and "SyntaxError" in app.start_error
+
+
+async def test_typed_commands_go_the_same_way_and_typos_are_shown(make_app):
+    app = make_app()
+    async with app.run_test(size=(80, 24)) as pilot:
+        await started(pilot)
+        await pilot.press("colon", *"f 4", "enter")
+        processor = app.core.worker.processor.instance
+        await wait_for(pilot, lambda: processor.buttons == [4], what="the typed F4")
+        await pilot.press("colon", *"fly away", "enter")
+        await wait_for(pilot, lambda: in_log(app, "unknown command 'fly'"), what="the typo in the log")
+        await pilot.press("colon", *"f 1", "escape")
+        await pilot.pause(0.2)
+        assert processor.buttons == [4] and app.is_running

@@ -13,7 +13,7 @@ from rich.text import Text
 from textual.binding import Binding
 from textual.widgets import Static
 
-KEY_NAMES = {"question_mark": "?", "enter": "Enter", "escape": "Esc", "left": "\u2190", "up": "\u2191",
+KEY_NAMES = {"question_mark": "?", "colon": ":", "enter": "Enter", "escape": "Esc", "left": "\u2190", "up": "\u2191",
              "right": "\u2192", "down": "\u2193"}
 """Short names for keys whose Textual name is long."""
 

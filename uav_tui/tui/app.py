@@ -26,7 +26,7 @@ from uav_tui.tui._panel import StatusPanel
 from uav_tui.tui._pipeline import PipelinePanel
 from uav_tui.tui._preview import FramePreview, FrameProvider
 from uav_tui.tui._telemetry import TelemetryPanel
-from uav_tui.tui.screens import ConfirmScreen
+from uav_tui.tui.screens import CommandPrompt, ConfirmScreen
 
 logger = logging.getLogger(__name__)
 
@@ -66,6 +66,9 @@ KEYS: tuple[Key, ...] = (
 )
 """The command keys, in footer order (hold and land first: they are what an operator looks for)."""
 
+CONFIRM = {k.command.split()[0]: k.confirm for k in KEYS if k.confirm}
+"""Command word -> the question asked before it is sent, by key or typed."""
+
 FUNCTION_KEYS = Binding.Group("processor")
 """F1-F4 share one footer entry."""
 
@@ -95,6 +98,7 @@ class UavApp(App[None]):
         *(Binding(k.key, f"send({k.command!r})", k.label, group=FUNCTION_KEYS if k.key.startswith("f") else None)
           for k in KEYS),
         Binding("b", "roi_box", "ROI box"),
+        Binding("colon", "prompt", "Command"),
         Binding("q", "quit", "Quit"),
         Binding("question_mark", "help", "Help"),
     ]
@@ -214,7 +218,11 @@ class UavApp(App[None]):
 
     def action_send(self, command: str) -> None:
         """Send ``command``; dangerous ones after a confirmation."""
-        question = next((k.confirm for k in KEYS if k.command == command), "")
+        word = command.split()[0].lower() if command.split() else ""
+        if word == "quit":
+            self.run_worker(self.action_quit(), exit_on_error=False)
+            return
+        question = CONFIRM.get(word, "")
         if question:
             label = command.split()[0].capitalize()
             self.push_screen(ConfirmScreen(question, label), lambda yes: self.send(command) if yes else None)
@@ -252,6 +260,10 @@ class UavApp(App[None]):
 
     def on_frame_preview_roi_selected(self, message: FramePreview.RoiSelected) -> None:
         self.send("roi {} {} {} {}".format(*message.roi))
+
+    def action_prompt(self) -> None:
+        """Type any command, as in a ``--script`` file."""
+        self.push_screen(CommandPrompt(), lambda text: self.action_send(text) if text else None)
 
     def action_roi_box(self) -> None:
         """Keyboard ROI: a box over the preview, arrows move it, shift+arrows resize, Enter sends."""

@@ -3,5 +3,6 @@
 from __future__ import annotations
 
 from uav_tui.tui.screens.confirm import ConfirmScreen
+from uav_tui.tui.screens.prompt import CommandPrompt
 
-__all__ = ["ConfirmScreen"]
+__all__ = ["CommandPrompt", "ConfirmScreen"]
