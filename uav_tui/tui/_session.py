@@ -62,12 +62,11 @@ class TuiSession:
         self.reason = "quit"
         self.headless = False
         """True once the screen is gone and the core carries on (``--on-hangup continue``)."""
-        self._stop: asyncio.Event | None = None
+        self._stop = asyncio.Event()
         self._tasks: set[asyncio.Task[Any]] = set()
 
     async def run(self) -> int:
         loop = asyncio.get_running_loop()
-        self._stop = asyncio.Event()
         handled = {signal.SIGTERM: "SIGTERM", signal.SIGINT: "SIGINT"}
         for signum, name in handled.items():
             loop.add_signal_handler(signum, self.request_stop, name)
@@ -95,7 +94,6 @@ class TuiSession:
         self.exit_code = self.exit_code or exit_code
         if self.headless:
             self.reason = reason
-            assert self._stop is not None
             self._stop.set()
         else:
             self.reason = reason
@@ -128,7 +126,6 @@ class TuiSession:
         self.core.events.emit("error", "platform", text, "script")
 
     async def _run_headless(self) -> None:
-        assert self._stop is not None
         logger.warning("terminal lost: the core keeps running headless (--on-hangup continue)")
         quit_watch = asyncio.ensure_future(self.core.quit_requested.wait())
         stop_watch = asyncio.ensure_future(self._stop.wait())
