@@ -17,6 +17,13 @@ from uav_tui.errors import SourceError, SourceUriError
 SCHEMES: dict[str, str] = {
     "file": "sources.file:FileSource",
     "synthetic": "sources.synthetic:SyntheticSource",
+    "usb": "sources.usb:UsbSource",
+    "picam": "sources.picam:PicamSource",
+    "rtsp": "sources.network:NetworkSource",
+    "rtsps": "sources.network:NetworkSource",
+    "http": "sources.network:NetworkSource",
+    "https": "sources.network:NetworkSource",
+    "sim": "sources.sim_camera:SimCameraSource",
 }
 """URI scheme -> ``module:Class``. Each class has ``from_uri(SourceUri, **context)``."""
 
@@ -35,7 +42,7 @@ def create_source(uri: str, **context: Any) -> CameraSource:
         raise SourceUriError(f"unknown camera scheme {parsed.scheme!r} in {uri!r}; known: {known}", key="source")
     module_name, class_name = target.split(":")
     cls = getattr(importlib.import_module(module_name), class_name)
-    return cls.from_uri(parsed, **context) if context else cls.from_uri(parsed)
+    return cls.from_uri(parsed, **context)
 
 
 def open_source(uri: str, **context: Any) -> CameraSource:

@@ -65,6 +65,7 @@ class CaptureSource:
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self._lock = threading.Lock()
+        self._device_lock = threading.Lock()
         self._device_open = False
 
     def __repr__(self) -> str:
@@ -106,9 +107,10 @@ class CaptureSource:
             self._stop.set()
         if thread is not None and thread is not threading.current_thread():
             thread.join(timeout=5)
-        if self._device_open:
-            self._device_open = False
-            self._close_device()
+            if thread.is_alive():  # stuck in a device call (an open or read timeout): it releases on its way out
+                logger.warning("%r: capture thread still busy in the device; it will release it when it returns", self)
+                return
+        self._release_device()
 
     def get_properties(self) -> dict[str, Any]:
         """Kind, device, granted size and fps, counters, last error and stall time."""
@@ -145,19 +147,29 @@ class CaptureSource:
     # -- the thread -----------------------------------------------------------------------------
 
     def _capture_loop(self) -> None:
-        while not self._stop.is_set():
-            reason = "no frame from the device"
-            try:
-                image = self._grab()
-            except Exception as exc:  # noqa: BLE001 - counted and reported, then recovered
-                image, reason = None, f"read failed: {exc}"
-            if self._stop.is_set():
-                break
-            if image is not None:
-                self.stalled_since = None
-                self.buffer.put(image)
-            else:
-                self._recover(reason)
+        try:
+            while not self._stop.is_set():
+                reason = "no frame from the device"
+                try:
+                    image = self._grab()
+                except Exception as exc:  # noqa: BLE001 - counted and reported, then recovered
+                    image, reason = None, f"read failed: {exc}"
+                if self._stop.is_set():
+                    break
+                if image is not None:
+                    self.stalled_since = None
+                    self.buffer.put(image)
+                else:
+                    self._recover(reason)
+        finally:
+            self._release_device()
+
+    def _release_device(self) -> None:
+        """Close the device if it is open; safe from the capture thread and from ``close`` at once."""
+        with self._device_lock:
+            if self._device_open:
+                self._device_open = False
+                self._close_device()
 
     def _recover(self, reason: str) -> None:
         """Mark the stall, then close and reopen the device with back-off until it works again."""
@@ -166,9 +178,7 @@ class CaptureSource:
         self._fail(reason)
         attempt = 0
         while not self._stop.is_set():
-            if self._device_open:
-                self._device_open = False
-                self._close_device()
+            self._release_device()
             if self._stop.wait(RETRY_DELAYS_S[min(attempt, len(RETRY_DELAYS_S) - 1)]):
                 return
             attempt += 1

@@ -34,10 +34,9 @@ class FileSource(VideoCaptureSource):
         self.loops = 0
         self.frame_count = 0
         self._pacer: Pacer | None = None
-        self._first: np.ndarray | None = None
 
     @classmethod
-    def from_uri(cls, uri: SourceUri) -> FileSource:
+    def from_uri(cls, uri: SourceUri, **_context: Any) -> FileSource:
         if not uri.target:
             raise SourceError(f"{uri.text!r}: give the video path, e.g. file:flight.mp4")
         source = cls(uri.text, uri.target, realtime=uri.take_bool("realtime", True),
@@ -51,11 +50,6 @@ class FileSource(VideoCaptureSource):
             raise SourceError(f"no such video file: {path} (working directory: {Path.cwd()})")
         super()._open_device()
         assert self._capture is not None
-        ok, first = self._capture.read()
-        if not ok:
-            self._close_device()
-            raise SourceError(f"{path}: opened but no frame could be decoded (corrupt or truncated file?)")
-        self._first = first
         self.frame_count = int(self._capture.get(cv2.CAP_PROP_FRAME_COUNT))
         self.fps = self.fps if self.fps > 0 else DEFAULT_FPS
         self._pacer = Pacer(self.fps if self.realtime else 0, self._stop)
@@ -63,13 +57,17 @@ class FileSource(VideoCaptureSource):
     def _open_error(self) -> Exception:
         return SourceError(f"{self.device}: not a video FFmpeg can read (unsupported format or corrupt file)")
 
-    def _read_frame(self) -> np.ndarray | None:
-        assert self._capture is not None and self._pacer is not None
+    def _no_frame_error(self) -> Exception:
+        return SourceError(f"{self.device}: opened but no frame could be decoded (corrupt or truncated file?)")
+
+    def _grab(self) -> np.ndarray | None:
+        assert self._pacer is not None
         if not self._pacer.wait():
             return None
-        if self._first is not None:
-            image, self._first = self._first, None
-            return image
+        return super()._grab()
+
+    def _read_frame(self) -> np.ndarray | None:
+        assert self._capture is not None
         ok, image = self._capture.read()
         if not ok:  # end of file: start over
             self.loops += 1

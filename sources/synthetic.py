@@ -72,7 +72,7 @@ class SyntheticSource(CaptureSource):
         self._pacer: Pacer | None = None
 
     @classmethod
-    def from_uri(cls, uri: SourceUri) -> SyntheticSource:
+    def from_uri(cls, uri: SourceUri, **_context: Any) -> SyntheticSource:
         source = cls(uri.text, width=uri.take_int("width", 640) or 640, height=uri.take_int("height", 480) or 480,
                      fps=uri.take_float("fps", 30.0) or 30.0, seed=uri.take_int("seed", 0) or 0,
                      realtime=uri.take_bool("realtime", True))

@@ -70,6 +70,8 @@ class WebConfig:
     web_token: str = _key("access token (empty = a random one per start)", default="")
     web_width: int = _key("width of the streamed video, px", minimum=64, maximum=4096, default=640)
     web_fps: float = _key("frame rate of the streamed video", minimum=1, maximum=60, default=15)
+    camera_mavlink: str = _key("MAVLink camera endpoint for ground-station click-to-track, e.g. "
+                               "udpin:0.0.0.0:14580 (empty = off)", default="")
 
 
 @dataclass(frozen=True)
@@ -156,7 +158,7 @@ def add_config_flags(parser: argparse.ArgumentParser) -> None:
     for cls in (Config, *SECTIONS.values()):
         group = parser.add_argument_group(cls.__doc__.splitlines()[0] if cls.__doc__ else cls.__name__)
         for f in fields(cls):
-            if f.name in SECTIONS:
+            if cls is Config and f.name in SECTIONS:
                 continue
             if f.name == "processor_args":
                 group.add_argument("--processor-arg", dest="processor_args", action="append", default=None,
@@ -175,7 +177,7 @@ def overrides_from_args(args: argparse.Namespace) -> dict[str, Any]:
     for cls in (Config, *SECTIONS.values()):
         for f in fields(cls):
             value = getattr(args, f.name, None)
-            if value is None or f.name in SECTIONS:
+            if value is None or cls is Config and f.name in SECTIONS:
                 continue
             if f.name == "processor_args":
                 result[f.name] = _parse_processor_args(value)
@@ -196,7 +198,7 @@ def with_overrides(config: Config, **changes: Any) -> Config:
 
 
 def _check(cls: type, key: str, value: Any, name: str, where: str) -> Any:
-    known = {f.name: f for f in fields(cls) if f.name not in SECTIONS}
+    known = {f.name: f for f in fields(cls) if cls is not Config or f.name not in SECTIONS}
     f = known.get(key)
     if f is None:
         close = difflib.get_close_matches(key, known, n=1)

@@ -12,7 +12,7 @@ import functools
 import logging
 import time
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from controllers import connect_controller
 from controllers.base import FlightController
@@ -23,9 +23,14 @@ from uav_tui.commands import VEHICLE_COMMANDS, Command, parse
 from uav_tui.config import Config
 from uav_tui.errors import CommandError, NoVehicle, ProcessorLoadError, SourceError, UavError
 from uav_tui.events import EventLog
+from uav_tui.recording import Recorder, describe
 from uav_tui.status import CoreStatus
 from uav_tui.telemetry import TelemetryManager
 from uav_tui.worker import ProcessedFrame, ProcessorWorker
+
+if TYPE_CHECKING:  # aiortc and pymavlink are imported only when the side channels are switched on
+    from uav_tui.web import WebServer
+    from uav_tui.web.mavlink_tracking import CameraTracking
 
 logger = logging.getLogger(__name__)
 
@@ -52,6 +57,8 @@ class UavCore:
         self.controller: FlightController | None = None
         self.source: CameraSource | None = None
         self.worker: ProcessorWorker | None = None
+        self.recorder: Recorder | None = None
+        """Writes the run's dataset (None with ``--no-record``)."""
         self.quit_requested = asyncio.Event()
         """Set by the ``quit`` command; the interface that runs the core then stops it."""
         self.processor_error: str | None = None
@@ -59,6 +66,10 @@ class UavCore:
         self.started_wall_ns = 0
         self._frame_listeners: list[Callable[[ProcessedFrame], None]] = []
         self._tasks: list[asyncio.Task[Any]] = []
+        self.web: WebServer | None = None
+        """The web page's WebServer (``web.url`` has the token) when ``web`` is on, else None."""
+        self.camera_tracking: CameraTracking | None = None
+        """The MAVLink camera component when ``camera_mavlink`` is set, else None."""
 
     # -- lifecycle -------------------------------------------------------------------------------
 
@@ -80,10 +91,15 @@ class UavCore:
             self.gate.telemetry, self.gate.controller = self.telemetry, self.controller
             processor.instance.tmMgr = self.telemetry
             self.source = await self._open_source(self.config.source)
+            self.worker = ProcessorWorker(processor, self._on_result)
+            if self.config.recording.record:
+                self.recorder = await loop.run_in_executor(None, functools.partial(
+                    Recorder.open, self.config.recording, describe(self),
+                    telemetry_expected=self.controller is not None, started_wall_ns=self.started_wall_ns))
+                self.recorder.attach(self)
         except BaseException:
             await self._release()
             raise
-        self.worker = ProcessorWorker(processor, self._on_result)
         self.worker.attach(self.source.buffer)
         self._spawn(self.worker.run(), "processor")
         self._spawn(self.telemetry.run(), "telemetry")
@@ -93,6 +109,26 @@ class UavCore:
         self.state = CoreState.RUNNING
         self.events.emit("info", "platform", f"started: source {self.config.source}, processor "
                          f"{processor.info.name}, fc {self.config.fc}")
+        try:
+            await self._start_side_channels()
+        except BaseException:
+            await self._release()
+            raise
+
+    async def _start_side_channels(self) -> None:
+        """The web page and MAVLink click-to-track, when configured (aiortc is imported only then)."""
+        if self.config.web.web:
+            from uav_tui.web import WebServer
+
+            self.web = WebServer(self, self.config.web)
+            await self.web.start()
+            self.events.emit("info", "web", f"web page: {self.web.url}")
+        if self.config.web.camera_mavlink:
+            from uav_tui.web.mavlink_tracking import CameraTracking
+
+            self.camera_tracking = CameraTracking(self, self.config.web.camera_mavlink)
+            await self.camera_tracking.start()
+            self.events.emit("info", "web", f"camera tracking on {self.config.web.camera_mavlink}")
 
     async def stop(self, reason: str = "quit") -> None:
         """Hold the vehicle if a vector could be flying, then release everything. Idempotent."""
@@ -109,6 +145,9 @@ class UavCore:
         await self._release()
 
     async def _release(self) -> None:
+        for side in (self.web, self.camera_tracking):
+            if side is not None:
+                await side.stop()
         for task in self._tasks:
             task.cancel()
         await asyncio.gather(*self._tasks, return_exceptions=True)
@@ -119,6 +158,9 @@ class UavCore:
             await asyncio.get_running_loop().run_in_executor(None, self.source.close)
         if self.controller is not None:
             await self.controller.close()
+        if self.recorder is not None:
+            self.telemetry.saver = None
+            await asyncio.get_running_loop().run_in_executor(None, self.recorder.close)
         self.state = CoreState.STOPPED
 
     def _spawn(self, coro: Any, name: str) -> None:
@@ -244,7 +286,9 @@ class UavCore:
         return f"target region ({x}, {y}, {w}, {h}) sent to the processor"
 
     async def _do_snapshot(self, *, origin: str) -> str:
-        raise UavError("snapshot needs the recorder, which is not part of this build yet")
+        if self.recorder is None:
+            raise UavError("snapshot: recording is off (started with --no-record)")
+        return self.recorder.snapshot()
 
     async def _do_reload(self, *, origin: str) -> str:
         assert self.worker is not None
@@ -314,4 +358,5 @@ class UavCore:
             last_decision=self.gate.last_decision,
             vectors_executed=self.gate.executed,
             vectors_rejected=self.gate.rejected,
+            recording=self.recorder.status() if self.recorder is not None else {},
         )

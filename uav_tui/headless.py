@@ -102,6 +102,9 @@ class HeadlessRunner:
             self._say(f"error: {exc}")
             return EXIT_START_FAILED
         self.core.events.add_listener(self._print_event)
+        if self.core.web is not None:
+            url = self.core.web.url
+            self._say(json.dumps({"web_url": url}) if self.json_lines else f"web page: {url}")
         started = time.monotonic()
         tasks = [asyncio.create_task(self._print_status(started))]
         if self.script is not None:
@@ -128,7 +131,7 @@ class HeadlessRunner:
     def _print_event(self, event: Event) -> None:
         if self.json_lines:
             self._say(json.dumps({"event": asdict(event)}))
-        elif event.level != "info" or event.kind in ("command", "autonomy"):
+        else:
             self._say(f"[{event.level}] {event.kind}: {event.message}")
 
     async def _run_script(self) -> None:

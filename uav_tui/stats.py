@@ -37,7 +37,7 @@ class RollingStats:
 
     def __init__(self) -> None:
         self._samples: deque[tuple[int, int, int, int, int]] = deque()  # done_ns, seq, capture, start, end/vector
-        self._captures: deque[tuple[int, int]] = deque()  # (now_ns, frames captured so far)
+        self._captures: deque[tuple[int, int]] = deque([(time.monotonic_ns(), 0)])  # (now_ns, frames captured)
         self.frames_processed = 0
         self.frames_skipped = 0
         self.errors = 0
@@ -53,8 +53,11 @@ class RollingStats:
 
     def snapshot(self, frames_captured: int, busy_since_ns: int | None) -> PipelineStats:
         now = time.monotonic_ns()
+        if frames_captured < self._captures[-1][1]:  # a new source counts from zero again
+            self._captures.clear()
         self._captures.append((now, frames_captured))
-        self._trim(self._captures, now)
+        while len(self._captures) > 2 and self._captures[0][0] < now - WINDOW_NS:
+            self._captures.popleft()
         self._trim(self._samples, now)
         samples = np.array(self._samples, dtype=np.int64).reshape(-1, 5)
         span_ns = (now - samples[0, 0]) if len(samples) > 1 else 0

@@ -19,6 +19,9 @@ from uav_tui.stats import PipelineStats, RollingStats
 
 logger = logging.getLogger(__name__)
 
+JOIN_TIMEOUT_S = 2.0
+"""How long stopping waits for the processor's current call before abandoning it."""
+
 
 @dataclass(slots=True)
 class ProcessedFrame:
@@ -91,6 +94,9 @@ class ProcessorWorker:
             await asyncio.Event().wait()
         finally:
             self.close()
+            # Let the current call finish before the interpreter exits: OpenCV aborts the process when its
+            # code is still running in a thread at shutdown. A hung processor is abandoned after the wait.
+            await asyncio.get_running_loop().run_in_executor(None, self._thread.join, JOIN_TIMEOUT_S)
 
     async def call(self, method: str, *args: Any) -> Any:
         """Call ``processor.<method>(*args)`` on the processor thread; its exception propagates."""

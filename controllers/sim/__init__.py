@@ -16,6 +16,7 @@ Requests (the simulator replies to the sender with one JSON object; an "id" in t
 
 TRUTH (streamed datagrams carry no "id" and no "ok"):
     t_mono_ns, t_wall_ns      time.monotonic_ns() and time.time_ns() in the simulator
+    time_boot_ms              the simulator's MAVLink clock (time_boot_ms in ATTITUDE, GLOBAL_POSITION_INT...)
     n, e, d, vn, ve, vd       local NED position (m, origin at home, d = 0 on the ground) and velocity (m/s)
     roll, pitch, yaw          degrees, yaw from north clockwise
     armed, in_air             booleans

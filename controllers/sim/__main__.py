@@ -59,8 +59,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--max-accel", type=float, default=3.0, metavar="M_S2", help="acceleration limit")
     p.add_argument("--takeoff-alt", type=float, default=2.5, metavar="M", help="MIS_TAKEOFF_ALT")
     p.add_argument("--rtl-alt", type=float, default=10.0, metavar="M", help="RTL_RETURN_ALT")
-    p.add_argument("--gps-delay", type=float, default=1.0, metavar="S", help="seconds until a 3D fix")
+    p.add_argument("--gps-delay", type=float, default=0.5, metavar="S", help="seconds until a 3D fix")
     p.add_argument("--rate", type=float, default=50.0, metavar="HZ", help="physics step rate")
+    p.add_argument("--parent-pid", type=int, default=None, metavar="PID", help="exit when PID stops being our parent")
     p.add_argument("--log-level", default="INFO", help="logging level on stderr")
     return p
 
@@ -83,6 +84,7 @@ def config_from_args(args: argparse.Namespace) -> ServerConfig:
         rate_hz=args.rate,
         offboard_loss_timeout_s=args.offboard_loss_timeout,
         failsafe_land_after_s=args.failsafe_land_after,
+        parent_pid=args.parent_pid,
         physics=physics,
     )
 
@@ -90,6 +92,7 @@ def config_from_args(args: argparse.Namespace) -> ServerConfig:
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the simulator; prints one ``ready`` line on stdout, returns 0 after SIGTERM/SIGINT."""
     args = build_parser().parse_args(argv)
+    sys.setswitchinterval(0.001)  # the MAVLink reader gets the interpreter promptly when a command arrives
     logging.basicConfig(
         level=args.log_level.upper(),
         stream=sys.stderr,

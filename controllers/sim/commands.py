@@ -32,7 +32,8 @@ ACCEPTED, DENIED, TEMP_REJECTED, UNSUPPORTED = (
     M.MAV_RESULT_TEMPORARILY_REJECTED,
     M.MAV_RESULT_UNSUPPORTED,
 )
-_INT_UNSET = 0x7FFFFFFF
+_INT_UNSET = (0, 0x7FFFFFFF, -0x80000000)
+"""COMMAND_INT x/y values that mean 'not given' (MAVSDK sends NaN as INT32_MIN)."""
 
 
 class Cmd:
@@ -43,8 +44,8 @@ class Cmd:
         self.src = (msg.get_srcSystem(), msg.get_srcComponent())
         self.p = [msg.param1, msg.param2, msg.param3, msg.param4]
         if msg.get_type() == "COMMAND_INT":
-            self.x = None if msg.x in (_INT_UNSET, 0) else msg.x * 1e-7
-            self.y = None if msg.y in (_INT_UNSET, 0) else msg.y * 1e-7
+            self.x = None if msg.x in _INT_UNSET else msg.x * 1e-7
+            self.y = None if msg.y in _INT_UNSET else msg.y * 1e-7
             self.z = msg.z
         else:
             self.x = msg.param5 if math.isfinite(msg.param5) and msg.param5 != 0 else None
@@ -72,6 +73,8 @@ class CommandHandler:
             M.MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES: self._capabilities,
         }
         self.params = ParamStore(self._param_list())
+        self._after_ack: list[mavlink.MAVLink_message] = []
+        """Messages a command asked for, sent right after its COMMAND_ACK."""
 
     def _param_list(self) -> list[Param]:
         cfg, pc = self.s.cfg, self.v.cfg
@@ -113,6 +116,7 @@ class CommandHandler:
         if msg.target_system not in (0, 1):
             return
         cmd = Cmd(msg)
+        logger.debug("SimVehicle: %s", msg)
         handler = self._handlers.get(cmd.id)
         if handler is None:
             result = UNSUPPORTED
@@ -131,6 +135,9 @@ class CommandHandler:
             _name(M.enums["MAV_RESULT"], result),
         )
         self.s.link.send(self.s.link.encoder.command_ack_encode(cmd.id, result, 0, 0, *cmd.src))
+        for reply in self._after_ack:
+            self.s.link.send(reply)
+        self._after_ack.clear()
 
     def _mode_action(self, action: Callable[[Cmd], None]) -> Callable[[Cmd], int]:
         def run(cmd: Cmd) -> int:
@@ -162,7 +169,9 @@ class CommandHandler:
         g = self.v.guidance
         if mode is None or mode == Mode.ORBIT:
             return DENIED
-        if mode == Mode.OFFBOARD:
+        if mode == self.v.mode and mode != Mode.OFFBOARD:
+            pass  # already there: PX4 does not restart the mode
+        elif mode == Mode.OFFBOARD:
             if not self.s.setpoint_fresh():
                 raise CommandRefused("offboard: no setpoints streaming")
             self.v.set_offboard(self.s.setpoint)
@@ -172,7 +181,7 @@ class CommandHandler:
             g.land()
         elif mode == Mode.RTL:
             g.rtl()
-        elif mode != self.v.mode:
+        else:
             g.hold(mode)
         self.s.client_took_over()
         return ACCEPTED
@@ -222,11 +231,11 @@ class CommandHandler:
         msg_id = int(cmd.p[0])
         if not self.s.streams.can_build(msg_id):
             return UNSUPPORTED
-        self.s.link.send(self.s.streams.build(msg_id))
+        self._after_ack.append(self.s.streams.build(msg_id))
         return ACCEPTED
 
     def _capabilities(self, cmd: Cmd) -> int:
-        self.s.link.send(self.s.streams.autopilot_version())
+        self._after_ack.append(self.s.streams.autopilot_version())
         return ACCEPTED
 
     # ----------------------------------------------------------- parameters
@@ -251,9 +260,7 @@ class CommandHandler:
     def _send_param(self, index: int, param: Param) -> None:
         enc = self.s.link.encoder
         self.s.link.send(
-            enc.param_value_encode(
-                param.name.encode(), encode_value(param), param.kind, len(self.params), index
-            )
+            enc.param_value_encode(param.name.encode(), encode_value(param), param.kind, len(self.params), index)
         )
 
 

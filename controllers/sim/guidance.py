@@ -161,8 +161,9 @@ class Guidance:
         cfg = self.v.cfg
         vel = self._toward(self.target, cfg.cruise_speed_ms, cfg.takeoff_speed_ms, cfg.fast_descent_ms)
         if abs(self.v.pos[2] - self.target[2]) < 0.1:
-            self.hold()
-            self.target = self.target.copy()
+            goal = self.target
+            self.hold()  # PX4 switches to HOLD at the takeoff altitude
+            self.target = goal
         return vel, self._yaw_goal, None
 
     def _descent_speed(self) -> float:
@@ -216,9 +217,7 @@ class Guidance:
             + cfg.position_gain * (o.radius - dist) * r_hat
             - cfg.speed_time_constant_s * centripetal * r_hat
         )
-        vel[2] = float(
-            np.clip(cfg.position_gain * (o.down - pos[2]), -cfg.takeoff_speed_ms, cfg.fast_descent_ms)
-        )
+        vel[2] = float(np.clip(cfg.position_gain * (o.down - pos[2]), -cfg.takeoff_speed_ms, cfg.fast_descent_ms))
         return vel, math.atan2(-r_hat[1], -r_hat[0]), None
 
     def _offboard(self) -> Demand:
@@ -227,9 +226,7 @@ class Guidance:
         vel = np.zeros(3)
         if sp.position is not None:
             self.target = np.array(sp.position, dtype=float)
-            vel = self._toward(
-                self.target, cfg.cruise_speed_ms, cfg.takeoff_speed_ms * 2, cfg.fast_descent_ms
-            )
+            vel = self._toward(self.target, cfg.cruise_speed_ms, cfg.takeoff_speed_ms * 2, cfg.fast_descent_ms)
         if sp.velocity is not None:
             vx, vy, vz = sp.velocity
             if sp.body:

@@ -92,6 +92,8 @@ class SimVehicle:
             f"{self.wind[0]},{self.wind[1]}",
             "--seed",
             str(self.seed),
+            "--parent-pid",
+            str(os.getpid()),
             *self.extra_args,
         ]
 
@@ -135,9 +137,7 @@ class SimVehicle:
                 return self
         log = self.log_text()
         self.stop()
-        raise ControllerError(
-            f"simulated vehicle did not start within {timeout} s; its output:\n{log[-2000:]}"
-        )
+        raise ControllerError(f"simulated vehicle did not start within {timeout} s; its output:\n{log[-2000:]}")
 
     def log_text(self) -> str:
         """What the simulator printed so far (stdout and stderr)."""

@@ -6,10 +6,14 @@ from __future__ import annotations
 import logging
 import os
 import socket
+import struct
+import sys
 import threading
 import time
 
 os.environ.setdefault("MAVLINK20", "1")
+
+import contextlib
 
 from pymavlink.dialects.v20 import common as mavlink  # noqa: E402
 
@@ -17,6 +21,24 @@ logger = logging.getLogger(__name__)
 
 SYSTEM_ID = 1
 COMPONENT_ID = mavlink.MAV_COMP_ID_AUTOPILOT1
+_SO_TIMESTAMPNS = 35
+"""Linux: the kernel stamps each datagram with CLOCK_REALTIME when it arrives (not in Python's socket)."""
+_TIMESPEC = struct.Struct("@ll")
+
+
+def arrival_mono_ns(ancdata: list[tuple[int, int, bytes]]) -> int:
+    """When the datagram reached the socket, on the time.monotonic_ns() clock.
+
+    Uses the kernel's receive timestamp when there is one, so a busy interpreter does not delay the
+    stamp; otherwise the time of reading.
+    """
+    now_mono = time.monotonic_ns()
+    for level, kind, payload in ancdata:
+        if level == socket.SOL_SOCKET and kind == _SO_TIMESTAMPNS and len(payload) >= _TIMESPEC.size:
+            sec, nsec = _TIMESPEC.unpack_from(payload)
+            wall_to_mono = time.time_ns() - time.monotonic_ns()
+            return min(now_mono, sec * 1_000_000_000 + nsec - wall_to_mono)
+    return now_mono
 
 
 class MavlinkLink:
@@ -30,6 +52,8 @@ class MavlinkLink:
         self._sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         self._sock.bind((host, 0))
         self._sock.settimeout(0.2)
+        if sys.platform.startswith("linux"):
+            self._sock.setsockopt(socket.SOL_SOCKET, _SO_TIMESTAMPNS, 1)
         self._tx = mavlink.MAVLink(None, srcSystem=SYSTEM_ID, srcComponent=COMPONENT_ID)
         self._rx = mavlink.MAVLink(None)
         self._rx.robust_parsing = True
@@ -55,14 +79,19 @@ class MavlinkLink:
     def receive(self) -> tuple[list[mavlink.MAVLink_message], int]:
         """Block up to 0.2 s for one datagram: (decoded messages, arrival time.monotonic_ns())."""
         try:
-            data, _addr = self._sock.recvfrom(65535)
+            data, ancdata, _flags, _addr = self._sock.recvmsg(65535, 256)
         except (TimeoutError, OSError):
             return [], 0
-        t_ns = time.monotonic_ns()
+        t_ns = arrival_mono_ns(ancdata)
         msgs = self._rx.parse_buffer(data) or []
         good = [m for m in msgs if m.get_type() != "BAD_DATA"]
         self.received += len(good)
         return good, t_ns
+
+    def wake(self) -> None:
+        """Unblock a reader waiting in :meth:`receive` (an empty datagram to ourselves)."""
+        with contextlib.suppress(OSError):
+            self._sock.sendto(b"", self._sock.getsockname())
 
     def close(self) -> None:
         self._sock.close()

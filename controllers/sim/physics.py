@@ -42,14 +42,14 @@ class PhysicsConfig:
     fast_descent_ms: float = 1.5
     land_alt1_m: float = 5.0
     cruise_speed_ms: float = 5.0
-    position_gain: float = 1.0
+    position_gain: float = 1.5
     max_yaw_rate_dps: float = 90.0
     attitude_time_constant_s: float = 0.1
     drag_per_ms: float = 0.15
     land_disarm_delay_s: float = 1.0
     preflight_disarm_s: float = 10.0
     battery_flight_minutes: float = 20.0
-    gps_fix_after_s: float = 1.0
+    gps_fix_after_s: float = 0.5
     takeoff_alt_m: float = 2.5
     rtl_alt_m: float = 10.0
     noise: bool = False
@@ -78,6 +78,11 @@ class Multicopter:
         self._armed_at = 0.0
         self._landed_at: float | None = None
         self._flown_since_arm = False
+        self.events: list[str] = []
+        """What PX4 would say in STATUSTEXT (takeoff/landing detected, auto-disarm); the owner drains it."""
+
+    def _event(self, text: str) -> None:
+        self.events.append(text)
 
     # ----------------------------------------------------------------- state
     @property
@@ -126,14 +131,14 @@ class Multicopter:
         self.armed = True
         self._armed_at = self.time_s
         self._flown_since_arm = False
-        logger.info("Multicopter armed in %s", self.mode)
+        self._event(f"Armed in {self.mode}")
 
     def disarm(self, *, force: bool = False) -> None:
         """Disarm; refused in the air unless forced (then the vehicle falls)."""
         if self.in_air and not force:
             raise CommandRefused("in air: disarm refused (force with 21196)")
         if self.armed:
-            logger.info("Multicopter disarmed%s", " in the air (forced)" if self.in_air else "")
+            self._event("Disarmed in the air (forced)" if self.in_air else "Disarmed")
         self.armed = False
 
     def takeoff(self, altitude_m: float | None = None) -> None:
@@ -177,6 +182,7 @@ class Multicopter:
         self.vel += acc * dt
         self.pos += self.vel * dt
         if self.pos[2] < -0.1 and not self.in_air:
+            self._event("Takeoff detected")
             self.in_air = True
             self._flown_since_arm = True
             self._landed_at = None
@@ -191,7 +197,7 @@ class Multicopter:
         self.tilt_acc[:] = 0.0
         self._landed_at = self.time_s
         self.guidance.on_touchdown()
-        logger.info("Multicopter touched down at n=%.2f e=%.2f", self.pos[0], self.pos[1])
+        self._event(f"Landing detected at n={self.pos[0]:.1f} e={self.pos[1]:.1f}")
 
     def _idle_on_ground(self) -> None:
         """Armed on the ground: PX4 disarms after landing and if it never takes off."""
@@ -200,10 +206,10 @@ class Multicopter:
         if self._landed_at is not None and self.time_s - self._landed_at >= self.cfg.land_disarm_delay_s:
             self.armed = False
             self.guidance.hold()
-            logger.info("Multicopter landed: disarmed")
+            self._event("Disarmed by landing")
         elif not self._flown_since_arm and self.time_s - self._armed_at >= self.cfg.preflight_disarm_s:
             self.armed = False
-            logger.info("Multicopter never took off: auto-disarmed")
+            self._event("Disarmed: no takeoff after arming")
 
     def _step_unpowered(self, dt: float) -> None:
         self.tilt_acc[:] = 0.0

@@ -18,7 +18,7 @@ from controllers.sim.physics import Multicopter
 M = mavlink
 DEFAULT_RATES_HZ: dict[int, float] = {
     M.MAVLINK_MSG_ID_HEARTBEAT: 1.0,
-    M.MAVLINK_MSG_ID_SYS_STATUS: 2.0,
+    M.MAVLINK_MSG_ID_SYS_STATUS: 5.0,
     M.MAVLINK_MSG_ID_EXTENDED_SYS_STATE: 5.0,
     M.MAVLINK_MSG_ID_ATTITUDE: 50.0,
     M.MAVLINK_MSG_ID_ATTITUDE_QUATERNION: 50.0,
@@ -30,6 +30,8 @@ DEFAULT_RATES_HZ: dict[int, float] = {
     M.MAVLINK_MSG_ID_VFR_HUD: 4.0,
 }
 """Streamed at boot, in Hz."""
+_SLACK_S = 0.005
+"""A message due this close to the current tick goes now, so 50 Hz streams survive tick jitter."""
 
 _SENSORS = (
     M.MAV_SYS_STATUS_SENSOR_3D_GYRO
@@ -125,8 +127,9 @@ class TelemetryStreams:
         """Messages whose time has come; at most one of each per call."""
         out = []
         for mid, interval in self._interval.items():
-            if self._next.get(mid, 0.0) <= now_s:
-                self._next[mid] = max(self._next.get(mid, 0.0) + interval, now_s - interval)
+            if self._next.get(mid, 0.0) <= now_s + _SLACK_S:
+                planned = self._next.get(mid, 0.0) + interval
+                self._next[mid] = planned if planned > now_s else now_s + interval
                 out.append(self._builders[mid]())
         return out
 
@@ -213,9 +216,7 @@ class TelemetryStreams:
 
     def local_position_ned(self) -> mavlink.MAVLink_message:
         pos, vel, _ = self._nav()
-        return self.enc.local_position_ned_encode(
-            self.boot_ms(), *(float(x) for x in pos), *(float(x) for x in vel)
-        )
+        return self.enc.local_position_ned_encode(self.boot_ms(), *(float(x) for x in pos), *(float(x) for x in vel))
 
     def gps_raw_int(self) -> mavlink.MAVLink_message:
         v = self.v

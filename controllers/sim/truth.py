@@ -39,7 +39,7 @@ class TruthClient:
         self._thread = threading.Thread(target=self._read, name=f"truth-client:{port}", daemon=True)
         self._thread.start()
         if subscribe:
-            self._send({"cmd": "subscribe"})
+            self._send({"cmd": "subscribe", "id": next(self._ids)})  # an id keeps the answer out of latest()
 
     def latest(self) -> dict[str, Any] | None:
         """The newest truth datagram received, or None before the first."""
@@ -88,7 +88,7 @@ class TruthClient:
         """Unsubscribe and stop the reader thread; idempotent."""
         if self._closed.is_set():
             return
-        self._send({"cmd": "unsubscribe"})
+        self._send({"cmd": "unsubscribe", "id": next(self._ids)})
         self._closed.set()
         self._thread.join(timeout=1.0)
         self._sock.close()
@@ -112,11 +112,13 @@ class TruthClient:
                 msg = json.loads(data)
             except (TimeoutError, OSError, ValueError):
                 continue
+            if not isinstance(msg, dict):
+                continue
             with self._cond:
-                if "id" in msg:
+                if "ok" not in msg:
+                    self._latest = msg
+                elif "id" in msg:
                     self._replies[msg["id"]] = msg
                     if len(self._replies) > 64:
                         self._replies.pop(next(iter(self._replies)))
-                else:
-                    self._latest = msg
                 self._cond.notify_all()

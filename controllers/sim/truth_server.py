@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
 import logging
 import math
@@ -31,6 +32,7 @@ def truth_dict(v: Multicopter, server: SimVehicleServer) -> dict[str, Any]:
     return {
         "t_mono_ns": time.monotonic_ns(),
         "t_wall_ns": time.time_ns(),
+        "time_boot_ms": server.streams.boot_ms(),
         "n": n,
         "e": e,
         "d": d,
@@ -75,6 +77,10 @@ class TruthServer:
         self._subscribers: dict[tuple[str, int], None] = {}
         self._sub_lock = threading.Lock()
 
+    @property
+    def has_subscribers(self) -> bool:
+        return bool(self._subscribers)
+
     def snapshot(self) -> dict[str, Any]:
         """Truth now (the caller holds the server lock)."""
         return truth_dict(self.s.vehicle, self.s)
@@ -97,6 +103,8 @@ class TruthServer:
             try:
                 data, addr = self.sock.recvfrom(65535)
             except (TimeoutError, OSError):
+                continue
+            if not data:
                 continue
             request: Any = None
             try:
@@ -150,6 +158,11 @@ class TruthServer:
                     "more": more,
                 }
         return {"ok": False, "error": f"unknown cmd {cmd!r}"}
+
+    def wake(self) -> None:
+        """Unblock :meth:`serve` waiting for a request."""
+        with contextlib.suppress(OSError):
+            self.sock.sendto(b"", self.sock.getsockname())
 
     def close(self) -> None:
         self.sock.close()

@@ -4,6 +4,7 @@ supervision (PX4's setpoint-stream rule and loss failsafe) and the ground-truth 
 from __future__ import annotations
 
 import logging
+import os
 import threading
 import time
 from collections import deque
@@ -36,6 +37,8 @@ class ServerConfig:
     offboard_loss_timeout_s: float = 1.0
     offboard_stream_window_s: float = 0.5
     failsafe_land_after_s: float = 10.0
+    parent_pid: int | None = None
+    """Exit when this process is no longer our parent (the launcher died without stopping us)."""
     physics: PhysicsConfig = field(default_factory=PhysicsConfig)
 
 
@@ -56,6 +59,9 @@ class SimVehicleServer:
         self.setpoint_log: deque[SetpointRecord] = deque(maxlen=20_000)
         self.failsafe_since_ns: int | None = None
         self._stop = threading.Event()
+        self._peers: set[tuple[int, int]] = set()
+        self._shown: tuple[Mode, bool] | None = None
+        """(mode, armed) in the last tick: a change is announced by an extra HEARTBEAT at once."""
 
     # ------------------------------------------------------------- offboard
     def setpoint_fresh(self, now_ns: int | None = None) -> bool:
@@ -98,11 +104,13 @@ class SimVehicleServer:
             self.commands.on_command(msg)
         elif kind in ("PARAM_REQUEST_READ", "PARAM_REQUEST_LIST", "PARAM_SET"):
             self.commands.on_param(msg)
+        elif kind == "HEARTBEAT" and (msg.get_srcSystem(), msg.get_srcComponent()) not in self._peers:
+            # greet a new ground station at once instead of making it wait up to a second
+            self._peers.add((msg.get_srcSystem(), msg.get_srcComponent()))
+            self.link.send(self.streams.heartbeat())
         elif kind == "PING" and msg.target_system == 0:
             enc = self.link.encoder
-            self.link.send(
-                enc.ping_encode(msg.time_usec, msg.seq, msg.get_srcSystem(), msg.get_srcComponent())
-            )
+            self.link.send(enc.ping_encode(msg.time_usec, msg.seq, msg.get_srcSystem(), msg.get_srcComponent()))
         elif kind not in ("HEARTBEAT", "TIMESYNC", "SYSTEM_TIME"):
             logger.debug("SimVehicle: ignoring %s", kind)
 
@@ -152,20 +160,37 @@ class SimVehicleServer:
                     steps += 1
                 if next_tick <= now:
                     next_tick = now + dt
-                with self.lock:
-                    self._supervise_offboard(time.monotonic_ns())
-                    due = self.streams.due(now)
-                    truth = self.truth.snapshot()
-                for msg in due:
-                    self.link.send(msg)
-                self.truth.publish(truth)
+                self._publish(now)
+                if self.cfg.parent_pid is not None and os.getppid() != self.cfg.parent_pid:
+                    logger.warning("SimVehicle: parent process %d is gone; exiting", self.cfg.parent_pid)
+                    break
                 self._stop.wait(max(0.0, next_tick - time.monotonic()))
         finally:
             self._stop.set()
+            self.link.wake()
+            self.truth.wake()
             for t in threads:
                 t.join(timeout=1.0)
             self.link.close()
             self.truth.close()
+
+    def _publish(self, now: float) -> None:
+        """Once per tick: failsafes, announcements, due telemetry, the truth datagram."""
+        with self.lock:
+            self._supervise_offboard(time.monotonic_ns())
+            for text in self.vehicle.events:
+                self.status_text(mavlink.MAV_SEVERITY_INFO, text)
+            self.vehicle.events.clear()
+            due = self.streams.due(now)
+            shown = (self.vehicle.mode, self.vehicle.armed)
+            if shown != self._shown and not any(m.get_msgId() == mavlink.MAVLINK_MSG_ID_HEARTBEAT for m in due):
+                due.append(self.streams.heartbeat())
+            self._shown = shown
+            truth = self.truth.snapshot() if self.truth.has_subscribers else None
+        for msg in due:
+            self.link.send(msg)
+        if truth is not None:
+            self.truth.publish(truth)
 
     def describe(self) -> str:
         h = self.cfg.home

@@ -1,0 +1,70 @@
+"""Ultralytics-exported ONNX detector (YOLOv8/v11 head) run with ONNX Runtime, no PyTorch."""
+
+from __future__ import annotations
+
+import ast
+import logging
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from processors.detection import Detection, DetectorConfig
+from processors.detection.postprocess import COCO_NAMES, letterbox, select
+
+logger = logging.getLogger(__name__)
+
+
+def decode(output: np.ndarray, n_classes: int) -> tuple[np.ndarray, np.ndarray]:
+    """Split an Ultralytics head output into boxes and scores.
+
+    Args:
+        output: (1, 4 + n_classes, N) - or its transpose (1, N, 4 + n_classes) - with rows
+            cx, cy, w, h (input pixels) then one score per class (no objectness).
+        n_classes: number of classes.
+
+    Returns:
+        (N x 4 centres cx, cy, w, h in input pixels, N x n_classes scores).
+    """
+    out = output[0]
+    if out.shape[0] != 4 + n_classes:
+        out = out.T
+    if out.shape[0] != 4 + n_classes:
+        raise ValueError(f"ONNX output shape {output.shape} does not fit 4 + {n_classes} classes")
+    return out[:4].T, out[4:].T
+
+
+class OnnxBackend:
+    """ONNX Runtime session on a model exported with ``yolo export format=onnx``.
+
+    Input: letterboxed RGB, 0..1, NCHW; class names from the model's ``names`` metadata (written by
+    Ultralytics), else COCO's.
+    """
+
+    def __init__(self, path: Path, config: DetectorConfig) -> None:
+        try:
+            import onnxruntime as ort
+        except ImportError as exc:
+            raise ImportError("the .onnx backend needs onnxruntime: pip install 'uav-tui[onnx]'") from exc
+        self.session = ort.InferenceSession(str(path), providers=["CPUExecutionProvider"])
+        inp = self.session.get_inputs()[0]
+        self.input_name = inp.name
+        h, w = inp.shape[2:4]
+        fixed = isinstance(h, int) and isinstance(w, int)
+        if config.input_size and fixed and (h, w) != (config.input_size,) * 2:
+            logger.warning("OnnxBackend(%s): model input is fixed at %dx%d, input_size ignored", path.name, w, h)
+        self.size = (w, h) if fixed else (config.input_size or 640,) * 2
+        meta = self.session.get_modelmeta().custom_metadata_map
+        names = ast.literal_eval(meta["names"]) if "names" in meta else None
+        self.names = [names[i] for i in sorted(names)] if isinstance(names, dict) else list(COCO_NAMES)
+        self.config = config
+        logger.info("OnnxBackend(%s): input %dx%d, %d classes", path.name, *self.size, len(self.names))
+
+    def detect(self, frame: np.ndarray) -> list[Detection]:
+        """Letterbox, run, decode, undo the letterbox, filter and NMS."""
+        img, lb = letterbox(frame, self.size)
+        blob = cv2.cvtColor(img, cv2.COLOR_BGR2RGB).transpose(2, 0, 1)[None].astype(np.float32) / 255.0
+        (output,) = self.session.run(None, {self.input_name: blob})[:1]
+        centres, scores = decode(output, len(self.names))
+        centres = lb.to_frame(centres)  # cx, cy scale like x, y; w, h by the gain
+        return select(centres, scores, self.config, self.names, (frame.shape[1], frame.shape[0]))

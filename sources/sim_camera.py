@@ -1,0 +1,111 @@
+"""``sim:`` — a camera rendered from the simulated vehicle's pose.
+
+The platform passes ``pose_provider``: a callable returning the vehicle's latest truth datagram
+(``{"n", "e", "d", "roll", "pitch", "yaw"}``, metres NED and degrees) or None before the first one.
+Closing the loop through vision: the processor's vectors move the simulated vehicle, which moves
+the image. This module knows nothing about the vehicle beyond that callable.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Callable, Mapping
+from typing import Any
+
+import numpy as np
+
+from sources.base import CaptureSource
+from sources.ground import default_ground
+from sources.pacing import Pacer
+from sources.sim_geometry import PinholeCamera, Pose
+from sources.sim_render import SimRenderer, default_targets
+from sources.uri import SourceUri
+from uav_tui.errors import SourceUriError
+
+logger = logging.getLogger(__name__)
+
+PoseProvider = Callable[[], Mapping[str, Any] | None]
+"""Returns the vehicle's latest pose datagram, or None when there is none yet."""
+
+MOUNT_TILT_DEG = {"down": 90.0, "forward": 0.0}
+"""Camera tilt below the vehicle's nose for each named mount; ``tilt=`` overrides it."""
+
+
+class SimCameraSource(CaptureSource):
+    """A pinhole camera over a textured ground, at the pose ``pose_provider`` reports.
+
+    URI: ``sim:[?width=640&height=480&fps=30&hfov=62&mount=down|forward&tilt=DEG&targets=N
+    &target_speed=1.0&noise=2&seed=0]``. Without a pose (no provider, or no datagram yet) it renders
+    a hover at 10 m over the origin, so the pipeline always has frames.
+    """
+
+    kind = "sim"
+
+    def __init__(self, uri: str = "sim:", *, camera: PinholeCamera | None = None, fps: float = 30.0,
+                 targets: int = 0, target_speed: float = 1.0, noise: float = 2.0, seed: int = 0,
+                 pose_provider: PoseProvider | None = None) -> None:
+        self.camera = camera or PinholeCamera()
+        super().__init__(uri, f"pinhole {self.camera.hfov_deg:g} deg, tilt {self.camera.tilt_deg:g} deg")
+        self.width, self.height, self.fps = self.camera.width, self.camera.height, fps
+        self.targets = default_targets(targets, target_speed)
+        self.noise, self.seed = noise, seed
+        self.pose_provider = pose_provider
+        self.pose = Pose()
+        self.pose_from_vehicle = False
+        self.renderer: SimRenderer | None = None
+        self._pacer: Pacer | None = None
+        self._t0 = 0.0
+        self._t = 0.0
+        self._index = 0
+
+    @classmethod
+    def from_uri(cls, uri: SourceUri, *, pose_provider: PoseProvider | None = None,
+                 **_context: Any) -> SimCameraSource:
+        mount = uri.take_str("mount", "down") or "down"
+        if mount not in MOUNT_TILT_DEG:
+            raise SourceUriError(f"camera URI {uri.text!r}: mount={mount!r} must be down or forward", key="source")
+        hfov = uri.take_float("hfov", 62.0) or 62.0
+        if not 1 <= hfov <= 170:
+            raise SourceUriError(f"camera URI {uri.text!r}: hfov={hfov:g} must be 1..170 degrees", key="source")
+        camera = PinholeCamera(uri.take_int("width", 640) or 640, uri.take_int("height", 480) or 480, hfov,
+                               uri.take_float("tilt", MOUNT_TILT_DEG[mount]) or 0.0)
+        source = cls(uri.text, camera=camera, fps=uri.take_float("fps", 30.0) or 30.0,
+                     targets=uri.take_int("targets", 0) or 0, target_speed=uri.take_float("target_speed", 1.0) or 0.0,
+                     noise=uri.take_float("noise", 2.0) or 0.0, seed=uri.take_int("seed", 0) or 0,
+                     pose_provider=pose_provider)
+        uri.finish()
+        return source
+
+    def _open_device(self) -> None:
+        self._pacer = Pacer(self.fps, self._stop)
+        self._t0 = time.monotonic()
+
+    def _grab(self) -> np.ndarray | None:
+        assert self._pacer is not None
+        if self.renderer is None:  # built here, on the capture thread: the first ground texture takes ~1.5 s
+            self.renderer = SimRenderer(self.camera, default_ground(self.seed), self.targets, self.noise, self.seed)
+        if not self._pacer.wait():
+            return None
+        self.pose, self.pose_from_vehicle = self._current_pose()
+        self._t = time.monotonic() - self._t0
+        image = self.renderer.render(self.pose, self._t, self._index)
+        self._index += 1
+        return image
+
+    def _current_pose(self) -> tuple[Pose, bool]:
+        if self.pose_provider is None:
+            return Pose(), False
+        try:
+            values = self.pose_provider()
+        except Exception as exc:  # noqa: BLE001 - a broken provider must not stop the camera
+            self._fail(f"pose provider failed: {exc}")
+            return self.pose, self.pose_from_vehicle
+        return (Pose.from_mapping(dict(values)), True) if values else (Pose(), False)
+
+    def _extra_properties(self) -> dict[str, Any]:
+        p = self.pose
+        positions = [dict(zip(("n", "e"), target.position(self._t)[:2], strict=True)) for target in self.targets]
+        return {"hfov": self.camera.hfov_deg, "tilt": self.camera.tilt_deg, "targets": positions,
+                "pose": {"n": p.n, "e": p.e, "d": p.d, "roll": p.roll, "pitch": p.pitch, "yaw": p.yaw},
+                "pose_source": "vehicle" if self.pose_from_vehicle else "default hover at 10 m (no pose yet)"}

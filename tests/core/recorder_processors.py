@@ -1,0 +1,44 @@
+"""Processors used by the recorder tests (loaded by spec: ``tests.core.recorder_processors:Class``)."""
+
+import numpy as np
+
+
+class SaveEveryFifth:
+    """Saves every 5th frame with a counter, a label and a small list, then draws on the frame."""
+
+    def __init__(self):
+        self.tmMgr = None
+        self.count = 0
+
+    def photo_processing(self, frame):
+        self.count += 1
+        if self.count % 5 == 0:
+            self.tmMgr.save(frame, n=self.count, label=f"f{self.count}", box=[1, 2, 3, 4],
+                            mean=np.float32(frame[::8, ::8].mean()))
+            frame[:40, :40] = 255  # drawn after saving: must not reach the saved image
+
+
+class SaveEveryFrame:
+    """Saves every frame (the recording benchmark and the pressure test)."""
+
+    def __init__(self):
+        self.tmMgr = None
+        self.count = 0
+
+    def photo_processing(self, frame):
+        self.count += 1
+        self.tmMgr.save(frame, n=self.count)
+
+
+class SavesInCatchCmd:
+    """Calls tmMgr.save from catch_cmd, where there is no frame being processed."""
+
+    def __init__(self):
+        self.tmMgr = None
+        self.frame = None
+
+    def photo_processing(self, frame):
+        self.frame = frame
+
+    def catch_cmd(self, roi):
+        self.tmMgr.save(self.frame, roi=list(roi))

@@ -1,0 +1,115 @@
+"""Telemetry at a frame's capture time, and frames held back until telemetry brackets them."""
+
+from __future__ import annotations
+
+import pytest
+
+from controllers.base import Telemetry
+from uav_tui.recording.interpolate import FIELDS, TelemetryHistory
+from uav_tui.recording.rows import FRAME_COLUMNS, FrameAligner, FrameRecord, TelemetrySample
+
+MS = 1_000_000
+
+
+def _history(*samples: tuple[int, dict]) -> TelemetryHistory:
+    history = TelemetryHistory()
+    for t_ms, values in samples:
+        history.add(Telemetry(**values), t_ms * MS)
+    return history
+
+
+def test_continuous_fields_are_linear_between_their_own_samples():
+    history = _history((0, {"north_m": 0.0, "roll_deg": 0.0}), (100, {"north_m": 1.0, "roll_deg": 0.0}),
+                       (150, {"north_m": 1.0, "roll_deg": 10.0}), (200, {"north_m": 3.0, "roll_deg": 10.0}))
+    values, how = history.at(50 * MS)
+    assert how == "interpolated"
+    assert values["north_m"] == pytest.approx(0.5)
+    # north changed at 100 and 200; the snapshot at 150 only repeated it: 175 is 3/4 of the way.
+    assert history.at(175 * MS)[0]["north_m"] == pytest.approx(2.5)
+    # roll changed at 0 and 150 only (the snapshot at 100 repeated it).
+    assert history.at(120 * MS)[0]["roll_deg"] == pytest.approx(8.0)
+
+
+def test_angles_take_the_short_way_round_in_the_autopilots_convention():
+    history = _history((0, {"yaw_deg": 170.0}), (100, {"yaw_deg": -170.0}))
+    assert history.at(25 * MS)[0]["yaw_deg"] == pytest.approx(175.0)
+    assert history.at(75 * MS)[0]["yaw_deg"] == pytest.approx(-175.0)
+    history = _history((0, {"yaw_deg": 350.0}), (100, {"yaw_deg": 10.0}))
+    assert history.at(75 * MS)[0]["yaw_deg"] == pytest.approx(5.0)
+    assert history.at(25 * MS)[0]["yaw_deg"] == pytest.approx(355.0)
+
+
+def test_discrete_fields_come_from_the_nearest_snapshot():
+    history = _history((0, {"flight_mode": "HOLD", "armed": False, "satellites": 9}),
+                       (100, {"flight_mode": "OFFBOARD", "armed": True, "satellites": 10}))
+    assert history.at(40 * MS)[0]["flight_mode"] == "HOLD"
+    values = history.at(60 * MS)[0]
+    assert (values["flight_mode"], values["armed"], values["satellites"]) == ("OFFBOARD", True, 10)
+
+
+def test_outside_the_samples_values_are_held_and_labelled():
+    history = _history((100, {"north_m": 1.0, "fc_boot_ms": 1000}), (200, {"north_m": 2.0, "fc_boot_ms": 1100}))
+    assert history.at(50 * MS) == ({**dict.fromkeys(FIELDS), "north_m": 1.0, "fc_boot_ms": 1000}, "before")
+    values, how = history.at(300 * MS)
+    assert (values["north_m"], how) == (2.0, "held")
+    assert history.at(150 * MS)[0]["fc_boot_ms"] == 1050
+    assert TelemetryHistory().at(0) == (dict.fromkeys(FIELDS), "none")
+
+
+def test_covers_waits_for_every_changing_field_but_not_for_constant_ones():
+    history = _history((0, {"north_m": 0.0, "roll_deg": 0.0}), (100, {"north_m": 1.0, "roll_deg": 1.0}))
+    assert history.covers(50 * MS) and not history.covers(150 * MS)
+    history.add(Telemetry(north_m=1.0, roll_deg=4.0), 120 * MS)
+    assert not history.covers(110 * MS)  # north has not changed since 100
+    history.add(Telemetry(north_m=1.5, roll_deg=4.0), 200 * MS)
+    assert history.covers(110 * MS)
+    for t in range(300, 800, 100):  # roll stays at 4.0 from 120 on: after 300 ms it counts as constant
+        history.add(Telemetry(north_m=t / 100, roll_deg=4.0), t * MS)
+    assert history.covers(650 * MS)
+    assert not history.covers(750 * MS)  # nothing arrived after it yet
+    history.add(Telemetry(north_m=9.0, roll_deg=4.0), 800 * MS)
+    assert history.covers(750 * MS)
+
+
+def test_history_forgets_old_samples_but_keeps_one_before_the_window():
+    history = TelemetryHistory(keep_ns=1000 * MS)
+    for t in range(0, 5000, 100):
+        history.add(Telemetry(north_m=float(t)), t * MS)
+    assert len(history) <= 12
+    assert history.at(4200 * MS)[0]["north_m"] == pytest.approx(4200.0)
+
+
+def _record(frame_id: int, t_ms: int) -> FrameRecord:
+    own = len(FRAME_COLUMNS) - len(FIELDS) - 1
+    return FrameRecord([frame_id, *[None] * (own - 1)], t_ms * MS)
+
+
+def test_aligner_holds_frames_until_telemetry_after_capture_arrives():
+    aligner = FrameAligner(hold_ns=500 * MS, min_hold_ns=0)
+    assert list(aligner.handle(TelemetrySample(Telemetry(north_m=0.0), 0))) != []
+    aligner.handle(_record(1, 50))
+    assert aligner.due(60 * MS) == []
+    aligner.handle(TelemetrySample(Telemetry(north_m=1.0), 100 * MS))
+    rows = aligner.due(110 * MS)
+    assert [r.values[0] for r in rows] == [1]
+    row = dict(zip(FRAME_COLUMNS, rows[0].values, strict=True))
+    assert (row["north_m"], row["telemetry"]) == (pytest.approx(0.5), "interpolated")
+
+
+def test_aligner_gives_up_waiting_after_hold_and_holds_the_newest_values():
+    aligner = FrameAligner(hold_ns=500 * MS, min_hold_ns=0)
+    aligner.handle(TelemetrySample(Telemetry(north_m=2.0), 0))
+    aligner.handle(_record(1, 100))
+    aligner.handle(_record(2, 300))
+    assert aligner.due(599 * MS) == []
+    assert [r.values[0] for r in aligner.due(600 * MS)] == [1]
+    row = dict(zip(FRAME_COLUMNS, aligner.drain()[0].values, strict=True))
+    assert (row["frame_id"], row["north_m"], row["telemetry"]) == (2, 2.0, "held")
+
+
+def test_without_a_flight_controller_frames_wait_only_the_minimum():
+    aligner = FrameAligner(min_hold_ns=200 * MS, telemetry_expected=False)
+    aligner.handle(_record(1, 0))
+    assert aligner.due(199 * MS) == []
+    row = dict(zip(FRAME_COLUMNS, aligner.due(200 * MS)[0].values, strict=True))
+    assert row["telemetry"] == "none" and row["north_m"] is None

@@ -1,0 +1,140 @@
+"""The safety rules of ARCHITECTURE.md, each enforced by the platform, on the simulated vehicle.
+
+Every test flies through a real UavCore, real MAVSDK and the simulator process; ground truth and
+the setpoints as they arrived come from the simulator's truth channel.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import re
+import time
+from pathlib import Path
+
+from tests.core.flight_helpers import flying_core, speed, wait_until
+
+MAX_T = 1.5
+
+
+async def test_rule1_nan_vector_rejected_counted_and_never_flown(tmp_path: Path) -> None:
+    async with flying_core(tmp_path) as core:
+        await core.execute("f 4")
+        await core.execute("autonomy on")
+        await wait_until(lambda: core.gate.rejected >= 5, 10, "rejected vectors")
+        assert core.status().vectors_rejected >= 5 and core.gate.executed == 0
+        assert core.gate.last_decision.startswith("rejected: non-finite")
+        assert not core.controller.vector_active
+        assert speed(core.truth.latest()) < 0.1
+        assert any("non-finite" in e.message for e in core.events.recent)
+
+
+async def test_rule1_speed_and_duration_are_clamped(tmp_path: Path) -> None:
+    async with flying_core(tmp_path, max_speed=0.5, max_t=MAX_T) as core:
+        since = time.monotonic_ns()
+        await core.execute("vector 3 0 9")
+        await wait_until(lambda: not core.controller.vector_active, MAX_T + 3, "the vector to end")
+        records = core.truth.request({"cmd": "setpoints", "since_mono_ns": since})["records"]
+        moving = [r for r in records if abs(r["vx"]) > 1e-6]
+        assert moving and max(abs(r["vx"]) for r in moving) <= 0.5 + 1e-6
+        assert (moving[-1]["t_mono_ns"] - moving[0]["t_mono_ns"]) / 1e9 <= MAX_T + 0.15
+
+
+async def test_rule2_vectors_fly_only_when_enabled_and_airborne(tmp_path: Path) -> None:
+    async with flying_core(tmp_path) as core:
+        await core.execute("f 1")
+        await asyncio.sleep(1.0)
+        assert core.gate.executed == 0 and core.gate.last_decision == "not executed: autonomy off"
+        assert speed(core.truth.latest()) < 0.1
+        await core.execute("autonomy on")
+        await wait_until(lambda: speed(core.truth.latest()) > 0.4, 10, "the vehicle to fly the vectors")
+        assert core.gate.executed > 0 and core.status().last_decision == "executed"
+        north_before = core.truth.latest()["n"]
+        await asyncio.sleep(1.0)
+        assert core.truth.latest()["n"] > north_before + 0.3  # forward = north: the vehicle faces north
+
+
+async def test_rule2_not_in_the_air_means_no_vector(tmp_path: Path) -> None:
+    async with flying_core(tmp_path) as core:
+        await core.execute("land")
+        await wait_until(lambda: not core.telemetry.snapshot().in_air, 20, "landing")
+        await core.execute("f 1")
+        await core.execute("autonomy on")
+        await wait_until(lambda: "not executed" in core.gate.last_decision, 5, "a decision")
+        assert core.gate.last_decision in ("not executed: vehicle not in the air", "not executed: vehicle not armed")
+        assert core.gate.executed == 0
+
+
+async def test_rule3_and_4_hung_processor_cannot_keep_the_vehicle_flying(tmp_path: Path) -> None:
+    async with flying_core(tmp_path, max_t=MAX_T) as core:
+        await core.execute("f 1")
+        await core.execute("autonomy on")
+        await wait_until(lambda: speed(core.truth.latest()) > 0.4, 10, "flying the vectors")
+        hang_started = time.monotonic_ns()
+        await core.execute("f 2")  # the next photo_processing sleeps for 30 s
+        await wait_until(lambda: speed(core.truth.latest()) < 0.15, MAX_T + 1.5, "the vehicle to stop")
+        stopped_after = (time.monotonic_ns() - hang_started) / 1e9
+        records = core.truth.request({"cmd": "setpoints", "since_mono_ns": hang_started})["records"]
+        last_moving = max((r["t_mono_ns"] for r in records if abs(r["vx"]) > 1e-6), default=hang_started)
+        # MAVSDK must not keep re-sending the last setpoint: moving setpoints end within max_t.
+        assert (last_moving - hang_started) / 1e9 <= MAX_T + 0.3
+        assert stopped_after <= MAX_T + 1.5
+        await wait_until(lambda: not core.gate.enabled, 2, "the watchdog to stop autonomy")
+        assert "processor stalled" in core.status().autonomy_stop_reason
+        await wait_until(lambda: core.truth.latest()["mode"] == "HOLD", 3, "hold")
+
+
+async def test_rule4_repeated_processor_exceptions_stop_autonomy(tmp_path: Path) -> None:
+    async with flying_core(tmp_path, max_processor_errors=3) as core:
+        await core.execute("f 1")
+        await core.execute("autonomy on")
+        await wait_until(lambda: core.controller.vector_active, 10, "a running vector")
+        await core.execute("f 3")
+        await wait_until(lambda: not core.gate.enabled, 5, "autonomy to stop")
+        reason = core.status().autonomy_stop_reason
+        assert re.search(r"processor raised (\d+) times in a row", reason) and int(reason.split()[2]) >= 3
+        assert "simulated algorithm failure" in (core.status().processor_error or "")
+        await wait_until(lambda: core.truth.latest()["mode"] == "HOLD" and speed(core.truth.latest()) < 0.15, 5,
+                         "zero and hold")
+
+
+async def test_rule4_camera_stall_stops_autonomy(tmp_path: Path) -> None:
+    async with flying_core(tmp_path) as core:
+        await core.execute("f 1")
+        await core.execute("autonomy on")
+        await wait_until(lambda: core.controller.vector_active, 10, "a running vector")
+        await asyncio.get_running_loop().run_in_executor(None, core.source.close)  # the camera stops delivering
+        await wait_until(lambda: not core.gate.enabled, 3, "autonomy to stop")
+        assert "camera stalled" in core.status().autonomy_stop_reason
+        await wait_until(lambda: core.truth.latest()["mode"] == "HOLD", 3, "hold")
+
+
+async def test_rule4_link_loss_stops_autonomy(tmp_path: Path) -> None:
+    async with flying_core(tmp_path, link_timeout=1.0) as core:
+        await core.execute("f 1")
+        await core.execute("autonomy on")
+        await wait_until(lambda: core.controller.vector_active, 10, "a running vector")
+        sim = core.controller.sim
+        import os
+        import signal
+
+        os.kill(sim.pid, signal.SIGSTOP)  # the autopilot goes silent
+        try:
+            await wait_until(lambda: not core.gate.enabled, 4, "autonomy to stop")
+        finally:
+            os.kill(sim.pid, signal.SIGCONT)
+        assert "link lost" in core.status().autonomy_stop_reason
+
+
+async def test_rule5_operator_command_preempts_autonomy_at_once(tmp_path: Path) -> None:
+    async with flying_core(tmp_path) as core:
+        await core.execute("f 1")
+        await core.execute("autonomy on")
+        await wait_until(lambda: speed(core.truth.latest()) > 0.4, 10, "flying the vectors")
+        await core.execute("hold", origin="tui")
+        assert not core.gate.enabled
+        executed = core.gate.executed
+        await wait_until(lambda: core.truth.latest()["mode"] == "HOLD" and speed(core.truth.latest()) < 0.15, 5,
+                         "hold")
+        await asyncio.sleep(0.5)
+        assert core.gate.executed == executed  # nothing flew after the operator's command
+        assert any("pre-empted by operator command 'hold'" in e.message for e in core.events.recent)

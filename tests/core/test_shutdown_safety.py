@@ -1,0 +1,75 @@
+"""Safety rule 6: SIGTERM / SIGHUP hold the vehicle before uav-tui exits; after SIGKILL the autopilot's
+offboard-loss failsafe holds it. uav-tui runs as a real process; the simulator outlives it."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from controllers.sim.launcher import SimVehicle
+from tests.core.flight_helpers import STEERING_PROCESSOR, speed
+
+ROOT = Path(__file__).resolve().parents[2]
+SCRIPT = "arm\ntakeoff 3\nwait 6\nf 1\nautonomy on\nwait 120\n"
+
+
+def wait_for(condition, timeout: float, what: str) -> None:
+    deadline = time.monotonic() + timeout
+    while not condition():
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out after {timeout} s waiting for {what}")
+        time.sleep(0.05)
+
+
+@pytest.fixture
+def flying_uav(tmp_path: Path, sim_vehicle: SimVehicle):
+    """uav-tui flying the simulator under autonomy (the test processor streams forward vectors)."""
+    (tmp_path / "steering.py").write_text(STEERING_PROCESSOR)
+    (tmp_path / "flight.txt").write_text(SCRIPT)
+    process = subprocess.Popen(
+        [sys.executable, "-m", "uav_tui", "--no-ui", "--fc", sim_vehicle.connection_string, "--source",
+         "synthetic:?width=160&height=120", "--processor", "steering.py:Steering", "--script", "flight.txt",
+         "--no-record"],
+        cwd=tmp_path, env={**os.environ, "PYTHONPATH": str(ROOT)}, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+        text=True)
+    truth = sim_vehicle.truth()
+    try:
+        wait_for(lambda: (s := truth.latest()) is not None and s["mode"] == "OFFBOARD" and speed(s) > 0.3, 40,
+                 "uav-tui to fly a vector")
+        yield process, truth
+    finally:
+        process.kill()
+        process.communicate()
+        truth.close()
+
+
+@pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGHUP], ids=["SIGTERM", "SIGHUP"])
+def test_signal_during_a_vector_holds_before_exit(flying_uav, signum: int) -> None:
+    process, truth = flying_uav
+    process.send_signal(signum)
+    out, _ = process.communicate(timeout=20)
+    exited = time.monotonic_ns()
+    assert process.returncode == 0, out
+    assert "vehicle put in hold before exit" in out
+    state = truth.wait_latest()
+    assert state["mode"] == "HOLD"  # held by uav-tui itself, before it exited
+    wait_for(lambda: speed(truth.latest()) < 0.15, 3, "the vehicle to stop")
+    time.sleep(0.5)
+    late = truth.request({"cmd": "setpoints", "since_mono_ns": exited})["records"]
+    assert late == []  # nothing it started keeps streaming setpoints
+
+
+def test_sigkill_leaves_the_autopilot_failsafe_to_hold(flying_uav) -> None:
+    process, truth = flying_uav
+    process.send_signal(signal.SIGKILL)
+    process.communicate(timeout=10)
+    killed = time.monotonic()
+    wait_for(lambda: truth.latest()["mode"] == "HOLD", 3, "the simulator's offboard-loss failsafe")
+    assert time.monotonic() - killed < 3
+    wait_for(lambda: speed(truth.latest()) < 0.15, 3, "the vehicle to stop")

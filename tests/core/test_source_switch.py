@@ -1,0 +1,39 @@
+"""Switching the camera at run time keeps the processor, the flight-controller link and the flight going."""
+
+from __future__ import annotations
+
+import asyncio
+from pathlib import Path
+
+import pytest
+
+from tests.core.flight_helpers import flying_core, wait_until
+from uav_tui.errors import SourceError
+
+
+async def test_switching_sources_keeps_processor_and_link(tmp_path: Path) -> None:
+    async with flying_core(tmp_path) as core:
+        processor = core.worker.processor.instance
+        controller = core.controller
+        await core.execute("f 1")  # the steering processor now streams vectors (autonomy stays off)
+        for uri in ("sim:?width=320&height=240", "synthetic:?width=200&height=100&seed=3"):
+            processed = core.worker.stats.frames_processed
+            message = await core.execute(f"source {uri}")
+            assert uri in message
+            await wait_until(lambda p=processed: core.worker.stats.frames_processed > p + 10, 5, f"frames from {uri}")
+            assert core.status().source_uri == uri
+            assert core.worker.last.frame.image.shape[:2] == tuple(reversed(core.source.get_frame_size()))
+        assert core.worker.processor.instance is processor and processor.mode == "fly"
+        assert core.controller is controller and controller.heartbeat_age_s() < 1.0
+        assert core.telemetry.snapshot().in_air and core.truth.latest()["mode"] == "HOLD"
+
+
+async def test_a_source_that_fails_to_open_leaves_the_old_one_running(tmp_path: Path) -> None:
+    async with flying_core(tmp_path) as core:
+        old = core.source
+        with pytest.raises(SourceError, match="no such video file"):
+            await core.execute(f"source file:{tmp_path / 'missing.mp4'}")
+        assert core.source is old
+        processed = core.worker.stats.frames_processed
+        await asyncio.sleep(0.5)
+        assert core.worker.stats.frames_processed > processed

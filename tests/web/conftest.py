@@ -1,0 +1,69 @@
+"""Fixtures for the web page tests: a core on loopback with the page on, a recording processor."""
+
+from __future__ import annotations
+
+import socket
+import threading
+from collections.abc import AsyncIterator
+from typing import Any
+
+import cv2
+import pytest
+
+from uav_tui.config import load_config
+from uav_tui.core import UavCore
+
+TOKEN = "test-token-0123456789"
+
+
+class RecordingProcessor:
+    """Draws a marker (the overlay) on every frame and records the operator's calls."""
+
+    def __init__(self) -> None:
+        self.tmMgr = None
+        self.rois: list[tuple[int, int, int, int]] = []
+        self.buttons: list[int] = []
+        self.frames = 0
+        self._lock = threading.Lock()
+
+    def photo_processing(self, frame: Any) -> None:
+        self.frames += 1
+        cv2.rectangle(frame, (20, 20), (140, 60), (0, 255, 255), -1)
+        cv2.putText(frame, f"#{self.frames}", (26, 52), cv2.FONT_HERSHEY_SIMPLEX, 0.9, (0, 0, 0), 2)
+
+    def catch_cmd(self, roi: tuple[int, int, int, int]) -> None:
+        with self._lock:
+            self.rois.append(roi)
+
+    def customize_processing(self, id: int) -> None:  # noqa: A002 - the published name
+        with self._lock:
+            self.buttons.append(id)
+
+
+def free_port(kind: int = socket.SOCK_STREAM) -> int:
+    with socket.socket(socket.AF_INET, kind) as probe:
+        probe.bind(("127.0.0.1", 0))
+        return probe.getsockname()[1]
+
+
+def make_core(**overrides: Any) -> UavCore:
+    settings = {"source": "synthetic:", "fc": "none", "processor": "tests.web.conftest:RecordingProcessor",
+                "record": False, "web": True, "web_host": "127.0.0.1", "web_port": free_port(),
+                "web_token": TOKEN, **overrides}
+    return UavCore(load_config(None, settings))
+
+
+@pytest.fixture
+async def web_core() -> AsyncIterator[UavCore]:
+    """A running core (synthetic camera, no vehicle) serving the page on 127.0.0.1."""
+    core = make_core()
+    await core.start()
+    try:
+        yield core
+    finally:
+        await core.stop("test finished")
+
+
+def processor_of(core: UavCore) -> RecordingProcessor:
+    assert core.worker is not None
+    return core.worker.processor.instance

@@ -1,0 +1,113 @@
+"""Ground-station click-to-track: MAVLink camera track commands sent with pymavlink -> catch_cmd."""
+
+from __future__ import annotations
+
+import asyncio
+import socket
+from collections.abc import AsyncIterator
+from typing import Any
+
+import pytest
+from pymavlink.dialects.v20 import common as mavlink
+
+from tests.web.conftest import free_port, make_core, processor_of
+from uav_tui.core import UavCore
+from uav_tui.errors import ConfigError
+from uav_tui.web.mavlink_tracking import parse_endpoint
+
+
+class GroundStation:
+    """A minimal MAVLink 2 ground station on a non-blocking UDP socket (system 255)."""
+
+    def __init__(self, port: int) -> None:
+        self.address = ("127.0.0.1", port)
+        self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        self.sock.setblocking(False)
+        self.sock.bind(("127.0.0.1", 0))
+        self.mav = mavlink.MAVLink(None, srcSystem=255, srcComponent=190)
+
+    async def command(self, command: int, *params: float, target: tuple[int, int] = (1, 100)) -> None:
+        params = (*params, *[0.0] * (7 - len(params)))
+        message = self.mav.command_long_encode(*target, command, 0, *params)
+        await asyncio.get_running_loop().sock_sendto(self.sock, message.pack(self.mav), self.address)
+
+    async def receive(self, kind: str, timeout: float = 5.0, **match: Any) -> Any:
+        loop = asyncio.get_running_loop()
+        async with asyncio.timeout(timeout):
+            while True:
+                data, _ = await loop.sock_recvfrom(self.sock, 4096)
+                for message in self.mav.parse_buffer(data) or []:
+                    if message.get_type() == kind and all(getattr(message, k) == v for k, v in match.items()):
+                        return message
+
+
+@pytest.fixture
+async def tracking() -> AsyncIterator[tuple[UavCore, GroundStation]]:
+    port = free_port(socket.SOCK_DGRAM)
+    core = make_core(web=False, camera_mavlink=f"udpin:127.0.0.1:{port}")
+    await core.start()
+    station = GroundStation(port)
+    try:
+        yield core, station
+    finally:
+        station.sock.close()
+        await core.stop("test finished")
+
+
+async def test_track_rectangle_and_point_reach_catch_cmd(tracking: tuple[UavCore, GroundStation]) -> None:
+    core, station = tracking
+    processor = processor_of(core)
+    await station.command(mavlink.MAV_CMD_CAMERA_TRACK_RECTANGLE, 0.25, 0.3, 0.55, 0.7)
+    ack = await station.receive("COMMAND_ACK", command=mavlink.MAV_CMD_CAMERA_TRACK_RECTANGLE)
+    assert ack.result == mavlink.MAV_RESULT_ACCEPTED and ack.target_system == 255
+    assert processor.rois == [(160, 144, 192, 192)]
+    status = await station.receive("CAMERA_TRACKING_IMAGE_STATUS",
+                                   tracking_mode=mavlink.CAMERA_TRACKING_MODE_RECTANGLE)
+    assert status.tracking_status == mavlink.CAMERA_TRACKING_STATUS_FLAGS_ACTIVE
+    assert (status.rec_top_x, status.rec_top_y, status.rec_bottom_x, status.rec_bottom_y) == pytest.approx(
+        (0.25, 0.3, 0.55, 0.7), abs=0.01)
+
+    await station.command(mavlink.MAV_CMD_CAMERA_TRACK_POINT, 0.5, 0.5, 0.05)
+    ack = await station.receive("COMMAND_ACK", command=mavlink.MAV_CMD_CAMERA_TRACK_POINT)
+    assert ack.result == mavlink.MAV_RESULT_ACCEPTED
+    assert processor.rois[-1] == (288, 208, 64, 64)
+    origins = {e.origin for e in core.events.recent if e.kind == "command" and e.message.startswith("roi")}
+    assert origins == {"mavlink:255/190"}
+
+    await station.command(mavlink.MAV_CMD_CAMERA_STOP_TRACKING)
+    ack = await station.receive("COMMAND_ACK", command=mavlink.MAV_CMD_CAMERA_STOP_TRACKING)
+    assert ack.result == mavlink.MAV_RESULT_ACCEPTED
+    await station.receive("CAMERA_TRACKING_IMAGE_STATUS", tracking_status=mavlink.CAMERA_TRACKING_STATUS_FLAGS_IDLE)
+
+
+async def test_bad_and_unknown_commands_are_refused(tracking: tuple[UavCore, GroundStation]) -> None:
+    core, station = tracking
+    await station.command(mavlink.MAV_CMD_CAMERA_TRACK_RECTANGLE, 0.2, 0.2, 1.5, 0.4)
+    ack = await station.receive("COMMAND_ACK", command=mavlink.MAV_CMD_CAMERA_TRACK_RECTANGLE)
+    assert ack.result == mavlink.MAV_RESULT_DENIED
+    await station.command(mavlink.MAV_CMD_DO_SET_MODE, 1, 4)
+    ack = await station.receive("COMMAND_ACK", command=mavlink.MAV_CMD_DO_SET_MODE)
+    assert ack.result == mavlink.MAV_RESULT_UNSUPPORTED
+    # addressed to another component: not ours to answer or execute
+    await station.command(mavlink.MAV_CMD_CAMERA_TRACK_POINT, 0.5, 0.5, 0, target=(1, 1))
+    with pytest.raises(TimeoutError):
+        await station.receive("COMMAND_ACK", timeout=0.5, command=mavlink.MAV_CMD_CAMERA_TRACK_POINT)
+    assert processor_of(core).rois == []
+    assert any("rejected" in e.message for e in core.events.recent if e.level == "warning")
+
+
+async def test_announces_itself_as_a_tracking_camera(tracking: tuple[UavCore, GroundStation]) -> None:
+    _, station = tracking
+    await station.command(mavlink.MAV_CMD_REQUEST_MESSAGE, mavlink.MAVLINK_MSG_ID_CAMERA_INFORMATION)
+    info = await station.receive("CAMERA_INFORMATION")
+    assert info.flags & mavlink.CAMERA_CAP_FLAGS_HAS_TRACKING_POINT
+    assert info.flags & mavlink.CAMERA_CAP_FLAGS_HAS_TRACKING_RECTANGLE
+    assert (info.resolution_h, info.resolution_v) == (640, 480)
+    heartbeat = await station.receive("HEARTBEAT")
+    assert heartbeat.type == mavlink.MAV_TYPE_CAMERA and heartbeat.get_srcComponent() == mavlink.MAV_COMP_ID_CAMERA
+
+
+@pytest.mark.parametrize("address", ["serial:/dev/ttyS0", "udpin:14580", "udpin:0.0.0.0:port", "tcp:host:5760"])
+def test_bad_endpoints_say_what_is_expected(address: str) -> None:
+    with pytest.raises(ConfigError, match="udpin:HOST:PORT"):
+        parse_endpoint(address)

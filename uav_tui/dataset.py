@@ -1,0 +1,128 @@
+"""Load a recorded run into pandas: ``uav_tui.dataset.load("runs/2026-05-01T10-00-00Z")``.
+
+Example::
+
+    from uav_tui import dataset
+
+    run = dataset.load("runs/2026-05-01T10-00-00Z")
+    run.frames[["frame_id", "north_m", "east_m", "roll_deg", "brightness"]]
+    run.telemetry.plot(x="east_m", y="north_m")
+    saved = run.frames[run.frames.saved]          # rows whose image is in run.path / saved.image
+
+Every table is indexed by capture / receive time (a UTC ``DatetimeIndex`` named ``time``, from the
+wall clock) and has ``t_s``, seconds since the run started on the monotonic clock (use it to compare
+rows: the wall clock may be stepped by NTP). Nanosecond columns are ``Int64``, flags ``boolean``,
+text ``string``; the ``tmMgr.save`` extras of ``frames.csv`` become one column each.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from uav_tui.errors import UavError
+from uav_tui.recording.interpolate import CONTINUOUS, DISCRETE
+from uav_tui.recording.rows import EVENT_COLUMNS, FRAME_OWN_COLUMNS, TELEMETRY_COLUMNS
+
+_TEXT = ("flight_mode", "gps_fix", "decision", "error", "image", "extra", "telemetry", "level", "kind", "origin",
+         "message")
+_FLAGS = ("armed", "in_air", "health_ok", "saved")
+_INTEGERS = ("fc_boot_ms", "satellites", "frame_id", "seq")
+
+
+@dataclass(frozen=True)
+class Dataset:
+    """One recorded run."""
+
+    path: Path
+    info: dict[str, Any]
+    """run.json: configuration, versions, source/processor/controller, start and end."""
+    telemetry: pd.DataFrame
+    """One row per telemetry update (columns: :data:`uav_tui.recording.TELEMETRY_COLUMNS`)."""
+    frames: pd.DataFrame
+    """One row per processed frame, with the telemetry interpolated to its capture time."""
+    events: pd.DataFrame
+    """Operator commands, autonomy decisions, warnings and errors."""
+
+    @property
+    def extra_columns(self) -> list[str]:
+        """The frames columns that came from ``tmMgr.save(frame, **extra)``."""
+        return list(self.info.get("extra_columns", []))
+
+
+def load(run_dir: str | Path) -> Dataset:
+    """Read a run folder (``runs/<UTC start>``) written by the recorder.
+
+    Raises:
+        UavError: ``run_dir`` is not a run folder.
+    """
+    path = Path(run_dir).expanduser()
+    if not (path / "run.json").is_file():
+        raise UavError(f"{path} is not a recorded run (no run.json); `uav-tui runs` lists the runs")
+    info = json.loads((path / "run.json").read_text())
+    telemetry = _read(path / "telemetry.csv", TELEMETRY_COLUMNS)
+    frames = _read(path / "frames.csv", FRAME_OWN_COLUMNS + CONTINUOUS + DISCRETE)
+    events = _read(path / "events.csv", EVENT_COLUMNS)
+    frames, extra_columns = _expand_extra(frames)
+    starts = [t for t in (info.get("start_mono_ns"),) if t] or [
+        int(df["t_mono_ns"].min()) for df in (telemetry, frames, events) if df["t_mono_ns"].notna().any()]
+    start_mono = min(starts) if starts else 0
+    info = {**info, "extra_columns": extra_columns}
+    return Dataset(path, info, *(_index(df, start_mono) for df in (telemetry, frames, events)))
+
+
+def _read(csv_path: Path, columns: tuple[str, ...]) -> pd.DataFrame:
+    dtypes = {name: _dtype(name) for name in columns}
+    if not csv_path.is_file():
+        return pd.DataFrame({name: pd.Series(dtype=dtype) for name, dtype in dtypes.items()})
+    return pd.read_csv(csv_path, dtype=dtypes, keep_default_na=False, na_values=[""])
+
+
+def _dtype(name: str) -> str:
+    if name.startswith("t_") and name.endswith("_ns"):
+        return "Int64"
+    if name in _INTEGERS:
+        return "Int64"
+    if name in _FLAGS:
+        return "boolean"
+    if name in _TEXT:
+        return "string"
+    return "float64"
+
+
+def _expand_extra(frames: pd.DataFrame) -> tuple[pd.DataFrame, list[str]]:
+    """One column per ``tmMgr.save`` extra; names that clash with recorder columns get ``extra_``."""
+    parsed = [json.loads(text) if isinstance(text, str) and text else {} for text in frames["extra"]]
+    keys = list(dict.fromkeys(key for fields in parsed for key in fields))
+    if not keys:
+        return frames, []
+    names = {key: f"extra_{key}" if key in frames.columns else key for key in keys}
+    table = pd.DataFrame([{names[k]: v for k, v in fields.items()} for fields in parsed], index=frames.index,
+                         columns=list(names.values()), dtype=object)
+    table = table.apply(_best_dtype)
+    return pd.concat([frames, table], axis=1), list(names.values())
+
+
+def _best_dtype(column: pd.Series) -> pd.Series:
+    values = column.dropna()
+    if values.map(lambda v: isinstance(v, bool)).all() and len(values):
+        return column.astype("boolean")
+    if values.map(lambda v: isinstance(v, int) and not isinstance(v, bool)).all():
+        return column.astype("Int64")
+    if values.map(lambda v: isinstance(v, int | float) and not isinstance(v, bool)).all():
+        return pd.to_numeric(column).astype("float64")
+    if values.map(lambda v: isinstance(v, str)).all():
+        return column.astype("string")
+    return column  # lists and mixed values stay Python objects
+
+
+def _index(table: pd.DataFrame, start_mono_ns: int) -> pd.DataFrame:
+    table = table.copy()
+    table.insert(0, "t_s", (table["t_mono_ns"].astype("float64") - start_mono_ns) / 1e9)
+    wall = table["t_wall_ns"].fillna(0).to_numpy(dtype="int64")
+    table.index = pd.DatetimeIndex(pd.to_datetime(wall, unit="ns", utc=True), name="time")
+    return table

@@ -1,0 +1,220 @@
+"""The Recorder: joins a running core to the disk writer, one folder per run.
+
+Threads: ``save`` runs on the processor thread (it is ``tmMgr.saver``); ``on_frame``,
+``on_telemetry``, ``on_event`` and ``snapshot`` on the event loop; all of them only queue work. The
+writer thread encodes, interpolates and writes. ``open`` and ``close`` block: run them in an executor.
+
+Frame ids count processed frames from 1 for the whole run, in processing order, so they stay unique
+when the camera is switched (a new source's ``seq`` starts at 1 again). An id is given on the loop
+when the frame's result arrives; ``tmMgr.save`` runs earlier, on the processor thread, so its image is
+written under a provisional name in ``.pending/`` and renamed to ``frames/<id>.jpg`` by the writer
+thread once the id is known (the writer handles items in order: image, rename, row).
+"""
+
+from __future__ import annotations
+
+import itertools
+import logging
+import shutil
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from controllers.base import Telemetry
+from uav_tui.config import RecordingConfig
+from uav_tui.errors import UavError
+from uav_tui.events import Event
+from uav_tui.recording.rows import (
+    TABLES,
+    FrameAligner,
+    MarkSaved,
+    TelemetrySample,
+    event_row,
+    extra_json,
+    frame_record,
+    image_name,
+)
+from uav_tui.recording.run_info import new_run_dir, write_json
+from uav_tui.recording.writer import MB, DiskWriter, Rename
+from uav_tui.worker import ProcessedFrame
+
+if TYPE_CHECKING:
+    from uav_tui.core import UavCore
+
+logger = logging.getLogger(__name__)
+
+PENDING = ".pending"
+"""Run sub-folder for images saved before their frame id was known."""
+
+
+@dataclass(slots=True)
+class _Save:
+    result: ProcessedFrame
+    pending: str = ""
+    """Provisional image name (``.pending/<n>.jpg``), empty when the image was dropped."""
+    extra: dict[str, Any] = field(default_factory=dict)
+
+
+class Recorder:
+    """Writes one run: ``telemetry.csv``, ``frames.csv``, ``frames/<id>.jpg``, ``events.csv``, ``run.json``.
+
+    Args:
+        run_dir: the run folder (created by :meth:`open`).
+        config: the recording section of the configuration.
+        info: what ``run.json`` says about the run (config, versions, source, processor, controller).
+        telemetry_expected: False without a flight controller: frame rows need not wait for telemetry.
+        writer_factory: builds the writer (default :class:`DiskWriter`; tests pass a throttled one).
+    """
+
+    def __init__(self, run_dir: Path, config: RecordingConfig, info: dict[str, Any], *,
+                 telemetry_expected: bool, writer_factory: Callable[..., DiskWriter] | None = None) -> None:
+        self.run_dir = run_dir
+        self.config = config
+        self.info = info
+        self.frames = 0
+        """Processed frames seen (rows queued)."""
+        self.misplaced_saves = 0
+        """``tmMgr.save`` calls made outside ``photo_processing`` (ignored)."""
+        self._emit: Callable[[str, str], None] = lambda level, message: None
+        self._current: Callable[[], ProcessedFrame | None] = lambda: None
+        self._ids = itertools.count(1)
+        self._provisional = itertools.count(1)
+        self._saves: dict[int, _Save] = {}
+        self._last: tuple[ProcessedFrame, int] | None = None
+        self.writer = (writer_factory or DiskWriter)(
+            run_dir, TABLES, stage=FrameAligner(telemetry_expected=telemetry_expected, run_dir=run_dir),
+            jpeg_quality=config.jpeg_quality, max_disk_bytes=int(config.max_disk_mb * MB),
+            min_free_bytes=int(config.min_free_mb * MB), on_problem=self._problem)
+
+    @classmethod
+    def open(cls, config: RecordingConfig, info: dict[str, Any], *, telemetry_expected: bool,
+             started_wall_ns: int | None = None, **kwargs: Any) -> Recorder:
+        """Create ``runs_dir/<UTC start>/`` with its ``run.json`` and start the writer thread. Blocks.
+
+        Raises:
+            UavError: the folder cannot be created (says which and what to do).
+        """
+        started = started_wall_ns or time.time_ns()
+        try:
+            run_dir = new_run_dir(Path(config.runs_dir).expanduser().resolve(), started)
+            (run_dir / "frames").mkdir()
+            (run_dir / PENDING).mkdir()
+            info = {**info, "start_wall_ns": started, "start_mono_ns": time.monotonic_ns()}
+            recorder = cls(run_dir, config, info, telemetry_expected=telemetry_expected, **kwargs)
+            write_json(run_dir / "run.json", recorder.info)
+        except OSError as exc:
+            raise UavError(f"cannot create the run folder under {config.runs_dir}: {exc.strerror or exc}; "
+                           "choose another with --runs-dir, or run with --no-record") from exc
+        recorder.writer.start()
+        logger.info("Recorder(%s): recording", run_dir)
+        return recorder
+
+    def attach(self, core: UavCore) -> None:
+        """Become the core's ``tmMgr`` saver and listen to its frames, telemetry and events."""
+        self._emit = lambda level, message: core.events.emit(level, "recorder", message)  # type: ignore[arg-type]
+        # Only while a frame is being processed (busy) does ``current`` belong to the calling processor.
+        self._current = lambda: core.worker.current if core.worker is not None and core.worker.busy_s > 0 else None
+        core.telemetry.saver = self.save
+        core.telemetry.add_listener(self.on_telemetry)
+        for event in core.events.recent:  # what happened before the recorder existed (e.g. a source warning)
+            self.on_event(event)
+        core.events.add_listener(self.on_event)
+        core.add_frame_listener(self.on_frame)
+
+    # -- processor thread ------------------------------------------------------------------------
+
+    def save(self, image: Any, extra: dict[str, Any]) -> None:
+        """``tmMgr.save(frame, **extra)``: queue the image and put ``extra`` in its frame's row.
+
+        The pixels are copied here: the processor may go on drawing on its array (or reuse it for
+        the next frame) while the writer thread encodes, and a copy (~0.3 ms for 640x480) costs far
+        less than encoding on this thread would.
+        """
+        result = self._current()
+        if result is None:
+            self.misplaced_saves += 1
+            if self.misplaced_saves == 1:
+                self._emit("warning", "tmMgr.save() called outside photo_processing(): ignored (it stores "
+                                      "the frame being processed)")
+            return
+        image = getattr(image, "image", image)  # a sources Frame is fine too
+        if not isinstance(image, np.ndarray) or image.ndim not in (2, 3):
+            raise TypeError(f"tmMgr.save(frame, **extra): frame must be an image array, got {type(image).__name__}")
+        entry = self._saves.get(id(result))
+        if entry is None or entry.result is not result:
+            entry = self._saves[id(result)] = _Save(result)
+        entry.extra.update(extra)
+        result.extra.update(extra)
+        name = entry.pending or f"{PENDING}/{next(self._provisional)}.jpg"
+        if self.writer.put_image(name, image, copy=True):
+            entry.pending = name
+            result.saved = True
+
+    # -- event loop ------------------------------------------------------------------------------
+
+    def on_frame(self, result: ProcessedFrame) -> None:
+        """Queue the frame's row (and every Nth frame's image when ``record_every`` is set)."""
+        frame_id = next(self._ids)
+        name = image_name(frame_id)
+        entry = self._saves.pop(id(result), None)
+        if entry is not None and entry.result is result:
+            extra = extra_json(entry.extra)
+            image = name if entry.pending and self.writer.put(Rename(entry.pending, name)) else ""
+        else:
+            extra, image = "", ""
+            every = self.config.record_every
+            # The processor is done with this array and sources hand out a new one per capture: no copy.
+            if every and frame_id % every == 0 and self.writer.put_image(name, result.frame.image):
+                image = name
+        self.frames += 1
+        self._last = (result, frame_id)
+        self.writer.put(frame_record(result, frame_id, image, extra))
+
+    def on_telemetry(self, telemetry: Telemetry) -> None:
+        t_mono = telemetry.t_mono_ns or time.monotonic_ns()
+        self.writer.put(TelemetrySample(telemetry, t_mono))
+
+    def on_event(self, event: Event) -> None:
+        self.writer.put(event_row(event))
+
+    def snapshot(self) -> str:
+        """Save the newest processed frame's image into the run; returns what was saved.
+
+        Raises:
+            UavError: no frame was processed yet, or the frame was dropped (says why).
+        """
+        if self._last is None:
+            raise UavError("snapshot: no frame has been processed yet")
+        result, frame_id = self._last
+        name = image_name(frame_id)
+        if not self.writer.put_image(name, result.frame.image, copy=True):
+            reason = self.writer.image_refused() or "the recorder queue is full"
+            raise UavError(f"snapshot of frame {frame_id} not saved: {reason}")
+        self.writer.put(MarkSaved(frame_id, name))
+        return f"frame {frame_id} saved as {self.run_dir / name}"
+
+    def status(self) -> dict[str, Any]:
+        """For ``CoreStatus.recording``: run folder, frames, images saved, rows written, drops."""
+        writer = self.writer
+        return {"run_dir": str(self.run_dir), "frames": self.frames, "frames_saved": writer.images_written,
+                "rows_written": dict(writer.rows_written), "bytes": writer.bytes_written,
+                "dropped": writer.dropped_total, "drops": dict(writer.dropped)}
+
+    def close(self, end: dict[str, Any] | None = None) -> None:
+        """Write everything queued, then finish ``run.json`` with the end time and counts. Blocks."""
+        self.writer.close()
+        # Images of frames whose results never arrived (in flight at the stop) have no row: drop them.
+        shutil.rmtree(self.run_dir / PENDING, ignore_errors=True)
+        self.info.update(end or {}, end_wall_ns=time.time_ns(), recording=self.status())
+        try:
+            write_json(self.run_dir / "run.json", self.info)
+        except OSError as exc:
+            logger.error("Recorder(%s): cannot finish run.json: %s", self.run_dir, exc)
+
+    def _problem(self, reason: str, message: str) -> None:
+        logger.warning("Recorder(%s): %s", self.run_dir, message)
+        self._emit("error" if reason in ("disk_full", "write_error") else "warning", message)

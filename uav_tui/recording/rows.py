@@ -1,0 +1,183 @@
+"""The three CSV tables: their columns, their rows, and frames held back until telemetry brackets them."""
+
+from __future__ import annotations
+
+import json
+import math
+from collections import deque
+from collections.abc import Iterable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from controllers.base import TELEMETRY_FIELDS, Telemetry
+from uav_tui.events import Event
+from uav_tui.recording.interpolate import FIELDS, TelemetryHistory
+from uav_tui.recording.writer import Row
+from uav_tui.worker import ProcessedFrame
+
+TELEMETRY_COLUMNS: tuple[str, ...] = TELEMETRY_FIELDS
+"""telemetry.csv: one row per telemetry update; ``t_mono_ns``/``t_wall_ns`` are when it was received."""
+
+EVENT_COLUMNS: tuple[str, ...] = ("t_wall_ns", "t_mono_ns", "level", "kind", "origin", "message")
+"""events.csv: one row per :class:`uav_tui.events.Event`."""
+
+FRAME_OWN_COLUMNS: tuple[str, ...] = (
+    "frame_id", "seq", "t_wall_ns", "t_mono_ns", "t_start_ns", "t_end_ns", "t_vector_ns", "vx", "vy", "vt",
+    "decision", "error", "saved", "image", "extra", "telemetry",
+)
+"""frames.csv, the frame's own part: ids, capture times (wall + monotonic ns), processing stage times
+(monotonic ns), the vector, the autonomy decision, the last line of an exception, whether and where
+the image was saved, the ``tmMgr.save`` extras as JSON, and how the telemetry columns were obtained
+(``interpolated``, ``held``, ``before``, ``none``; see :meth:`TelemetryHistory.at`)."""
+
+FRAME_COLUMNS: tuple[str, ...] = FRAME_OWN_COLUMNS + FIELDS
+"""frames.csv: the frame's own columns, then the telemetry interpolated to the capture time."""
+
+_SAVED = FRAME_OWN_COLUMNS.index("saved")  # followed by "image"
+
+TABLES: dict[str, tuple[str, ...]] = {"telemetry": TELEMETRY_COLUMNS, "frames": FRAME_COLUMNS, "events": EVENT_COLUMNS}
+
+
+def image_name(frame_id: int) -> str:
+    """Where frame ``frame_id``'s image goes, relative to the run folder."""
+    return f"frames/{frame_id:06d}.jpg"
+
+
+@dataclass(slots=True)
+class FrameRecord:
+    """A frame's own columns, waiting on the writer thread for the telemetry around its capture."""
+
+    values: list[Any]
+    t_mono_ns: int
+
+    @property
+    def frame_id(self) -> int:
+        return self.values[0]
+
+
+@dataclass(slots=True)
+class TelemetrySample:
+    """One telemetry snapshot and the monotonic time it was received."""
+
+    telemetry: Telemetry
+    t_mono_ns: int
+
+
+@dataclass(slots=True)
+class MarkSaved:
+    """Frame ``frame_id``'s image was saved after its row was built (the ``snapshot`` command)."""
+
+    frame_id: int
+    image: str
+
+
+def frame_record(result: ProcessedFrame, frame_id: int, image: str, extra_json: str) -> FrameRecord:
+    """The own columns of a processed frame (:data:`FRAME_OWN_COLUMNS` minus ``telemetry``)."""
+    frame = result.frame
+    vx, vy, vt = _vector(result.vector)
+    error = result.error.strip().splitlines()[-1] if result.error else ""
+    values = [frame_id, frame.seq, frame.t_wall_ns, frame.t_mono_ns, result.t_start_ns, result.t_end_ns,
+              result.t_vector_ns or None, vx, vy, vt, result.decision, error, bool(image), image, extra_json]
+    return FrameRecord(values, frame.t_mono_ns)
+
+
+def event_row(event: Event) -> Row:
+    return Row("events", [event.t_wall_ns, event.t_mono_ns, event.level, event.kind, event.origin, event.message])
+
+
+def telemetry_row(sample: TelemetrySample) -> Row:
+    return Row("telemetry", [getattr(sample.telemetry, name) for name in TELEMETRY_FIELDS])
+
+
+def extra_json(extra: dict[str, Any]) -> str:
+    """``tmMgr.save`` extras as one JSON object (NumPy scalars and small arrays become numbers and lists)."""
+    return json.dumps(extra, default=_plain, allow_nan=True) if extra else ""
+
+
+def _plain(value: Any) -> Any:
+    if isinstance(value, np.generic | np.ndarray):
+        return value.tolist()
+    if isinstance(value, set | frozenset | tuple):
+        return list(value)
+    return str(value)
+
+
+def _vector(vector: Any) -> tuple[float | None, float | None, float | None]:
+    """The three numbers of a vector if it is one (the gate judges it; the row just records it)."""
+    try:
+        vx, vy, vt = (float(v) for v in vector)
+    except (TypeError, ValueError):
+        return None, None, None
+    return vx, vy, vt
+
+
+class FrameAligner:
+    """Writer-thread stage: telemetry rows go out at once, frame rows once telemetry brackets them.
+
+    A frame waits until every continuous telemetry field has a sample after its capture time, or
+    ``hold_ns`` has passed since capture (then the newest values are held), so it is interpolated,
+    not extrapolated. Every frame waits at least ``min_hold_ns``, so a ``snapshot`` of the newest
+    frame still finds its row and marks it saved.
+
+    A row's ``saved`` says whether its image file is on disk when the row is written (images are
+    queued before their rows, so a frame dropped by a full disk or the size cap is not claimed).
+
+    Args:
+        hold_ns: longest wait for telemetry after a capture.
+        min_hold_ns: shortest wait.
+        telemetry_expected: False with ``--fc none``: frames wait only ``min_hold_ns``.
+        run_dir: where image names point (None: do not check the files).
+    """
+
+    def __init__(self, hold_ns: int = 500_000_000, min_hold_ns: int = 200_000_000,
+                 telemetry_expected: bool = True, run_dir: Path | None = None) -> None:
+        self.hold_ns = hold_ns
+        self.min_hold_ns = min_hold_ns
+        self.run_dir = run_dir
+        self.telemetry_expected = telemetry_expected
+        self.history = TelemetryHistory()
+        self._waiting: deque[FrameRecord] = deque()
+
+    def handle(self, item: Any) -> Iterable[Row]:
+        if isinstance(item, TelemetrySample):
+            self.history.add(item.telemetry, item.t_mono_ns)
+            return [telemetry_row(item)]
+        if isinstance(item, FrameRecord):
+            self._waiting.append(item)
+        elif isinstance(item, MarkSaved):
+            for record in self._waiting:
+                if record.frame_id == item.frame_id:
+                    record.values[_SAVED:_SAVED + 2] = [True, item.image]
+        else:
+            raise TypeError(f"FrameAligner cannot handle {type(item).__name__}")
+        return []
+
+    def due(self, now_ns: int) -> Iterable[Row]:
+        rows = []
+        while self._waiting:
+            record = self._waiting[0]
+            age = now_ns - record.t_mono_ns
+            if age < self.min_hold_ns or (age < self.hold_ns and self.telemetry_expected
+                                          and not self.history.covers(record.t_mono_ns)):
+                break
+            rows.append(self._row(self._waiting.popleft()))
+        return rows
+
+    def drain(self) -> Iterable[Row]:
+        rows = [self._row(record) for record in self._waiting]
+        self._waiting.clear()
+        return rows
+
+    def _row(self, record: FrameRecord) -> Row:
+        image = record.values[_SAVED + 1]
+        if image and self.run_dir is not None and not (self.run_dir / image).is_file():
+            record.values[_SAVED:_SAVED + 2] = [False, ""]
+        values, how = self.history.at(record.t_mono_ns)
+        return Row("frames", [*record.values, how, *(_finite(values[name]) for name in FIELDS)])
+
+
+def _finite(value: Any) -> Any:
+    return None if isinstance(value, float) and not math.isfinite(value) else value

@@ -1,0 +1,77 @@
+"""``run.json``: where a run's folder is and what the run was (configuration, versions, parts)."""
+
+from __future__ import annotations
+
+import dataclasses
+import datetime
+import json
+import os
+import platform
+from importlib import metadata
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from uav_tui.core import UavCore
+
+RUN_NAME_FORMAT = "%Y-%m-%dT%H-%M-%SZ"
+"""Run folders are named after their UTC start, sortable, without ':' (FAT/exFAT sticks cannot hold it)."""
+
+_PACKAGES = ("uav-tui", "numpy", "opencv-contrib-python-headless", "mavsdk", "textual", "pandas")
+
+
+def utc_text(wall_ns: int) -> str:
+    """ISO 8601 UTC, second resolution."""
+    return datetime.datetime.fromtimestamp(wall_ns / 1e9, datetime.UTC).isoformat(timespec="seconds")
+
+
+def new_run_dir(runs_dir: Path, started_wall_ns: int) -> Path:
+    """Create and return ``runs_dir/<UTC start>`` (with ``-2``, ``-3`` ... when that exists already)."""
+    runs_dir.mkdir(parents=True, exist_ok=True)
+    name = datetime.datetime.fromtimestamp(started_wall_ns / 1e9, datetime.UTC).strftime(RUN_NAME_FORMAT)
+    for n in range(1, 1000):
+        path = runs_dir / (name if n == 1 else f"{name}-{n}")
+        try:
+            path.mkdir()
+        except FileExistsError:
+            continue
+        return path
+    raise FileExistsError(f"{runs_dir / name} and 999 numbered variants exist")
+
+
+def describe(core: UavCore) -> dict[str, Any]:
+    """What ``run.json`` says about a started core's run."""
+    source = core.source.get_properties() if core.source is not None else {}
+    processor = core.worker.processor if core.worker is not None else None
+    return {
+        "start_utc": utc_text(core.started_wall_ns),
+        "config": dataclasses.asdict(core.config),
+        "versions": versions(),
+        "source": {"uri": core.config.source, **{k: _plain(v) for k, v in source.items()}},
+        "processor": {} if processor is None else {
+            "name": processor.info.name, "spec": processor.spec, "path": processor.info.path,
+            "capabilities": sorted(processor.info.capabilities), "kwargs": _plain(processor.kwargs)},
+        "controller": {"fc": core.config.fc, "description": getattr(core.controller, "description", "none")},
+    }
+
+
+def versions() -> dict[str, str]:
+    """Python, platform and the versions of the packages that shape a run's data."""
+    found = {"python": platform.python_version(), "platform": platform.platform()}
+    for package in _PACKAGES:
+        try:
+            found[package] = metadata.version(package)
+        except metadata.PackageNotFoundError:
+            continue
+    return found
+
+
+def write_json(path: Path, data: dict[str, Any]) -> None:
+    """Replace ``path`` atomically (a reader never sees half a file)."""
+    temporary = path.with_name(path.name + ".tmp")
+    temporary.write_text(json.dumps(data, indent=2, default=str) + "\n")
+    os.replace(temporary, path)
+
+
+def _plain(value: Any) -> Any:
+    return json.loads(json.dumps(value, default=str))

@@ -1,0 +1,347 @@
+"""The disk writer: one thread behind a bounded queue; nothing that feeds it ever waits for the disk.
+
+Items are CSV rows (:class:`Row`), JPEG frames (queued with :meth:`DiskWriter.put_image`), renames
+of written files (:class:`Rename`) or anything a :class:`Stage` understands (the stage runs on the
+writer thread and turns items into rows). Items are handled in the order they were queued. When
+the queue is full, the disk is full, the run folder reached its size cap or the disk its free-space
+floor, the item is dropped and counted, and the first drop of each kind is reported once through
+``on_problem``.
+
+CSV files only ever receive whole lines: rows are collected in memory and appended every
+``flush_s`` with one ``write`` per file; a failed or short write is cut back to the last whole line.
+A process killed with SIGKILL therefore leaves valid CSV up to its last flush. JPEGs are written to a
+temporary name and renamed, so a frame file is either complete or absent.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import csv
+import errno
+import io
+import logging
+import os
+import queue
+import shutil
+import threading
+import time
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Protocol
+
+import cv2
+import numpy as np
+
+logger = logging.getLogger(__name__)
+
+MB = 1024 * 1024
+
+_IDLE = object()
+
+
+@dataclass(slots=True)
+class Row:
+    """One CSV row for ``table`` (a file ``<table>.csv``), values in the table's column order."""
+
+    table: str
+    values: list[Any]
+
+
+@dataclass(slots=True)
+class Rename:
+    """Move ``source`` to ``target`` (paths relative to the run folder) if ``source`` was written."""
+
+    source: str
+    target: str
+
+
+@dataclass(slots=True)
+class _Image:
+    name: str
+    image: np.ndarray
+
+
+class Stage(Protocol):
+    """Turns queued items into rows on the writer thread (e.g. frames waiting for telemetry)."""
+
+    def handle(self, item: Any) -> Iterable[Row]:
+        """Rows that ``item`` produces at once."""
+        ...
+
+    def due(self, now_ns: int) -> Iterable[Row]:
+        """Rows that became ready by ``now_ns`` (monotonic)."""
+        ...
+
+    def drain(self) -> Iterable[Row]:
+        """Everything still held back (the run ends)."""
+        ...
+
+
+PROBLEMS = {
+    "queue_full": "the recorder cannot keep up with the disk: items are being dropped",
+    "disk_full": "the disk is full: items are being dropped (rows already written are intact)",
+    "disk_cap": "the run folder reached max_disk_mb: frames are no longer saved",
+    "min_free": "free disk space is below min_free_mb: frames are no longer saved",
+    "write_error": "a write failed",
+}
+"""Drop reason -> what the operator is told the first time it happens."""
+
+
+class DiskWriter:
+    """Writes CSV tables and JPEG frames into ``run_dir`` from one named daemon thread.
+
+    Args:
+        run_dir: the run folder (exists).
+        tables: table name -> column names (the header written when the file is created).
+        stage: optional item -> rows converter run on the writer thread.
+        jpeg_quality: 10..100.
+        max_disk_bytes: stop saving frames once this much was written (0: no cap).
+        min_free_bytes: stop saving frames when the disk has less free space.
+        on_problem: ``on_problem(reason, message)``, called once per drop reason, from any thread.
+        max_items: queue length.
+        max_image_bytes: image bytes allowed to wait in the queue at once.
+        flush_s: how often collected rows are appended to the files.
+    """
+
+    def __init__(self, run_dir: Path, tables: dict[str, Sequence[str]], *, stage: Stage | None = None,
+                 jpeg_quality: int = 90, max_disk_bytes: int = 0, min_free_bytes: int = 0,
+                 on_problem: Callable[[str, str], None] | None = None, max_items: int = 4096,
+                 max_image_bytes: int = 48 * MB, flush_s: float = 0.5) -> None:
+        self.run_dir = Path(run_dir)
+        self.tables = {name: list(columns) for name, columns in tables.items()}
+        self.stage = stage
+        self.jpeg_quality = jpeg_quality
+        self.max_disk_bytes = max_disk_bytes
+        self.min_free_bytes = min_free_bytes
+        self.flush_s = flush_s
+        self.max_image_bytes = max_image_bytes
+        self.rows_written = dict.fromkeys(tables, 0)
+        """Rows on disk per table."""
+        self.images_written = 0
+        self.bytes_written = 0
+        """Everything this writer put on disk (run folder size, apart from run.json)."""
+        self.dropped: dict[str, int] = {}
+        """Drop reason -> items dropped."""
+        self._on_problem = on_problem
+        self._queue: queue.Queue[Any] = queue.Queue(max_items)
+        self._lock = threading.Lock()
+        self._image_bytes_queued = 0
+        self._free_bytes = self._disk_free()
+        self._pending: dict[str, list[list[Any]]] = {name: [] for name in tables}
+        self._files: dict[str, tuple[int, int]] = {}  # table -> (fd, size)
+        self._thread = threading.Thread(target=self._run, name=f"recorder-writer:{self.run_dir.name}", daemon=True)
+        self._closed = False
+
+    # -- any thread ------------------------------------------------------------------------------
+
+    def start(self) -> None:
+        self._thread.start()
+
+    def put(self, item: Any) -> bool:
+        """Queue a :class:`Row` or a stage item; False when it was dropped."""
+        if self._closed:
+            return False
+        try:
+            self._queue.put_nowait(item)
+        except queue.Full:
+            self._drop("queue_full")
+            return False
+        return True
+
+    def put_image(self, name: str, image: np.ndarray, *, copy: bool = False) -> bool:
+        """Queue ``image`` to be JPEG-encoded into ``run_dir/name``; False when it was dropped.
+
+        The guards (size cap, free space, queued image bytes) are checked before anything is copied.
+        With ``copy=True`` the pixels are copied first, so the caller may go on changing its array.
+        """
+        reason = self.image_refused()
+        if reason is None:
+            with self._lock:
+                if self._image_bytes_queued + image.nbytes > self.max_image_bytes:
+                    reason = "queue_full"
+                else:
+                    self._image_bytes_queued += image.nbytes
+        if reason is not None:
+            self._drop(reason)
+            return False
+        if self.put(_Image(name, image.copy() if copy else image)):
+            return True
+        self._image_done(image.nbytes)
+        return False
+
+    def image_refused(self) -> str | None:
+        """Why a frame would be dropped now (``disk_cap``, ``min_free``), None if it would be taken."""
+        if self._closed:
+            return "closed"
+        if self.max_disk_bytes and self.bytes_written >= self.max_disk_bytes:
+            return "disk_cap"
+        if self.min_free_bytes and self._free_bytes < self.min_free_bytes:
+            return "min_free"
+        return None
+
+    @property
+    def dropped_total(self) -> int:
+        return sum(self.dropped.values())
+
+    def close(self, timeout: float = 10.0) -> None:
+        """Write what is queued, flush, close the files. Blocks (call it off the event loop); idempotent."""
+        if self._closed:
+            return
+        self._closed = True
+        if self._thread.is_alive():
+            try:
+                self._queue.put(None, timeout=timeout)
+            except queue.Full:
+                logger.warning("DiskWriter(%s): queue still full after %.0f s; abandoning it", self.run_dir, timeout)
+                return
+            self._thread.join(timeout)
+            if self._thread.is_alive():
+                logger.warning("DiskWriter(%s): writer still busy after %.0f s; abandoning it", self.run_dir, timeout)
+
+    def _drop(self, reason: str, count: int = 1, detail: str = "") -> None:
+        with self._lock:
+            first = reason not in self.dropped
+            self.dropped[reason] = self.dropped.get(reason, 0) + count
+        if reason == "closed":
+            return
+        logger.debug("DiskWriter(%s): dropped %d (%s) %s", self.run_dir, count, reason, detail)
+        if first and self._on_problem is not None:
+            message = PROBLEMS.get(reason, reason) + (f": {detail}" if detail else "")
+            self._on_problem(reason, message)
+
+    def _image_done(self, nbytes: int) -> None:
+        with self._lock:
+            self._image_bytes_queued -= nbytes
+
+    # -- writer thread ---------------------------------------------------------------------------
+
+    def _run(self) -> None:
+        tick_ns = 50_000_000
+        next_flush = time.monotonic_ns() + int(self.flush_s * 1e9)
+        next_tick = time.monotonic_ns() + tick_ns
+        while True:
+            now = time.monotonic_ns()
+            try:
+                item = self._queue.get(timeout=max(0.0, (min(next_flush, next_tick) - now) / 1e9))
+            except queue.Empty:
+                item = _IDLE
+            if item is None:
+                break
+            if item is not _IDLE:
+                self._handle(item)
+            now = time.monotonic_ns()
+            if self.stage is not None and now >= next_tick:
+                self._collect(self.stage.due, now)
+                next_tick = now + tick_ns
+            if now >= next_flush:
+                self._flush()
+                self._free_bytes = self._disk_free()
+                next_flush = now + int(self.flush_s * 1e9)
+        if self.stage is not None:
+            self._collect(self.stage.drain)
+        self._flush()
+        for fd, _ in self._files.values():
+            os.close(fd)
+        self._files.clear()
+
+    def _handle(self, item: Any) -> None:
+        try:
+            if isinstance(item, Row):
+                self._pending[item.table].append(item.values)
+            elif isinstance(item, _Image):
+                try:
+                    self._write_image(item)
+                finally:
+                    self._image_done(item.image.nbytes)
+            elif isinstance(item, Rename):
+                source = self.run_dir / item.source
+                if source.exists():
+                    os.replace(source, self.run_dir / item.target)
+            elif self.stage is not None:
+                self._collect(self.stage.handle, item)
+                self._collect(self.stage.due, time.monotonic_ns())
+        except Exception as exc:  # noqa: BLE001 - the writer must outlive any bad item
+            logger.exception("DiskWriter(%s): cannot write %r", self.run_dir, type(item).__name__)
+            self._drop("write_error", detail=f"{type(item).__name__}: {exc!r}")
+
+    def _collect(self, produce: Callable[..., Iterable[Row]], *args: Any) -> None:
+        for row in produce(*args):
+            self._pending[row.table].append(row.values)
+
+    def _write_image(self, item: _Image) -> None:
+        reason = self.image_refused()
+        if reason is not None and reason != "closed":
+            self._drop(reason)
+            return
+        image = item.image if item.image.dtype == np.uint8 else np.clip(item.image, 0, 255).astype(np.uint8)
+        ok, encoded = cv2.imencode(".jpg", image, [cv2.IMWRITE_JPEG_QUALITY, self.jpeg_quality])
+        if not ok:
+            raise ValueError(f"cannot encode a {image.shape} {image.dtype} array as JPEG")
+        path = self.run_dir / item.name
+        temporary = path.with_name(path.name + ".tmp")
+        data = encoded.tobytes()
+        try:
+            self._store(temporary, data)
+            os.replace(temporary, path)
+        except OSError as exc:
+            temporary.unlink(missing_ok=True)
+            self._drop("disk_full" if exc.errno == errno.ENOSPC else "write_error", detail=f"{item.name}: {exc}")
+            return
+        self.images_written += 1
+        self.bytes_written += len(data)
+
+    def _store(self, path: Path, data: bytes) -> None:
+        """Write one whole file (the seam a throttled test writer overrides)."""
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with open(path, "wb") as handle:
+            handle.write(data)
+
+    def _flush(self) -> None:
+        for table, rows in self._pending.items():
+            if rows:
+                self._pending[table] = []
+                self._append(table, rows)
+
+    def _append(self, table: str, rows: list[list[Any]]) -> None:
+        buffer = io.StringIO()
+        writer = csv.writer(buffer, lineterminator="\n")
+        if table not in self._files:
+            writer.writerow(self.tables[table])
+        writer.writerows(rows)
+        data = buffer.getvalue().encode()
+        try:
+            fd, size = self._files.get(table) or (self._open(table), 0)
+        except OSError as exc:
+            self._drop("disk_full" if exc.errno == errno.ENOSPC else "write_error", len(rows), f"{table}.csv: {exc}")
+            return
+        self._files[table] = (fd, size)
+        written = 0
+        try:
+            while written < len(data):
+                written += self._write(fd, data[written:])
+        except OSError as exc:
+            with contextlib.suppress(OSError):
+                os.ftruncate(fd, size)  # cut back to the last whole line
+                os.lseek(fd, size, os.SEEK_SET)
+            if size == 0:  # not even the header made it: write it again next time
+                del self._files[table]
+                os.close(fd)
+            self._drop("disk_full" if exc.errno == errno.ENOSPC else "write_error", len(rows), f"{table}.csv: {exc}")
+            return
+        self._files[table] = (fd, size + written)
+        self.rows_written[table] += len(rows)
+        self.bytes_written += written
+
+    def _write(self, fd: int, data: bytes) -> int:
+        """One ``os.write`` (the seam a full-disk test writer overrides)."""
+        return os.write(fd, data)
+
+    def _open(self, table: str) -> int:
+        return os.open(self.run_dir / f"{table}.csv", os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644)
+
+    def _disk_free(self) -> int:
+        try:
+            return shutil.disk_usage(self.run_dir).free
+        except OSError:
+            return 0

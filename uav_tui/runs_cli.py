@@ -1,0 +1,101 @@
+"""``uav-tui runs`` (list the recorded runs) and ``uav-tui report [RUN]`` (draw a run's plots)."""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+from uav_tui.config import find_config_file, load_config
+from uav_tui.errors import UavError
+
+
+def main(name: str, argv: list[str]) -> int:
+    """Run the tool ``name`` (``runs`` or ``report``) with its arguments; returns the exit code."""
+    parser = argparse.ArgumentParser(prog=f"uav-tui {name}")
+    parser.add_argument("--runs-dir", metavar="DIR", help="folder holding the runs (default: runs_dir of the "
+                        "configuration, 'runs')")
+    parser.add_argument("--config", metavar="PATH", help="TOML file to take runs_dir from")
+    if name == "report":
+        parser.description = "Write PNG plots and summary.txt into a run's folder."
+        parser.add_argument("run", nargs="?", metavar="RUN", help="run folder, or its name under the runs "
+                            "folder (default: the newest run)")
+    else:
+        parser.description = "List recorded runs: start, duration, frames, size."
+    args = parser.parse_args(argv)
+    try:
+        runs_dir = Path(args.runs_dir or load_config(find_config_file(args.config)).recording.runs_dir).expanduser()
+        if name == "report":
+            return _report(_find_run(runs_dir, args.run))
+        return _list(runs_dir)
+    except UavError as exc:
+        print(f"uav-tui {name}: {exc}", file=sys.stderr)
+        return 2
+
+
+def list_runs(runs_dir: Path) -> list[dict[str, Any]]:
+    """One dict per run folder under ``runs_dir``, oldest first: name, path, start, duration_s, frames, bytes."""
+    found = []
+    for path in sorted(p for p in runs_dir.glob("*") if (p / "run.json").is_file()):
+        try:
+            info = json.loads((path / "run.json").read_text())
+        except (OSError, ValueError):
+            continue
+        files = [p for p in path.rglob("*") if p.is_file()]
+        start, end = info.get("start_wall_ns"), info.get("end_wall_ns")
+        if end is None:  # killed: the newest file tells how long it ran
+            end = max((int(p.stat().st_mtime_ns) for p in files), default=start)
+        frames = info.get("recording", {}).get("frames")
+        if frames is None:
+            frames = max(0, _count_lines(path / "frames.csv") - 1)
+        found.append({"name": path.name, "path": path, "start": info.get("start_utc", "?"),
+                      "duration_s": (end - start) / 1e9 if start and end else None, "frames": frames,
+                      "bytes": sum(p.stat().st_size for p in files), "finished": "end_wall_ns" in info})
+    return found
+
+
+def _list(runs_dir: Path) -> int:
+    runs = list_runs(runs_dir)
+    if not runs:
+        print(f"no recorded runs in {runs_dir}")
+        return 0
+    print(f"{'run':<24} {'start (UTC)':<20} {'duration':>9} {'frames':>7} {'size':>9}")
+    for run in runs:
+        duration = "?" if run["duration_s"] is None else str(datetime.timedelta(seconds=round(run["duration_s"])))
+        start = run["start"].replace("+00:00", "").replace("T", " ")
+        note = "" if run["finished"] else "  (not closed)"
+        print(f"{run['name']:<24} {start:<20} {duration:>9} {run['frames']:>7} {run['bytes'] / 1e6:>7.1f}MB{note}")
+    return 0
+
+
+def _find_run(runs_dir: Path, name: str | None) -> Path:
+    if name is None:
+        runs = list_runs(runs_dir)
+        if not runs:
+            raise UavError(f"no recorded runs in {runs_dir}")
+        return runs[-1]["path"]
+    for candidate in (Path(name).expanduser(), runs_dir / name):
+        if (candidate / "run.json").is_file():
+            return candidate
+    raise UavError(f"{name} is neither a run folder nor a run in {runs_dir}; `uav-tui runs` lists them")
+
+
+def _report(run_dir: Path) -> int:
+    from uav_tui.report import write_report  # matplotlib is only imported when a report is drawn
+
+    paths, text = write_report(run_dir)
+    print(text)
+    for path in paths:
+        print(f"wrote {path}")
+    return 0
+
+
+def _count_lines(path: Path) -> int:
+    try:
+        with open(path, "rb") as handle:
+            return sum(chunk.count(b"\n") for chunk in iter(lambda: handle.read(1 << 20), b""))
+    except OSError:
+        return 0

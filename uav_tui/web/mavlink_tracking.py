@@ -1,0 +1,204 @@
+"""QGroundControl click-to-track: a MAVLink camera component that turns track commands into ``roi``.
+
+A ground station sends MAV_CMD_CAMERA_TRACK_RECTANGLE or MAV_CMD_CAMERA_TRACK_POINT with normalized
+image coordinates; they become the same ``roi X Y W H`` command (frame pixels) as a drag on the web
+page, run through ``core.execute(..., origin="mavlink:SYS/COMP")``. Every command gets a COMMAND_ACK,
+and CAMERA_TRACKING_IMAGE_STATUS reports the selected region (once after each command, then once a
+second). The component sends HEARTBEAT (MAV_TYPE_CAMERA) and answers CAMERA_INFORMATION requests with
+the tracking capability flags, so a ground station discovers it.
+
+Endpoint (config ``camera_mavlink``): ``udpin:HOST:PORT`` listens and answers whoever spoke last;
+``udpout:HOST:PORT`` (or ``udp:``) sends to a ground station / MAVLink router. All of it runs on the
+event loop: a datagram endpoint, MAVLink 2 packing with pymavlink's generated dialect, no threads.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+from collections.abc import Callable
+from typing import Any
+
+from pymavlink.dialects.v20 import common as mavlink
+
+from uav_tui.commands import Command
+from uav_tui.errors import CommandError, ConfigError, UavError
+from uav_tui.web.roi import point_to_roi, rect_to_roi
+
+logger = logging.getLogger(__name__)
+
+STATUS_PERIOD_S = 1.0
+"""HEARTBEAT and CAMERA_TRACKING_IMAGE_STATUS are sent this often."""
+
+
+def parse_endpoint(address: str) -> tuple[str, str, int]:
+    """``udpin:0.0.0.0:14580`` -> ("udpin", "0.0.0.0", 14580); ``udp:`` means ``udpout:``."""
+    scheme, _, rest = address.partition(":")
+    host, _, port = rest.rpartition(":")
+    scheme = "udpout" if scheme == "udp" else scheme
+    if scheme not in ("udpin", "udpout") or not host or not port.isdigit() or not 0 < int(port) < 65536:
+        raise ConfigError(f"camera_mavlink {address!r}: expected udpin:HOST:PORT (listen, e.g. "
+                          "udpin:0.0.0.0:14580) or udpout:HOST:PORT (send to a ground station)", key="camera_mavlink")
+    return scheme, host, int(port)
+
+
+class _Writer:
+    """The 'file' pymavlink's MAVLink object writes packed messages to: one datagram each."""
+
+    def __init__(self, owner: CameraTracking) -> None:
+        self.owner = owner
+
+    def write(self, data: bytes) -> None:
+        transport, peer = self.owner.transport, self.owner.peer
+        if transport is not None and peer is not None:
+            transport.sendto(bytes(data), peer)
+
+
+class _Datagrams(asyncio.DatagramProtocol):
+    def __init__(self, owner: CameraTracking) -> None:
+        self.owner = owner
+
+    def datagram_received(self, data: bytes, addr: tuple[str, int]) -> None:
+        self.owner.received(data, addr)
+
+
+class CameraTracking:
+    """The camera component for one running core.
+
+    Args:
+        core: the running UavCore.
+        address: ``udpin:HOST:PORT`` or ``udpout:HOST:PORT``.
+        system_id: MAVLink system id (the vehicle's, so the ground station groups the camera with it).
+        component_id: MAVLink component id (MAV_COMP_ID_CAMERA).
+    """
+
+    def __init__(self, core: Any, address: str, *, system_id: int = 1,
+                 component_id: int = mavlink.MAV_COMP_ID_CAMERA) -> None:
+        self.core = core
+        self.address = address
+        self.scheme, self.host, self.port = parse_endpoint(address)
+        self.mav = mavlink.MAVLink(_Writer(self), srcSystem=system_id, srcComponent=component_id)
+        self.mav.robust_parsing = True
+        self.transport: asyncio.DatagramTransport | None = None
+        self.peer: tuple[str, int] | None = None if self.scheme == "udpin" else (self.host, self.port)
+        self.selection: tuple[int, tuple[float, float, float, float]] | None = None
+        """(CAMERA_TRACKING_MODE_*, normalized (x0, y0, x1, y1)) of the last accepted selection."""
+        self._commands: asyncio.Queue[Any] = asyncio.Queue(maxsize=16)
+        self._tasks: list[asyncio.Task[None]] = []
+
+    async def start(self) -> None:
+        loop = asyncio.get_running_loop()
+        where = {"local_addr": (self.host, self.port)} if self.scheme == "udpin" else {
+            "remote_addr": (self.host, self.port)}
+        try:
+            self.transport, _ = await loop.create_datagram_endpoint(lambda: _Datagrams(self), **where)
+        except OSError as exc:
+            raise UavError(f"camera_mavlink {self.address}: {exc.strerror}; is another program using the "
+                           "port? pick another one") from exc
+        self._tasks = [asyncio.create_task(self._handle_commands(), name="camera-commands"),
+                       asyncio.create_task(self._report(), name="camera-status")]
+        logger.info("CameraTracking(%s) started", self.address)
+
+    async def stop(self) -> None:
+        """Stop answering and close the socket. Idempotent."""
+        for task in self._tasks:
+            task.cancel()
+        await asyncio.gather(*self._tasks, return_exceptions=True)
+        self._tasks = []
+        if self.transport is not None:
+            self.transport.close()
+            self.transport = None
+
+    # -- receiving -------------------------------------------------------------------------------
+
+    def received(self, data: bytes, addr: tuple[str, int]) -> None:
+        """Datagram from the ground station (on the loop): queue the commands addressed to us."""
+        if self.scheme == "udpin":
+            self.peer = addr
+        for message in self.mav.parse_buffer(data) or []:
+            if message.get_type() != "COMMAND_LONG":
+                continue
+            if message.target_system not in (0, self.mav.srcSystem) or \
+                    message.target_component not in (0, self.mav.srcComponent):
+                continue
+            if self._commands.full():
+                logger.warning("CameraTracking(%s): command queue full, dropped %s", self.address, message.command)
+            else:
+                self._commands.put_nowait(message)
+
+    async def _handle_commands(self) -> None:
+        while True:
+            message = await self._commands.get()
+            result, reply = await self._dispatch(message)
+            self.mav.command_ack_send(message.command, result, target_system=message.get_srcSystem(),
+                                      target_component=message.get_srcComponent())
+            if reply is not None:  # requested messages follow their ACK
+                reply()
+
+    async def _dispatch(self, message: Any) -> tuple[int, Callable[[], None] | None]:
+        """(MAV_RESULT, what to send after the ACK) for one COMMAND_LONG."""
+        command, origin = message.command, f"mavlink:{message.get_srcSystem()}/{message.get_srcComponent()}"
+        params = (message.param1, message.param2, message.param3, message.param4)
+        if command == mavlink.MAV_CMD_CAMERA_TRACK_RECTANGLE:
+            return await self._select(mavlink.CAMERA_TRACKING_MODE_RECTANGLE, params, origin), self._send_status
+        if command == mavlink.MAV_CMD_CAMERA_TRACK_POINT:
+            return await self._select(mavlink.CAMERA_TRACKING_MODE_POINT, params, origin), self._send_status
+        if command == mavlink.MAV_CMD_CAMERA_STOP_TRACKING:
+            self.selection = None
+            self.core.events.emit("info", "command", "ground station stopped tracking (the processor keeps its "
+                                  "target until the next selection)", origin)
+            return mavlink.MAV_RESULT_ACCEPTED, self._send_status
+        requested = int(message.param1) if command == mavlink.MAV_CMD_REQUEST_MESSAGE else None
+        if command == mavlink.MAV_CMD_REQUEST_CAMERA_INFORMATION or \
+                requested == mavlink.MAVLINK_MSG_ID_CAMERA_INFORMATION:
+            return mavlink.MAV_RESULT_ACCEPTED, self._send_information
+        if requested == mavlink.MAVLINK_MSG_ID_CAMERA_TRACKING_IMAGE_STATUS:
+            return mavlink.MAV_RESULT_ACCEPTED, self._send_status
+        return mavlink.MAV_RESULT_UNSUPPORTED, None
+
+    async def _select(self, mode: int, params: tuple[float, ...], origin: str) -> int:
+        source = self.core.source
+        size = source.get_frame_size() if source is not None else (0, 0)
+        try:
+            if mode == mavlink.CAMERA_TRACKING_MODE_RECTANGLE:
+                roi = rect_to_roi(*params, size)
+            else:
+                roi = point_to_roi(params[0], params[1], size, radius=params[2])
+        except CommandError as exc:
+            self.core.events.emit("warning", "command", f"camera track command rejected: {exc}", origin)
+            return mavlink.MAV_RESULT_DENIED
+        try:
+            await self.core.execute(Command("roi", roi), origin=origin)
+        except UavError:  # logged as an event by the core
+            return mavlink.MAV_RESULT_FAILED
+        x, y, w, h = roi
+        self.selection = (mode, (x / size[0], y / size[1], (x + w) / size[0], (y + h) / size[1]))
+        return mavlink.MAV_RESULT_ACCEPTED
+
+    # -- sending ---------------------------------------------------------------------------------
+
+    async def _report(self) -> None:
+        while True:
+            self.mav.heartbeat_send(mavlink.MAV_TYPE_CAMERA, mavlink.MAV_AUTOPILOT_INVALID, 0, 0,
+                                    mavlink.MAV_STATE_ACTIVE)
+            self._send_status()
+            await asyncio.sleep(STATUS_PERIOD_S)
+
+    def _send_status(self) -> None:
+        if self.selection is None:
+            self.mav.camera_tracking_image_status_send(
+                mavlink.CAMERA_TRACKING_STATUS_FLAGS_IDLE, mavlink.CAMERA_TRACKING_MODE_NONE, 0,
+                *([float("nan")] * 7))
+            return
+        mode, (x0, y0, x1, y1) = self.selection
+        point = (x0 + x1) / 2, (y0 + y1) / 2, (x1 - x0) / 2
+        self.mav.camera_tracking_image_status_send(
+            mavlink.CAMERA_TRACKING_STATUS_FLAGS_ACTIVE, mode, mavlink.CAMERA_TRACKING_TARGET_DATA_IN_STATUS,
+            *point, x0, y0, x1, y1)
+
+    def _send_information(self) -> None:
+        size = self.core.source.get_frame_size() if self.core.source is not None else (0, 0)
+        self.mav.camera_information_send(
+            0, list(b"uav-tui".ljust(32, b"\0")), list(b"processed camera".ljust(32, b"\0")), 0, 0.0, 0.0, 0.0,
+            size[0], size[1], 0,
+            mavlink.CAMERA_CAP_FLAGS_HAS_TRACKING_POINT | mavlink.CAMERA_CAP_FLAGS_HAS_TRACKING_RECTANGLE, 0, b"")

@@ -1,0 +1,303 @@
+"""The side page: aiohttp routes, token check, WebRTC signalling, status push and page commands.
+
+Routes (every one needs the token, else 401 and nothing else):
+
+- ``GET /?token=T``: the page (it also sets an HttpOnly cookie so ``/static/*`` loads);
+- ``POST /offer``: the browser's SDP offer -> the answer with the processed video track;
+- ``GET /ws?token=T``: a websocket the server pushes status (twice a second) and events into;
+- ``POST /api/roi``: ``{"rect": [x0, y0, x1, y1]}`` or ``{"point": [x, y]}``, normalized -> ``roi``;
+- ``POST /api/command``: ``{"command": "f 2"}``, one of WEB_COMMANDS.
+
+The token travels as ``?token=`` or ``Authorization: Bearer``. Commands go through
+``core.execute(..., origin="web:<ip>")``, the one command module.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import logging
+import math
+import secrets
+import socket
+import time
+from pathlib import Path
+from typing import Any
+
+from aiohttp import WSCloseCode, web
+from aiortc import RTCConfiguration, RTCPeerConnection, RTCSessionDescription
+
+from uav_tui.commands import Command, parse
+from uav_tui.config import WebConfig
+from uav_tui.core import CoreState
+from uav_tui.errors import CommandError, UavError
+from uav_tui.events import Event
+from uav_tui.web.roi import roi_from_message
+from uav_tui.web.tracks import VideoHub
+
+logger = logging.getLogger(__name__)
+
+STATIC = Path(__file__).with_name("static")
+MAX_VIEWERS = 4
+"""Peer connections served at once; each one encodes its own stream."""
+STATUS_PERIOD_S = 0.5
+WEB_COMMANDS = frozenset({"f", "roi", "hold", "land", "rtl", "autonomy off"})
+"""What the page may send: the buttons, target selection and the ways to stop. Arming, takeoff and
+switching autonomy on stay with the operator's terminal."""
+COOKIE = "uav_token"
+_REJECT_LOG_PERIOD_S = 60.0
+
+
+class WebServer:
+    """Serves the page for one running core.
+
+    Args:
+        core: the running UavCore.
+        config: the ``[web]`` section.
+    """
+
+    def __init__(self, core: Any, config: WebConfig) -> None:
+        self.core = core
+        self.config = config
+        self.token = config.web_token or secrets.token_urlsafe(16)
+        self.video = VideoHub(core, config.web_width, config.web_fps)
+        self.port = config.web_port
+        self._peers: set[RTCPeerConnection] = set()
+        self._sockets: set[web.WebSocketResponse] = set()
+        self._queues: set[asyncio.Queue[dict[str, Any]]] = set()
+        self._rejected: dict[str, float] = {}
+        self._runner: web.AppRunner | None = None
+
+    @property
+    def url(self) -> str:
+        """The page's address with the token, for the operator to open."""
+        host = self.config.web_host
+        if host in ("", "0.0.0.0", "::"):
+            host = _reachable_address()
+        return f"http://{host}:{self.port}/?token={self.token}"
+
+    async def start(self) -> None:
+        app = web.Application(middlewares=[self._auth], client_max_size=256 * 1024)
+        app.router.add_get("/", self._page)
+        app.router.add_static("/static/", STATIC)
+        app.router.add_post("/offer", self._offer)
+        app.router.add_get("/ws", self._websocket)
+        app.router.add_post("/api/roi", self._roi)
+        app.router.add_post("/api/command", self._command)
+        app.on_shutdown.append(self._on_shutdown)
+        self._runner = web.AppRunner(app, access_log=None)
+        await self._runner.setup()
+        site = web.TCPSite(self._runner, self.config.web_host, self.config.web_port)
+        try:
+            await site.start()
+        except OSError as exc:
+            await self._runner.cleanup()
+            raise UavError(f"web page: cannot listen on {self.config.web_host}:{self.config.web_port} "
+                           f"({exc.strerror}); pick another --web-port") from exc
+        self.core.events.add_listener(self._on_event)
+
+    async def stop(self) -> None:
+        """Close every viewer and the listening socket. Idempotent."""
+        self.core.events.remove_listener(self._on_event)
+        if self._runner is not None:
+            runner, self._runner = self._runner, None
+            await runner.cleanup()
+
+    # -- access ----------------------------------------------------------------------------------
+
+    @web.middleware
+    async def _auth(self, request: web.Request, handler: Any) -> web.StreamResponse:
+        given = request.query.get("token", "")
+        header = request.headers.get("Authorization", "")
+        if header.startswith("Bearer "):
+            given = header[len("Bearer "):]
+        if not given and request.path.startswith("/static/"):
+            given = request.cookies.get(COOKIE, "")
+        if not secrets.compare_digest(given.encode(), self.token.encode()):
+            self._note_rejected(request)
+            raise web.HTTPUnauthorized(text="401: a valid token is required")
+        return await handler(request)
+
+    def _note_rejected(self, request: web.Request) -> None:
+        ip = request.remote or "?"
+        now = time.monotonic()
+        if now - self._rejected.get(ip, -math.inf) > _REJECT_LOG_PERIOD_S:
+            self._rejected[ip] = now
+            self.core.events.emit("warning", "web", f"refused {request.method} {request.path}: no valid token",
+                                  f"web:{ip}")
+
+    async def _page(self, request: web.Request) -> web.StreamResponse:
+        response = web.FileResponse(STATIC / "index.html")
+        response.set_cookie(COOKIE, self.token, httponly=True, samesite="Strict")
+        return response
+
+    # -- video -----------------------------------------------------------------------------------
+
+    async def _offer(self, request: web.Request) -> web.Response:
+        origin = _origin(request)
+        body = await self._json(request, origin, "offer")
+        if not (isinstance(body.get("sdp"), str) and body.get("type") == "offer"):
+            raise self._bad_request(origin, "offer must be JSON {\"sdp\": ..., \"type\": \"offer\"}")
+        if len(self._peers) >= MAX_VIEWERS:
+            raise web.HTTPServiceUnavailable(text=f"{MAX_VIEWERS} viewers are watching already")
+        pc = RTCPeerConnection(RTCConfiguration(iceServers=[]))  # loopback / LAN only: no STUN lookups
+        self._peers.add(pc)
+        track = None
+        try:
+            await pc.setRemoteDescription(RTCSessionDescription(sdp=body["sdp"], type="offer"))
+            if not any(t.kind == "video" for t in pc.getTransceivers()):
+                raise ValueError("the offer has no video section")
+            track = self.video.subscribe()
+            pc.addTrack(track)
+            await pc.setLocalDescription(await pc.createAnswer())
+        except Exception as exc:  # noqa: BLE001 - aiortc raises many types for a bad SDP
+            await self._close_peer(pc, track)
+            raise self._bad_request(origin, f"offer rejected: {type(exc).__name__}: {exc}") from None
+
+        @pc.on("connectionstatechange")
+        async def on_state() -> None:
+            if pc.connectionState in ("failed", "closed") and pc in self._peers:  # once, not again on close
+                await self._close_peer(pc, track)
+                self.core.events.emit("info", "web", f"viewer left ({self.video.viewers} watching)", origin)
+
+        self.core.events.emit("info", "web", f"viewer connected ({self.video.viewers} watching)", origin)
+        answer = pc.localDescription
+        return web.json_response({"sdp": answer.sdp, "type": answer.type})
+
+    async def _close_peer(self, pc: RTCPeerConnection, track: Any) -> None:
+        self._peers.discard(pc)
+        if track is not None:
+            self.video.unsubscribe(track)
+        await pc.close()
+
+    # -- status push -----------------------------------------------------------------------------
+
+    async def _websocket(self, request: web.Request) -> web.WebSocketResponse:
+        ws = web.WebSocketResponse(heartbeat=20)
+        await ws.prepare(request)
+        queue: asyncio.Queue[dict[str, Any]] = asyncio.Queue(maxsize=100)
+        self._sockets.add(ws)
+        self._queues.add(queue)
+        sender = asyncio.create_task(self._push(ws, queue))
+        try:
+            async for _ in ws:  # the page sends nothing here; commands are POSTed
+                pass
+        finally:
+            self._queues.discard(queue)
+            self._sockets.discard(ws)
+            sender.cancel()
+            await asyncio.gather(sender, return_exceptions=True)
+        return ws
+
+    async def _push(self, ws: web.WebSocketResponse, queue: asyncio.Queue[dict[str, Any]]) -> None:
+        for event in list(self.core.events.recent)[-8:]:
+            await ws.send_str(_dumps(_event_message(event)))
+        while not ws.closed:
+            await ws.send_str(_dumps(self._status_message()))
+            deadline = time.monotonic() + STATUS_PERIOD_S
+            while (left := deadline - time.monotonic()) > 0:
+                try:
+                    message = await asyncio.wait_for(queue.get(), left)
+                except TimeoutError:
+                    break
+                await ws.send_str(_dumps(message))
+
+    def _status_message(self) -> dict[str, Any]:
+        source = self.core.source
+        width, height = source.get_frame_size() if source is not None else (0, 0)
+        status = self.core.status().as_dict() if self.core.state is CoreState.RUNNING else {}
+        return {"type": "status", "status": status, "frame": [width, height], "viewers": self.video.viewers}
+
+    def _on_event(self, event: Event) -> None:
+        message = _event_message(event)
+        for queue in tuple(self._queues):
+            if not queue.full():  # a stalled viewer misses events, it never holds up the loop
+                queue.put_nowait(message)
+
+    # -- commands --------------------------------------------------------------------------------
+
+    async def _roi(self, request: web.Request) -> web.Response:
+        origin = _origin(request)
+        body = await self._json(request, origin, "roi")
+        source = self.core.source
+        try:
+            x, y, w, h = roi_from_message(body, source.get_frame_size() if source else (0, 0))
+        except CommandError as exc:
+            raise self._bad_request(origin, f"roi rejected: {exc}") from None
+        return await self._run(Command("roi", (x, y, w, h)), origin)
+
+    async def _command(self, request: web.Request) -> web.Response:
+        origin = _origin(request)
+        body = await self._json(request, origin, "command")
+        text = body.get("command")
+        try:
+            command = parse(text) if isinstance(text, str) else None
+        except CommandError as exc:
+            raise self._bad_request(origin, f"command rejected: {exc}") from None
+        if command is None or not ({command.word, str(command)} & WEB_COMMANDS):
+            raise self._bad_request(origin, f"command {text!r} is not allowed from the page; allowed: "
+                              f"{', '.join(sorted(WEB_COMMANDS))}")
+        return await self._run(command, origin)
+
+    async def _run(self, command: Command, origin: str) -> web.Response:
+        try:
+            message = await self.core.execute(command, origin=origin)
+        except UavError as exc:  # already logged as an event by the core
+            return web.json_response({"ok": False, "message": str(exc)}, status=409)
+        return web.json_response({"ok": True, "message": message or str(command)})
+
+    async def _json(self, request: web.Request, origin: str, what: str) -> dict[str, Any]:
+        try:
+            body = await request.json()
+        except (json.JSONDecodeError, UnicodeDecodeError):
+            body = None
+        if not isinstance(body, dict):
+            raise self._bad_request(origin, f"{what}: the body is not a JSON object")
+        return body
+
+    def _bad_request(self, origin: str, message: str) -> web.HTTPBadRequest:
+        """Log a refused request as an event and return the 400 to raise; nothing else changes."""
+        self.core.events.emit("warning", "web", message, origin)
+        return web.HTTPBadRequest(text=message)
+
+    async def _on_shutdown(self, app: web.Application) -> None:
+        for ws in tuple(self._sockets):
+            await ws.close(code=WSCloseCode.GOING_AWAY, message=b"uav-tui is stopping")
+        peers = tuple(self._peers)
+        self._peers.clear()
+        await asyncio.gather(*(pc.close() for pc in peers), return_exceptions=True)
+        self.video.close()
+
+
+def _origin(request: web.Request) -> str:
+    return f"web:{request.remote or '?'}"
+
+
+def _event_message(event: Event) -> dict[str, Any]:
+    return {"type": "event", "t_wall_ns": event.t_wall_ns, "level": event.level, "kind": event.kind,
+            "message": event.message, "origin": event.origin}
+
+
+def _dumps(message: dict[str, Any]) -> str:
+    return json.dumps(_finite(message), default=str)
+
+
+def _finite(value: Any) -> Any:
+    """JSON has no NaN/inf (browsers refuse them): replace them with null."""
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {k: _finite(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_finite(v) for v in value]
+    return value
+
+
+def _reachable_address() -> str:
+    """This machine's address on the default route (no packet is sent), else its host name."""
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
+        try:
+            probe.connect(("192.0.2.1", 9))
+            return probe.getsockname()[0]
+        except OSError:
+            return socket.gethostname()
