@@ -76,7 +76,7 @@ def run(mode: str, source: str, seconds: float, workdir: Path) -> dict[str, floa
         subprocess.run([*command, "--no-ui"], env=env, cwd=workdir, stdout=subprocess.DEVNULL, timeout=seconds + 60)
     else:
         width, height = mode.split("x")
-        socket = f"bench-ui-{os.getpid()}-{out.stem}"
+        socket = f"bench-ui-{os.getpid()}-{time.monotonic_ns()}"  # a fresh server per run
         shell = " ".join(f"{k}={shlex.quote(v)}" for k, v in env.items() if k in ("PYTHONPATH", "BENCH_UI_OUT"))
         subprocess.run(["tmux", "-L", socket, "new-session", "-d", "-x", width, "-y", height,
                         f"cd {shlex.quote(str(workdir))} && env {shell} TERM=xterm-256color {shlex.join(command)}"],

@@ -18,6 +18,9 @@ import pytest
 
 ROOT = Path(__file__).parents[2]
 
+LOG_COLUMN = 40
+"""Where the event log starts on an 80-column screen (the left column of panels is 40 wide)."""
+
 pytestmark = pytest.mark.skipif(shutil.which("tmux") is None, reason="tmux is not installed")
 
 
@@ -44,13 +47,14 @@ class Tmux:
     def screen(self) -> str:
         return self.tmux("capture-pane", "-p")
 
-    def shows(self, text: str) -> bool:
-        """Whether the screen shows ``text``, ignoring line breaks and spaces (panels wrap)."""
+    def log_shows(self, text: str) -> bool:
+        """Whether the event log (the right half of the 80-column screen) shows ``text``; it wraps lines."""
         try:
             screen = self.screen()
         except subprocess.CalledProcessError:  # the session ended with the program
             return False
-        return "".join(text.split()) in "".join(screen.split())
+        log = "".join(line[LOG_COLUMN:] for line in screen.splitlines())
+        return "".join(text.split()) in "".join(log.split())
 
     def keys(self, *keys: str) -> None:
         self.tmux("send-keys", *keys)
@@ -89,7 +93,7 @@ def test_dashboard_in_a_real_terminal_takes_keys_and_quits(tmux, tmp_path):
         assert text in screen, text
     assert len(screen.splitlines()) <= 24 and all(len(line) <= 80 for line in screen.splitlines())
     tmux.keys("F2")
-    wait(lambda: tmux.shows("F2 sent to the processor"), 10, "F2 in the event log")
+    wait(lambda: tmux.log_shows("F2 sent to the processor"), 10, "F2 in the event log")
     tmux.keys("q")
     wait(tmux.status.exists, 15, "the exit status")
     assert tmux.status.read_text().strip() == "0"
@@ -123,6 +127,6 @@ def test_script_and_duration_run_with_the_dashboard(tmux, tmp_path, lines, statu
     script.write_text(lines)
     tmux.start("--fc", "none", "--script", str(script), "--duration", "4", tmp_path=tmp_path)
     if status == "0":  # (a failing script ends the run at once, too fast to read the screen)
-        wait(lambda: tmux.shows("F3 sent to the processor"), 30, "the script's F3 in the event log")
+        wait(lambda: tmux.log_shows("F3 sent to the processor"), 30, "the script's F3 in the event log")
     wait(tmux.status.exists, 30, "the run to end by itself")
     assert tmux.status.read_text().strip() == status

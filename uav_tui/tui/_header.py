@@ -11,9 +11,6 @@ from textual.widgets import Static
 from uav_tui.status import CoreStatus
 from uav_tui.tui._panel import MISSING, StatusPanel, num
 
-LINK_TIMEOUT_S = 1.5
-"""Heartbeat age shown as a lost link (the safety default; the gate uses the configured value)."""
-
 
 class VehicleLine(StatusPanel):
     """Two lines: connection and link age; flight mode, armed / in air, GPS fix, battery."""
@@ -21,6 +18,11 @@ class VehicleLine(StatusPanel):
     DEFAULT_CSS = """
     VehicleLine { border-top: none; padding: 0 1; width: 1fr; height: 2; }
     """
+
+    def __init__(self, link_timeout: float) -> None:
+        super().__init__()
+        self.link_timeout = link_timeout
+        """Heartbeat age from which the link shows as LOST (``safety.link_timeout``, as the gate uses)."""
 
     def describe(self, status: CoreStatus) -> Text:
         t = status.telemetry
@@ -31,7 +33,7 @@ class VehicleLine(StatusPanel):
             return line.append(self.styled("no vehicle: commands are refused", "warn"))
         age = status.heartbeat_age_s
         line.append("link ", label)  # first: a long connection string may be cut, the link state never
-        if age is None or age >= LINK_TIMEOUT_S:
+        if age is None or age >= self.link_timeout:
             line.append(self.styled("LOST" + ("" if age is None or age == float("inf") else f" {age:.1f}s"), "bad"))
         else:
             line.append(self.styled(f"ok {age:.1f}s", "good"))
@@ -69,14 +71,22 @@ class AutonomyBadge(Static):
 
 
 class StatusBar(Horizontal):
-    """The header: :class:`VehicleLine` and :class:`AutonomyBadge`."""
+    """The header: :class:`VehicleLine` and :class:`AutonomyBadge`.
+
+    Args:
+        link_timeout: heartbeat age (s) from which the link shows as lost.
+    """
 
     DEFAULT_CSS = """
     StatusBar { height: 2; dock: top; background: $panel; }
     """
 
+    def __init__(self, link_timeout: float) -> None:
+        super().__init__()
+        self.link_timeout = link_timeout
+
     def compose(self) -> ComposeResult:
-        yield VehicleLine()
+        yield VehicleLine(self.link_timeout)
         yield AutonomyBadge()
 
     def show(self, status: CoreStatus) -> None:

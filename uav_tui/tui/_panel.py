@@ -53,7 +53,9 @@ class StatusPanel(Static):
         self.watch_status(self.status)
 
     def watch_status(self, status: CoreStatus | None) -> None:
-        self.update(self.describe(status) if status is not None else Text("starting...", style="italic"))
+        # Panels have fixed heights (app.tcss): no layout pass per refresh, which would cost the loop.
+        self.update(self.describe(status) if status is not None else Text("starting...", style="italic"),
+                    layout=False)
 
     def describe(self, status: CoreStatus) -> Text:
         """The panel's text for ``status``."""

@@ -25,8 +25,8 @@ FrameProvider = Callable[[], "tuple[int, np.ndarray] | None"]
 PREVIEW_FPS = 4.0
 """How often the preview redraws at most; the terminal, not the camera, sets how much is worth drawing."""
 
-MAX_CELLS = 2400
-"""Largest image drawn (about 80x30 cells): every cell costs the loop time in Textual's compositor."""
+MAX_CELLS = 1600
+"""Largest image drawn (about 64x25 cells for 4:3): every cell costs the loop time in Textual's compositor."""
 
 CPU_BUDGET = 0.05
 """Largest share of one core the conversion may use: a big terminal on a slow board redraws less often."""
@@ -196,8 +196,13 @@ class FramePreview(Widget, can_focus=True):
             self.post_message(self.RoiSelected(self._layout.to_roi(self.selection)))
         self.action_cancel_box()
 
+    def on_blur(self) -> None:
+        if self.keyboard:  # focus went elsewhere: the arrows no longer move the box, so drop it
+            self.action_cancel_box()
+
     def action_cancel_box(self) -> None:
         self.keyboard = False
         self.selection = None
         self.remove_class("-selecting")
-        self.screen.set_focus(None)
+        if self.has_focus:
+            self.screen.set_focus(None)

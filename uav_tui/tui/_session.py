@@ -24,7 +24,7 @@ from uav_tui.config import Config
 from uav_tui.core import CoreState, UavCore
 from uav_tui.events import EventLog
 from uav_tui.headless import EXIT_SCRIPT_FAILED, run_script
-from uav_tui.tui._terminal import TerminalWatch, driver_for
+from uav_tui.tui._terminal import CHECK_PERIOD_S, TerminalWatch, driver_for
 from uav_tui.tui.app import LOG_ORIGIN, UavApp
 
 logger = logging.getLogger(__name__)
@@ -76,7 +76,8 @@ class TuiSession:
             with _logging_into(self.core.events):
                 await self.app.run_async()
             if not self.headless and self.app.return_code not in (0, None):
-                await asyncio.sleep(0.2)  # a SIGHUP may still be on its way: the input thread can fail first
+                # The app may have died of the lost terminal before the watch reported it: give it a period.
+                await asyncio.sleep(CHECK_PERIOD_S + 0.1)
             if self.headless and self.core.state is CoreState.RUNNING:
                 await self._run_headless()
         finally:
@@ -92,11 +93,10 @@ class TuiSession:
     def request_stop(self, reason: str, exit_code: int = 0) -> None:
         """Hold if needed and end the run (dashboard or headless)."""
         self.exit_code = self.exit_code or exit_code
+        self.reason = reason
         if self.headless:
-            self.reason = reason
             self._stop.set()
         else:
-            self.reason = reason
             self._spawn(self.app.shutdown(reason, self.exit_code))
 
     def _hangup(self, reason: str) -> None:

@@ -33,7 +33,7 @@ logger = logging.getLogger(__name__)
 LOG_ORIGIN = "log"
 """Origin of events that are log records (shown in the log, not popped up: they are for developers)."""
 
-STATUS_HZ = 3.0
+STATUS_HZ = 2.0
 """How often the panels are refreshed from ``core.status()``."""
 
 
@@ -118,7 +118,7 @@ class UavApp(App[None]):
         self._stopping = False
 
     def compose(self) -> ComposeResult:
-        yield StatusBar()
+        yield StatusBar(self.core.config.safety.link_timeout)
         with Horizontal(id="body"):
             with Vertical(id="left"):
                 yield TelemetryPanel(id="telemetry")
