@@ -28,6 +28,9 @@ from pathlib import Path
 import cv2
 
 ROOT = Path(__file__).resolve().parents[1]
+INPUTS = {"unpaced": "synthetic:?realtime=0", "camera_30fps": "synthetic:?fps=30"}
+"""Frames as fast as the machine makes them (CPU-bound), and a 30 FPS camera."""
+
 WARMUP_S = 2.0
 """Frames in the first seconds after the first frame are not counted (imports, start-up, first layout)."""
 
@@ -103,11 +106,12 @@ def main() -> None:
     parser.add_argument("--seconds", type=float, default=10.0, help="length of each run")
     parser.add_argument("--repeat", type=int, default=3, help="runs per mode; the median is reported")
     parser.add_argument("--sizes", default="80x24,160x48", help="terminal sizes for the TUI runs")
+    parser.add_argument("--inputs", default="unpaced,camera_30fps", help="which inputs to run")
     args = parser.parse_args()
     if shutil.which("tmux") is None:
         sys.exit("bench_ui needs tmux (the TUI runs in a real terminal)")
     sizes = args.sizes.split(",")
-    inputs = {"unpaced": "synthetic:?realtime=0", "camera_30fps": "synthetic:?fps=30"}
+    inputs = {name: source for name, source in INPUTS.items() if name in args.inputs.split(",")}
     report: dict[str, object] = {"seconds": args.seconds, "repeat": args.repeat, "cpus": os.cpu_count(),
                                  "load_avg_1min": round(os.getloadavg()[0], 2), "inputs": inputs}
     ratios = []

@@ -35,17 +35,19 @@ class Tmux:
         return subprocess.run(["tmux", "-L", self.socket, *args], check=True, capture_output=True, text=True,
                               timeout=10).stdout
 
-    def start(self, *flags: str, tmp_path: Path) -> None:
+    def start(self, *flags: str, tmp_path: Path, colorterm: str = "") -> None:
         command = [sys.executable, "-m", "uav_tui", "--source", "synthetic:?fps=30", "--processor",
                    f"{ROOT / 'tests/tui/procs.py'}:RecordingProcessor", "--no-record", "--runs-dir",
                    str(tmp_path / "runs"), *flags]
         # The shell ignores SIGHUP so that it can write the exit status after a hang-up.
         script = f"trap '' HUP; cd {shlex.quote(str(tmp_path))}; {shlex.join(command)}; echo $? > {self.status}"
-        env = f"env PYTHONPATH={shlex.quote(str(ROOT))} TERM=xterm-256color"
+        env = f"env -u COLORTERM PYTHONPATH={shlex.quote(str(ROOT))} TERM=xterm-256color"
+        if colorterm:
+            env += f" COLORTERM={colorterm}"
         self.tmux("new-session", "-d", "-x", "80", "-y", "24", f"{env} sh -c {shlex.quote(script)}")
 
-    def screen(self) -> str:
-        return self.tmux("capture-pane", "-p")
+    def screen(self, escapes: bool = False) -> str:
+        return self.tmux("capture-pane", "-p", *(["-e"] if escapes else []))
 
     def log_shows(self, text: str) -> bool:
         """Whether the event log (the right half of the 80-column screen) shows ``text``; it wraps lines."""
@@ -130,3 +132,16 @@ def test_script_and_duration_run_with_the_dashboard(tmux, tmp_path, lines, statu
         wait(lambda: tmux.log_shows("F3 sent to the processor"), 30, "the script's F3 in the event log")
     wait(tmux.status.exists, 30, "the run to end by itself")
     assert tmux.status.read_text().strip() == status
+
+
+@pytest.mark.parametrize(("colorterm", "truecolor"), [("", False), ("truecolor", True)],
+                         ids=["256-colours", "truecolor"])
+def test_colours_follow_what_the_terminal_says_it_can_do(tmux, tmp_path, colorterm, truecolor):
+    tmux.start("--fc", "none", tmp_path=tmp_path, colorterm=colorterm)
+    wait(lambda: "RecordingProcessor" in tmux.screen() and tmux.log_shows("started"), 30, "the dashboard")
+    time.sleep(1)  # a few preview frames
+    screen = tmux.screen(escapes=True)
+    assert ("\x1b[38;2;" in screen or ";38;2;" in screen) is truecolor  # 24-bit colours only when announced
+    assert "38;5;" in screen or truecolor  # otherwise the 256-colour palette
+    tmux.keys("q")
+    wait(tmux.status.exists, 15, "the exit status")

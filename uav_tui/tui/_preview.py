@@ -5,8 +5,10 @@ from __future__ import annotations
 import logging
 import time
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
+import psutil
 from rich.segment import Segment
 from textual import events
 from textual.binding import Binding
@@ -31,12 +33,20 @@ MAX_CELLS = 1600
 CPU_BUDGET = 0.05
 """Largest share of one core the conversion may use: a big terminal on a slow board redraws less often."""
 
+BUSY_CPU_PERCENT = 90.0
+"""When the whole machine is this busy, the preview slows to :data:`BUSY_FPS`: the processor needs the CPU."""
+
+BUSY_FPS = 1.0
+
 
 MOVE_KEYS = Binding.Group("move box, shift+arrows: resize")
 
 
 class FramePreview(Widget, can_focus=True):
     """Draws the newest processed frame, letterboxed, at :data:`PREVIEW_FPS` while it is on screen.
+
+    It draws less often when converting a frame costs more than :data:`CPU_BUDGET` of a core, or when
+    the machine is saturated (:data:`BUSY_CPU_PERCENT`): the processor comes first.
 
     Drag with the mouse over the image, or press ``b`` for a keyboard box (arrows move, shift+arrows
     resize, Enter sends, Escape cancels), to choose a region; it is posted as :class:`RoiSelected`
@@ -82,6 +92,7 @@ class FramePreview(Widget, can_focus=True):
         self._layout: Letterbox | None = None
         self._drag_start: tuple[int, int] | None = None
         self._next_draw = 0.0
+        self._cpu_times: Any = None
         self.frames_drawn = 0
         """How many frames were converted to cells (for the benchmark and tests)."""
 
@@ -113,10 +124,23 @@ class FramePreview(Widget, can_focus=True):
         if layout is None or (layout.frame_w, layout.frame_h, layout.cols, layout.rows) != (width, height, cols, rows):
             layout = Letterbox.fit(width, height, cols, rows, MAX_CELLS)
         self._strips = render_cells(image, layout, self.selection)
-        self._next_draw = now + (time.monotonic() - now) / CPU_BUDGET
+        interval = (time.monotonic() - now) / CPU_BUDGET
+        if self._machine_busy_percent() >= BUSY_CPU_PERCENT:
+            interval = max(interval, 1 / BUSY_FPS)
+        self._next_draw = now + interval - 0.5 / self._fps  # the timer's period is the floor; half a tick slack
         self._layout, self._drawn = layout, key
         self.frames_drawn += 1
         self.refresh()
+
+    def _machine_busy_percent(self) -> float:
+        """How busy all cores were since the previous call (from /proc/stat via psutil; cheap)."""
+        times = psutil.cpu_times()
+        previous, self._cpu_times = self._cpu_times, times
+        if previous is None:
+            return 0.0
+        total = sum(times) - sum(previous)
+        idle = (times.idle + getattr(times, "iowait", 0.0)) - (previous.idle + getattr(previous, "iowait", 0.0))
+        return 100.0 * (1.0 - idle / total) if total > 0 else 0.0
 
     def render_line(self, y: int) -> Strip:
         if y < len(self._strips):
