@@ -79,16 +79,16 @@ def run(mode: str, source: str, seconds: float, workdir: Path) -> dict[str, floa
         subprocess.run([*command, "--no-ui"], env=env, cwd=workdir, stdout=subprocess.DEVNULL, timeout=seconds + 60)
     else:
         width, height = mode.split("x")
-        socket = f"bench-ui-{os.getpid()}-{time.monotonic_ns()}"  # a fresh server per run
+        socket = str(workdir / f"tmux-{time.monotonic_ns()}.sock")  # a fresh server per run, removed with workdir
         shell = " ".join(f"{k}={shlex.quote(v)}" for k, v in env.items() if k in ("PYTHONPATH", "BENCH_UI_OUT"))
-        subprocess.run(["tmux", "-L", socket, "new-session", "-d", "-x", width, "-y", height,
+        subprocess.run(["tmux", "-S", socket, "new-session", "-d", "-x", width, "-y", height,
                         f"cd {shlex.quote(str(workdir))} && env {shell} TERM=xterm-256color {shlex.join(command)}"],
                        check=True, timeout=10)
         try:
             while not out.exists() and time.monotonic() - started < seconds + 60:
                 time.sleep(0.2)
         finally:
-            subprocess.run(["tmux", "-L", socket, "kill-server"], capture_output=True, timeout=10)
+            subprocess.run(["tmux", "-S", socket, "kill-server"], capture_output=True, timeout=10)
     while not out.exists() and time.monotonic() - started < seconds + 60:
         time.sleep(0.1)
     result = json.loads(out.read_text())

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import os
 import re
 import shlex
 import shutil
@@ -25,14 +24,14 @@ pytestmark = pytest.mark.skipif(shutil.which("tmux") is None, reason="tmux is no
 
 
 class Tmux:
-    """One private tmux server (its own socket) running one 80x24 session."""
+    """One private tmux server (its own socket in the test's tmp_path) running one 80x24 session."""
 
     def __init__(self, tmp_path: Path) -> None:
-        self.socket = f"uav-tui-test-{os.getpid()}-{tmp_path.name}"
+        self.socket = str(tmp_path / "tmux.sock")  # its own server, its socket removed with tmp_path
         self.status = tmp_path / "status"
 
     def tmux(self, *args: str) -> str:
-        return subprocess.run(["tmux", "-L", self.socket, *args], check=True, capture_output=True, text=True,
+        return subprocess.run(["tmux", "-S", self.socket, *args], check=True, capture_output=True, text=True,
                               timeout=10).stdout
 
     def start(self, *flags: str, tmp_path: Path, colorterm: str = "") -> None:
@@ -66,7 +65,7 @@ class Tmux:
         return next(child.pid for child in shell.children() if "python" in child.name().lower())
 
     def kill(self) -> None:
-        subprocess.run(["tmux", "-L", self.socket, "kill-server"], capture_output=True, timeout=10)
+        subprocess.run(["tmux", "-S", self.socket, "kill-server"], capture_output=True, timeout=10)
 
 
 @pytest.fixture
