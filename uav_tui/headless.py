@@ -8,6 +8,7 @@ import json
 import signal
 import sys
 import time
+from collections.abc import Callable
 from dataclasses import asdict
 from pathlib import Path
 from typing import TextIO
@@ -57,6 +58,20 @@ def format_status(status: CoreStatus, elapsed_s: float) -> str:
     if status.last_decision:
         line += f" ({status.last_decision})"
     return line
+
+
+async def run_script(core: UavCore, script: list[tuple[int, Command]], say: Callable[[str], None]) -> str:
+    """Run ``--script`` lines through ``core.execute`` (``wait`` sleeps); returns "" or why it stopped early."""
+    for number, command in script:
+        try:
+            if command.word == "wait":
+                await asyncio.sleep(command.args[0])
+            else:
+                await core.execute(command, origin="script")
+        except UavError as exc:
+            say(f"script line {number} ({command}) failed: {exc}")
+            return f"script line {number} failed"
+    return ""
 
 
 class HeadlessRunner:
@@ -121,18 +136,11 @@ class HeadlessRunner:
 
     async def _run_script(self) -> None:
         assert self.script is not None
-        for number, command in self.script:
-            try:
-                if command.word == "wait":
-                    await asyncio.sleep(command.args[0])
-                else:
-                    await self.core.execute(command, origin="script")
-            except UavError as exc:
-                self._say(f"script line {number} ({command}) failed: {exc}")
-                self.exit_code = EXIT_SCRIPT_FAILED
-                self.request_stop(f"script line {number} failed")
-                return
-        if self.duration is None:
+        failure = await run_script(self.core, self.script, self._say)
+        if failure:
+            self.exit_code = EXIT_SCRIPT_FAILED
+            self.request_stop(failure)
+        elif self.duration is None:
             self.request_stop("script finished")
 
     async def _print_status(self, started: float) -> None:

@@ -1,0 +1,128 @@
+"""Keys without a vehicle (``--fc none``): processor keys, reload, dimmed vehicle keys, help, quit."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+from uav_tui.commands import parse
+from uav_tui.core import CoreState
+from uav_tui.errors import CommandError
+from uav_tui.tui.app import KEYS
+from uav_tui.tui.screens import ConfirmScreen
+
+from .conftest import HERE, in_log, started, wait_for
+
+
+def tui_commands(app) -> list[str]:
+    """The commands the dashboard sent (the core logs each one, then its result, as command events)."""
+    return [e.message for e in app.core.events.recent if e.kind == "command" and e.origin == "tui"
+            and e.level == "info" and _is_command(e.message)]
+
+
+def _is_command(text: str) -> bool:
+    try:
+        return parse(text) is not None
+    except CommandError:
+        return False
+
+
+async def test_function_keys_reach_the_processor(make_app):
+    app = make_app()
+    async with app.run_test(size=(80, 24)) as pilot:
+        await started(pilot)
+        processor = app.core.worker.processor.instance
+        for key in ("f2", "f1", "f4", "f3"):
+            await pilot.press(key)
+        await wait_for(pilot, lambda: len(processor.buttons) == 4, what="four F-keys")
+        assert processor.buttons == [2, 1, 4, 3]
+        assert tui_commands(app)[:4] == ["f 2", "f 1", "f 4", "f 3"]
+
+
+async def test_vehicle_keys_are_dimmed_and_do_nothing_without_a_vehicle(make_app):
+    app = make_app()
+    async with app.run_test(size=(80, 24)) as pilot:
+        await started(pilot)
+        bindings = app.screen.active_bindings
+        for key in (k for k in KEYS if k.command.split()[0] in ("arm", "takeoff", "land", "hold", "autonomy")):
+            assert bindings[key.key][2] is False, key  # (node, binding, enabled, tooltip)
+        assert bindings["f1"][2] and bindings["q"][2]
+        await pilot.press("a", "h")
+        await pilot.pause(0.2)
+        assert not isinstance(app.screen, ConfirmScreen)
+        assert tui_commands(app) == []
+
+
+async def test_snapshot_key_sends_the_snapshot_command(make_app):
+    app = make_app()
+    async with app.run_test(size=(80, 24)) as pilot:
+        await started(pilot)
+        await pilot.press("s")
+        await wait_for(pilot, lambda: "snapshot" in tui_commands(app), what="snapshot command")
+
+
+async def test_reload_keeps_the_old_processor_on_a_broken_file_and_loads_a_fixed_one(make_app, tmp_path: Path):
+    mine = tmp_path / "mine.py"
+    shutil.copy(HERE / "procs.py", mine)
+    app = make_app(processor=f"{mine}:RecordingProcessor")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await started(pilot)
+        old = app.core.worker.processor.instance
+        mine.write_text(mine.read_text() + "\n    def broken(self:\n")
+        await pilot.press("R")
+        await wait_for(pilot, lambda: in_log(app, "reload failed"), what="the reload error in the log")
+        assert in_log(app, "mine.py:25: SyntaxError")
+        assert any(n.severity == "error" and "reload failed" in n.message for n in app._notifications)
+        frames = old.frames
+        await wait_for(pilot, lambda: old.frames > frames + 3, what="the old processor to keep processing")
+        assert app.core.worker.processor.instance is old
+
+        shutil.copy(HERE / "procs.py", mine)
+        await pilot.press("R")
+        await wait_for(pilot, lambda: app.core.worker.processor.instance is not old, what="the new instance")
+        new = app.core.worker.processor.instance
+        assert new.tmMgr is app.core.telemetry
+        await wait_for(pilot, lambda: new.frames > 0, what="the new processor to process")
+
+
+async def test_help_key_shows_the_keys(make_app):
+    app = make_app()
+    async with app.run_test(size=(80, 24)) as pilot:
+        await started(pilot)
+        await pilot.press("question_mark")
+        await pilot.pause(0.1)
+        assert app.screen.query("HelpPanel")
+
+
+async def test_quit_key_stops_the_core_and_exits(make_app):
+    app = make_app()
+    async with app.run_test(size=(80, 24)) as pilot:
+        await started(pilot)
+        await pilot.press("q")
+        await wait_for(pilot, lambda: app.core.state is CoreState.STOPPED, what="the core to stop")
+        await wait_for(pilot, lambda: not app.is_running, what="the app to exit")
+    assert app.return_code == 0
+
+
+async def test_a_processor_that_cannot_load_ends_the_app_with_file_and_line(make_app, tmp_path: Path):
+    broken = tmp_path / "broken.py"
+    broken.write_text("import numpy\n\nclass Broken:\n    def photo_processing(self, frame)\n        pass\n")
+    app = make_app(processor=f"{broken}:Broken")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await wait_for(pilot, lambda: not app.is_running, what="the app to exit")
+    assert app.return_code == 2
+    assert f"{broken}:4" in app.start_error and "SyntaxError" in app.start_error
+
+
+async def test_typed_commands_go_the_same_way_and_typos_are_shown(make_app):
+    app = make_app()
+    async with app.run_test(size=(80, 24)) as pilot:
+        await started(pilot)
+        await pilot.press("colon", *"f 4", "enter")
+        processor = app.core.worker.processor.instance
+        await wait_for(pilot, lambda: processor.buttons == [4], what="the typed F4")
+        await pilot.press("colon", *"fly away", "enter")
+        await wait_for(pilot, lambda: in_log(app, "unknown command 'fly'"), what="the typo in the log")
+        await pilot.press("colon", *"f 1", "escape")
+        await pilot.pause(0.2)
+        assert processor.buttons == [4] and app.is_running

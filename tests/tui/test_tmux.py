@@ -1,0 +1,146 @@
+"""End to end, as an operator over SSH: ``python -m uav_tui`` in a real terminal (tmux), keys, screen, hang-up."""
+
+from __future__ import annotations
+
+import re
+import shlex
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+import psutil
+import pytest
+
+ROOT = Path(__file__).parents[2]
+
+LOG_COLUMN = 40
+"""Where the event log starts on an 80-column screen (the left column of panels is 40 wide)."""
+
+pytestmark = pytest.mark.skipif(shutil.which("tmux") is None, reason="tmux is not installed")
+
+
+class Tmux:
+    """One private tmux server (its own socket in the test's tmp_path) running one 80x24 session."""
+
+    def __init__(self, tmp_path: Path) -> None:
+        self.socket = str(tmp_path / "tmux.sock")  # its own server, its socket removed with tmp_path
+        self.status = tmp_path / "status"
+
+    def tmux(self, *args: str) -> str:
+        return subprocess.run(["tmux", "-S", self.socket, *args], check=True, capture_output=True, text=True,
+                              timeout=10).stdout
+
+    def start(self, *flags: str, tmp_path: Path, colorterm: str = "") -> None:
+        command = [sys.executable, "-m", "uav_tui", "--source", "synthetic:?fps=30", "--processor",
+                   f"{ROOT / 'tests/tui/procs.py'}:RecordingProcessor", "--no-record", "--runs-dir",
+                   str(tmp_path / "runs"), *flags]
+        # The shell ignores SIGHUP so that it can write the exit status after a hang-up.
+        script = f"trap '' HUP; cd {shlex.quote(str(tmp_path))}; {shlex.join(command)}; echo $? > {self.status}"
+        env = f"env -u COLORTERM PYTHONPATH={shlex.quote(str(ROOT))} TERM=xterm-256color"
+        if colorterm:
+            env += f" COLORTERM={colorterm}"
+        self.tmux("new-session", "-d", "-x", "80", "-y", "24", f"{env} sh -c {shlex.quote(script)}")
+
+    def screen(self, escapes: bool = False) -> str:
+        return self.tmux("capture-pane", "-p", *(["-e"] if escapes else []))
+
+    def log_shows(self, text: str) -> bool:
+        """Whether the event log (the right half of the 80-column screen) shows ``text``; it wraps lines."""
+        try:
+            screen = self.screen()
+        except subprocess.CalledProcessError:  # the session ended with the program
+            return False
+        log = "".join(line[LOG_COLUMN:] for line in screen.splitlines())
+        return "".join(text.split()) in "".join(log.split())
+
+    def keys(self, *keys: str) -> None:
+        self.tmux("send-keys", *keys)
+
+    def app_pid(self) -> int:
+        shell = psutil.Process(int(self.tmux("display-message", "-p", "#{pane_pid}").strip()))
+        return next(child.pid for child in shell.children() if "python" in child.name().lower())
+
+    def kill(self) -> None:
+        subprocess.run(["tmux", "-S", self.socket, "kill-server"], capture_output=True, timeout=10)
+
+
+@pytest.fixture
+def tmux(tmp_path: Path):
+    session = Tmux(tmp_path)
+    yield session
+    session.kill()
+
+
+def wait(condition: Callable[[], object], timeout: float, what: str) -> object:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        result = condition()
+        if result:
+            return result
+        time.sleep(0.1)
+    pytest.fail(f"timed out waiting for {what}")
+
+
+def test_dashboard_in_a_real_terminal_takes_keys_and_quits(tmux, tmp_path):
+    tmux.start("--fc", "none", tmp_path=tmp_path)
+    wait(lambda: "RecordingProcessor" in tmux.screen() and re.search(r"proc +[1-9]", tmux.screen()), 30,
+         "the dashboard with frames flowing")
+    screen = tmux.screen()
+    for text in ("Telemetry", "Pipeline", "Algorithm", "Preview", "Events", "AUTONOMY", "Quit", "Hold"):
+        assert text in screen, text
+    assert len(screen.splitlines()) <= 24 and all(len(line) <= 80 for line in screen.splitlines())
+    tmux.keys("F2")
+    wait(lambda: tmux.log_shows("F2 sent to the processor"), 10, "F2 in the event log")
+    tmux.keys("q")
+    wait(tmux.status.exists, 15, "the exit status")
+    assert tmux.status.read_text().strip() == "0"
+
+
+@pytest.mark.parametrize(("policy", "hangup"), [("stop", "close"), ("stop", "sighup"), ("continue", "close")],
+                         ids=["stop-terminal-closed", "stop-sighup", "continue-terminal-closed"])
+def test_hangup_stops_or_continues_headless(tmux, tmp_path, policy, hangup):
+    tmux.start("--fc", "none", "--on-hangup", policy, tmp_path=tmp_path)
+    wait(lambda: "RecordingProcessor" in tmux.screen(), 30, "the dashboard")
+    app = psutil.Process(tmux.app_pid())
+    if hangup == "close":
+        tmux.kill()  # the terminal is gone; the shell in between swallows SIGHUP: only EIO tells
+    else:
+        app.send_signal(signal.SIGHUP)
+    if policy == "stop":
+        wait(tmux.status.exists, 15, "the exit after SIGHUP")
+    else:
+        time.sleep(2)
+        assert app.is_running() and not tmux.status.exists()
+        assert app.cpu_percent(interval=1.0) < 50  # headless: not spinning on the dead terminal
+        app.send_signal(signal.SIGTERM)
+        wait(tmux.status.exists, 15, "the exit after SIGTERM")
+    assert tmux.status.read_text().strip() == "0"
+
+
+@pytest.mark.parametrize(("lines", "status"), [("f 3\nwait 30\n", "0"), ("f 3\nroi 9000 0 5 5\nwait 30\n", "1")],
+                         ids=["duration-ends-the-run", "failed-script-line-ends-it"])
+def test_script_and_duration_run_with_the_dashboard(tmux, tmp_path, lines, status):
+    script = tmp_path / "mission.txt"
+    script.write_text(lines)
+    tmux.start("--fc", "none", "--script", str(script), "--duration", "4", tmp_path=tmp_path)
+    if status == "0":  # (a failing script ends the run at once, too fast to read the screen)
+        wait(lambda: tmux.log_shows("F3 sent to the processor"), 30, "the script's F3 in the event log")
+    wait(tmux.status.exists, 30, "the run to end by itself")
+    assert tmux.status.read_text().strip() == status
+
+
+@pytest.mark.parametrize(("colorterm", "truecolor"), [("", False), ("truecolor", True)],
+                         ids=["256-colours", "truecolor"])
+def test_colours_follow_what_the_terminal_says_it_can_do(tmux, tmp_path, colorterm, truecolor):
+    tmux.start("--fc", "none", tmp_path=tmp_path, colorterm=colorterm)
+    wait(lambda: "RecordingProcessor" in tmux.screen() and tmux.log_shows("started"), 30, "the dashboard")
+    time.sleep(1)  # a few preview frames
+    screen = tmux.screen(escapes=True)
+    assert ("\x1b[38;2;" in screen or ";38;2;" in screen) is truecolor  # 24-bit colours only when announced
+    assert "38;5;" in screen or truecolor  # otherwise the 256-colour palette
+    tmux.keys("q")
+    wait(tmux.status.exists, 15, "the exit status")

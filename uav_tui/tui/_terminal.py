@@ -1,0 +1,124 @@
+"""Losing the terminal (the SSH session dropped) must never block or kill the run.
+
+A hang-up does not always arrive as SIGHUP: when the shell in between ignores or swallows it, the
+process only notices that the terminal answers every call with EIO. Textual writes the screen from a
+writer thread through a bounded queue; if that thread dies on EIO, the queue fills and the event
+loop blocks for good (and with it the vehicle's hold). So:
+
+- :class:`TerminalWatch` notices the loss three ways (SIGHUP, a failed write, EIO on a periodic
+  ``tcgetattr``), points fds 0, 1, 2 at /dev/null at once, and reports it on the loop, once;
+- :func:`driver_for` gives Textual a driver whose writes never raise.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import errno
+import logging
+import os
+import sys
+import termios
+import threading
+from collections.abc import Callable
+from typing import Any, TextIO
+
+from textual.drivers.linux_driver import LinuxDriver
+
+logger = logging.getLogger(__name__)
+
+CHECK_PERIOD_S = 0.5
+"""How often the watch thread asks the terminal whether it is still there."""
+
+
+class TerminalWatch:
+    """Calls ``on_lost(reason)`` on the loop, once, when the controlling terminal goes away.
+
+    Args:
+        on_lost: what the session does (hold and exit, or carry on headless).
+    """
+
+    def __init__(self, on_lost: Callable[[str], None]) -> None:
+        self.on_lost = on_lost
+        self.lost_reason = ""
+        """Why the terminal counts as lost ("" while it is there)."""
+        self._lock = threading.Lock()
+        self._stop = threading.Event()
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._thread: threading.Thread | None = None
+
+    def start(self) -> None:
+        """Start watching (from the loop that ``on_lost`` must run on)."""
+        self._loop = asyncio.get_running_loop()
+        self._thread = threading.Thread(target=self._poll, name="terminal-watch", daemon=True)
+        self._thread.start()
+
+    def close(self) -> None:
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(timeout=2 * CHECK_PERIOD_S)
+
+    def lost(self, reason: str) -> None:
+        """The terminal is gone (any thread): detach from it now, report on the loop once."""
+        with self._lock:
+            if self.lost_reason:
+                return
+            self.lost_reason = reason
+        _detach_from_terminal()
+        loop = self._loop
+        if loop is not None and not loop.is_closed():
+            loop.call_soon_threadsafe(self.on_lost, reason)
+
+    def _poll(self) -> None:
+        fd = sys.__stdin__.fileno() if sys.__stdin__ is not None else 0
+        while not self._stop.wait(CHECK_PERIOD_S) and not self.lost_reason:
+            try:
+                termios.tcgetattr(fd)
+            except termios.error as exc:
+                if exc.args and exc.args[0] == errno.EIO:
+                    self.lost("the terminal stopped answering (EIO)")
+                    return
+
+
+def driver_for(watch: TerminalWatch) -> type[LinuxDriver]:
+    """A LinuxDriver whose screen writes report a lost terminal to ``watch`` instead of raising."""
+
+    class HangupSafeDriver(LinuxDriver):
+        def __init__(self, *args: Any, **kwargs: Any) -> None:
+            super().__init__(*args, **kwargs)
+            self._file = _QuietFile(self._file, watch)
+
+    return HangupSafeDriver
+
+
+class _QuietFile:
+    """Forwards writes to the terminal; an OSError means it is gone: reported, then writes are dropped."""
+
+    def __init__(self, file: TextIO, watch: TerminalWatch) -> None:
+        self._file = file
+        self._watch = watch
+
+    def write(self, text: str) -> None:
+        try:
+            self._file.write(text)
+        except OSError as exc:
+            self._watch.lost(f"writing to the terminal failed: {exc.strerror}")
+
+    def flush(self) -> None:
+        try:
+            self._file.flush()
+        except OSError as exc:
+            self._watch.lost(f"writing to the terminal failed: {exc.strerror}")
+
+    def fileno(self) -> int:
+        return self._file.fileno()
+
+
+def _detach_from_terminal() -> None:
+    """Point stdin, stdout and stderr at /dev/null: reads and writes on the dead terminal would fail."""
+    try:
+        null = os.open(os.devnull, os.O_RDWR)
+        for fd in (0, 1, 2):
+            os.dup2(null, fd)
+        os.close(null)
+    except OSError:
+        logger.exception("could not detach from the lost terminal")
