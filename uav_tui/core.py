@@ -16,13 +16,14 @@ from typing import TYPE_CHECKING, Any
 
 from controllers import connect_controller
 from controllers.base import FlightController
-from processors import LoadedProcessor, load_processor
+from processors import load_processor
 from sources import CameraSource, open_source
-from uav_tui.autonomy import AutonomyGate, check_vector
+from uav_tui.autonomy import AutonomyGate
 from uav_tui.commands import VEHICLE_COMMANDS, Command, parse
 from uav_tui.config import Config
-from uav_tui.errors import CommandError, NoVehicle, ProcessorLoadError, SourceError, UavError
+from uav_tui.errors import NoVehicle, SourceError, UavError
 from uav_tui.events import EventLog
+from uav_tui.operations import Operations
 from uav_tui.recording import Recorder, describe
 from uav_tui.status import CoreStatus
 from uav_tui.telemetry import TelemetryManager
@@ -67,6 +68,7 @@ class UavCore:
         self._frame_listeners: list[Callable[[ProcessedFrame], None]] = []
         self._tasks: list[asyncio.Task[Any]] = []
         self._told_not_recording = False
+        self._operations = Operations(self)
         self.web: WebServer | None = None
         """The web page's WebServer (``web.url`` has the token) when ``web`` is on, else None."""
         self.camera_tracking: CameraTracking | None = None
@@ -91,7 +93,7 @@ class UavCore:
             self.telemetry = TelemetryManager(self.controller)
             self.gate.telemetry, self.gate.controller = self.telemetry, self.controller
             processor.instance.tmMgr = self.telemetry
-            self.source = await self._open_source(self.config.source)
+            self.source = await self.open_source(self.config.source)
             self.worker = ProcessorWorker(processor, self._on_result)
             if self.config.recording.record:
                 self.recorder = await loop.run_in_executor(None, functools.partial(
@@ -206,7 +208,8 @@ class UavCore:
         frame = self.source.buffer.latest() if self.source is not None else None
         return None if frame is None else frame.age_s
 
-    async def _open_source(self, uri: str) -> CameraSource:
+    async def open_source(self, uri: str) -> CameraSource:
+        """Open the camera ``uri`` names (in a thread: opening can block), with the sim vehicle's pose for sim:."""
         context: dict[str, Any] = {}
         if uri.startswith("sim:"):
             sim = getattr(self.controller, "sim", None)
@@ -232,117 +235,13 @@ class UavCore:
                                     "MAVLink connection string")
                 if self.gate.enabled:  # any operator command pre-empts autonomy at once
                     await self.gate.disable(origin, f"pre-empted by operator command '{parsed}'", hold=False)
-            handler = getattr(self, f"_do_{parsed.word}")
-            message = await handler(*parsed.args, origin=origin)
+            message = await self._operations.run(parsed, origin)
         except UavError as exc:
             self.events.emit("error", "command", f"{parsed}: {exc}", origin)
             raise
         if message:
             self.events.emit("info", "command", message, origin)
         return message
-
-    async def _do_arm(self, *, origin: str) -> str:
-        await self._vehicle().arm()
-        return "armed"
-
-    async def _do_disarm(self, *, origin: str) -> str:
-        await self._vehicle().disarm()
-        return "disarmed"
-
-    async def _do_takeoff(self, altitude: float | None = None, *, origin: str) -> str:
-        altitude = altitude or self.config.safety.takeoff_alt
-        await self._vehicle().takeoff(altitude)
-        return f"taking off to {altitude:g} m"
-
-    async def _do_land(self, *, origin: str) -> str:
-        await self._vehicle().land()
-        return "landing"
-
-    async def _do_rtl(self, *, origin: str) -> str:
-        await self._vehicle().return_to_home()
-        return "returning to launch"
-
-    async def _do_hold(self, *, origin: str) -> str:
-        await self._vehicle().hold()
-        return "holding"
-
-    async def _do_orbit(self, radius: float, speed: float, *, origin: str) -> str:
-        await self._vehicle().do_orbit(radius, speed)
-        return f"orbiting at {radius:g} m, {speed:g} m/s"
-
-    async def _do_vector(self, vx: float, vy: float, t: float, *, origin: str) -> str:
-        vector, note = check_vector((vx, vy, t), self.config.safety)
-        assert vector is not None  # parse() already rejected non-finite values and t <= 0
-        await self._vehicle().set_fly_vector(*vector)
-        return f"flying vector {vector}" + (f" ({note})" if note else "")
-
-    async def _do_autonomy(self, switch: str, *, origin: str) -> str:
-        if switch == "on" or (switch == "toggle" and not self.gate.enabled):
-            self.gate.enable(origin)
-        else:
-            await self.gate.disable(origin)
-        return ""
-
-    async def _do_f(self, button: int, *, origin: str) -> str:
-        await self._call_processor("customize_processing", button)
-        return f"F{button} sent to the processor"
-
-    async def _do_roi(self, x: int, y: int, w: int, h: int, *, origin: str) -> str:
-        width, height = self.source.get_frame_size() if self.source else (0, 0)
-        if w <= 0 or h <= 0 or x + w > width or y + h > height:
-            raise CommandError(f"roi ({x}, {y}, {w}, {h}) is not inside the {width}x{height} frame", key="roi")
-        await self._call_processor("catch_cmd", (x, y, w, h))
-        return f"target region ({x}, {y}, {w}, {h}) sent to the processor"
-
-    async def _do_snapshot(self, *, origin: str) -> str:
-        if self.recorder is None:
-            raise UavError("snapshot: recording is off (started with --no-record)")
-        return self.recorder.snapshot()
-
-    async def _do_reload(self, *, origin: str) -> str:
-        assert self.worker is not None
-        current = self.worker.processor
-        try:
-            fresh = await asyncio.get_running_loop().run_in_executor(None, functools.partial(
-                load_processor, current.spec, current.kwargs, fresh=True))
-        except ProcessorLoadError as exc:
-            raise ProcessorLoadError(f"reload failed, {current.info.name} keeps running: {exc}", path=exc.path,
-                                     class_name=exc.class_name, missing=exc.missing) from exc
-        fresh.instance.tmMgr = self.telemetry
-        await self.worker.replace(fresh)
-        self.processor_error = None
-        return f"processor {fresh.info.name} reloaded"
-
-    async def _do_source(self, uri: str, *, origin: str) -> str:
-        assert self.worker is not None
-        new = await self._open_source(uri)
-        old, self.source = self.source, new
-        self.worker.attach(new.buffer)
-        if old is not None:
-            await asyncio.get_running_loop().run_in_executor(None, old.close)
-        width, height = new.get_frame_size()
-        return f"camera switched to {uri} ({width}x{height})"
-
-    async def _do_wait(self, seconds: float, *, origin: str) -> str:
-        raise CommandError("wait is for --script files only", key="command")
-
-    async def _do_quit(self, *, origin: str) -> str:
-        self.quit_requested.set()
-        return "quit requested"
-
-    def _vehicle(self) -> FlightController:
-        assert self.controller is not None
-        return self.controller
-
-    async def _call_processor(self, method: str, *args: Any) -> None:
-        assert self.worker is not None
-        loaded: LoadedProcessor = self.worker.processor
-        if method not in loaded.info.capabilities:
-            raise UavError(f"processor {loaded.info.name} has no {method}() method")
-        try:
-            await self.worker.call(method, *args)
-        except Exception as exc:  # the researcher's code raised: report it, keep running
-            raise UavError(f"{loaded.info.name}.{method}{args!r} raised {type(exc).__name__}: {exc}") from exc
 
     # -- status ----------------------------------------------------------------------------------
 

@@ -1,0 +1,128 @@
+"""What each operator command does to a running core (``UavCore.execute`` parses, logs and dispatches)."""
+
+from __future__ import annotations
+
+import asyncio
+import functools
+from typing import TYPE_CHECKING, Any
+
+from processors import load_processor
+from uav_tui.autonomy import check_vector
+from uav_tui.commands import Command
+from uav_tui.errors import CommandError, ProcessorLoadError, UavError
+
+if TYPE_CHECKING:
+    from controllers.base import FlightController
+    from uav_tui.core import UavCore
+
+PLAIN_VEHICLE_CALLS: dict[str, tuple[str, str]] = {
+    "arm": ("arm", "armed"),
+    "disarm": ("disarm", "disarmed"),
+    "land": ("land", "landing"),
+    "rtl": ("return_to_home", "returning to launch"),
+    "hold": ("hold", "holding"),
+}
+"""Commands that are one FlightController call without arguments: word -> (method, what to report)."""
+
+
+class Operations:
+    """One coroutine per command word; each returns what happened or raises UavError saying why not."""
+
+    def __init__(self, core: UavCore) -> None:
+        self.core = core
+
+    async def run(self, command: Command, origin: str) -> str:
+        plain = PLAIN_VEHICLE_CALLS.get(command.word)
+        if plain is not None:
+            method, done = plain
+            await getattr(self._vehicle(), method)()
+            return done
+        return await getattr(self, f"_{command.word}")(*command.args, origin=origin)
+
+    async def _takeoff(self, altitude: float | None = None, *, origin: str) -> str:
+        altitude = altitude or self.core.config.safety.takeoff_alt
+        await self._vehicle().takeoff(altitude)
+        return f"taking off to {altitude:g} m"
+
+    async def _orbit(self, radius: float, speed: float, *, origin: str) -> str:
+        await self._vehicle().do_orbit(radius, speed)
+        return f"orbiting at {radius:g} m, {speed:g} m/s"
+
+    async def _vector(self, vx: float, vy: float, t: float, *, origin: str) -> str:
+        vector, note = check_vector((vx, vy, t), self.core.config.safety)
+        assert vector is not None  # parse() already rejected non-finite values and t <= 0
+        await self._vehicle().set_fly_vector(*vector)
+        return f"flying vector {vector}" + (f" ({note})" if note else "")
+
+    async def _autonomy(self, switch: str, *, origin: str) -> str:
+        gate = self.core.gate
+        if switch == "on" or (switch == "toggle" and not gate.enabled):
+            gate.enable(origin)
+        else:
+            await gate.disable(origin)
+        return ""
+
+    async def _f(self, button: int, *, origin: str) -> str:
+        await self._call_processor("customize_processing", button)
+        return f"F{button} sent to the processor"
+
+    async def _roi(self, x: int, y: int, w: int, h: int, *, origin: str) -> str:
+        source = self.core.source
+        width, height = source.get_frame_size() if source else (0, 0)
+        if w <= 0 or h <= 0 or x + w > width or y + h > height:
+            raise CommandError(f"roi ({x}, {y}, {w}, {h}) is not inside the {width}x{height} frame", key="roi")
+        await self._call_processor("catch_cmd", (x, y, w, h))
+        return f"target region ({x}, {y}, {w}, {h}) sent to the processor"
+
+    async def _snapshot(self, *, origin: str) -> str:
+        if self.core.recorder is None:
+            raise UavError("snapshot: recording is off (started with --no-record)")
+        return self.core.recorder.snapshot()
+
+    async def _reload(self, *, origin: str) -> str:
+        core = self.core
+        assert core.worker is not None
+        current = core.worker.processor
+        try:
+            fresh = await asyncio.get_running_loop().run_in_executor(None, functools.partial(
+                load_processor, current.spec, current.kwargs, fresh=True))
+        except ProcessorLoadError as exc:
+            raise ProcessorLoadError(f"reload failed, {current.info.name} keeps running: {exc}", path=exc.path,
+                                     class_name=exc.class_name, missing=exc.missing) from exc
+        fresh.instance.tmMgr = core.telemetry
+        await core.worker.replace(fresh)
+        core.processor_error = None
+        return f"processor {fresh.info.name} reloaded"
+
+    async def _source(self, uri: str, *, origin: str) -> str:
+        core = self.core
+        assert core.worker is not None
+        new = await core.open_source(uri)
+        old, core.source = core.source, new
+        core.worker.attach(new.buffer)
+        if old is not None:
+            await asyncio.get_running_loop().run_in_executor(None, old.close)
+        width, height = new.get_frame_size()
+        return f"camera switched to {uri} ({width}x{height})"
+
+    async def _wait(self, seconds: float, *, origin: str) -> str:
+        raise CommandError("wait is for --script files only", key="command")
+
+    async def _quit(self, *, origin: str) -> str:
+        self.core.quit_requested.set()
+        return "quit requested"
+
+    def _vehicle(self) -> FlightController:
+        assert self.core.controller is not None  # execute() refuses vehicle commands without one
+        return self.core.controller
+
+    async def _call_processor(self, method: str, *args: Any) -> None:
+        worker = self.core.worker
+        assert worker is not None
+        loaded = worker.processor
+        if method not in loaded.info.capabilities:
+            raise UavError(f"processor {loaded.info.name} has no {method}() method")
+        try:
+            await worker.call(method, *args)
+        except Exception as exc:  # the researcher's code raised: report it, keep running
+            raise UavError(f"{loaded.info.name}.{method}{args!r} raised {type(exc).__name__}: {exc}") from exc
