@@ -71,11 +71,24 @@ class FrameBuffer:
         frame = self._frame
         return 0 if frame is None else frame.seq
 
+    def peek(self) -> Frame | None:
+        """The newest frame without marking it read (for watchdogs and status)."""
+        return self._frame
+
+    def wait_read(self, timeout: float) -> bool:
+        """Block up to ``timeout`` s until a reader has taken the newest frame; True once it has.
+
+        Lets a replaying source run in lockstep with its reader instead of decoding frames nobody takes.
+        """
+        with self._cond:
+            return self._cond.wait_for(lambda: self._frame is None or self._read_seq >= self._frame.seq, timeout)
+
     def latest(self) -> Frame | None:
         """The newest frame, or None before the first capture. Marks it as read."""
         with self._cond:
-            if self._frame is not None:
-                self._read_seq = max(self._read_seq, self._frame.seq)
+            if self._frame is not None and self._frame.seq > self._read_seq:
+                self._read_seq = self._frame.seq
+                self._cond.notify_all()
             return self._frame
 
     def wait_newer(self, seq: int, timeout: float) -> Frame | None:
@@ -84,7 +97,9 @@ class FrameBuffer:
             if not self._cond.wait_for(lambda: self._frame is not None and self._frame.seq > seq, timeout):
                 return None
             assert self._frame is not None
-            self._read_seq = max(self._read_seq, self._frame.seq)
+            if self._frame.seq > self._read_seq:
+                self._read_seq = self._frame.seq
+                self._cond.notify_all()
             return self._frame
 
     def add_listener(self, listener: Callable[[Frame], None]) -> None:

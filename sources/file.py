@@ -20,8 +20,9 @@ DEFAULT_FPS = 30.0
 class FileSource(VideoCaptureSource):
     """Replays an MP4/AVI (anything FFmpeg reads), starting over at the end.
 
-    URI: ``file:PATH[?realtime=1&width=W&height=H]``. ``realtime=0`` delivers frames as fast as
-    they decode; otherwise they come at the file's FPS.
+    URI: ``file:PATH[?realtime=1&width=W&height=H]``. Frames come at the file's FPS, like a camera
+    (a slow reader skips frames). ``realtime=0`` replays every frame, as fast as the reader takes them:
+    the next frame is decoded while the reader works on the current one, and none is skipped.
     """
 
     kind = "file"
@@ -62,7 +63,11 @@ class FileSource(VideoCaptureSource):
 
     def _grab(self) -> np.ndarray | None:
         assert self._pacer is not None
-        if not self._pacer.wait():
+        if not self.realtime:
+            while not self.buffer.wait_read(timeout=0.1):
+                if self._stop.is_set():
+                    return None
+        elif not self._pacer.wait():
             return None
         return super()._grab()
 

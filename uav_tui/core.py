@@ -205,7 +205,7 @@ class UavCore:
             listener(result)
 
     def _newest_frame_age(self) -> float | None:
-        frame = self.source.buffer.latest() if self.source is not None else None
+        frame = self.source.buffer.peek() if self.source is not None else None
         return None if frame is None else frame.age_s
 
     async def open_source(self, uri: str) -> CameraSource:

@@ -27,7 +27,11 @@ def _collect(buffer: FrameBuffer, duration_s: float) -> list[tuple[int, int]]:
 def test_loops_at_end_of_file(video_file) -> None:
     source = open_source(f"file:{video_file(frames=6, fps=30)}?realtime=0")
     try:
-        assert source.buffer.wait_newer(20, timeout=10) is not None
+        seq = 0
+        while seq < 20:  # a reader taking every frame
+            frame = source.buffer.wait_newer(seq, timeout=10)
+            assert frame is not None
+            seq = frame.seq
         props = source.get_properties()
         assert props["frame_count"] == 6
         assert props["loops"] >= 3
@@ -56,11 +60,27 @@ def test_realtime_off_delivers_faster_than_the_file_rate(video_file) -> None:
     counts = {}
     for realtime in (1, 0):
         source = open_source(f"file:{clip}?realtime={realtime}")
-        time.sleep(0.5)
-        counts[realtime] = source.get_properties()["frames_captured"]
+        counts[realtime] = len(_collect(source.buffer, 0.5))
         source.close()
     assert counts[1] <= 8
     assert counts[0] > 3 * counts[1]
+
+
+def test_realtime_off_replays_every_frame_in_lockstep_with_the_reader(video_file) -> None:
+    source = open_source(f"file:{video_file(frames=12, fps=30)}?realtime=0")
+    try:
+        seqs = []
+        for _ in range(30):  # a slow reader: the source waits for it instead of skipping frames
+            frame = source.buffer.wait_newer(seqs[-1] if seqs else 0, timeout=5)
+            assert frame is not None
+            seqs.append(frame.seq)
+            time.sleep(0.01)
+        assert seqs == list(range(1, 31))
+        assert source.get_properties()["frames_dropped"] == 0
+        time.sleep(0.2)
+        assert source.buffer.captured <= 31  # with no reader it decodes one frame ahead, then waits
+    finally:
+        source.close()
 
 
 def test_resizes_to_the_requested_size(video_file) -> None:
