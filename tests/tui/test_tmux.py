@@ -133,6 +133,18 @@ def test_script_and_duration_run_with_the_dashboard(tmux, tmp_path, lines, statu
     assert tmux.status.read_text().strip() == status
 
 
+def test_a_finished_script_leaves_the_dashboard_to_the_operator(tmux, tmp_path):
+    script = tmp_path / "mission.txt"
+    script.write_text("f 3\n")
+    tmux.start("--fc", "none", "--script", str(script), tmp_path=tmp_path)
+    wait(lambda: tmux.log_shows("script finished"), 30, "the end of the script in the event log")
+    time.sleep(1)
+    assert not tmux.status.exists()  # still running
+    tmux.keys("q")
+    wait(tmux.status.exists, 15, "the exit status")
+    assert tmux.status.read_text().strip() == "0"
+
+
 @pytest.mark.parametrize(("colorterm", "truecolor"), [("", False), ("truecolor", True)],
                          ids=["256-colours", "truecolor"])
 def test_colours_follow_what_the_terminal_says_it_can_do(tmux, tmp_path, colorterm, truecolor):

@@ -119,8 +119,10 @@ class TuiSession:
         failure = await run_script(self.core, self.script, self._say)
         if failure:
             self.request_stop(failure, EXIT_SCRIPT_FAILED)
-        elif self.duration is None:
+        elif self.headless and self.duration is None:
             self.request_stop("script finished")
+        else:  # the operator is watching: the dashboard stays theirs until they quit
+            self.core.events.emit("info", "platform", "script finished; press q to quit", "script")
 
     def _say(self, text: str) -> None:
         self.core.events.emit("error", "platform", text, "script")
