@@ -60,6 +60,13 @@ async def wait_until(condition: Callable[[], Any], timeout: float, what: str) ->
     return time.monotonic() - start
 
 
+async def fly_under_autonomy(core: UavCore, until: Callable[[], Any], what: str, timeout: float = 10) -> None:
+    """Let the steering processor stream forward vectors with autonomy on, until ``until()`` holds."""
+    await core.execute("f 1")
+    await core.execute("autonomy on")
+    await wait_until(until, timeout, what)
+
+
 @asynccontextmanager
 async def flying_core(tmp_path: Path, *, altitude: float = 3.0, **overrides: Any) -> AsyncIterator[UavCore]:
     """A core on the simulated vehicle, airborne at ``altitude``; by default with the steering test processor.

@@ -11,7 +11,7 @@ import re
 import time
 from pathlib import Path
 
-from tests.core.flight_helpers import flying_core, speed, wait_until
+from tests.core.flight_helpers import fly_under_autonomy, flying_core, speed, wait_until
 
 MAX_T = 1.5
 
@@ -67,9 +67,7 @@ async def test_rule2_not_in_the_air_means_no_vector(tmp_path: Path) -> None:
 
 async def test_rule3_and_4_hung_processor_cannot_keep_the_vehicle_flying(tmp_path: Path) -> None:
     async with flying_core(tmp_path, max_t=MAX_T) as core:
-        await core.execute("f 1")
-        await core.execute("autonomy on")
-        await wait_until(lambda: speed(core.truth.latest()) > 0.4, 10, "flying the vectors")
+        await fly_under_autonomy(core, lambda: speed(core.truth.latest()) > 0.4, "flying the vectors")
         hang_started = time.monotonic_ns()
         await core.execute("f 2")  # the next photo_processing sleeps for 30 s
         await wait_until(lambda: speed(core.truth.latest()) < 0.15, MAX_T + 1.5, "the vehicle to stop")
@@ -86,9 +84,7 @@ async def test_rule3_and_4_hung_processor_cannot_keep_the_vehicle_flying(tmp_pat
 
 async def test_rule4_repeated_processor_exceptions_stop_autonomy(tmp_path: Path) -> None:
     async with flying_core(tmp_path, max_processor_errors=3) as core:
-        await core.execute("f 1")
-        await core.execute("autonomy on")
-        await wait_until(lambda: core.controller.vector_active, 10, "a running vector")
+        await fly_under_autonomy(core, lambda: core.controller.vector_active, "a running vector")
         await core.execute("f 3")
         await wait_until(lambda: not core.gate.enabled, 5, "autonomy to stop")
         reason = core.status().autonomy_stop_reason
@@ -100,9 +96,7 @@ async def test_rule4_repeated_processor_exceptions_stop_autonomy(tmp_path: Path)
 
 async def test_rule4_camera_stall_stops_autonomy(tmp_path: Path) -> None:
     async with flying_core(tmp_path) as core:
-        await core.execute("f 1")
-        await core.execute("autonomy on")
-        await wait_until(lambda: core.controller.vector_active, 10, "a running vector")
+        await fly_under_autonomy(core, lambda: core.controller.vector_active, "a running vector")
         await asyncio.get_running_loop().run_in_executor(None, core.source.close)  # the camera stops delivering
         await wait_until(lambda: not core.gate.enabled, 3, "autonomy to stop")
         assert "camera stalled" in core.status().autonomy_stop_reason
@@ -111,9 +105,7 @@ async def test_rule4_camera_stall_stops_autonomy(tmp_path: Path) -> None:
 
 async def test_rule4_link_loss_stops_autonomy(tmp_path: Path) -> None:
     async with flying_core(tmp_path, link_timeout=1.0) as core:
-        await core.execute("f 1")
-        await core.execute("autonomy on")
-        await wait_until(lambda: core.controller.vector_active, 10, "a running vector")
+        await fly_under_autonomy(core, lambda: core.controller.vector_active, "a running vector")
         sim = core.controller.sim
         import os
         import signal
@@ -128,9 +120,7 @@ async def test_rule4_link_loss_stops_autonomy(tmp_path: Path) -> None:
 
 async def test_rule5_operator_command_preempts_autonomy_at_once(tmp_path: Path) -> None:
     async with flying_core(tmp_path) as core:
-        await core.execute("f 1")
-        await core.execute("autonomy on")
-        await wait_until(lambda: speed(core.truth.latest()) > 0.4, 10, "flying the vectors")
+        await fly_under_autonomy(core, lambda: speed(core.truth.latest()) > 0.4, "flying the vectors")
         await core.execute("hold", origin="tui")
         assert not core.gate.enabled
         executed = core.gate.executed
@@ -143,9 +133,7 @@ async def test_rule5_operator_command_preempts_autonomy_at_once(tmp_path: Path) 
 
 async def test_pilot_or_failsafe_mode_change_ends_autonomy_without_overriding_it(tmp_path: Path) -> None:
     async with flying_core(tmp_path) as core:
-        await core.execute("f 1")
-        await core.execute("autonomy on")
-        await wait_until(lambda: core.truth.latest()["mode"] == "OFFBOARD", 10, "autonomy flying in offboard")
+        await fly_under_autonomy(core, lambda: core.truth.latest()["mode"] == "OFFBOARD", "autonomy flying in offboard")
         await asyncio.to_thread(core.truth.request, {"cmd": "rc_mode", "mode": "POSCTL"})  # the pilot takes over
         await wait_until(lambda: not core.gate.enabled, 3, "autonomy to stop")
         assert "POSCTL" in core.status().autonomy_stop_reason
