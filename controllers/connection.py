@@ -25,7 +25,7 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
-from uav_tui.errors import ConnectError
+from controllers.errors import ConnectError
 
 logger = logging.getLogger(__name__)
 

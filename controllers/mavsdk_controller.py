@@ -23,13 +23,13 @@ from controllers.connection import (
     no_heartbeat_error,
     parse_connection,
 )
+from controllers.errors import ControllerError
 from controllers.mavlink_commands import px4_set_mode, send_command, velocity_body_setpoint
 from controllers.mavsdk_errors import map_mavsdk_errors
 from controllers.mavsdk_link import LinkMonitor
 from controllers.mavsdk_log import route_mavsdk_log
 from controllers.mavsdk_telemetry import merged_updates, set_rates
 from controllers.vector_stream import VectorStream
-from uav_tui.errors import ControllerError
 
 logger = logging.getLogger(__name__)
 

@@ -13,7 +13,7 @@ from collections.abc import Callable, Iterator
 
 from mavsdk.asyncio import MavsdkError
 
-from uav_tui.errors import CommandDenied, ControllerError, LinkLost, NotSupported
+from controllers.errors import CommandDenied, ControllerError, LinkLost, NotSupported
 
 logger = logging.getLogger(__name__)
 

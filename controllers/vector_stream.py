@@ -13,7 +13,7 @@ import logging
 import time
 from typing import Protocol
 
-from uav_tui.errors import ControllerError
+from controllers.errors import ControllerError
 
 logger = logging.getLogger(__name__)
 

@@ -3,15 +3,19 @@
 from __future__ import annotations
 
 import inspect
+import math
 from dataclasses import dataclass
 from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
-from uav_tui.errors import ProcessorLoadError
+from processors.errors import ProcessorLoadError
 
 OPTIONAL_METHODS = ("catch_cmd", "customize_processing", "getPreparedVector")
 """Detected once at load time; a processor without ``getPreparedVector`` never moves the vehicle."""
+
+Box = tuple[int, int, int, int]
+"""``(x, y, w, h)`` in frame pixels, (x, y) the top-left corner."""
 
 
 @runtime_checkable
@@ -27,6 +31,9 @@ class FrameProcessor(Protocol):
 
     ``tmMgr`` is set by the platform after construction (the TelemetryManager:
     ``snapshot()``, ``save(frame, **extra)``). All calls come from one thread.
+
+    One optional read-only attribute, ``box``: ``(x, y, w, h)`` in frame pixels of what the processor
+    tracks now, or ``None`` (nothing selected, or lost). The platform reads it after every frame.
     """
 
     tmMgr: Any
@@ -81,3 +88,21 @@ def _require_arity(method: Any, count: int, where: str, path: str | None, class_
                                  path=path, class_name=class_name, missing=signature) from None
     except ValueError:  # builtins without a signature: accept
         pass
+
+
+def read_box(instance: object) -> Box | None:
+    """The processor's ``box`` attribute as whole frame pixels, or None when absent, None or malformed.
+
+    A box is 4 finite numbers with positive width and height; anything else reads as None, so a
+    researcher's half-finished attribute can never break the frame it belongs to.
+    """
+    value = getattr(instance, "box", None)
+    if value is None:
+        return None
+    try:
+        x, y, w, h = (float(v) for v in value)
+    except (TypeError, ValueError, OverflowError):
+        return None
+    if not all(math.isfinite(v) and abs(v) < 1e7 for v in (x, y, w, h)) or w <= 0 or h <= 0:
+        return None
+    return round(x), round(y), max(1, round(w)), max(1, round(h))

@@ -14,7 +14,7 @@ from types import ModuleType
 from typing import Any
 
 from processors.base import ProcessorInfo, validate_processor
-from uav_tui.errors import ProcessorLoadError
+from processors.errors import ProcessorLoadError
 
 ENTRY_POINT_GROUP = "uav_tui.processors"
 """Installed packages register processors here: ``name = "package.module:Class"``."""

@@ -11,8 +11,8 @@ from typing import Any
 
 from sources.base import CameraSource, CaptureSource
 from sources.buffer import Frame, FrameBuffer
+from sources.errors import SourceError, SourceUriError
 from sources.uri import SourceUri
-from uav_tui.errors import SourceError, SourceUriError
 
 SCHEMES: dict[str, str] = {
     "file": "sources.file:FileSource",

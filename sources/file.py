@@ -8,10 +8,10 @@ from typing import Any
 import cv2
 import numpy as np
 
+from sources.errors import SourceError
 from sources.pacing import Pacer
 from sources.uri import SourceUri
 from sources.videocapture import VideoCaptureSource
-from uav_tui.errors import SourceError
 
 DEFAULT_FPS = 30.0
 """Used when a file does not state its frame rate."""

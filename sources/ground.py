@@ -15,7 +15,7 @@ import math
 import cv2
 import numpy as np
 
-from uav_tui.errors import SourceError
+from sources.errors import SourceError
 
 logger = logging.getLogger(__name__)
 

@@ -14,9 +14,9 @@ from urllib.parse import urlsplit, urlunsplit
 
 import cv2
 
+from sources.errors import SourceError
 from sources.uri import SourceUri
 from sources.videocapture import VideoCaptureSource
-from uav_tui.errors import SourceError
 
 OPTIONS_ENV = "OPENCV_FFMPEG_CAPTURE_OPTIONS"
 """OpenCV reads FFmpeg's open options from this variable when a capture opens."""

@@ -16,8 +16,8 @@ from typing import Any
 import numpy as np
 
 from sources.base import CaptureSource
+from sources.errors import SourceError
 from sources.uri import SourceUri
-from uav_tui.errors import SourceError
 
 logger = logging.getLogger(__name__)
 

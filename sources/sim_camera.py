@@ -16,12 +16,12 @@ from typing import Any
 import numpy as np
 
 from sources.base import CaptureSource
+from sources.errors import SourceUriError
 from sources.ground import default_ground
 from sources.pacing import Pacer
 from sources.sim_geometry import PinholeCamera, Pose
 from sources.sim_render import SimRenderer, default_targets
 from sources.uri import SourceUri
-from uav_tui.errors import SourceUriError
 
 logger = logging.getLogger(__name__)
 

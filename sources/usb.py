@@ -10,9 +10,9 @@ from typing import Any
 
 import cv2
 
+from sources.errors import SourceError, SourceUriError
 from sources.uri import SourceUri
 from sources.videocapture import VideoCaptureSource
-from uav_tui.errors import SourceError, SourceUriError
 
 logger = logging.getLogger(__name__)
 

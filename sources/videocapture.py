@@ -8,7 +8,7 @@ import cv2
 import numpy as np
 
 from sources.base import CaptureSource
-from uav_tui.errors import SourceError
+from sources.errors import SourceError
 
 
 class VideoCaptureSource(CaptureSource):

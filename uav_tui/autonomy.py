@@ -18,7 +18,7 @@ from typing import Any
 
 from controllers.base import FlightController
 from uav_tui.config import SafetyConfig
-from uav_tui.errors import UavError
+from uav_tui.errors import KNOWN_ERRORS, UavError
 from uav_tui.events import EventLog
 from uav_tui.telemetry import TelemetryManager
 from uav_tui.worker import ProcessedFrame
@@ -99,7 +99,7 @@ class AutonomyGate:
         if hold and self.controller is not None and self.controller.vector_active:
             try:
                 await self.controller.hold()
-            except UavError as exc:
+            except KNOWN_ERRORS as exc:
                 self.events.emit("error", "autonomy", f"hold after stopping autonomy failed: {exc}", origin)
 
     def consider(self, result: ProcessedFrame) -> None:
@@ -159,7 +159,7 @@ class AutonomyGate:
                 await self.controller.set_fly_vector(vx, vy, t)
                 self.executed += 1
                 self._flown = True
-            except UavError as exc:
+            except KNOWN_ERRORS as exc:
                 await self.disable("autonomy", f"vector failed: {exc}")
 
     def _taken_over(self) -> str:

@@ -21,7 +21,7 @@ from sources import CameraSource, open_source
 from uav_tui.autonomy import AutonomyGate
 from uav_tui.commands import VEHICLE_COMMANDS, Command, parse
 from uav_tui.config import Config
-from uav_tui.errors import NoVehicle, SourceError, UavError
+from uav_tui.errors import KNOWN_ERRORS, NoVehicle, SourceError, UavError
 from uav_tui.events import EventLog
 from uav_tui.operations import Operations
 from uav_tui.recording import Recorder, describe
@@ -145,7 +145,7 @@ class UavCore:
             try:
                 await asyncio.wait_for(self.controller.hold(), 5)
                 self.events.emit("info", "platform", "vehicle put in hold before exit")
-            except (UavError, TimeoutError) as exc:
+            except (*KNOWN_ERRORS, TimeoutError) as exc:
                 self.events.emit("error", "platform", f"hold before exit failed: {exc!r}")
         await self._release()
 
@@ -236,7 +236,7 @@ class UavCore:
                 if self.gate.enabled:  # any operator command pre-empts autonomy at once
                     await self.gate.disable(origin, f"pre-empted by operator command '{parsed}'", hold=False)
             message = await self._operations.run(parsed, origin)
-        except UavError as exc:
+        except KNOWN_ERRORS as exc:
             self.events.emit("error", "command", f"{parsed}: {exc}", origin)
             raise
         if message:

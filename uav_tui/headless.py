@@ -16,7 +16,7 @@ from typing import TextIO
 from uav_tui.commands import Command, parse
 from uav_tui.config import Config
 from uav_tui.core import UavCore
-from uav_tui.errors import CommandError, UavError
+from uav_tui.errors import KNOWN_ERRORS, CommandError
 from uav_tui.events import Event
 from uav_tui.status import CoreStatus
 
@@ -68,7 +68,7 @@ async def run_script(core: UavCore, script: list[tuple[int, Command]], say: Call
                 await asyncio.sleep(command.args[0])
             else:
                 await core.execute(command, origin="script")
-        except UavError as exc:
+        except KNOWN_ERRORS as exc:
             say(f"script line {number} ({command}) failed: {exc}")
             return f"script line {number} failed"
     return ""
@@ -98,7 +98,7 @@ class HeadlessRunner:
                 loop.add_signal_handler(signum, self.request_stop, name)
         try:
             await self.core.start()
-        except UavError as exc:
+        except KNOWN_ERRORS as exc:
             self._say(f"error: {exc}")
             return EXIT_START_FAILED
         self.core.events.add_listener(self._print_event)

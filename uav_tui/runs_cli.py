@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import Any
 
 from uav_tui.config import find_config_file, load_config
-from uav_tui.errors import UavError
+from uav_tui.errors import KNOWN_ERRORS, UavError
 
 
 def main(name: str, argv: list[str]) -> int:
@@ -31,7 +31,7 @@ def main(name: str, argv: list[str]) -> int:
         if name == "report":
             return _report(_find_run(runs_dir, args.run))
         return _list(runs_dir)
-    except UavError as exc:
+    except KNOWN_ERRORS as exc:
         print(f"uav-tui {name}: {exc}", file=sys.stderr)
         return 2
 

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from processors import LoadedProcessor
+from processors.base import Box, read_box
 from sources.buffer import Frame, FrameBuffer
 from uav_tui.stats import PipelineStats, RollingStats
 
@@ -43,6 +44,8 @@ class ProcessedFrame:
     """Fields the processor stored with ``tmMgr.save(frame, **extra)`` for this frame."""
     saved: bool = False
     """True when the processor saved this frame's image."""
+    box: Box | None = None
+    """The processor's ``box`` attribute after this frame (what it tracks), or None."""
 
 
 class ProcessorWorker:
@@ -197,6 +200,7 @@ class ProcessorWorker:
             if "getPreparedVector" in self.processor.info.capabilities:
                 result.vector = instance.getPreparedVector()
                 result.t_vector_ns = time.monotonic_ns()
+            result.box = read_box(instance)
             self.consecutive_errors = 0
         except Exception:  # noqa: BLE001 - counted and reported, never fatal
             result.t_end_ns = result.t_end_ns or time.monotonic_ns()

@@ -13,9 +13,9 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
+from controllers.errors import ControllerError
 from controllers.sim.geo import Home
 from controllers.sim.truth import TruthClient
-from uav_tui.errors import ControllerError
 
 logger = logging.getLogger(__name__)
 

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from processors import load_processor
+from processors.base import read_box
 from uav_tui.errors import ProcessorLoadError
 
 PAPER_TEMPLATE = '''
@@ -128,3 +129,26 @@ def test_entry_point_names_are_found(tmp_path: Path, monkeypatch: pytest.MonkeyP
         sys.modules.pop("researcher_algos", None)
     assert type(loaded.instance).__name__ == "MyAnalyzer"
     assert loaded.info.name == "researcher_algos:MyAnalyzer"
+
+
+class _Boxed:
+    def __init__(self, box: object) -> None:
+        self.box = box
+
+
+@pytest.mark.parametrize(("box", "expected"), [
+    ((10.4, 20.6, 30, 40), (10, 21, 30, 40)),
+    ([1, 2, 3, 4], (1, 2, 3, 4)),
+    (None, None),
+    ((1, 2, 0, 4), None),
+    ((1, 2, float("nan"), 4), None),
+    ((1, 2, 3), None),
+    ("abcd", None),
+    ((1, 2, 10**400, 4), None),
+])
+def test_read_box_accepts_only_a_positive_finite_box(box: object, expected: object) -> None:
+    assert read_box(_Boxed(box)) == expected
+
+
+def test_read_box_without_the_attribute_is_none() -> None:
+    assert read_box(object()) is None

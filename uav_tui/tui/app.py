@@ -15,7 +15,7 @@ from textual.driver import Driver
 
 from uav_tui.commands import VEHICLE_COMMANDS, parse
 from uav_tui.core import CoreState, UavCore
-from uav_tui.errors import CommandError, UavError
+from uav_tui.errors import KNOWN_ERRORS, CommandError
 from uav_tui.events import Event
 from uav_tui.status import CoreStatus
 from uav_tui.tui._algorithm import AlgorithmPanel
@@ -139,7 +139,7 @@ class UavApp(App[None]):
         if self.core.state is CoreState.NEW:
             try:
                 await self.core.start()
-            except UavError as exc:
+            except KNOWN_ERRORS as exc:
                 self._start_failed(str(exc))
                 return
             except Exception as exc:
@@ -246,7 +246,7 @@ class UavApp(App[None]):
             return
         try:
             await self.core.execute(command, origin="tui")
-        except UavError:
+        except KNOWN_ERRORS:
             return  # the core logged it as an error event, which on_core_event shows
         except Exception as exc:
             logger.exception("command %s failed", command)

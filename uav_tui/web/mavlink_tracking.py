@@ -22,7 +22,7 @@ from typing import Any
 from pymavlink.dialects.v20 import common as mavlink
 
 from uav_tui.commands import Command
-from uav_tui.errors import CommandError, ConfigError, UavError
+from uav_tui.errors import KNOWN_ERRORS, CommandError, ConfigError, UavError
 from uav_tui.web.roi import point_to_roi, rect_to_roi
 
 logger = logging.getLogger(__name__)
@@ -169,7 +169,7 @@ class CameraTracking:
             return mavlink.MAV_RESULT_DENIED
         try:
             await self.core.execute(Command("roi", roi), origin=origin)
-        except UavError:  # logged as an event by the core
+        except KNOWN_ERRORS:  # logged as an event by the core
             return mavlink.MAV_RESULT_FAILED
         x, y, w, h = roi
         self.selection = (mode, (x / size[0], y / size[1], (x + w) / size[0], (y + h) / size[1]))

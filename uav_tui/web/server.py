@@ -30,7 +30,7 @@ from aiortc import RTCConfiguration, RTCPeerConnection, RTCSessionDescription
 from uav_tui.commands import Command, parse
 from uav_tui.config import WebConfig
 from uav_tui.core import CoreState
-from uav_tui.errors import CommandError, UavError
+from uav_tui.errors import KNOWN_ERRORS, CommandError, UavError
 from uav_tui.events import Event
 from uav_tui.web.roi import roi_from_message
 from uav_tui.web.tracks import VideoHub
@@ -242,7 +242,7 @@ class WebServer:
     async def _run(self, command: Command, origin: str) -> web.Response:
         try:
             message = await self.core.execute(command, origin=origin)
-        except UavError as exc:  # already logged as an event by the core
+        except KNOWN_ERRORS as exc:  # already logged as an event by the core
             return web.json_response({"ok": False, "message": str(exc)}, status=409)
         return web.json_response({"ok": True, "message": message or str(command)})
 
