@@ -130,23 +130,31 @@ class FrameAligner:
         min_hold_ns: shortest wait.
         telemetry_expected: False with ``--fc none``: frames wait only ``min_hold_ns``.
         run_dir: where image names point (None: do not check the files).
+        recorded_clock: a replay: time is the newest capture or receive time handled, not this
+            computer's clock, so rows are released as they were in the recorded run, at any speed.
     """
 
+    accepts = (TelemetrySample, FrameRecord, MarkSaved)
+
     def __init__(self, hold_ns: int = 500_000_000, min_hold_ns: int = 200_000_000,
-                 telemetry_expected: bool = True, run_dir: Path | None = None) -> None:
+                 telemetry_expected: bool = True, run_dir: Path | None = None, recorded_clock: bool = False) -> None:
         self.hold_ns = hold_ns
         self.min_hold_ns = min_hold_ns
         self.run_dir = run_dir
         self.telemetry_expected = telemetry_expected
+        self.recorded_clock = recorded_clock
         self.history = TelemetryHistory()
         self._waiting: deque[FrameRecord] = deque()
+        self._newest_ns = 0
 
     def handle(self, item: Any) -> Iterable[Row]:
         if isinstance(item, TelemetrySample):
             self.history.add(item.telemetry, item.t_mono_ns)
+            self._newest_ns = max(self._newest_ns, item.t_mono_ns)
             return [telemetry_row(item)]
         if isinstance(item, FrameRecord):
             self._waiting.append(item)
+            self._newest_ns = max(self._newest_ns, item.t_mono_ns)
         elif isinstance(item, MarkSaved):
             for record in self._waiting:
                 if record.frame_id == item.frame_id:
@@ -156,6 +164,8 @@ class FrameAligner:
         return []
 
     def due(self, now_ns: int) -> Iterable[Row]:
+        if self.recorded_clock:
+            now_ns = self._newest_ns
         rows = []
         while self._waiting:
             record = self._waiting[0]
