@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any
 
 from controllers import connect_controller
 from controllers.base import FlightController
+from controllers.replay_timeline import ReplayTimeline
 from processors import load_processor
 from sources import CameraSource, open_source
 from uav_tui.autonomy import AutonomyGate
@@ -25,6 +26,7 @@ from uav_tui.errors import KNOWN_ERRORS, NoVehicle, SourceError, UavError
 from uav_tui.events import EventLog
 from uav_tui.operations import Operations
 from uav_tui.recording import Recorder, describe
+from uav_tui.replay.gate import ReplayGate
 from uav_tui.status import CoreStatus
 from uav_tui.telemetry import TelemetryManager
 from uav_tui.worker import ProcessedFrame, ProcessorWorker
@@ -60,6 +62,8 @@ class UavCore:
         self.worker: ProcessorWorker | None = None
         self.recorder: Recorder | None = None
         """Writes the run's dataset (None with ``--no-record``)."""
+        self.replay: ReplayTimeline | None = None
+        """Where a replay is on the recorded clock (``--fc replay:RUN``), else None."""
         self.quit_requested = asyncio.Event()
         """Set by the ``quit`` command; the interface that runs the core then stops it."""
         self.processor_error: str | None = None
@@ -91,6 +95,10 @@ class UavCore:
                 None, functools.partial(load_processor, self.config.processor, self.config.processor_args))
             self.controller = await connect_controller(self.config.fc, heartbeat_timeout=self.config.connect_timeout)
             self.telemetry = TelemetryManager(self.controller)
+            self.replay = getattr(self.controller, "timeline", None)
+            if self.replay is not None:
+                self.gate = ReplayGate(self.config.safety, self.telemetry, self.events, self.controller)
+                self.add_frame_listener(lambda result: self.replay.frame_done())
             self.gate.telemetry, self.gate.controller = self.telemetry, self.controller
             processor.instance.tmMgr = self.telemetry
             self.source = await self.open_source(self.config.source)
@@ -98,7 +106,8 @@ class UavCore:
             if self.config.recording.record:
                 self.recorder = await loop.run_in_executor(None, functools.partial(
                     Recorder.open, self.config.recording, describe(self),
-                    telemetry_expected=self.controller is not None, started_wall_ns=self.started_wall_ns))
+                    telemetry_expected=self.controller is not None, started_wall_ns=self.started_wall_ns,
+                    replayed=self.replay is not None))
                 self.recorder.attach(self)
             else:
                 self.telemetry.saver = self._save_without_recording
@@ -206,7 +215,7 @@ class UavCore:
 
     def _newest_frame_age(self) -> float | None:
         frame = self.source.buffer.peek() if self.source is not None else None
-        return None if frame is None else frame.age_s
+        return None if frame is None else (self.gate.clock() - frame.t_mono_ns) / 1e9
 
     async def open_source(self, uri: str) -> CameraSource:
         """Open the camera ``uri`` names (in a thread: opening can block), with the sim vehicle's pose for sim:."""
@@ -216,6 +225,8 @@ class UavCore:
             if sim is None:
                 raise SourceError("the sim: camera renders the simulated vehicle's view: use it with --fc sim")
             context["pose_provider"] = sim.truth().latest
+        if uri.startswith("run:") and self.replay is not None:
+            context["timeline"] = self.replay
         return await asyncio.get_running_loop().run_in_executor(None, functools.partial(open_source, uri, **context))
 
     # -- commands --------------------------------------------------------------------------------

@@ -43,6 +43,7 @@ def describe(core: UavCore) -> dict[str, Any]:
     """What ``run.json`` says about a started core's run."""
     source = core.source.get_properties() if core.source is not None else {}
     processor = core.worker.processor if core.worker is not None else None
+    replayed = getattr(core.controller, "run_dir", None) if core.replay is not None else None
     return {
         "start_utc": utc_text(core.started_wall_ns),
         "config": dataclasses.asdict(core.config),
@@ -52,6 +53,7 @@ def describe(core: UavCore) -> dict[str, Any]:
             "name": processor.info.name, "spec": processor.spec, "path": processor.info.path,
             "capabilities": sorted(processor.info.capabilities), "kwargs": _plain(processor.kwargs)},
         "controller": {"fc": core.config.fc, "description": getattr(core.controller, "description", "none")},
+        **({"replay_of": {"run": str(Path(replayed).resolve()), "name": Path(replayed).name}} if replayed else {}),
     }
 
 
