@@ -48,8 +48,13 @@ def parse_address(address: str) -> tuple[Path, float | None]:
 
 
 def read_telemetry(path: Path) -> list[dict[str, Any]]:
-    """The rows of a ``telemetry.csv`` as typed updates (empty cells left out), oldest first."""
-    rows = []
+    """The rows of a ``telemetry.csv`` as typed updates (empty cells left out), oldest first.
+
+    A run recorded without a vehicle (``--fc none``) has no such file: it has no rows.
+    """
+    rows: list[dict[str, Any]] = []
+    if not path.is_file():
+        return rows
     with open(path, newline="") as handle:
         for row in csv.DictReader(handle):
             update = {name: _typed(name, text) for name, text in row.items() if name in _TYPES and text}

@@ -17,6 +17,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from uav_tui.dataset import Dataset, load
+from uav_tui.report_replay import write_replay_plot
 
 logger = logging.getLogger(__name__)
 
@@ -39,6 +40,9 @@ def write_report(run_dir: str | Path) -> tuple[list[Path], str]:
         path = run.path / name
         figure.savefig(path, dpi=100)
         paths.append(path)
+    replay_plot = write_replay_plot(run)  # a replayed run: its vectors beside the recorded run's
+    if replay_plot is not None:
+        paths.append(replay_plot)
     text = summary(run)
     (run.path / "summary.txt").write_text(text + "\n")
     paths.append(run.path / "summary.txt")
