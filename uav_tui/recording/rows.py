@@ -149,9 +149,11 @@ class FrameAligner:
 
     def handle(self, item: Any) -> Iterable[Row]:
         if isinstance(item, TelemetrySample):
+            # On the recorded clock, rows due before this sample arrived go out without it, as they did live.
+            rows = self._release(item.t_mono_ns - 1) if self.recorded_clock else []
             self.history.add(item.telemetry, item.t_mono_ns)
             self._newest_ns = max(self._newest_ns, item.t_mono_ns)
-            return [telemetry_row(item)]
+            return [*rows, telemetry_row(item)]
         if isinstance(item, FrameRecord):
             self._waiting.append(item)
             self._newest_ns = max(self._newest_ns, item.t_mono_ns)
@@ -164,8 +166,9 @@ class FrameAligner:
         return []
 
     def due(self, now_ns: int) -> Iterable[Row]:
-        if self.recorded_clock:
-            now_ns = self._newest_ns
+        return self._release(self._newest_ns if self.recorded_clock else now_ns)
+
+    def _release(self, now_ns: int) -> list[Row]:
         rows = []
         while self._waiting:
             record = self._waiting[0]
