@@ -30,3 +30,13 @@ class Darkness(Brightness):
     """The same with the opposite sign: another processor to compare with."""
 
     sign = -1.0
+
+
+class Idle:
+    """Looks at nothing, saves nothing: the recording tests count only the video's items."""
+
+    def __init__(self):
+        self.tmMgr = None
+
+    def photo_processing(self, frame):
+        pass
