@@ -9,7 +9,9 @@ Times are the recorded monotonic nanoseconds of the run being replayed. Two ways
   capture time has been applied; nothing depends on this computer's speed, so two replays are equal.
 
 The camera thread calls :meth:`show` and :meth:`finish`; the event loop calls :meth:`reach` (the
-vehicle's telemetry), :meth:`frame_done` (the platform, per processed frame) and :meth:`now`.
+vehicle's telemetry), :meth:`frame_done` (the platform, per processed frame) and :meth:`now`. The
+platform may set :attr:`ReplayTimeline.before_show` to act on the camera thread just before a frame
+is shown (it replays the operator's commands to the processor there).
 """
 
 from __future__ import annotations
@@ -55,6 +57,8 @@ class ReplayTimeline:
         self._shown = 0
         self._done = 0
         self._wakers: list[Callable[[], None]] = []
+        self.before_show: Callable[[int], None] | None = None
+        """Called on the camera thread with a frame's capture time once it is due, before it is shown."""
 
     @property
     def lockstep(self) -> bool:
@@ -72,6 +76,12 @@ class ReplayTimeline:
 
     def show(self, t_ns: int, stop: threading.Event) -> bool:
         """Block until the frame captured at ``t_ns`` is due; False when ``stop`` was set meanwhile."""
+        due = self._due(t_ns, stop)
+        if due and self.before_show is not None:
+            self.before_show(t_ns)
+        return due
+
+    def _due(self, t_ns: int, stop: threading.Event) -> bool:
         if self.speed is not None:
             delay_s = (t_ns - self.now()) / self.speed / 1e9
             return not (delay_s > 0 and stop.wait(delay_s)) and not stop.is_set()

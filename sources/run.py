@@ -14,7 +14,7 @@ from __future__ import annotations
 import csv
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Generator, Iterator
 from pathlib import Path
 from typing import Any, Protocol
 
@@ -45,6 +45,18 @@ def recorded_frames(run_dir: Path) -> tuple[str, list[tuple[int, int, str]]]:
     return "saved frames", [(int(r["t_mono_ns"]), int(r["t_wall_ns"]), r["image"]) for r in rows if r.get("image")]
 
 
+def read_video(path: Path) -> Generator[np.ndarray, None, None]:
+    """The frames of a recorded ``video.ts`` as BGR images, converted back the way the recorder converted them."""
+    import av
+
+    with av.open(str(path)) as container:
+        for frame in container.decode(video=0):
+            if frame.format.name == "yuv420p" and frame.width % 2 == 0 and frame.height % 2 == 0:
+                yield cv2.cvtColor(frame.to_ndarray(format="yuv420p"), cv2.COLOR_YUV2BGR_I420)
+            else:
+                yield frame.to_ndarray(format="bgr24")
+
+
 def _rows(path: Path) -> list[dict[str, str]]:
     with open(path, newline="") as handle:
         return list(csv.DictReader(handle))
@@ -65,8 +77,7 @@ class RunSource(CaptureSource):
         """Set once the last recorded frame was handed out."""
         self.shown = 0
         self._frames: list[tuple[int, int, str]] = []
-        self._images: Iterator[np.ndarray] | None = None
-        self._container: Any = None
+        self._images: Generator[np.ndarray, None, None] | None = None
         self._times: tuple[int, int] | None = None
         self._started: tuple[int, int] | None = None  # (first recorded t, real monotonic t) when paced alone
 
@@ -103,14 +114,10 @@ class RunSource(CaptureSource):
         duration_s = (self._frames[-1][0] - self._frames[0][0]) / 1e9
         self.fps = (len(self._frames) - 1) / duration_s if duration_s > 0 else 0.0
 
-    def _decode(self) -> Iterator[np.ndarray]:
-        import av
+    def _decode(self) -> Generator[np.ndarray, None, None]:
+        return read_video(self.run_dir / VIDEO_FILE)
 
-        self._container = av.open(str(self.run_dir / VIDEO_FILE))
-        for frame in self._container.decode(video=0):
-            yield frame.to_ndarray(format="bgr24")
-
-    def _saved(self) -> Iterator[np.ndarray]:
+    def _saved(self) -> Generator[np.ndarray, None, None]:
         for _, _, name in self._frames:
             image = cv2.imread(str(self.run_dir / name))
             if image is None:
@@ -155,16 +162,15 @@ class RunSource(CaptureSource):
         self._stop.wait()
 
     def _close_device(self) -> None:
-        if self._container is not None:
-            self._container.close()
-            self._container = None
-        self._images = None
+        if self._images is not None:
+            self._images.close()  # a video's decoder closes its file
+            self._images = None
 
     def _extra_properties(self) -> dict[str, Any]:
         return {"content": self.content, "frames_recorded": len(self._frames), "frames_shown": self.shown,
                 "finished": self.finished.is_set(), "speed": "max" if self.speed is None else self.speed}
 
 
-def _prepend(first: np.ndarray, rest: Iterator[np.ndarray]) -> Iterator[np.ndarray]:
+def _prepend(first: np.ndarray, rest: Iterator[np.ndarray]) -> Generator[np.ndarray, None, None]:
     yield first
     yield from rest

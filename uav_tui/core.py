@@ -27,6 +27,7 @@ from uav_tui.events import EventLog
 from uav_tui.operations import Operations
 from uav_tui.recording import Recorder, describe
 from uav_tui.replay.gate import ReplayGate
+from uav_tui.replay.operator import CommandReplay, recorded_commands
 from uav_tui.status import CoreStatus
 from uav_tui.telemetry import TelemetryManager
 from uav_tui.worker import ProcessedFrame, ProcessorWorker
@@ -99,6 +100,8 @@ class UavCore:
             if self.replay is not None:
                 self.gate = ReplayGate(self.config.safety, self.telemetry, self.events, self.controller)
                 self.add_frame_listener(lambda result: self.replay.frame_done())
+                commands = recorded_commands(self.controller.run_dir / "events.csv")  # type: ignore[attr-defined]
+                self.replay.before_show = CommandReplay(self, loop, commands).before_show
             self.gate.telemetry, self.gate.controller = self.telemetry, self.controller
             processor.instance.tmMgr = self.telemetry
             self.source = await self.open_source(self.config.source)

@@ -4,7 +4,8 @@ import numpy as np
 
 
 class Brightness:
-    """Steers by the frame's brightness, reports a box, stores what tmMgr.snapshot() said, draws an overlay."""
+    """Steers by the frame's brightness (F2 reverses it), reports a box, stores what tmMgr.snapshot() said,
+    draws an overlay."""
 
     sign = 1.0
 
@@ -12,10 +13,14 @@ class Brightness:
         self.tmMgr = None
         self.box = None
         self.vector = None
+        self.gain = 1.0
+
+    def customize_processing(self, id):
+        self.gain = -1.0 if id == 2 else 1.0
 
     def photo_processing(self, frame):
         level = float(frame[::4, ::4].mean())
-        self.vector = (self.sign * (level - 110.0) / 40.0, 0.2, 1.0)
+        self.vector = (self.sign * self.gain * (level - 110.0) / 40.0, 0.2, 1.0)
         rows = np.flatnonzero(frame[::4, ::4, 2].mean(axis=1) > level)
         self.box = (8, int(rows[0]) * 4, 32, 32) if len(rows) else None
         seen = self.tmMgr.snapshot()

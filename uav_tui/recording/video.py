@@ -160,14 +160,13 @@ class VideoStage:
         return rows
 
     def _encode(self, item: VideoFrame) -> int:
-        import av
 
         image = item.image
         if self._stream is None:
             self._open(image.shape[1], image.shape[0], item.t_mono_ns)
         if (image.shape[1], image.shape[0]) != self._size:  # the camera was switched: keep one stream size
             image = cv2.resize(image, self._size, interpolation=cv2.INTER_AREA)
-        frame = av.VideoFrame.from_ndarray(np.ascontiguousarray(image), format="bgr24")
+        frame = _video_frame(np.ascontiguousarray(image), self._stream.pix_fmt)
         frame.pts = max(self._last_pts + 1, round((item.t_mono_ns - self._first_ns) * TIME_BASE.denominator / 1e9))
         frame.time_base = TIME_BASE
         self._last_pts = frame.pts
@@ -201,3 +200,15 @@ class VideoStage:
         finally:
             del data[:written]
             self._writer.bytes_written += written
+
+
+def _video_frame(image: np.ndarray, pix_fmt: str) -> Any:
+    """An encoder frame from a BGR image. For H.264's yuv420p (BT.601, limited range) OpenCV converts:
+    4x faster than FFmpeg's default scaler, without its bias (about 2 levels darker), and the ``run:``
+    source converts back the same way."""
+    import av
+
+    height, width = image.shape[:2]
+    if pix_fmt == "yuv420p" and width % 2 == 0 and height % 2 == 0:
+        return av.VideoFrame.from_ndarray(cv2.cvtColor(image, cv2.COLOR_BGR2YUV_I420), format="yuv420p")
+    return av.VideoFrame.from_ndarray(image, format="bgr24")
