@@ -49,7 +49,7 @@ def test_sigkill_leaves_a_video_playable_up_to_the_last_flush(tmp_path):
     assert "end_wall_ns" not in dataset.load(run_dir).info  # it really was killed, not closed
     index = _indexed(run_dir)
     indexed = index["video_frame"].dropna()
-    assert len(indexed) > 60 and indexed.tolist() == list(range(len(indexed)))
+    assert len(indexed) > 30 and indexed.tolist() == list(range(len(indexed)))
     assert _decoded(run_dir / "video.ts") >= len(indexed)  # every indexed frame plays; later ones may too
 
 

@@ -17,7 +17,7 @@ if TYPE_CHECKING:
 RUN_NAME_FORMAT = "%Y-%m-%dT%H-%M-%SZ"
 """Run folders are named after their UTC start, sortable, without ':' (FAT/exFAT sticks cannot hold it)."""
 
-_PACKAGES = ("uav-tui", "numpy", "opencv-contrib-python-headless", "mavsdk", "textual", "pandas")
+_PACKAGES = ("uav-tui", "numpy", "opencv-contrib-python-headless", "mavsdk", "textual", "pandas", "av")
 
 
 def utc_text(wall_ns: int) -> str:
