@@ -4,6 +4,7 @@ Every recorded telemetry row is handed to the platform at its recorded time (see
 :mod:`controllers.replay_timeline`) with its recorded receive stamps, so ``tmMgr.snapshot()``, the
 telemetry panel and the recorder see the vehicle exactly as it was. The recorded vehicle cannot be
 commanded: vehicle commands raise :class:`NotSupported`, and vectors are never sent anywhere.
+With ``speed=max`` the same run's ``run:`` camera drives the timeline; without it nothing moves.
 """
 
 from __future__ import annotations
