@@ -33,7 +33,10 @@ def parse_speed(text: str | float | None) -> float | None:
         return 1.0
     if isinstance(text, str) and text.strip().lower() == "max":
         return None
-    speed = float(text)
+    try:
+        speed = float(text)
+    except ValueError:
+        speed = math.nan
     if not math.isfinite(speed) or speed <= 0:
         raise ValueError(f"speed must be a positive number or 'max', got {text!r}")
     return speed
@@ -95,9 +98,11 @@ class ReplayTimeline:
             self._shown += 1
         return True
 
-    def finish(self) -> None:
-        """The camera has nothing more to show: the rest of the telemetry may go."""
+    def finish(self, stop: threading.Event) -> None:
+        """The camera has nothing more to show: once its last frame is done, the rest of the telemetry may go."""
         with self._cond:
+            if self.speed is None and not self._wait(lambda: self._done >= self._shown, stop):
+                return
             self._position = FOREVER
             self._wake()
 

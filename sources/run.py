@@ -33,7 +33,7 @@ class Timeline(Protocol):
     """What the source needs from a replay timeline (``controllers.replay_timeline.ReplayTimeline``)."""
 
     def show(self, t_ns: int, stop: threading.Event) -> bool: ...
-    def finish(self) -> None: ...
+    def finish(self, stop: threading.Event) -> None: ...
 
 
 def recorded_frames(run_dir: Path) -> tuple[str, list[tuple[int, int, str]]]:
@@ -158,7 +158,7 @@ class RunSource(CaptureSource):
         """The recording is over: say so, let the replayed telemetry run out, and wait to be closed."""
         self.finished.set()
         if self.timeline is not None:
-            self.timeline.finish()
+            self.timeline.finish(self._stop)
         self._stop.wait()
 
     def _close_device(self) -> None:

@@ -122,6 +122,11 @@ class FrameAligner:
     not extrapolated. Every frame waits at least ``min_hold_ns``, so a ``snapshot`` of the newest
     frame still finds its row and marks it saved.
 
+    While telemetry flows, rows are released when a sample arrives, as if time were its receive
+    stamp (rows due just before it first, without it; then those it completes): what a row holds
+    depends on the recorded stamps alone, not on when the writer thread ran, so a replay computes
+    the same row. Ticks (``due``) only release rows that waited ``hold_ns``.
+
     A row's ``saved`` says whether its image file is on disk when the row is written (images are
     queued before their rows, so a frame dropped by a full disk or the size cap is not claimed).
 
@@ -130,7 +135,7 @@ class FrameAligner:
         min_hold_ns: shortest wait.
         telemetry_expected: False with ``--fc none``: frames wait only ``min_hold_ns``.
         run_dir: where image names point (None: do not check the files).
-        recorded_clock: a replay: time is the newest capture or receive time handled, not this
+        recorded_clock: a replay: ticks read the newest capture or receive time handled, not this
             computer's clock, so rows are released as they were in the recorded run, at any speed.
     """
 
@@ -149,11 +154,10 @@ class FrameAligner:
 
     def handle(self, item: Any) -> Iterable[Row]:
         if isinstance(item, TelemetrySample):
-            # On the recorded clock, rows due before this sample arrived go out without it, as they did live.
-            rows = self._release(item.t_mono_ns - 1) if self.recorded_clock else []
+            rows = self._release(item.t_mono_ns - 1)  # rows due before this sample arrived go out without it
             self.history.add(item.telemetry, item.t_mono_ns)
             self._newest_ns = max(self._newest_ns, item.t_mono_ns)
-            return [*rows, telemetry_row(item)]
+            return [*rows, *self._release(item.t_mono_ns), telemetry_row(item)]
         if isinstance(item, FrameRecord):
             self._waiting.append(item)
             self._newest_ns = max(self._newest_ns, item.t_mono_ns)
@@ -166,15 +170,16 @@ class FrameAligner:
         return []
 
     def due(self, now_ns: int) -> Iterable[Row]:
-        return self._release(self._newest_ns if self.recorded_clock else now_ns)
+        return self._release(self._newest_ns if self.recorded_clock else now_ns, timed_out=self.telemetry_expected)
 
-    def _release(self, now_ns: int) -> list[Row]:
+    def _release(self, now_ns: int, *, timed_out: bool = False) -> list[Row]:
+        """Rows ready at ``now_ns``: those that waited ``hold_ns`` if ``timed_out``, else also covered ones."""
         rows = []
         while self._waiting:
             record = self._waiting[0]
             age = now_ns - record.t_mono_ns
-            if age < self.min_hold_ns or (age < self.hold_ns and self.telemetry_expected
-                                          and not self.history.covers(record.t_mono_ns)):
+            if age < self.min_hold_ns or age < self.hold_ns and (timed_out or self.telemetry_expected
+                                                                 and not self.history.covers(record.t_mono_ns)):
                 break
             rows.append(self._row(self._waiting.popleft()))
         return rows
