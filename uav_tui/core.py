@@ -22,7 +22,7 @@ from uav_tui.autonomy import AutonomyGate
 from uav_tui.commands import VEHICLE_COMMANDS, Command, parse
 from uav_tui.config import Config
 from uav_tui.errors import KNOWN_ERRORS, NoVehicle, SourceError, UavError
-from uav_tui.events import EventLog
+from uav_tui.events import EventLog, Repeats
 from uav_tui.operations import Operations
 from uav_tui.recording import Recorder, describe
 from uav_tui.status import CoreStatus
@@ -68,6 +68,7 @@ class UavCore:
         self._frame_listeners: list[Callable[[ProcessedFrame], None]] = []
         self._tasks: list[asyncio.Task[Any]] = []
         self._told_not_recording = False
+        self._processor_errors = Repeats(self.events, "error", "processor")
         self._operations = Operations(self)
         self.web: WebServer | None = None
         """The web page's WebServer (``web.url`` has the token) when ``web`` is on, else None."""
@@ -197,8 +198,7 @@ class UavCore:
     def _on_result(self, result: ProcessedFrame) -> None:
         if result.error:
             last_line = result.error.strip().splitlines()[-1]
-            if last_line != self.processor_error:
-                self.events.emit("error", "processor", f"frame {result.frame.seq}: {result.error.strip()}")
+            self._processor_errors.report(last_line, f"frame {result.frame.seq}: {result.error.strip()}")
             self.processor_error = last_line
         self.gate.consider(result)
         for listener in tuple(self._frame_listeners):

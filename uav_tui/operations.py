@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Any
 
 from processors import load_processor
 from uav_tui.autonomy import check_vector
-from uav_tui.commands import Command
+from uav_tui.commands import Command, check_limits
 from uav_tui.errors import CommandError, ProcessorLoadError, UavError
 
 if TYPE_CHECKING:
@@ -32,6 +32,7 @@ class Operations:
         self.core = core
 
     async def run(self, command: Command, origin: str) -> str:
+        check_limits(command, self.core.config.safety)
         plain = PLAIN_VEHICLE_CALLS.get(command.word)
         if plain is not None:
             method, done = plain

@@ -109,7 +109,7 @@ def _vector(vector: Any) -> tuple[float | None, float | None, float | None]:
     """The three numbers of a vector if it is one (the gate judges it; the row just records it)."""
     try:
         vx, vy, vt = (float(v) for v in vector)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         return None, None, None
     return vx, vy, vt
 
