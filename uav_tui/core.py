@@ -27,6 +27,7 @@ from uav_tui.operations import Operations
 from uav_tui.recording import Recorder, describe
 from uav_tui.status import CoreStatus
 from uav_tui.telemetry import TelemetryManager
+from uav_tui.text import shorten
 from uav_tui.worker import ProcessedFrame, ProcessorWorker
 
 if TYPE_CHECKING:  # aiortc and pymavlink are imported only when the side channels are switched on
@@ -197,7 +198,7 @@ class UavCore:
 
     def _on_result(self, result: ProcessedFrame) -> None:
         if result.error:
-            last_line = result.error.strip().splitlines()[-1]
+            last_line = shorten(result.error.strip().splitlines()[-1], 500)
             self._processor_errors.report(last_line, f"frame {result.frame.seq}: {result.error.strip()}")
             self.processor_error = last_line
         self.gate.consider(result)

@@ -11,7 +11,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Literal
 
-from uav_tui.text import safe
+from uav_tui.text import safe, shorten
 
 logger = logging.getLogger(__name__)
 
@@ -60,10 +60,8 @@ class EventLog:
 
     def emit(self, level: Level, kind: Kind, message: str, origin: str = "platform") -> Event:
         """Record and deliver an event; ``message`` and ``origin`` are bounded, redacted and escaped here."""
-        if len(message) > MAX_MESSAGE_CHARS:
-            message = f"{message[:MAX_MESSAGE_CHARS]}... ({len(message) - MAX_MESSAGE_CHARS} more characters)"
-        event = Event(time.time_ns(), time.monotonic_ns(), level, kind, safe(message, multiline=True),
-                      safe(origin))
+        message = safe(shorten(message, MAX_MESSAGE_CHARS), multiline=True)
+        event = Event(time.time_ns(), time.monotonic_ns(), level, kind, message, safe(shorten(origin, 200)))
         logger.debug("[%s/%s/%s] %s", level, kind, origin, message)  # interfaces show events; logs keep them
         loop = self._loop
         if loop is None or threading.get_ident() == self._loop_thread:

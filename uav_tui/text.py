@@ -7,7 +7,7 @@ the CSV writer, ``run.json``, the headless terminal):
   can move the cursor, clear the screen or start a line of its own;
 - :func:`redact` hides passwords in URIs (``rtsp://admin:***@host``) and ``token=`` values;
 - :func:`describe` renders any untrusted value (a vector of a million numbers, say) in at most N
-  characters, escaped;
+  characters, escaped; :func:`shorten` cuts long text (a processor's exception message);
 - :class:`SafeFormatter` applies them to every log record on the terminal.
 """
 
@@ -60,6 +60,11 @@ def safe(text: str, *, multiline: bool = False) -> str:
     return escape(redact(text if isinstance(text, str) else str(text)), multiline=multiline)
 
 
+def shorten(text: str, limit: int) -> str:
+    """``text`` cut to ``limit`` characters, saying how many were left out."""
+    return text if len(text) <= limit else f"{text[:limit]}... ({len(text) - limit} more characters)"
+
+
 def describe(value: Any, limit: int = DESCRIBE_CHARS) -> str:
     """A short, escaped description of any untrusted value, at most ``limit`` characters.
 
@@ -81,11 +86,18 @@ def describe(value: Any, limit: int = DESCRIBE_CHARS) -> str:
 
 
 class SafeFormatter(logging.Formatter):
-    """Formats log records with :func:`safe`: passwords hidden, control characters escaped, and the
-    lines of a traceback indented, so a logged string cannot clear the terminal or forge a line."""
+    """Formats log records with :func:`safe`: passwords hidden, the message on one line with control
+    characters escaped, a traceback's lines indented: a logged string cannot clear the terminal or
+    forge a line."""
 
-    def format(self, record: logging.LogRecord) -> str:
-        return safe(super().format(record), multiline=True)
+    def formatMessage(self, record: logging.LogRecord) -> str:  # noqa: N802 - logging's name
+        return safe(super().formatMessage(record))
+
+    def formatException(self, ei: Any) -> str:  # noqa: N802
+        return "  " + safe(super().formatException(ei), multiline=True)
+
+    def formatStack(self, stack_info: str) -> str:  # noqa: N802
+        return "  " + safe(super().formatStack(stack_info), multiline=True)
 
 
 def _escape_one(match: re.Match[str]) -> str:
