@@ -29,11 +29,15 @@ async ([target, token]) => {
 """
 
 
+async def another_site(request: web.Request) -> web.Response:
+    return web.Response(text="<h1>another site</h1>", content_type="text/html")
+
+
 async def test_a_foreign_page_with_the_token_cannot_command_or_listen(web_core: UavCore) -> None:
     from playwright.async_api import async_playwright
 
     foreign = web.Application()
-    foreign.router.add_get("/", lambda request: web.Response(text="<h1>another site</h1>", content_type="text/html"))
+    foreign.router.add_get("/", another_site)
     runner = web.AppRunner(foreign)
     await runner.setup()
     site = web.TCPSite(runner, "127.0.0.1", 0)
