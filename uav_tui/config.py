@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from uav_tui.errors import ConfigError
+from uav_tui.text import describe
 
 
 def _key(help: str, *, minimum: float | None = None, maximum: float | None = None, default: Any = MISSING,
@@ -228,11 +229,11 @@ def _check(cls: type, key: str, value: Any, name: str, where: str) -> Any:
         raise ConfigError(f"{where}: unknown key {name!r}{hint}", key=name)
     expected = {"bool": bool, "int": int, "float": (int, float), "str": str}.get(f.type, dict)
     if isinstance(value, bool) and f.type != "bool" or not isinstance(value, expected):
-        raise ConfigError(f"{where}: {name} must be {f.type.split('[')[0]}, got {value!r}", key=name)
+        raise ConfigError(f"{where}: {name} must be {f.type.split('[')[0]}, got {describe(value)}", key=name)
     if f.type == "float":
         value = float(value)
         if not math.isfinite(value):
-            raise ConfigError(f"{where}: {name} must be a finite number, got {value!r}", key=name)
+            raise ConfigError(f"{where}: {name} must be a finite number, got {describe(value)}", key=name)
     low, high = f.metadata.get("min"), f.metadata.get("max")
     if low is not None and not low <= value <= high:
         raise ConfigError(f"{where}: {name} = {value!r} is out of range [{low}, {high}]", key=name)
@@ -250,7 +251,7 @@ def _convert_flag(type_name: str, text: Any, key: str) -> Any:
     try:
         return {"int": int, "float": float}.get(type_name, str)(text)
     except ValueError:
-        raise ConfigError(f"--{_flag(key)} must be {type_name}, got {text!r}", key=key) from None
+        raise ConfigError(f"--{_flag(key)} must be {type_name}, got {describe(text)}", key=key) from None
 
 
 def _parse_processor_args(items: list[str]) -> dict[str, Any]:
@@ -258,7 +259,7 @@ def _parse_processor_args(items: list[str]) -> dict[str, Any]:
     for item in items:
         key, sep, raw = item.partition("=")
         if not sep or not key.strip():
-            raise ConfigError(f"--processor-arg {item!r}: expected KEY=VALUE", key="processor_args")
+            raise ConfigError(f"--processor-arg {describe(item)}: expected KEY=VALUE", key="processor_args")
         try:
             result[key.strip()] = tomllib.loads(f"v = {raw}")["v"]
         except tomllib.TOMLDecodeError:

@@ -10,6 +10,7 @@ from processors import load_processor
 from uav_tui.autonomy import check_vector
 from uav_tui.commands import Command, check_limits
 from uav_tui.errors import CommandError, ProcessorLoadError, UavError
+from uav_tui.text import describe, shorten
 
 if TYPE_CHECKING:
     from controllers.base import FlightController
@@ -126,4 +127,5 @@ class Operations:
         try:
             await worker.call(method, *args)
         except Exception as exc:  # the researcher's code raised: report it, keep running
-            raise UavError(f"{loaded.info.name}.{method}{args!r} raised {type(exc).__name__}: {exc}") from exc
+            raise UavError(f"{loaded.info.name}.{method}{describe(args)} raised {type(exc).__name__}: "
+                           f"{shorten(str(exc), 500)}") from exc

@@ -34,7 +34,7 @@ from uav_tui.config import WebConfig
 from uav_tui.core import CoreState
 from uav_tui.errors import KNOWN_ERRORS, CommandError, UavError
 from uav_tui.events import Event
-from uav_tui.text import describe
+from uav_tui.text import describe, shorten
 from uav_tui.web.roi import roi_from_message
 from uav_tui.web.throttle import AuthThrottle
 from uav_tui.web.tracks import VideoHub
@@ -182,7 +182,7 @@ class WebServer:
             await pc.setLocalDescription(await pc.createAnswer())
         except Exception as exc:  # noqa: BLE001 - aiortc raises many types for a bad SDP
             await self._close_peer(pc, track)
-            raise self._bad_request(origin, f"offer rejected: {type(exc).__name__}: {exc}") from None
+            raise self._bad_request(origin, f"offer rejected: {type(exc).__name__}: {shorten(str(exc), 200)}") from None
 
         @pc.on("connectionstatechange")
         async def on_state() -> None:
