@@ -1,6 +1,6 @@
 """Text from outside (network, files, the researcher's code) made safe to print, log and record.
 
-Three small functions, applied where text leaves the platform (the event log, the logging formatter,
+Small functions, applied where text leaves the platform (the event log, the logging formatter,
 the CSV writer, ``run.json``, the headless terminal):
 
 - :func:`escape` shows control characters as escapes (``\\x1b``, ``\\n``), so nothing from outside
