@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import asyncio
 import logging
 from pathlib import Path
 
@@ -62,4 +61,3 @@ async def test_huge_and_overflowing_vectors_are_described_briefly_counted_and_re
     assert all(d.startswith("rejected") for d in decisions[:30]) and decisions[30:].count("error") >= 10
     size = sum(f.stat().st_size for f in core.recorder.run_dir.rglob("*") if f.is_file())
     assert size < 2_000_000
-    await asyncio.sleep(0)
