@@ -22,11 +22,12 @@ from uav_tui.autonomy import AutonomyGate
 from uav_tui.commands import VEHICLE_COMMANDS, Command, parse
 from uav_tui.config import Config
 from uav_tui.errors import KNOWN_ERRORS, NoVehicle, SourceError, UavError
-from uav_tui.events import EventLog
+from uav_tui.events import EventLog, Repeats
 from uav_tui.operations import Operations
 from uav_tui.recording import Recorder, describe
 from uav_tui.status import CoreStatus
 from uav_tui.telemetry import TelemetryManager
+from uav_tui.text import shorten
 from uav_tui.worker import ProcessedFrame, ProcessorWorker
 
 if TYPE_CHECKING:  # aiortc and pymavlink are imported only when the side channels are switched on
@@ -68,6 +69,7 @@ class UavCore:
         self._frame_listeners: list[Callable[[ProcessedFrame], None]] = []
         self._tasks: list[asyncio.Task[Any]] = []
         self._told_not_recording = False
+        self._processor_errors = Repeats(self.events, "error", "processor")
         self._operations = Operations(self)
         self.web: WebServer | None = None
         """The web page's WebServer (``web.url`` has the token) when ``web`` is on, else None."""
@@ -196,9 +198,8 @@ class UavCore:
 
     def _on_result(self, result: ProcessedFrame) -> None:
         if result.error:
-            last_line = result.error.strip().splitlines()[-1]
-            if last_line != self.processor_error:
-                self.events.emit("error", "processor", f"frame {result.frame.seq}: {result.error.strip()}")
+            last_line = shorten(result.error.strip().splitlines()[-1], 500)
+            self._processor_errors.report(last_line, f"frame {result.frame.seq}: {result.error.strip()}")
             self.processor_error = last_line
         self.gate.consider(result)
         for listener in tuple(self._frame_listeners):

@@ -13,26 +13,35 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import TextIO
 
-from uav_tui.commands import Command, parse
-from uav_tui.config import Config
+from uav_tui.commands import Command, check_limits, parse
+from uav_tui.config import Config, SafetyConfig
 from uav_tui.core import UavCore
 from uav_tui.errors import KNOWN_ERRORS, CommandError
 from uav_tui.events import Event
 from uav_tui.status import CoreStatus
+from uav_tui.text import escape, safe
 
 EXIT_OK, EXIT_SCRIPT_FAILED, EXIT_START_FAILED = 0, 1, 2
 
 
-def load_script(path: Path) -> list[tuple[int, Command]]:
-    """Parse a whole ``--script`` file up front, so a typo on line 9 is found before takeoff."""
+def load_script(path: Path, safety: SafetyConfig | None = None) -> list[tuple[int, Command]]:
+    """Parse a whole ``--script`` file up front, so a typo on line 9 is found before takeoff.
+
+    With ``safety``, arguments beyond their configured limits are found then too.
+    """
     try:
-        lines = path.read_text().splitlines()
+        lines = path.read_text(encoding="utf-8").splitlines()
     except OSError as exc:
         raise CommandError(f"cannot read script {path}: {exc.strerror}", key="script") from None
+    except UnicodeDecodeError as exc:
+        raise CommandError(f"script {path} is not UTF-8 text (byte {exc.start}); save it as UTF-8",
+                           key="script") from None
     commands, problems = [], []
     for number, line in enumerate(lines, start=1):
         try:
             command = parse(line)
+            if command is not None and safety is not None:
+                check_limits(command, safety)
         except CommandError as exc:
             problems.append(f"{path}:{number}: {exc}")
             continue
@@ -104,7 +113,7 @@ class HeadlessRunner:
         self.core.events.add_listener(self._print_event)
         if self.core.web is not None:
             url = self.core.web.url
-            self._say(json.dumps({"web_url": url}) if self.json_lines else f"web page: {url}")
+            self._say(json.dumps({"web_url": url}) if self.json_lines else f"web page: {url}", redact=False)
         started = time.monotonic()
         tasks = [asyncio.create_task(self._print_status(started))]
         if self.script is not None:
@@ -152,7 +161,9 @@ class HeadlessRunner:
             else:
                 self._say(format_status(status, time.monotonic() - started))
 
-    def _say(self, text: str) -> None:
+    def _say(self, text: str, *, redact: bool = True) -> None:
+        """Print one line: escaped, and with passwords hidden unless ``redact`` is False (the page's URL)."""
+        text = safe(text, multiline=True) if redact else escape(text)
         # A lost terminal must not stop the run: the safety rules decide that, not print().
         with contextlib.suppress(BrokenPipeError, OSError):
             print(text, file=self.out, flush=True)
