@@ -280,7 +280,7 @@ async def test_vector_moves_along_the_heading_then_holds(
     assert abs(after["d"] - before["d"]) < 0.2
     records = (await airborne.request(cmd="setpoints", since_mono_ns=since))["records"]
     moving = [r for r in records if (r["vx"], r["vy"]) == (vx, vy)]
-    assert len(moving) >= 10 * 2.0 * 0.8  # >= 10 Hz for the 2 s
+    assert len(moving) >= 20 * 2.0 * 0.9  # 20 Hz for the 2 s (a stalled loop may lose a few)
     assert (records[-1]["vx"], records[-1]["vy"]) == (0.0, 0.0)  # zero is the last word, then HOLD
 
 
