@@ -50,6 +50,10 @@ class Steering:
         return None
 '''
 
+NO_FAILSAFE: dict[str, Any] = {"extra_args": ["--offboard-loss-timeout", "600"]}
+"""``SimVehicle`` arguments that keep the autopilot's offboard-loss failsafe out of a test: any hold is uav-tui's.
+Use as ``@pytest.mark.parametrize("sim_vehicle", [NO_FAILSAFE], indirect=True)``."""
+
 
 def speed(truth: dict[str, Any]) -> float:
     return math.hypot(truth["vn"], truth["ve"])

@@ -16,6 +16,7 @@ import pytest
 
 from controllers.sim.launcher import SimVehicle
 from tests.core.flight_helpers import (
+    NO_FAILSAFE,
     STEERING_PROCESSOR,
     fly_under_autonomy,
     setpoints_since,
@@ -63,6 +64,7 @@ def flying_uav(tmp_path: Path, sim_vehicle: SimVehicle):
 
 
 @pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGHUP], ids=["SIGTERM", "SIGHUP"])
+@pytest.mark.parametrize("sim_vehicle", [NO_FAILSAFE], indirect=True)
 def test_signal_during_a_vector_holds_before_exit(flying_uav, signum: int) -> None:
     process, truth = flying_uav
     process.send_signal(signum)
@@ -88,6 +90,7 @@ def test_sigkill_leaves_the_autopilot_failsafe_to_hold(flying_uav) -> None:
     wait_for(lambda: speed(truth.latest()) < 0.15, 3, "the vehicle to stop")
 
 
+@pytest.mark.parametrize("sim_vehicle", [NO_FAILSAFE], indirect=True)
 async def test_an_unhandled_error_holds_the_flying_vehicle_then_exits_non_zero(
     tmp_path: Path, sim_vehicle: SimVehicle
 ) -> None:
