@@ -164,7 +164,7 @@ async def test_bad_connection_strings_fail_at_once(address: str, says: str) -> N
     started = time.monotonic()
     with pytest.raises(ConnectError, match=says):
         await connect_controller(address)
-    assert time.monotonic() - started < 1.0
+    assert time.monotonic() - started < 5.0  # refused before waiting the 10 s for a heartbeat
 
 
 @pytest.mark.parametrize("form", ["udp://:{port}", "udp://127.0.0.1:{port}"], ids=["udp-empty-host", "udp-host"])
