@@ -17,6 +17,7 @@ from tests.core.flight_helpers import (
     wait_until,
 )
 from uav_tui.core import CoreState
+from uav_tui.headless import EXIT_UNHANDLED_ERROR
 from uav_tui.tui._session import TuiSession
 
 from .conftest import started, wait_for
@@ -61,3 +62,27 @@ async def test_hangup_with_continue_keeps_the_core_running_until_quit(make_confi
     await asyncio.wait_for(headless, 5)
     assert session.reason == "quit"
     await session.core.stop(session.reason)
+
+
+@pytest.mark.parametrize("sim_vehicle", [NO_FAILSAFE], indirect=True)
+async def test_an_unhandled_error_holds_the_flying_vehicle_and_exits_with_status_3(make_config, tmp_path,
+                                                                                    sim_vehicle):
+    session = TuiSession(steering_config(tmp_path, fc=sim_vehicle.connection_string))
+    truth = sim_vehicle.truth()
+    async with session.app.run_test(size=(80, 24)) as pilot:
+        await started(pilot)
+        await take_off(session.core, truth)
+        await fly_under_autonomy(session.core, lambda: truth.latest()["mode"] == "OFFBOARD", "autonomy flying")
+
+        def buggy_listener(result) -> None:
+            raise KeyError("a bug in a frame listener")
+
+        session.core.add_frame_listener(buggy_listener)
+        await wait_for(pilot, lambda: session.core.state is CoreState.STOPPED, timeout=15, what="the core to stop")
+    stopped = time.monotonic_ns()
+    assert session.app.return_code == EXIT_UNHANDLED_ERROR
+    assert session.app.stop_reason.startswith("unhandled error in frame")
+    assert truth.wait_latest()["mode"] == "HOLD"
+    await wait_until(lambda: speed(truth.latest()) < 0.15, 5, "the vehicle to stop")
+    await asyncio.sleep(0.5)
+    assert await setpoints_since(truth, stopped) == []
