@@ -28,7 +28,7 @@ def messages(session: TuiSession) -> list[str]:
 
 
 @pytest.mark.parametrize("sim_vehicle", [NO_FAILSAFE], indirect=True)
-async def test_hangup_holds_the_vehicle_autonomy_flies_then_exits(make_config, tmp_path, sim_vehicle):
+async def test_hangup_holds_the_vehicle_autonomy_flies_then_exits(tmp_path, sim_vehicle):
     config = steering_config(tmp_path, fc=sim_vehicle.connection_string)
     session = TuiSession(config, on_hangup="stop")
     truth = sim_vehicle.truth()
@@ -65,8 +65,7 @@ async def test_hangup_with_continue_keeps_the_core_running_until_quit(make_confi
 
 
 @pytest.mark.parametrize("sim_vehicle", [NO_FAILSAFE], indirect=True)
-async def test_an_unhandled_error_holds_the_flying_vehicle_and_exits_with_status_3(make_config, tmp_path,
-                                                                                    sim_vehicle):
+async def test_an_unhandled_error_holds_the_flying_vehicle_and_exits_with_status_3(tmp_path, sim_vehicle):
     session = TuiSession(steering_config(tmp_path, fc=sim_vehicle.connection_string))
     truth = sim_vehicle.truth()
     async with session.app.run_test(size=(80, 24)) as pilot:
