@@ -65,6 +65,8 @@ class UavCore:
         """Set by the ``quit`` command; the interface that runs the core then stops it."""
         self.processor_error: str | None = None
         """Last line of the newest processor traceback."""
+        self.failure: str | None = None
+        """Set by :meth:`fail`: an unhandled error ended the run (the interface exits non-zero, after the hold)."""
         self.started_wall_ns = 0
         self._frame_listeners: list[Callable[[ProcessedFrame], None]] = []
         self._tasks: list[asyncio.Task[Any]] = []
@@ -183,8 +185,15 @@ class UavCore:
 
     def _task_done(self, task: asyncio.Task[Any]) -> None:
         if not task.cancelled() and task.exception() is not None:
-            self.events.emit("error", "platform", f"{task.get_name()} task failed: {task.exception()!r}")
-            self.quit_requested.set()
+            self.fail(f"the {task.get_name()} task", task.exception())
+
+    def fail(self, where: str, exc: BaseException) -> None:
+        """An unhandled error (a bug): log it and end the run; the interface holds the vehicle (safety rule 6)."""
+        logger.error("unhandled error in %s", where, exc_info=exc)
+        if self.failure is None:
+            self.failure = f"unhandled error in {where}: {exc!r}"
+            self.events.emit("error", "platform", f"{self.failure}; stopping")
+        self.quit_requested.set()
 
     # -- frames ----------------------------------------------------------------------------------
 
@@ -197,6 +206,12 @@ class UavCore:
             self._frame_listeners.remove(listener)
 
     def _on_result(self, result: ProcessedFrame) -> None:
+        try:
+            self._handle_result(result)
+        except Exception as exc:  # noqa: BLE001 - a bug on the loop: stop the run, never keep flying
+            self.fail(f"frame {result.frame.seq}", exc)
+
+    def _handle_result(self, result: ProcessedFrame) -> None:
         if result.error:
             last_line = shorten(result.error.strip().splitlines()[-1], 500)
             self._processor_errors.report(last_line, f"frame {result.frame.seq}: {result.error.strip()}")

@@ -17,6 +17,7 @@ from uav_tui.commands import VEHICLE_COMMANDS, parse
 from uav_tui.core import CoreState, UavCore
 from uav_tui.errors import KNOWN_ERRORS, CommandError
 from uav_tui.events import Event
+from uav_tui.headless import EXIT_UNHANDLED_ERROR
 from uav_tui.status import CoreStatus
 from uav_tui.text import safe
 from uav_tui.tui._algorithm import AlgorithmPanel
@@ -162,7 +163,8 @@ class UavApp(App[None]):
 
     async def _watch_quit(self) -> None:
         await self.core.quit_requested.wait()
-        await self.shutdown("quit")
+        failure = self.core.failure
+        await self.shutdown(failure or "quit", EXIT_UNHANDLED_ERROR if failure else 0)
 
     async def shutdown(self, reason: str, return_code: int = 0) -> None:
         """Stop the core (holding the vehicle if it flies a vector or is in the air), then exit."""
