@@ -29,7 +29,7 @@ from controllers.mavsdk_errors import map_mavsdk_errors
 from controllers.mavsdk_link import LinkMonitor
 from controllers.mavsdk_log import route_mavsdk_log
 from controllers.mavsdk_telemetry import merged_updates, set_rates
-from controllers.vector_stream import VectorStream
+from controllers.vector_stream import DEFAULT_RATE_HZ, VectorStream
 
 logger = logging.getLogger(__name__)
 
@@ -63,7 +63,8 @@ class MavsdkController:
         command_timeout_s: upper bound on each command.
     """
 
-    def __init__(self, *, vector_rate_hz: float = 20.0, command_timeout_s: float = COMMAND_TIMEOUT_S) -> None:
+    def __init__(self, *, vector_rate_hz: float = DEFAULT_RATE_HZ,
+                 command_timeout_s: float = COMMAND_TIMEOUT_S) -> None:
         self.description = "MAVSDK (not connected)"
         self.autopilot = "unknown"
         """``"px4"``, ``"ardupilot"`` or ``"unknown"``, from the heartbeat's autopilot field."""

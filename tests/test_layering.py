@@ -4,7 +4,10 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
 
+
+@pytest.mark.timeout(180)  # a cold import of every module, in a child bounded at 120 s
 def test_levels_load_without_the_platform() -> None:
     script = (
         "import importlib, pkgutil, sys\n"

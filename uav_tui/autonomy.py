@@ -20,8 +20,9 @@ from typing import Any
 from controllers.base import FlightController
 from uav_tui.config import SafetyConfig
 from uav_tui.errors import KNOWN_ERRORS, UavError
-from uav_tui.events import EventLog
+from uav_tui.events import EventLog, Repeats
 from uav_tui.telemetry import TelemetryManager
+from uav_tui.text import describe
 from uav_tui.worker import ProcessedFrame
 
 logger = logging.getLogger(__name__)
@@ -39,28 +40,30 @@ def check_vector(raw: Any, safety: SafetyConfig) -> tuple[Vector | None, str]:
     """Validate and clamp a processor's vector.
 
     Returns ``(vector, note)``: the clamped vector and "" or what was clamped; or ``(None, reason)``
-    when it must be rejected (wrong shape or type, NaN/inf, t <= 0).
+    when it must be rejected (wrong shape or type, NaN/inf or too large for a float, t <= 0). Notes
+    describe the value in bounded text, whatever the processor returned.
     """
-    if not isinstance(raw, (tuple, list)) or len(raw) != 3:
-        return None, f"rejected: expected (vx, vy, t), got {_short(raw)}"
+    if not isinstance(raw, tuple | list) or len(raw) != 3:
+        return None, f"rejected: expected (vx, vy, t), got {describe(raw)}"
     if not all(isinstance(v, Real) and not isinstance(v, bool) for v in raw):
-        return None, f"rejected: non-numeric vector {_short(raw)}"
-    vx, vy, t = (float(v) for v in raw)
+        return None, f"rejected: non-numeric vector {describe(raw)}"
+    try:
+        vx, vy, t = (float(v) for v in raw)
+    except OverflowError:  # an int like 10**400 has no float
+        return None, f"rejected: vector too large for a float {describe(raw)}"
     if not all(math.isfinite(v) for v in (vx, vy, t)):
-        return None, f"rejected: non-finite vector {_short(raw)}"
+        return None, f"rejected: non-finite vector {describe(raw)}"
     if t <= 0:
         return None, f"rejected: duration t={t:g} must be > 0"
     limit = safety.max_speed
     clamped = (max(-limit, min(limit, vx)), max(-limit, min(limit, vy)), min(t, safety.max_t))
-    note = "" if clamped == (vx, vy, t) else f"clamped {_short((vx, vy, t))} to {_short(clamped)}"
+    note = "" if clamped == (vx, vy, t) else (f"clamped {_numbers((vx, vy, t))} to {_numbers(clamped)} "
+                                              f"(max_speed {limit:g} m/s, max_t {safety.max_t:g} s)")
     return clamped, note
 
 
-def _short(value: Any) -> str:
-    if isinstance(value, (tuple, list)):
-        return "(" + ", ".join(f"{v:.3g}" if isinstance(v, float) else repr(v) for v in value) + ")"
-    text = repr(value)
-    return text if len(text) < 40 else text[:37] + "..."
+def _numbers(vector: Vector) -> str:
+    return "(" + ", ".join(f"{v:.3g}" for v in vector) + ")"
 
 
 class AutonomyGate:
@@ -78,6 +81,7 @@ class AutonomyGate:
         self.rejected = 0
         self.last_vector: Vector | None = None
         self.last_decision = ""
+        self._rejections = Repeats(events, "warning", "autonomy", "processor")
         self._pending: tuple[Vector, ProcessedFrame] | None = None
         self._wake = asyncio.Event()
         self._flown = False
@@ -115,7 +119,7 @@ class AutonomyGate:
             self.rejected += 1
             result.decision = note
             self.last_decision = note
-            self.events.emit("warning", "autonomy", f"frame {result.frame.seq}: vector {note}", "processor")
+            self._rejections.report(note, f"frame {result.frame.seq}: vector {note}")
             return
         self.last_vector = vector
         result.decision = self._why_not(result) or ("executed" + (f" ({note})" if note else ""))

@@ -16,6 +16,7 @@ from pathlib import Path
 from uav_tui.commands import help_text
 from uav_tui.config import add_config_flags, find_config_file, load_config, overrides_from_args
 from uav_tui.errors import CONFIG_ERRORS
+from uav_tui.text import SafeFormatter, safe
 
 TOOLS = ("sim", "runs", "report", "replay")
 """Sub-commands; anything else on the command line configures a run."""
@@ -47,16 +48,16 @@ def main(argv: list[str] | None = None) -> int:
     if argv and argv[0] in TOOLS:
         return _run_tool(argv[0], argv[1:])
     args = build_parser().parse_args(argv)
-    logging.basicConfig(level=args.log_level, format="%(asctime)s %(levelname)s %(name)s: %(message)s")
+    setup_logging(args.log_level)
     try:
         config = load_config(find_config_file(args.config), overrides_from_args(args))
         script = None
         if args.script:
             from uav_tui.headless import load_script
 
-            script = load_script(Path(args.script))
+            script = load_script(Path(args.script), config.safety)
     except CONFIG_ERRORS as exc:
-        print(f"uav-tui: {exc}", file=sys.stderr)
+        print(safe(f"uav-tui: {exc}", multiline=True), file=sys.stderr)
         return 2
     if args.no_ui:
         from uav_tui.headless import HeadlessRunner
@@ -70,6 +71,13 @@ def main(argv: list[str] | None = None) -> int:
     from uav_tui.tui import run_tui
 
     return run_tui(config, duration=args.duration, script=script, on_hangup=args.on_hangup)
+
+
+def setup_logging(level: str) -> None:
+    """Log records to stderr through :class:`SafeFormatter` (escaped, passwords hidden)."""
+    handler = logging.StreamHandler()
+    handler.setFormatter(SafeFormatter("%(asctime)s %(levelname)s %(name)s: %(message)s"))
+    logging.basicConfig(level=level, handlers=[handler])
 
 
 def _run_tool(name: str, argv: list[str]) -> int:

@@ -11,7 +11,12 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+from uav_tui.config import SafetyConfig
 from uav_tui.errors import CommandError
+from uav_tui.text import describe
+
+MAX_WAIT_S = 24 * 3600.0
+"""The longest ``wait`` in a script."""
 
 
 def _finite(text: str) -> float:
@@ -28,8 +33,15 @@ def _positive(text: str) -> float:
     return value
 
 
+def _seconds(text: str) -> float:
+    value = _positive(text)
+    if value > MAX_WAIT_S:
+        raise ValueError(f"longer than {MAX_WAIT_S:g} s")
+    return value
+
+
 def _pixels(text: str) -> int:
-    value = int(float(text))
+    value = int(_finite(text))
     if value < 0:
         raise ValueError("negative")
     return value
@@ -59,17 +71,25 @@ class CommandSpec:
     """How many trailing args may be left out."""
     rest: bool = False
     """The single argument takes the rest of the line (a URI with spaces, say)."""
+    limits: tuple[str | None, ...] = ()
+    """Per argument, the :class:`SafetyConfig` key its magnitude may not exceed (None: no such limit)."""
+
+    @property
+    def arg_names(self) -> list[str]:
+        """The arguments' names from the usage (``orbit R V`` -> ``['R', 'V']``)."""
+        return [name.strip("[]") for name in self.usage.split()[1:]]
 
 
 COMMANDS: dict[str, CommandSpec] = {
     "arm": CommandSpec("arm", "arm the motors"),
     "disarm": CommandSpec("disarm", "disarm the motors (refused in the air by the autopilot)"),
-    "takeoff": CommandSpec("takeoff [ALT]", "take off to ALT metres (default: takeoff_alt)", (_positive,), 1),
+    "takeoff": CommandSpec("takeoff [ALT]", "take off to ALT metres (default: takeoff_alt)", (_positive,), 1,
+                           limits=("max_altitude",)),
     "land": CommandSpec("land", "land where it is"),
     "rtl": CommandSpec("rtl", "return to launch and land"),
     "hold": CommandSpec("hold", "stop and hold position"),
     "orbit": CommandSpec("orbit R V", "orbit the current position at radius R m and speed V m/s",
-                         (_positive, _finite)),
+                         (_positive, _finite), limits=("max_orbit_radius", "max_orbit_speed")),
     "vector": CommandSpec("vector VX VY T", "fly body-frame velocity VX (forward) VY (right) m/s for T s",
                           (_finite, _finite, _positive)),
     "autonomy": CommandSpec("autonomy on|off|toggle", "let the processor's vectors fly the vehicle", (_switch,)),
@@ -80,7 +100,7 @@ COMMANDS: dict[str, CommandSpec] = {
     "reload": CommandSpec("reload", "reload the processor from its file, keeping the old one on error"),
     "source": CommandSpec("source URI", "switch the camera to URI without stopping anything else", (str,),
                           rest=True),
-    "wait": CommandSpec("wait S", "scripts only: wait S seconds", (_positive,)),
+    "wait": CommandSpec("wait S", "scripts only: wait S seconds", (_seconds,)),
     "quit": CommandSpec("quit", "hold the vehicle if flying, then exit"),
 }
 """Every command word. Keys are bound to these in the TUI; scripts and the web page send them as text."""
@@ -109,18 +129,33 @@ def parse(line: str) -> Command | None:
     word = word.lower()
     spec = COMMANDS.get(word)
     if spec is None:
-        raise CommandError(f"unknown command {word!r}; commands: {', '.join(COMMANDS)}", key="command")
+        raise CommandError(f"unknown command {describe(word)}; commands: {', '.join(COMMANDS)}", key="command")
     try:
         words = [rest.strip()] if spec.rest and rest.strip() else shlex.split(rest)
     except ValueError as exc:
-        raise CommandError(f"{text!r}: {exc}; usage: {spec.usage}", key="command") from None
+        raise CommandError(f"{describe(text)}: {exc}; usage: {spec.usage}", key="command") from None
     if not len(spec.args) - spec.optional <= len(words) <= len(spec.args):
-        raise CommandError(f"{text!r}: wrong number of arguments; usage: {spec.usage}", key="command")
+        raise CommandError(f"{describe(text)}: wrong number of arguments; usage: {spec.usage}", key="command")
     try:
         args = tuple(convert(word) for convert, word in zip(spec.args, words, strict=False))
-    except ValueError:
-        raise CommandError(f"{text!r}: bad argument; usage: {spec.usage}", key="command") from None
+    except (ValueError, OverflowError):  # float("1e999") is inf, int(inf) overflows
+        raise CommandError(f"{describe(text)}: bad argument; usage: {spec.usage}", key="command") from None
     return Command(word, args)
+
+
+def check_limits(command: Command, safety: SafetyConfig) -> None:
+    """Refuse a command whose argument exceeds its configured limit; the message names the limit.
+
+    Raises:
+        CommandError: with ``key`` set to the limit's configuration key.
+    """
+    spec = COMMANDS[command.word]
+    for name, key, value in zip(spec.arg_names, spec.limits, command.args, strict=False):
+        limit = getattr(safety, key) if key else None
+        if limit is not None and abs(value) > limit:
+            raise CommandError(f"{command}: {name} = {value:g} is beyond the limit {key} = {limit:g}; raise "
+                               f"{key} in the [safety] section of uav.toml (or --{key.replace('_', '-')}) to "
+                               "allow it", key=key)
 
 
 def help_text() -> str:

@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from uav_tui.errors import ConfigError
+from uav_tui.text import describe
 
 
 def _key(help: str, *, minimum: float | None = None, maximum: float | None = None, default: Any = MISSING,
@@ -25,6 +26,10 @@ def _key(help: str, *, minimum: float | None = None, maximum: float | None = Non
     if factory is not MISSING:
         return field(default_factory=factory, metadata=metadata)
     return field(default=default, metadata=metadata)
+
+
+MIN_TOKEN_CHARS = 16
+"""A shorter ``web_token`` can be guessed; generated tokens are 22 characters."""
 
 
 @dataclass(frozen=True)
@@ -43,6 +48,17 @@ class SafetyConfig:
     max_processor_errors: int = _key("consecutive processor exceptions that stop autonomy", minimum=1,
                                      maximum=1000, default=3)
     takeoff_alt: float = _key("default takeoff altitude, m", minimum=1, maximum=120, default=5.0)
+    max_altitude: float = _key("highest altitude a takeoff command may ask for, m", minimum=1, maximum=10000,
+                               default=120.0)
+    max_orbit_radius: float = _key("largest orbit radius a command may ask for, m", minimum=1, maximum=10000,
+                                   default=100.0)
+    max_orbit_speed: float = _key("largest orbit speed a command may ask for, m/s", minimum=0.1, maximum=30,
+                                  default=5.0)
+
+    def __post_init__(self) -> None:
+        if self.takeoff_alt > self.max_altitude:
+            raise ConfigError(f"takeoff_alt = {self.takeoff_alt:g} is above max_altitude = {self.max_altitude:g}; "
+                              "lower takeoff_alt or raise max_altitude", key="takeoff_alt")
 
 
 @dataclass(frozen=True)
@@ -69,7 +85,10 @@ class WebConfig:
     web: bool = _key("serve the WebRTC page", default=False)
     web_host: str = _key("address the page binds to", default="0.0.0.0")
     web_port: int = _key("port of the page", minimum=1, maximum=65535, default=8080)
-    web_token: str = _key("access token (empty = a random one per start)", default="")
+    web_token: str = _key(f"access token, at least {MIN_TOKEN_CHARS} characters (empty = a random one per start)",
+                          default="")
+    web_origins: str = _key("other page origins allowed to send commands, comma-separated, e.g. "
+                            "https://gcs.local:8443 (the page's own origin is always allowed)", default="")
     web_width: int = _key("width of the streamed video, px", minimum=64, maximum=4096, default=640)
     web_fps: float = _key("frame rate of the streamed video", minimum=1, maximum=60, default=15)
     camera_mavlink: str = _key("MAVLink camera endpoint for ground-station click-to-track, e.g. "
@@ -120,9 +139,13 @@ def load_config(path: Path | None, overrides: dict[str, Any] | None = None) -> C
     data: dict[str, Any] = {}
     if path is not None:
         try:
-            data = tomllib.loads(path.read_text())
+            data = tomllib.loads(path.read_text(encoding="utf-8"))
         except tomllib.TOMLDecodeError as exc:
             raise ConfigError(f"{path}: not valid TOML: {exc}", key="config") from None
+        except UnicodeDecodeError as exc:
+            raise ConfigError(f"{path}: not UTF-8 text (byte {exc.start}); save it as UTF-8", key="config") from None
+        except OSError as exc:
+            raise ConfigError(f"cannot read config file {path}: {exc.strerror or exc}", key="config") from None
     where = str(path) if path else "configuration"
     top: dict[str, Any] = {}
     sections: dict[str, dict[str, Any]] = {name: {} for name in SECTIONS}
@@ -208,16 +231,19 @@ def _check(cls: type, key: str, value: Any, name: str, where: str) -> Any:
         raise ConfigError(f"{where}: unknown key {name!r}{hint}", key=name)
     expected = {"bool": bool, "int": int, "float": (int, float), "str": str}.get(f.type, dict)
     if isinstance(value, bool) and f.type != "bool" or not isinstance(value, expected):
-        raise ConfigError(f"{where}: {name} must be {f.type.split('[')[0]}, got {value!r}", key=name)
+        raise ConfigError(f"{where}: {name} must be {f.type.split('[')[0]}, got {describe(value)}", key=name)
     if f.type == "float":
         value = float(value)
         if not math.isfinite(value):
-            raise ConfigError(f"{where}: {name} must be a finite number, got {value!r}", key=name)
+            raise ConfigError(f"{where}: {name} must be a finite number, got {describe(value)}", key=name)
     low, high = f.metadata.get("min"), f.metadata.get("max")
     if low is not None and not low <= value <= high:
         raise ConfigError(f"{where}: {name} = {value!r} is out of range [{low}, {high}]", key=name)
     if f.type == "str" and key in ("source", "processor", "fc") and not value.strip():
         raise ConfigError(f"{where}: {name} must not be empty", key=name)
+    if key == "web_token" and value and len(value) < MIN_TOKEN_CHARS:
+        raise ConfigError(f"{where}: {name} must be at least {MIN_TOKEN_CHARS} characters (it has {len(value)}); "
+                          "leave it empty for a random one per start", key=name)
     return value
 
 
@@ -227,7 +253,7 @@ def _convert_flag(type_name: str, text: Any, key: str) -> Any:
     try:
         return {"int": int, "float": float}.get(type_name, str)(text)
     except ValueError:
-        raise ConfigError(f"--{_flag(key)} must be {type_name}, got {text!r}", key=key) from None
+        raise ConfigError(f"--{_flag(key)} must be {type_name}, got {describe(text)}", key=key) from None
 
 
 def _parse_processor_args(items: list[str]) -> dict[str, Any]:
@@ -235,7 +261,7 @@ def _parse_processor_args(items: list[str]) -> dict[str, Any]:
     for item in items:
         key, sep, raw = item.partition("=")
         if not sep or not key.strip():
-            raise ConfigError(f"--processor-arg {item!r}: expected KEY=VALUE", key="processor_args")
+            raise ConfigError(f"--processor-arg {describe(item)}: expected KEY=VALUE", key="processor_args")
         try:
             result[key.strip()] = tomllib.loads(f"v = {raw}")["v"]
         except tomllib.TOMLDecodeError:

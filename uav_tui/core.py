@@ -23,13 +23,14 @@ from uav_tui.autonomy import AutonomyGate
 from uav_tui.commands import VEHICLE_COMMANDS, Command, parse
 from uav_tui.config import Config
 from uav_tui.errors import KNOWN_ERRORS, NoVehicle, SourceError, UavError
-from uav_tui.events import EventLog
+from uav_tui.events import EventLog, Repeats
 from uav_tui.operations import Operations
 from uav_tui.recording import Recorder, describe
 from uav_tui.replay.gate import ReplayGate
 from uav_tui.replay.operator import CommandReplay, recorded_commands
 from uav_tui.status import CoreStatus
 from uav_tui.telemetry import TelemetryManager
+from uav_tui.text import shorten
 from uav_tui.worker import ProcessedFrame, ProcessorWorker
 
 if TYPE_CHECKING:  # aiortc and pymavlink are imported only when the side channels are switched on
@@ -69,10 +70,13 @@ class UavCore:
         """Set by the ``quit`` command; the interface that runs the core then stops it."""
         self.processor_error: str | None = None
         """Last line of the newest processor traceback."""
+        self.failure: str | None = None
+        """Set by :meth:`fail`: an unhandled error ended the run (the interface exits non-zero, after the hold)."""
         self.started_wall_ns = 0
         self._frame_listeners: list[Callable[[ProcessedFrame], None]] = []
         self._tasks: list[asyncio.Task[Any]] = []
         self._told_not_recording = False
+        self._processor_errors = Repeats(self.events, "error", "processor")
         self._operations = Operations(self)
         self.web: WebServer | None = None
         """The web page's WebServer (``web.url`` has the token) when ``web`` is on, else None."""
@@ -193,8 +197,15 @@ class UavCore:
 
     def _task_done(self, task: asyncio.Task[Any]) -> None:
         if not task.cancelled() and task.exception() is not None:
-            self.events.emit("error", "platform", f"{task.get_name()} task failed: {task.exception()!r}")
-            self.quit_requested.set()
+            self.fail(f"the {task.get_name()} task", task.exception())
+
+    def fail(self, where: str, exc: BaseException) -> None:
+        """An unhandled error (a bug): log it and end the run; the interface holds the vehicle (safety rule 6)."""
+        logger.error("unhandled error in %s", where, exc_info=exc)
+        if self.failure is None:
+            self.failure = f"unhandled error in {where}: {exc!r}"
+            self.events.emit("error", "platform", f"{self.failure}; stopping")
+        self.quit_requested.set()
 
     # -- frames ----------------------------------------------------------------------------------
 
@@ -207,10 +218,15 @@ class UavCore:
             self._frame_listeners.remove(listener)
 
     def _on_result(self, result: ProcessedFrame) -> None:
+        try:
+            self._handle_result(result)
+        except Exception as exc:  # noqa: BLE001 - a bug on the loop: stop the run, never keep flying
+            self.fail(f"frame {result.frame.seq}", exc)
+
+    def _handle_result(self, result: ProcessedFrame) -> None:
         if result.error:
-            last_line = result.error.strip().splitlines()[-1]
-            if last_line != self.processor_error:
-                self.events.emit("error", "processor", f"frame {result.frame.seq}: {result.error.strip()}")
+            last_line = shorten(result.error.strip().splitlines()[-1], 500)
+            self._processor_errors.report(last_line, f"frame {result.frame.seq}: {result.error.strip()}")
             self.processor_error = last_line
         self.gate.consider(result)
         for listener in tuple(self._frame_listeners):

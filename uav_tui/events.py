@@ -11,7 +11,12 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Literal
 
+from uav_tui.text import safe, shorten
+
 logger = logging.getLogger(__name__)
+
+MAX_MESSAGE_CHARS = 4000
+"""Longer event messages are cut (a processor's exception may carry megabytes)."""
 
 Level = Literal["info", "warning", "error"]
 Kind = Literal["command", "autonomy", "processor", "source", "link", "recorder", "web", "platform"]
@@ -54,7 +59,9 @@ class EventLog:
             self._listeners.remove(listener)
 
     def emit(self, level: Level, kind: Kind, message: str, origin: str = "platform") -> Event:
-        event = Event(time.time_ns(), time.monotonic_ns(), level, kind, message, origin)
+        """Record and deliver an event; ``message`` and ``origin`` are bounded, redacted and escaped here."""
+        message = safe(shorten(message, MAX_MESSAGE_CHARS), multiline=True)
+        event = Event(time.time_ns(), time.monotonic_ns(), level, kind, message, safe(shorten(origin, 200)))
         logger.debug("[%s/%s/%s] %s", level, kind, origin, message)  # interfaces show events; logs keep them
         loop = self._loop
         if loop is None or threading.get_ident() == self._loop_thread:
@@ -70,3 +77,27 @@ class EventLog:
                 listener(event)
             except Exception:  # a broken listener must not silence the others
                 logger.exception("event listener %r failed", listener)
+
+
+class Repeats:
+    """Says a message once, then counts while it repeats (processor exceptions, rejected vectors).
+
+    ``report(key, message)`` emits ``message`` when ``key`` differs from the previous one; the same
+    key again is only counted, and how often it repeated is said when a different key comes.
+    """
+
+    def __init__(self, events: EventLog, level: Level, kind: Kind, origin: str = "platform") -> None:
+        self.events, self.level, self.kind, self.origin = events, level, kind, origin
+        self.key: str | None = None
+        self.repeats = 0
+        """How often ``key`` came again since it was said."""
+
+    def report(self, key: str, message: str) -> None:
+        if key == self.key:
+            self.repeats += 1
+            return
+        if self.repeats:
+            self.events.emit(self.level, self.kind, f"the previous message repeated {self.repeats} more times "
+                             f"({self.key})", self.origin)
+        self.key, self.repeats = key, 0
+        self.events.emit(self.level, self.kind, message, self.origin)

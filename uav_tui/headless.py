@@ -8,31 +8,40 @@ import json
 import signal
 import sys
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Coroutine
 from dataclasses import asdict
 from pathlib import Path
-from typing import TextIO
+from typing import Any, TextIO
 
-from uav_tui.commands import Command, parse
-from uav_tui.config import Config
+from uav_tui.commands import Command, check_limits, parse
+from uav_tui.config import Config, SafetyConfig
 from uav_tui.core import UavCore
 from uav_tui.errors import KNOWN_ERRORS, CommandError
 from uav_tui.events import Event
 from uav_tui.status import CoreStatus
+from uav_tui.text import escape, safe
 
-EXIT_OK, EXIT_SCRIPT_FAILED, EXIT_START_FAILED = 0, 1, 2
+EXIT_OK, EXIT_SCRIPT_FAILED, EXIT_START_FAILED, EXIT_UNHANDLED_ERROR = 0, 1, 2, 3
 
 
-def load_script(path: Path) -> list[tuple[int, Command]]:
-    """Parse a whole ``--script`` file up front, so a typo on line 9 is found before takeoff."""
+def load_script(path: Path, safety: SafetyConfig | None = None) -> list[tuple[int, Command]]:
+    """Parse a whole ``--script`` file up front, so a typo on line 9 is found before takeoff.
+
+    With ``safety``, arguments beyond their configured limits are found then too.
+    """
     try:
-        lines = path.read_text().splitlines()
+        lines = path.read_text(encoding="utf-8").splitlines()
     except OSError as exc:
         raise CommandError(f"cannot read script {path}: {exc.strerror}", key="script") from None
+    except UnicodeDecodeError as exc:
+        raise CommandError(f"script {path} is not UTF-8 text (byte {exc.start}); save it as UTF-8",
+                           key="script") from None
     commands, problems = [], []
     for number, line in enumerate(lines, start=1):
         try:
             command = parse(line)
+            if command is not None and safety is not None:
+                check_limits(command, safety)
         except CommandError as exc:
             problems.append(f"{path}:{number}: {exc}")
             continue
@@ -101,27 +110,48 @@ class HeadlessRunner:
         except KNOWN_ERRORS as exc:
             self._say(f"error: {exc}")
             return EXIT_START_FAILED
+        try:
+            await self._serve(loop)
+        except BaseException as exc:  # a bug here, or the loop cancelled: the vehicle is held all the same
+            self._reason = f"unhandled error: {exc!r}"
+            raise
+        finally:
+            await self.core.stop(self._reason)
+        self._say(f"stopped: {self._reason}")
+        return self.exit_code
+
+    async def _serve(self, loop: asyncio.AbstractEventLoop) -> None:
+        """From a started core until something asks to stop; sets the reason and the exit code."""
         self.core.events.add_listener(self._print_event)
         if self.core.web is not None:
             url = self.core.web.url
-            self._say(json.dumps({"web_url": url}) if self.json_lines else f"web page: {url}")
+            self._say(json.dumps({"web_url": url}) if self.json_lines else f"web page: {url}", redact=False)
         started = time.monotonic()
-        tasks = [asyncio.create_task(self._print_status(started))]
+        tasks = [self._watched(self._print_status(started), "status line")]
         if self.script is not None:
-            tasks.append(asyncio.create_task(self._run_script()))
+            tasks.append(self._watched(self._run_script(), "script"))
         if self.duration is not None:
             loop.call_later(self.duration, self.request_stop, f"--duration {self.duration:g} s reached")
         quit_watch = asyncio.create_task(self.core.quit_requested.wait())
         stop_watch = asyncio.create_task(self._stop.wait())
         await asyncio.wait([quit_watch, stop_watch], return_when=asyncio.FIRST_COMPLETED)
-        if self.core.quit_requested.is_set() and not self._stop.is_set():
+        if self.core.failure is not None:
+            self._reason, self.exit_code = self.core.failure, EXIT_UNHANDLED_ERROR
+        elif self.core.quit_requested.is_set() and not self._stop.is_set():
             self._reason = "quit"
         for task in (*tasks, quit_watch, stop_watch):
             task.cancel()
         await asyncio.gather(*tasks, quit_watch, stop_watch, return_exceptions=True)
-        await self.core.stop(self._reason)
-        self._say(f"stopped: {self._reason}")
-        return self.exit_code
+
+    def _watched(self, coro: Coroutine[Any, Any, None], name: str) -> asyncio.Task[None]:
+        """A task of this runner whose unexpected exception ends the run like any unhandled error."""
+        def done(task: asyncio.Task[None]) -> None:
+            if not task.cancelled() and task.exception() is not None:
+                self.core.fail(f"the {name} task", task.exception())
+
+        task = asyncio.create_task(coro, name=name)
+        task.add_done_callback(done)
+        return task
 
     def request_stop(self, reason: str) -> None:
         if not self._stop.is_set():
@@ -152,7 +182,9 @@ class HeadlessRunner:
             else:
                 self._say(format_status(status, time.monotonic() - started))
 
-    def _say(self, text: str) -> None:
+    def _say(self, text: str, *, redact: bool = True) -> None:
+        """Print one line: escaped, and with passwords hidden unless ``redact`` is False (the page's URL)."""
+        text = safe(text, multiline=True) if redact else escape(text)
         # A lost terminal must not stop the run: the safety rules decide that, not print().
         with contextlib.suppress(BrokenPipeError, OSError):
             print(text, file=self.out, flush=True)

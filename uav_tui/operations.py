@@ -8,8 +8,9 @@ from typing import TYPE_CHECKING, Any
 
 from processors import load_processor
 from uav_tui.autonomy import check_vector
-from uav_tui.commands import Command
+from uav_tui.commands import Command, check_limits
 from uav_tui.errors import CommandError, ProcessorLoadError, UavError
+from uav_tui.text import describe, shorten
 
 if TYPE_CHECKING:
     from controllers.base import FlightController
@@ -32,6 +33,7 @@ class Operations:
         self.core = core
 
     async def run(self, command: Command, origin: str) -> str:
+        check_limits(command, self.core.config.safety)
         plain = PLAIN_VEHICLE_CALLS.get(command.word)
         if plain is not None:
             method, done = plain
@@ -127,4 +129,5 @@ class Operations:
         try:
             await worker.call(method, *args)
         except Exception as exc:  # the researcher's code raised: report it, keep running
-            raise UavError(f"{loaded.info.name}.{method}{args!r} raised {type(exc).__name__}: {exc}") from exc
+            raise UavError(f"{loaded.info.name}.{method}{describe(args)} raised {type(exc).__name__}: "
+                           f"{shorten(str(exc), 500)}") from exc

@@ -66,8 +66,9 @@ async def test_guided_before_arming_and_takeoff_altitude(copter: tuple[MavsdkCon
 async def test_vector_in_guided_then_loiter(copter: tuple[MavsdkController, FakeAutopilot]) -> None:
     fc, fake = copter
     await fc.set_fly_vector(0.5, 0.25, 0.5)
-    while fc.vector_active:
-        await asyncio.sleep(0.05)
+    async with asyncio.timeout(10):  # a 0.5 s vector; a stream that never ends fails here, not at the suite timeout
+        while fc.vector_active:
+            await asyncio.sleep(0.05)
     assert set_modes(fake)[-2:] == [GUIDED, LOITER]
     setpoints = fake.of_type("SET_POSITION_TARGET_LOCAL_NED")
     moving = [s for s in setpoints if (s.vx, s.vy) == (0.5, 0.25)]

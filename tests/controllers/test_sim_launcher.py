@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import statistics
 import subprocess
 import sys
 import time
@@ -108,11 +109,12 @@ def test_truth_stream_and_requests(sim_vehicle: SimVehicle) -> None:
 def test_truth_stream_rate_is_about_50_hz(sim_vehicle: SimVehicle) -> None:
     truth = sim_vehicle.truth()
     truth.wait_latest()
-    seen = set()
-    end = time.monotonic() + 0.5
-    while time.monotonic() < end:
+    seen: set[int] = set()
+    while len(seen) < 20:
         seen.add(truth.wait_latest()["t_mono_ns"])
-    assert len(seen) >= 15
+    stamps = sorted(seen)
+    # Spacing on the simulator's own clock: 20 ms steps (a late step on a loaded machine moves few of them).
+    assert statistics.median(b - a for a, b in zip(stamps, stamps[1:], strict=False)) / 1e6 < 30
 
 
 def test_cli_options_reach_the_configuration() -> None:

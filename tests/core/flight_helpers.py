@@ -10,22 +10,27 @@ from contextlib import asynccontextmanager
 from pathlib import Path
 from typing import Any
 
-from uav_tui.config import load_config
+from controllers.sim.truth import TruthClient
+from uav_tui.config import Config, load_config
 from uav_tui.core import UavCore
 
 STEERING_PROCESSOR = '''
 import math, time
 
 class Steering:
-    """Test processor: F1 flies forward, F2 hangs, F3 raises, F4 returns NaN; catch_cmd sets the speed."""
+    """Test processor: F1 flies (speed forward, side right), F2 hangs, F3 raises, F4 returns NaN;
+    catch_cmd sets the speed; every frame takes at least ``delay`` seconds."""
 
-    def __init__(self, speed=0.6, t=2.0):
+    def __init__(self, speed=0.6, t=2.0, side=0.0, delay=0.0):
         self.tmMgr = None
         self.mode = "idle"
         self.speed = speed
+        self.side = side
         self.t = t
+        self.delay = delay
 
     def photo_processing(self, frame):
+        time.sleep(self.delay)
         if self.mode == "hang":
             time.sleep(30)
         if self.mode == "raise":
@@ -39,11 +44,15 @@ class Steering:
 
     def getPreparedVector(self):
         if self.mode == "fly":
-            return (self.speed, 0.0, self.t)
+            return (self.speed, self.side, self.t)
         if self.mode == "nan":
             return (math.nan, 0.0, 1.0)
         return None
 '''
+
+NO_FAILSAFE: dict[str, Any] = {"extra_args": ["--offboard-loss-timeout", "600"]}
+"""``SimVehicle`` arguments that keep the autopilot's offboard-loss failsafe out of a test: any hold is uav-tui's.
+Use as ``@pytest.mark.parametrize("sim_vehicle", [NO_FAILSAFE], indirect=True)``."""
 
 
 def speed(truth: dict[str, Any]) -> float:
@@ -67,26 +76,54 @@ async def fly_under_autonomy(core: UavCore, until: Callable[[], Any], what: str,
     await wait_until(until, timeout, what)
 
 
-@asynccontextmanager
-async def flying_core(tmp_path: Path, *, altitude: float = 3.0, **overrides: Any) -> AsyncIterator[UavCore]:
-    """A core on the simulated vehicle, airborne at ``altitude``; by default with the steering test processor.
+def steering_config(tmp_path: Path, **overrides: Any) -> Config:
+    """A run's config: the steering test processor, a small synthetic camera, the built-in simulator, no recording.
 
-    ``overrides`` are config keys (``processor=``, ``source=``, ``max_t=`` ...).
+    ``overrides`` are config keys (``processor=``, ``source=``, ``fc=``, ``max_t=`` ...).
     """
     processor = tmp_path / "steering.py"
     processor.write_text(STEERING_PROCESSOR)
     settings = {"fc": "sim", "source": "synthetic:?width=160&height=120", "processor": f"{processor}:Steering",
                 "record": False, **overrides}
-    core = UavCore(load_config(None, settings))
+    return load_config(None, settings)
+
+
+async def take_off(core: UavCore, truth: TruthClient, altitude: float = 3.0) -> None:
+    """Arm and take off through the core's commands; returns once the vehicle holds at ``altitude``."""
+    await core.execute("arm")
+    await core.execute(f"takeoff {altitude}")
+    await wait_until(lambda: (s := truth.latest()) and -s["d"] > altitude - 0.3 and s["mode"] == "HOLD",
+                     30, f"takeoff to {altitude} m")
+    await wait_until(lambda: core.telemetry.snapshot().in_air, 5, "in-air telemetry")
+
+
+@asynccontextmanager
+async def flying_core(tmp_path: Path, *, altitude: float = 3.0, truth: TruthClient | None = None,
+                      **overrides: Any) -> AsyncIterator[UavCore]:
+    """A core on the simulated vehicle, airborne at ``altitude``; by default with the steering test processor.
+
+    ``core.truth`` is the simulator's ground truth: the built-in simulator's, or ``truth`` when ``fc=``
+    names a simulator the test started itself (one that outlives the core). ``overrides``: see
+    :func:`steering_config`.
+    """
+    core = UavCore(steering_config(tmp_path, **overrides))
     await core.start()
     try:
-        truth = core.controller.sim.truth()
+        truth = truth or core.controller.sim.truth()
         core.truth = truth  # type: ignore[attr-defined]
-        await core.execute("arm")
-        await core.execute(f"takeoff {altitude}")
-        await wait_until(lambda: (s := truth.latest()) and -s["d"] > altitude - 0.3 and s["mode"] == "HOLD",
-                         30, f"takeoff to {altitude} m")
-        await wait_until(lambda: core.telemetry.snapshot().in_air, 5, "in-air telemetry")
+        await take_off(core, truth, altitude)
         yield core
     finally:
         await core.stop("test finished")
+
+
+async def setpoints_since(truth: TruthClient, since_mono_ns: int) -> list[dict[str, Any]]:
+    """Every offboard setpoint the simulator received after ``since_mono_ns`` (time.monotonic_ns())."""
+    reply = await asyncio.to_thread(truth.request, {"cmd": "setpoints", "since_mono_ns": since_mono_ns})
+    assert not reply["more"], "more setpoints than one reply holds: ask for a shorter span"
+    return reply["records"]
+
+
+def moving(records: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """The setpoints that ask for motion (not the zero that ends a vector)."""
+    return [r for r in records if abs(r["vx"]) > 1e-6 or abs(r["vy"]) > 1e-6]

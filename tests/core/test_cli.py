@@ -29,7 +29,7 @@ def test_headless_run_prints_stats_and_exits_zero(tmp_path: Path) -> None:
     assert len(lines) >= 2
     assert "stopped: --duration 3 s reached" in result.stdout
     fps = float(lines[-1].split("proc")[1].split("fps")[0])
-    assert 20 < fps < 40  # the synthetic camera runs at 30 FPS and the template keeps up
+    assert fps > 0  # frames are processed (how fast is scripts/bench_pipeline.py's question)
 
 
 def test_json_lines(tmp_path: Path) -> None:
@@ -83,3 +83,39 @@ def test_signals_stop_cleanly(tmp_path: Path, signum: int) -> None:
         process.kill()
     assert process.returncode == 0, err
     assert "stopped:" in out
+
+
+@pytest.mark.parametrize(("option", "name", "content"), [
+    ("--config", "uav.toml", "[safety]\nmax_speed = 0.5 # caf\xe9\n".encode("latin-1")),
+    ("--script", "flight.txt", b"arm\n\xff\xfe takeoff\n"),
+], ids=["config", "script"])
+def test_a_file_that_is_not_utf8_is_a_clear_error(tmp_path: Path, option: str, name: str, content: bytes) -> None:
+    (tmp_path / name).write_bytes(content)
+    result = uav("--no-ui", "--duration", "1", option, name, cwd=tmp_path)
+    assert result.returncode == 2
+    assert f"{name} is not UTF-8" in result.stderr or f"{name}: not UTF-8" in result.stderr
+    assert "Traceback" not in result.stderr and "UnicodeDecodeError" not in result.stderr
+
+
+@pytest.mark.parametrize("line", ["roi inf 0 1 1", "takeoff 10000"])
+def test_a_script_with_an_impossible_value_exits_2_before_starting(tmp_path: Path, line: str) -> None:
+    (tmp_path / "flight.txt").write_text(f"f 1\n{line}\n")
+    result = uav("--no-ui", "--duration", "5", "--script", "flight.txt", "--runs-dir", str(tmp_path / "runs"),
+                 cwd=tmp_path)
+    assert result.returncode == 2
+    assert "flight.txt:2" in result.stderr and "Traceback" not in result.stderr
+    assert not (tmp_path / "runs").exists()  # nothing started
+
+
+def test_log_records_reach_the_terminal_escaped(tmp_path: Path) -> None:
+    """The real logging setup of ``uav-tui``: a processor's string with escapes and a newline stays one line."""
+    (tmp_path / "noisy.py").write_text(
+        "import logging\n"
+        "class Noisy:\n"
+        "    def photo_processing(self, frame):\n"
+        "        logging.getLogger('noisy').warning('seen \\x1b[2J\\n[info] command: arm rtsp://a:Hunter2pw@h/')\n")
+    result = uav("--no-ui", "--duration", "1.5", "--processor", "noisy.py:Noisy", "--no-record", cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert "seen \\x1b[2J\\n[info] command: arm rtsp://a:***@h/" in result.stderr
+    assert "\x1b" not in result.stderr and "Hunter2pw" not in result.stderr
+    assert not any(line.startswith("[info] command: arm") for line in result.stderr.splitlines())

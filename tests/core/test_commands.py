@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import asyncio
 from pathlib import Path
 
 import pytest
 
-from uav_tui.commands import COMMANDS, Command, parse
-from uav_tui.errors import CommandError
+from uav_tui.commands import COMMANDS, Command, check_limits, parse
+from uav_tui.config import Config, SafetyConfig, load_config, with_overrides
+from uav_tui.core import UavCore
+from uav_tui.errors import CommandError, ConfigError
 from uav_tui.headless import load_script
 
 
@@ -64,3 +67,70 @@ def test_script_is_checked_whole_before_running(tmp_path: Path) -> None:
     assert f"{script}:5" in str(info.value) and f"{script}:7" in str(info.value)
     script.write_text("arm\ntakeoff 5\n\nwait 2\nland\n")
     assert [n for n, _ in load_script(script)] == [1, 2, 4, 5]
+
+
+SAFETY = SafetyConfig()
+
+
+@pytest.mark.parametrize(("line", "limit"), [
+    ("takeoff 10000", "max_altitude"),
+    ("orbit 100000 2", "max_orbit_radius"),
+    ("orbit 10 1000", "max_orbit_speed"),
+    ("orbit 5 -1e9", "max_orbit_speed"),
+], ids=lambda v: v)
+def test_arguments_beyond_their_limit_are_refused_naming_it(line: str, limit: str) -> None:
+    command = parse(line)
+    assert command is not None
+    with pytest.raises(CommandError, match=f"beyond the limit {limit} = ") as refused:
+        check_limits(command, SAFETY)
+    assert refused.value.key == limit
+
+
+@pytest.mark.parametrize("line", ["takeoff 120", "orbit 100 5", "orbit 10 -5", "takeoff", "vector 9 9 9", "f 2"])
+def test_arguments_within_their_limits_pass(line: str) -> None:
+    command = parse(line)
+    assert command is not None
+    check_limits(command, SAFETY)
+
+
+@pytest.mark.parametrize("line", ["roi inf 0 1 1", "roi 1e999 0 1 1", "takeoff inf", "orbit 5 nan", "wait 1e9",
+                                  "vector 1e999 0 1"])
+def test_non_finite_and_absurd_values_are_refused(line: str) -> None:
+    with pytest.raises(CommandError, match="bad argument; usage"):
+        parse(line)
+
+
+def test_a_config_may_raise_the_limits_but_not_set_takeoff_alt_above_them() -> None:
+    raised = with_overrides(Config(), max_altitude=500).safety
+    check_limits(Command("takeoff", (400.0,)), raised)
+    with pytest.raises(ConfigError, match="takeoff_alt = 50 is above max_altitude = 30"):
+        with_overrides(Config(), max_altitude=30, takeoff_alt=50)
+
+
+def test_script_limits_are_checked_before_anything_runs(tmp_path: Path) -> None:
+    script = tmp_path / "flight.txt"
+    script.write_text("arm\ntakeoff 10000\norbit 5 -1e9\nroi inf 0 1 1\nland\n")
+    with pytest.raises(CommandError) as info:
+        load_script(script, SAFETY)
+    lines = str(info.value).splitlines()
+    assert [line.split(": ", 1)[0] for line in lines] == [f"{script}:{n}" for n in (2, 3, 4)]
+    assert "max_altitude" in lines[0] and "max_orbit_speed" in lines[1] and "bad argument" in lines[2]
+
+
+async def test_takeoff_beyond_max_altitude_never_reaches_the_vehicle(tmp_path: Path) -> None:
+    settings = {"fc": "sim", "source": "synthetic:?width=160&height=120", "record": False}
+    core = UavCore(load_config(None, settings))
+    await core.start()
+    try:
+        truth = core.controller.sim.truth()
+        await core.execute("arm")
+        for line in ("takeoff 10000", "orbit 100000 1000", "orbit 5 -1e9"):
+            with pytest.raises(CommandError, match="beyond the limit"):
+                await core.execute(line)
+        errors = [e.message for e in core.events.recent if e.level == "error" and e.kind == "command"]
+        assert len(errors) == 3 and "max_altitude" in errors[0]
+        await asyncio.sleep(1.0)  # the simulator's ground truth: still on the ground, not climbing
+        state = truth.latest()
+        assert -state["d"] < 0.2 and abs(state["vd"]) < 0.1
+    finally:
+        await core.stop("test finished")

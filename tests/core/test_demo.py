@@ -8,11 +8,14 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 from uav_tui import dataset
 
 ROOT = Path(__file__).resolve().parents[2]
 
 
+@pytest.mark.timeout(300)  # the whole demo flight, in a process that may itself take 120 s
 def test_demo_script_flies_and_lands(tmp_path: Path) -> None:
     result = subprocess.run(
         [sys.executable, "-m", "uav_tui", "--no-ui", "--json", "--fc", "sim", "--source", "sim:?targets=1",

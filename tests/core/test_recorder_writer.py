@@ -103,7 +103,7 @@ def test_a_full_disk_keeps_whole_lines_and_reports_once(tmp_path):
     assert not list(tmp_path.rglob("*.tmp")) and not list(tmp_path.rglob("*.jpg"))
 
 
-def test_the_size_cap_stops_frames_but_not_rows(tmp_path):
+def test_the_size_cap_stops_frames_and_rows(tmp_path):
     writer = DiskWriter(tmp_path, {"t": ["i"]}, max_disk_bytes=20_000)
     writer.start()
     image = np.random.default_rng(0).integers(0, 255, (240, 320, 3), np.uint8)  # ~60 kB as JPEG
@@ -113,11 +113,33 @@ def test_the_size_cap_stops_frames_but_not_rows(tmp_path):
         time.sleep(0.01)
     assert not writer.put_image("frames/b.jpg", image)
     assert writer.image_refused() == "disk_cap"
-    assert writer.put(Row("t", [1]))
+    writer.put(Row("t", [1]))
     writer.close()
     assert (tmp_path / "frames/a.jpg").is_file() and not (tmp_path / "frames/b.jpg").exists()
-    assert pd.read_csv(tmp_path / "t.csv")["i"].tolist() == [1]
-    assert writer.dropped == {"disk_cap": 1}
+    assert not (tmp_path / "t.csv").exists()
+    assert writer.dropped == {"disk_cap": 2}
+
+
+def test_the_disk_guards_cover_the_csv_files(tmp_path):
+    """Rows alone (a processor's huge strings, say) stop at max_disk_mb, and at min_free_mb."""
+    problems: list[str] = []
+    writer = DiskWriter(tmp_path / "capped", {"t": ["text"]}, max_disk_bytes=100_000, flush_s=0.01,
+                        on_problem=lambda reason, message: problems.append(reason))
+    (tmp_path / "capped").mkdir()
+    writer.start()
+    for _ in range(200):  # 2 MB offered, 10 kB a row
+        writer.put(Row("t", ["x" * 10_000]))
+        time.sleep(0.001)
+    writer.close()
+    size = (tmp_path / "capped" / "t.csv").stat().st_size
+    assert 100_000 <= size < 100_000 + 10 * 10_001  # stops within the batch that crossed the cap
+    assert writer.dropped["disk_cap"] > 100 and problems == ["disk_cap"]
+
+    floor = DiskWriter(tmp_path, {"t": ["i"]}, min_free_bytes=2**62)  # more than any disk has free
+    floor.start()
+    floor.put(Row("t", [1]))
+    floor.close()
+    assert not (tmp_path / "t.csv").exists() and floor.dropped == {"min_free": 1}
 
 
 def test_sigkill_leaves_csv_that_parses_up_to_the_last_flush(tmp_path):

@@ -7,11 +7,22 @@ the setpoints as they arrived come from the simulator's truth channel.
 from __future__ import annotations
 
 import asyncio
+import dataclasses
+import math
 import re
 import time
 from pathlib import Path
 
-from tests.core.flight_helpers import fly_under_autonomy, flying_core, speed, wait_until
+from tests.core.flight_helpers import (
+    fly_under_autonomy,
+    flying_core,
+    moving,
+    setpoints_since,
+    speed,
+    steering_config,
+    wait_until,
+)
+from uav_tui.core import UavCore
 
 MAX_T = 1.5
 
@@ -39,6 +50,23 @@ async def test_rule1_speed_and_duration_are_clamped(tmp_path: Path) -> None:
         assert (moving[-1]["t_mono_ns"] - moving[0]["t_mono_ns"]) / 1e9 <= MAX_T + 0.15
 
 
+async def test_rule1_negative_speeds_are_clamped_to_minus_max_speed(tmp_path: Path) -> None:
+    # The processor asks for 3 m/s backward and 3 m/s left; the vehicle faces north.
+    async with flying_core(tmp_path, max_speed=0.5, max_t=MAX_T, processor_args={"speed": -3.0, "side": -3.0}) as core:
+        start, since, fastest = core.truth.latest(), time.monotonic_ns(), 0.0
+
+        def moved_back_and_left() -> bool:
+            nonlocal fastest
+            state = core.truth.latest()
+            fastest = max(fastest, speed(state))
+            return start["n"] - state["n"] > 1.0 and start["e"] - state["e"] > 1.0
+
+        await fly_under_autonomy(core, moved_back_and_left, "the vehicle to fly backward (south) and left (west)", 15)
+        sent = moving(await setpoints_since(core.truth, since))
+        assert sent and {(r["vx"], r["vy"]) for r in sent} == {(-0.5, -0.5)}
+        assert fastest < 0.5 * math.sqrt(2) + 0.1
+
+
 async def test_rule2_vectors_fly_only_when_enabled_and_airborne(tmp_path: Path) -> None:
     async with flying_core(tmp_path) as core:
         await core.execute("f 1")
@@ -63,6 +91,44 @@ async def test_rule2_not_in_the_air_means_no_vector(tmp_path: Path) -> None:
                          f"a decision (now {core.gate.last_decision!r}, autonomy {core.gate.enabled})")
         assert core.gate.last_decision in ("not executed: vehicle not in the air", "not executed: vehicle not armed")
         assert core.gate.executed == 0
+
+
+async def test_rule2_a_vector_from_a_stale_frame_never_flies(tmp_path: Path) -> None:
+    # Every frame takes 0.4 s to process: its vector is older than max_frame_age when the gate sees it.
+    async with flying_core(tmp_path, max_frame_age=0.2, processor_args={"delay": 0.4}) as core:
+        since = time.monotonic_ns()
+        await core.execute("f 1")
+        await core.execute("autonomy on")
+        stale = 0
+
+        def count_stale(result) -> None:
+            nonlocal stale
+            stale += result.decision.startswith("not executed: frame")
+
+        core.add_frame_listener(count_stale)
+        await wait_until(lambda: stale >= 5, 15, "five vectors from stale frames")
+        assert core.gate.enabled and core.gate.executed == 0
+        assert re.fullmatch(r"not executed: frame 0\.\d\d s old", core.gate.last_decision)
+        assert moving(await setpoints_since(core.truth, since)) == []
+        assert speed(core.truth.latest()) < 0.1 and core.truth.latest()["mode"] == "HOLD"
+        # The same vectors fly once the frames count as fresh: only the frame age held them back.
+        core.gate.safety = dataclasses.replace(core.gate.safety, max_frame_age=2.0)
+        await wait_until(lambda: speed(core.truth.latest()) > 0.4, 10, "the vehicle to fly the fresh vectors")
+
+
+async def test_rule3_setpoints_stream_at_20_hz_for_the_whole_vector(tmp_path: Path) -> None:
+    async with flying_core(tmp_path) as core:
+        since = time.monotonic_ns()
+        await core.execute("vector 0.5 0 2")
+        await wait_until(lambda: not core.controller.vector_active, 6, "the vector to end")
+        records = await setpoints_since(core.truth, since)
+        sent = moving(records)
+        # The README's promise, counted where the vehicle receives them: 40 in 2 s; a stalled loop may lose a few.
+        assert len(sent) >= 0.9 * 20 * 2.0, len(sent)
+        span_s = (sent[-1]["t_mono_ns"] - sent[0]["t_mono_ns"]) / 1e9
+        assert span_s <= 2.0 + 0.1
+        assert (records[-1]["vx"], records[-1]["vy"]) == (0.0, 0.0)  # then zero, and the controller holds
+        await wait_until(lambda: core.truth.latest()["mode"] == "HOLD", 3, "hold after the vector")
 
 
 async def test_rule3_and_4_hung_processor_cannot_keep_the_vehicle_flying(tmp_path: Path) -> None:
@@ -129,6 +195,30 @@ async def test_rule5_operator_command_preempts_autonomy_at_once(tmp_path: Path) 
         await asyncio.sleep(0.5)
         assert core.gate.executed == executed  # nothing flew after the operator's command
         assert any("pre-empted by operator command 'hold'" in e.message for e in core.events.recent)
+
+
+async def test_arm_and_takeoff_switch_autonomy_off_so_the_processor_never_takes_over_the_climb(
+    tmp_path: Path,
+) -> None:
+    core = UavCore(steering_config(tmp_path))
+    await core.start()
+    try:
+        truth = core.controller.sim.truth()
+        await core.execute("f 1")
+        await core.execute("autonomy on")  # on the ground: accepted, nothing flies
+        await wait_until(lambda: core.gate.last_decision == "not executed: vehicle not armed", 5, "a decision")
+        await core.execute("arm")
+        assert not core.gate.enabled
+        await core.execute("autonomy on")
+        since = time.monotonic_ns()
+        await core.execute("takeoff 3")
+        assert not core.gate.enabled and core.gate.stop_reason == "pre-empted by operator command 'takeoff 3.0'"
+        await wait_until(lambda: (s := truth.latest()) and -s["d"] > 2.7 and s["mode"] == "HOLD", 30, "takeoff")
+        await asyncio.sleep(1.0)  # at altitude, the processor still asks to fly forward
+        assert core.gate.executed == 0 and moving(await setpoints_since(truth, since)) == []
+        assert truth.latest()["mode"] == "HOLD" and speed(truth.latest()) < 0.1
+    finally:
+        await core.stop("test finished")
 
 
 async def test_pilot_or_failsafe_mode_change_ends_autonomy_without_overriding_it(tmp_path: Path) -> None:

@@ -1,8 +1,10 @@
-"""Safety rule 6: SIGTERM / SIGHUP hold the vehicle before uav-tui exits; after SIGKILL the autopilot's
-offboard-loss failsafe holds it. uav-tui runs as a real process; the simulator outlives it."""
+"""Safety rule 6: SIGTERM / SIGHUP / an unhandled error hold the vehicle before uav-tui exits; after SIGKILL
+the autopilot's offboard-loss failsafe holds it. The simulator runs on its own and outlives uav-tui."""
 
 from __future__ import annotations
 
+import asyncio
+import io
 import os
 import signal
 import subprocess
@@ -13,7 +15,19 @@ from pathlib import Path
 import pytest
 
 from controllers.sim.launcher import SimVehicle
-from tests.core.flight_helpers import STEERING_PROCESSOR, speed
+from tests.core.flight_helpers import (
+    NO_FAILSAFE,
+    STEERING_PROCESSOR,
+    fly_under_autonomy,
+    setpoints_since,
+    speed,
+    steering_config,
+    take_off,
+    wait_until,
+)
+from uav_tui.core import CoreState
+from uav_tui.headless import EXIT_UNHANDLED_ERROR, HeadlessRunner
+from uav_tui.worker import ProcessedFrame
 
 ROOT = Path(__file__).resolve().parents[2]
 SCRIPT = "arm\ntakeoff 3\nwait 6\nf 1\nautonomy on\nwait 120\n"
@@ -50,6 +64,7 @@ def flying_uav(tmp_path: Path, sim_vehicle: SimVehicle):
 
 
 @pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGHUP], ids=["SIGTERM", "SIGHUP"])
+@pytest.mark.parametrize("sim_vehicle", [NO_FAILSAFE], indirect=True)
 def test_signal_during_a_vector_holds_before_exit(flying_uav, signum: int) -> None:
     process, truth = flying_uav
     process.send_signal(signum)
@@ -73,3 +88,37 @@ def test_sigkill_leaves_the_autopilot_failsafe_to_hold(flying_uav) -> None:
     wait_for(lambda: truth.latest()["mode"] == "HOLD", 3, "the simulator's offboard-loss failsafe")
     assert time.monotonic() - killed < 3
     wait_for(lambda: speed(truth.latest()) < 0.15, 3, "the vehicle to stop")
+
+
+@pytest.mark.parametrize("sim_vehicle", [NO_FAILSAFE], indirect=True)
+async def test_an_unhandled_error_holds_the_flying_vehicle_then_exits_non_zero(
+    tmp_path: Path, sim_vehicle: SimVehicle
+) -> None:
+    truth = sim_vehicle.truth()
+    out = io.StringIO()
+    runner = HeadlessRunner(steering_config(tmp_path, fc=sim_vehicle.connection_string), out=out)
+    run = asyncio.create_task(runner.run())
+    try:
+        core = runner.core
+        await wait_until(lambda: core.state is CoreState.RUNNING, 30, "the platform to start")
+        await take_off(core, truth)
+        await fly_under_autonomy(core, lambda: truth.latest()["mode"] == "OFFBOARD" and speed(truth.latest()) > 0.4,
+                                 "autonomy flying the vehicle")
+
+        def buggy_interface(result: ProcessedFrame) -> None:
+            raise ZeroDivisionError("a bug in a frame listener")
+
+        core.add_frame_listener(buggy_interface)
+        code = await asyncio.wait_for(asyncio.shield(run), 20)
+        exited = time.monotonic_ns()
+    finally:
+        if not run.done():
+            run.cancel()
+            await asyncio.gather(run, return_exceptions=True)
+    assert code == EXIT_UNHANDLED_ERROR
+    assert "unhandled error in frame" in out.getvalue() and "ZeroDivisionError" in out.getvalue()
+    assert "vehicle put in hold before exit" in out.getvalue()
+    assert truth.wait_latest()["mode"] == "HOLD"
+    await wait_until(lambda: speed(truth.latest()) < 0.15, 3, "the vehicle to stop")
+    await asyncio.sleep(0.5)
+    assert await setpoints_since(truth, exited) == []  # nothing it started keeps streaming

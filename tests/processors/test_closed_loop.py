@@ -33,9 +33,8 @@ async def test_position_hold_brings_the_vehicle_back_and_holds_it_against_wind(t
         assert pushed > 2.0
         await asyncio.to_thread(truth.request, {"cmd": "set_wind", "n": 1.0, "e": 0.5})
         await core.execute("autonomy on")
-        took = await wait_until(lambda: horizontal_distance(truth.latest(), reference["n"], reference["e"]) < 0.6,
-                                20, "position hold to return over the reference")
-        assert took < 20
+        await wait_until(lambda: horizontal_distance(truth.latest(), reference["n"], reference["e"]) < 0.6,
+                         20, "position hold to return over the reference")
         worst, end = 0.0, time.monotonic() + 8
         while time.monotonic() < end:  # and it stays there, against the wind, from the camera alone
             worst = max(worst, horizontal_distance(truth.latest(), reference["n"], reference["e"]))

@@ -126,3 +126,16 @@ async def test_typed_commands_go_the_same_way_and_typos_are_shown(make_app):
         await pilot.press("colon", *"f 1", "escape")
         await pilot.pause(0.2)
         assert processor.buttons == [4] and app.is_running
+
+
+async def test_the_dashboard_shows_the_page_url_with_its_token_but_never_records_it(make_app):
+    from tests.web.conftest import TOKEN, free_port
+
+    app = make_app(web=True, web_host="127.0.0.1", web_port=free_port(), web_token=TOKEN)
+    async with app.run_test(size=(120, 40)) as pilot:
+        await started(pilot)
+        url = app.core.web.url
+        await wait_for(pilot, lambda: in_log(app, f"web page: {url}"), what="the page's URL in the event log")
+        assert TOKEN in url
+        assert not [e for e in app.core.events.recent if TOKEN in e.message]
+        assert any(e.message.endswith("?token=***") for e in app.core.events.recent if e.kind == "web")

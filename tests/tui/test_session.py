@@ -3,8 +3,21 @@
 from __future__ import annotations
 
 import asyncio
+import time
 
+import pytest
+
+from tests.core.flight_helpers import (
+    NO_FAILSAFE,
+    fly_under_autonomy,
+    setpoints_since,
+    speed,
+    steering_config,
+    take_off,
+    wait_until,
+)
 from uav_tui.core import CoreState
+from uav_tui.headless import EXIT_UNHANDLED_ERROR
 from uav_tui.tui._session import TuiSession
 
 from .conftest import started, wait_for
@@ -14,21 +27,23 @@ def messages(session: TuiSession) -> list[str]:
     return [event.message for event in session.core.events.recent]
 
 
-async def fly(pilot, session: TuiSession) -> None:
-    await started(pilot)
-    await session.core.execute("arm", origin="test")
-    await session.core.execute("takeoff 3", origin="test")
-    await wait_for(pilot, lambda: session.core.telemetry.snapshot().in_air, timeout=30, what="the vehicle in the air")
-
-
-async def test_hangup_holds_the_flying_vehicle_then_exits(make_config):
-    session = TuiSession(make_config(fc="sim"), on_hangup="stop")
+@pytest.mark.parametrize("sim_vehicle", [NO_FAILSAFE], indirect=True)
+async def test_hangup_holds_the_vehicle_autonomy_flies_then_exits(tmp_path, sim_vehicle):
+    config = steering_config(tmp_path, fc=sim_vehicle.connection_string)
+    session = TuiSession(config, on_hangup="stop")
+    truth = sim_vehicle.truth()
     async with session.app.run_test(size=(80, 24)) as pilot:
-        await fly(pilot, session)
+        await started(pilot)
+        await take_off(session.core, truth)
+        await fly_under_autonomy(session.core, lambda: truth.latest()["mode"] == "OFFBOARD", "autonomy flying")
         session._hangup("SIGHUP")  # what TerminalWatch reports (without detaching pytest from its terminal)
         await wait_for(pilot, lambda: session.core.state is CoreState.STOPPED, timeout=15, what="the core to stop")
-    assert "vehicle put in hold before exit" in messages(session)
+    stopped = time.monotonic_ns()
     assert any("terminal lost (SIGHUP)" in m for m in messages(session))
+    assert truth.wait_latest()["mode"] == "HOLD"  # the simulator's failsafe is off: this hold is uav-tui's
+    await wait_until(lambda: speed(truth.latest()) < 0.15, 5, "the vehicle to stop")
+    await asyncio.sleep(0.5)
+    assert await setpoints_since(truth, stopped) == []
 
 
 async def test_hangup_with_continue_keeps_the_core_running_until_quit(make_config):
@@ -47,3 +62,26 @@ async def test_hangup_with_continue_keeps_the_core_running_until_quit(make_confi
     await asyncio.wait_for(headless, 5)
     assert session.reason == "quit"
     await session.core.stop(session.reason)
+
+
+@pytest.mark.parametrize("sim_vehicle", [NO_FAILSAFE], indirect=True)
+async def test_an_unhandled_error_holds_the_flying_vehicle_and_exits_with_status_3(tmp_path, sim_vehicle):
+    session = TuiSession(steering_config(tmp_path, fc=sim_vehicle.connection_string))
+    truth = sim_vehicle.truth()
+    async with session.app.run_test(size=(80, 24)) as pilot:
+        await started(pilot)
+        await take_off(session.core, truth)
+        await fly_under_autonomy(session.core, lambda: truth.latest()["mode"] == "OFFBOARD", "autonomy flying")
+
+        def buggy_listener(result) -> None:
+            raise KeyError("a bug in a frame listener")
+
+        session.core.add_frame_listener(buggy_listener)
+        await wait_for(pilot, lambda: session.core.state is CoreState.STOPPED, timeout=15, what="the core to stop")
+    stopped = time.monotonic_ns()
+    assert session.app.return_code == EXIT_UNHANDLED_ERROR
+    assert session.app.stop_reason.startswith("unhandled error in frame")
+    assert truth.wait_latest()["mode"] == "HOLD"
+    await wait_until(lambda: speed(truth.latest()) < 0.15, 5, "the vehicle to stop")
+    await asyncio.sleep(0.5)
+    assert await setpoints_since(truth, stopped) == []

@@ -1,4 +1,6 @@
-"""End to end, as an operator over SSH: ``python -m uav_tui`` in a real terminal (tmux), keys, screen, hang-up."""
+"""End to end, as an operator over SSH: ``python -m uav_tui`` in a real terminal (tmux), keys, screen, hang-up.
+
+Flying tests run the simulator on its own, so that its ground truth outlives uav-tui."""
 
 from __future__ import annotations
 
@@ -14,6 +16,10 @@ from pathlib import Path
 
 import psutil
 import pytest
+
+from controllers.sim.launcher import SimVehicle
+from controllers.sim.truth import TruthClient
+from tests.core.flight_helpers import NO_FAILSAFE, STEERING_PROCESSOR, speed
 
 ROOT = Path(__file__).parents[2]
 
@@ -100,24 +106,63 @@ def test_dashboard_in_a_real_terminal_takes_keys_and_quits(tmux, tmp_path):
     assert tmux.status.read_text().strip() == "0"
 
 
+FLIGHT = "arm\ntakeoff 3\nwait 6\nf 1\nautonomy on\n"
+"""A --script that takes off and lets the steering test processor fly forward under autonomy."""
+
+
+def fly(tmux: Tmux, tmp_path: Path, sim: SimVehicle, *flags: str) -> TruthClient:
+    """Run the dashboard on ``sim`` with the steering processor flying it; returns once it flies."""
+    (tmp_path / "steering.py").write_text(STEERING_PROCESSOR)
+    (tmp_path / "flight.txt").write_text(FLIGHT)
+    tmux.start("--fc", sim.connection_string, "--processor", "steering.py:Steering", "--script", "flight.txt",
+               *flags, tmp_path=tmp_path)
+    truth = sim.truth()
+    wait(lambda: (s := truth.latest()) is not None and s.get("mode") == "OFFBOARD" and speed(s) > 0.3, 60,
+         "uav-tui to fly the vehicle under autonomy")
+    return truth
+
+
+def held_after_exit(truth: TruthClient, exited_ns: int) -> None:
+    """The vehicle holds and stops; nothing arrives from uav-tui after it exited."""
+    assert truth.wait_latest()["mode"] == "HOLD"  # held by uav-tui itself before it exited
+    wait(lambda: speed(truth.latest()) < 0.15, 5, "the vehicle to stop")
+    time.sleep(0.5)
+    assert truth.request({"cmd": "setpoints", "since_mono_ns": exited_ns})["records"] == []
+
+
+@pytest.mark.parametrize("sim_vehicle", [NO_FAILSAFE], indirect=True)
+def test_quit_while_flying_holds_the_vehicle_before_exit(tmux, tmp_path, sim_vehicle):
+    truth = fly(tmux, tmp_path, sim_vehicle)
+    tmux.keys("q")
+    wait(lambda: "Quit?" in tmux.screen(), 10, "the quit confirmation")
+    tmux.keys("y")
+    wait(tmux.status.exists, 20, "the exit status")
+    held_after_exit(truth, time.monotonic_ns())
+    assert tmux.status.read_text().strip() == "0"
+
+
 @pytest.mark.parametrize(("policy", "hangup"), [("stop", "close"), ("stop", "sighup"), ("continue", "close")],
                          ids=["stop-terminal-closed", "stop-sighup", "continue-terminal-closed"])
-def test_hangup_stops_or_continues_headless(tmux, tmp_path, policy, hangup):
-    tmux.start("--fc", "none", "--on-hangup", policy, tmp_path=tmp_path)
-    wait(lambda: "RecordingProcessor" in tmux.screen(), 30, "the dashboard")
+@pytest.mark.parametrize("sim_vehicle", [NO_FAILSAFE], indirect=True)
+def test_hangup_stops_or_continues_headless(tmux, tmp_path, sim_vehicle, policy, hangup):
+    truth = fly(tmux, tmp_path, sim_vehicle, "--on-hangup", policy)
     app = psutil.Process(tmux.app_pid())
+    lost = time.monotonic_ns()
     if hangup == "close":
         tmux.kill()  # the terminal is gone; the shell in between swallows SIGHUP: only EIO tells
     else:
         app.send_signal(signal.SIGHUP)
-    if policy == "stop":
-        wait(tmux.status.exists, 15, "the exit after SIGHUP")
-    else:
-        time.sleep(2)
+    if policy == "continue":
+        # Headless now, autonomy keeps flying: new vectors keep reaching the vehicle well after the hang-up.
+        wait(lambda: any(r["vx"] > 0 and r["t_mono_ns"] > lost + 2e9 for r in
+                         truth.request({"cmd": "setpoints", "since_mono_ns": lost})["records"]), 15,
+             "vectors two seconds after the hang-up")
         assert app.is_running() and not tmux.status.exists()
+        assert truth.latest()["mode"] == "OFFBOARD"
         assert app.cpu_percent(interval=1.0) < 50  # headless: not spinning on the dead terminal
         app.send_signal(signal.SIGTERM)
-        wait(tmux.status.exists, 15, "the exit after SIGTERM")
+    wait(tmux.status.exists, 20, "the exit status")
+    held_after_exit(truth, time.monotonic_ns())
     assert tmux.status.read_text().strip() == "0"
 
 

@@ -16,6 +16,7 @@ from controllers.base import TELEMETRY_FIELDS, Telemetry
 from uav_tui.events import Event
 from uav_tui.recording.interpolate import FIELDS, TelemetryHistory
 from uav_tui.recording.writer import Row
+from uav_tui.text import shorten
 from uav_tui.worker import ProcessedFrame
 
 TELEMETRY_COLUMNS: tuple[str, ...] = TELEMETRY_FIELDS
@@ -35,6 +36,9 @@ the image was saved, the ``tmMgr.save`` extras as JSON, and how the telemetry co
 
 FRAME_COLUMNS: tuple[str, ...] = FRAME_OWN_COLUMNS + FIELDS
 """frames.csv: the frame's own columns, then the telemetry interpolated to the capture time."""
+
+MAX_ERROR_CHARS = 500
+"""The ``error`` column keeps this much of an exception's last line."""
 
 _SAVED = FRAME_OWN_COLUMNS.index("saved")  # followed by "image"
 
@@ -78,7 +82,7 @@ def frame_record(result: ProcessedFrame, frame_id: int, image: str, extra_json: 
     """The own columns of a processed frame (:data:`FRAME_OWN_COLUMNS` minus ``telemetry``)."""
     frame = result.frame
     vx, vy, vt = _vector(result.vector)
-    error = result.error.strip().splitlines()[-1] if result.error else ""
+    error = shorten(result.error.strip().splitlines()[-1], MAX_ERROR_CHARS) if result.error else ""
     values = [frame_id, frame.seq, frame.t_wall_ns, frame.t_mono_ns, result.t_start_ns, result.t_end_ns,
               result.t_vector_ns or None, vx, vy, vt, result.decision, error, bool(image), image, extra_json]
     return FrameRecord(values, frame.t_mono_ns)
@@ -109,7 +113,7 @@ def _vector(vector: Any) -> tuple[float | None, float | None, float | None]:
     """The three numbers of a vector if it is one (the gate judges it; the row just records it)."""
     try:
         vx, vy, vt = (float(v) for v in vector)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         return None, None, None
     return vx, vy, vt
 

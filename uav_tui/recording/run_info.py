@@ -11,6 +11,8 @@ from importlib import metadata
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from uav_tui.text import redact
+
 if TYPE_CHECKING:
     from uav_tui.core import UavCore
 
@@ -44,9 +46,11 @@ def describe(core: UavCore) -> dict[str, Any]:
     source = core.source.get_properties() if core.source is not None else {}
     processor = core.worker.processor if core.worker is not None else None
     replayed = getattr(core.controller, "run_dir", None) if core.replay is not None else None
+    config = dataclasses.asdict(core.config)
+    config["web"]["web_token"] = "***" if core.config.web.web_token else ""  # never recorded
     return {
         "start_utc": utc_text(core.started_wall_ns),
-        "config": dataclasses.asdict(core.config),
+        "config": config,
         "versions": versions(),
         "source": {"uri": core.config.source, **{k: _plain(v) for k, v in source.items()}},
         "processor": {} if processor is None else {
@@ -69,9 +73,9 @@ def versions() -> dict[str, str]:
 
 
 def write_json(path: Path, data: dict[str, Any]) -> None:
-    """Replace ``path`` atomically (a reader never sees half a file)."""
+    """Replace ``path`` atomically (a reader never sees half a file); passwords in URIs are redacted."""
     temporary = path.with_name(path.name + ".tmp")
-    temporary.write_text(json.dumps(data, indent=2, default=str) + "\n")
+    temporary.write_text(redact(json.dumps(data, indent=2, default=str)) + "\n")
     os.replace(temporary, path)
 
 

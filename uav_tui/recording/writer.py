@@ -34,6 +34,8 @@ from typing import Any, Protocol
 import cv2
 import numpy as np
 
+from uav_tui.text import safe
+
 logger = logging.getLogger(__name__)
 
 MB = 1024 * 1024
@@ -91,8 +93,8 @@ class Stage(Protocol):
 PROBLEMS = {
     "queue_full": "the recorder cannot keep up with the disk: items are being dropped",
     "disk_full": "the disk is full: items are being dropped (rows already written are intact)",
-    "disk_cap": "the run folder reached max_disk_mb: frames are no longer saved",
-    "min_free": "free disk space is below min_free_mb: frames are no longer saved",
+    "disk_cap": "the run folder reached max_disk_mb: nothing more is recorded (frames, rows)",
+    "min_free": "free disk space is below min_free_mb: nothing more is recorded (frames, rows)",
     "write_error": "a write failed",
 }
 """Drop reason -> what the operator is told the first time it happens."""
@@ -106,8 +108,8 @@ class DiskWriter:
         tables: table name -> column names (the header written when the file is created).
         stages: item -> rows converters run on the writer thread (more can be appended before ``start``).
         jpeg_quality: 10..100.
-        max_disk_bytes: stop saving frames once this much was written (0: no cap).
-        min_free_bytes: stop saving frames when the disk has less free space.
+        max_disk_bytes: stop writing (frames and rows) once this much was written (0: no cap).
+        min_free_bytes: stop writing (frames and rows) when the disk has less free space.
         on_problem: ``on_problem(reason, message)``, called once per drop reason, from any thread.
         max_items: queue length.
         max_image_bytes: image bytes allowed to wait in the queue at once.
@@ -201,9 +203,11 @@ class DiskWriter:
         return False
 
     def image_refused(self) -> str | None:
-        """Why a frame would be dropped now (``disk_cap``, ``min_free``), None if it would be taken."""
-        if self._closed:
-            return "closed"
+        """Why a frame would be dropped now (``closed``, ``disk_cap``, ``min_free``), None if it would be taken."""
+        return "closed" if self._closed else self._space_refused()
+
+    def _space_refused(self) -> str | None:
+        """``disk_cap`` or ``min_free`` when the disk guards refuse any more writing, else None."""
         if self.max_disk_bytes and self.bytes_written >= self.max_disk_bytes:
             return "disk_cap"
         if self.min_free_bytes and self._free_bytes < self.min_free_bytes:
@@ -336,11 +340,16 @@ class DiskWriter:
                 self._append(table, rows)
 
     def _append(self, table: str, rows: list[list[Any]]) -> None:
+        refused = self._space_refused()
+        if refused is not None:
+            self._drop(refused, len(rows), f"{table}.csv")
+            return
         buffer = io.StringIO()
         writer = csv.writer(buffer, lineterminator="\n")
         if table not in self._files:
             writer.writerow(self.tables[table])
-        writer.writerows(rows)
+        # Text from outside (processor strings, paths, messages) reaches the file redacted and escaped.
+        writer.writerows([safe(v) if isinstance(v, str) else v for v in row] for row in rows)
         data = buffer.getvalue().encode()
         try:
             fd, size = self._files.get(table) or (self._open(table), 0)

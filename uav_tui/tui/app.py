@@ -17,7 +17,9 @@ from uav_tui.commands import VEHICLE_COMMANDS, parse
 from uav_tui.core import CoreState, UavCore
 from uav_tui.errors import KNOWN_ERRORS, CommandError
 from uav_tui.events import Event
+from uav_tui.headless import EXIT_UNHANDLED_ERROR
 from uav_tui.status import CoreStatus
+from uav_tui.text import safe
 from uav_tui.tui._algorithm import AlgorithmPanel
 from uav_tui.tui._event_log import EventLogView
 from uav_tui.tui._header import StatusBar
@@ -146,6 +148,8 @@ class UavApp(App[None]):
                 logger.exception("UavCore failed to start")
                 self._start_failed(f"{type(exc).__name__}: {exc}")
                 return
+        if self.core.web is not None:  # with its token: shown here, never recorded (events redact it)
+            self.query_one(EventLogView).write(f"web page: {self.core.web.url}")
         self.set_interval(1 / STATUS_HZ, self.refresh_status)
         self.refresh_status()
         self.refresh_bindings()
@@ -155,11 +159,12 @@ class UavApp(App[None]):
 
     def _start_failed(self, reason: str) -> None:
         self.start_error = reason
-        self.exit(return_code=2, message=f"uav-tui: cannot start: {reason}")
+        self.exit(return_code=2, message=safe(f"uav-tui: cannot start: {reason}", multiline=True))
 
     async def _watch_quit(self) -> None:
         await self.core.quit_requested.wait()
-        await self.shutdown("quit")
+        failure = self.core.failure
+        await self.shutdown(failure or "quit", EXIT_UNHANDLED_ERROR if failure else 0)
 
     async def shutdown(self, reason: str, return_code: int = 0) -> None:
         """Stop the core (holding the vehicle if it flies a vector or is in the air), then exit."""

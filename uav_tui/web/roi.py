@@ -11,6 +11,7 @@ import math
 from typing import Any
 
 from uav_tui.errors import CommandError
+from uav_tui.text import describe
 
 POINT_BOX_FRACTION = 0.1
 """A single click selects a square this fraction of the frame's shorter side wide."""
@@ -78,7 +79,7 @@ def _numbers(value: Any, count: int) -> bool:
 
 def _check_unit(value: float) -> None:
     if not (isinstance(value, int | float) and math.isfinite(value) and 0.0 <= value <= 1.0):
-        raise CommandError(f"normalized coordinate {value!r} is not a number in 0..1", key="roi")
+        raise CommandError(f"normalized coordinate {describe(value)} is not a number in 0..1", key="roi")
 
 
 def _fit(x: int, y: int, w: int, h: int, width: int, height: int) -> tuple[int, int, int, int]:

@@ -8,8 +8,10 @@ Routes (every one needs the token, else 401 and nothing else):
 - ``POST /api/roi``: ``{"rect": [x0, y0, x1, y1]}`` or ``{"point": [x, y]}``, normalized -> ``roi``;
 - ``POST /api/command``: ``{"command": "f 2"}``, one of WEB_COMMANDS.
 
-The token travels as ``?token=`` or ``Authorization: Bearer``. Commands go through
-``core.execute(..., origin="web:<ip>")``, the one command module.
+The token travels as ``?token=`` or ``Authorization: Bearer``. Failed attempts are slowed per client
+address (:class:`AuthThrottle`: 429 with ``Retry-After``). POST routes and the websocket also refuse a
+browser ``Origin`` other than the page's own or one listed in ``web_origins`` (403). Commands go
+through ``core.execute(..., origin="web:<ip>")``, the one command module.
 """
 
 from __future__ import annotations
@@ -32,7 +34,9 @@ from uav_tui.config import WebConfig
 from uav_tui.core import CoreState
 from uav_tui.errors import KNOWN_ERRORS, CommandError, UavError
 from uav_tui.events import Event
+from uav_tui.text import describe, shorten
 from uav_tui.web.roi import roi_from_message
+from uav_tui.web.throttle import AuthThrottle
 from uav_tui.web.tracks import VideoHub
 
 logger = logging.getLogger(__name__)
@@ -66,6 +70,8 @@ class WebServer:
         self._sockets: set[web.WebSocketResponse] = set()
         self._queues: set[asyncio.Queue[dict[str, Any]]] = set()
         self._rejected: dict[str, float] = {}
+        self._throttle = AuthThrottle()
+        self._origins = frozenset(o.strip().rstrip("/").lower() for o in config.web_origins.split(",") if o.strip())
         self._runner: web.AppRunner | None = None
 
     @property
@@ -107,6 +113,13 @@ class WebServer:
 
     @web.middleware
     async def _auth(self, request: web.Request, handler: Any) -> web.StreamResponse:
+        address = request.remote or "?"
+        wait = self._throttle.retry_after(address)
+        if wait > 0:
+            self._note_rejected(request, "too many failed attempts")
+            seconds = math.ceil(wait)
+            raise web.HTTPTooManyRequests(text=f"429: too many failed attempts; retry in {seconds} s",
+                                          headers={"Retry-After": str(seconds)})
         given = request.query.get("token", "")
         header = request.headers.get("Authorization", "")
         if header.startswith("Bearer "):
@@ -114,16 +127,33 @@ class WebServer:
         if not given and request.path.startswith("/static/"):
             given = request.cookies.get(COOKIE, "")
         if not secrets.compare_digest(given.encode(), self.token.encode()):
-            self._note_rejected(request)
+            self._throttle.failed(address)
+            self._note_rejected(request, "no valid token")
             raise web.HTTPUnauthorized(text="401: a valid token is required")
+        self._throttle.succeeded(address)
+        if (request.method == "POST" or request.path == "/ws") and not self._origin_allowed(request):
+            self._note_rejected(request, f"origin {describe(request.headers['Origin'])} not allowed")
+            raise web.HTTPForbidden(text="403: requests from another site's page are refused; add its origin to "
+                                         "web_origins to allow it")
         return await handler(request)
 
-    def _note_rejected(self, request: web.Request) -> None:
+    def _origin_allowed(self, request: web.Request) -> bool:
+        """No ``Origin`` (not a browser), the page's own, or one in ``web_origins``."""
+        origin = request.headers.get("Origin")
+        if origin is None:
+            return True
+        origin = origin.rstrip("/").lower()
+        return origin == f"{request.scheme}://{request.host}".lower() or origin in self._origins
+
+    def _note_rejected(self, request: web.Request, why: str) -> None:
+        """An event for a refused request, at most one per client address a minute."""
         ip = request.remote or "?"
         now = time.monotonic()
         if now - self._rejected.get(ip, -math.inf) > _REJECT_LOG_PERIOD_S:
+            if len(self._rejected) > 4096:
+                self._rejected.clear()
             self._rejected[ip] = now
-            self.core.events.emit("warning", "web", f"refused {request.method} {request.path}: no valid token",
+            self.core.events.emit("warning", "web", f"refused {request.method} {describe(request.path)}: {why}",
                                   f"web:{ip}")
 
     async def _page(self, request: web.Request) -> web.StreamResponse:
@@ -152,7 +182,7 @@ class WebServer:
             await pc.setLocalDescription(await pc.createAnswer())
         except Exception as exc:  # noqa: BLE001 - aiortc raises many types for a bad SDP
             await self._close_peer(pc, track)
-            raise self._bad_request(origin, f"offer rejected: {type(exc).__name__}: {exc}") from None
+            raise self._bad_request(origin, f"offer rejected: {type(exc).__name__}: {shorten(str(exc), 200)}") from None
 
         @pc.on("connectionstatechange")
         async def on_state() -> None:
@@ -235,7 +265,7 @@ class WebServer:
         except CommandError as exc:
             raise self._bad_request(origin, f"command rejected: {exc}") from None
         if command is None or not ({command.word, str(command)} & WEB_COMMANDS):
-            raise self._bad_request(origin, f"command {text!r} is not allowed from the page; allowed: "
+            raise self._bad_request(origin, f"command {describe(text)} is not allowed from the page; allowed: "
                               f"{', '.join(sorted(WEB_COMMANDS))}")
         return await self._run(command, origin)
 
@@ -249,7 +279,7 @@ class WebServer:
     async def _json(self, request: web.Request, origin: str, what: str) -> dict[str, Any]:
         try:
             body = await request.json()
-        except (json.JSONDecodeError, UnicodeDecodeError):
+        except (ValueError, RecursionError):  # not JSON, not UTF-8, or nested too deep to parse
             body = None
         if not isinstance(body, dict):
             raise self._bad_request(origin, f"{what}: the body is not a JSON object")

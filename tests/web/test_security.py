@@ -1,0 +1,214 @@
+"""What someone on the drone's network can try (issue 14, points 6-10), against the real server."""
+
+from __future__ import annotations
+
+import asyncio
+import csv
+import io
+import json
+from pathlib import Path
+
+import aiohttp
+import pytest
+from yarl import URL
+
+from tests.sources.stream_servers import RtspTestServer
+from tests.web.conftest import TOKEN, free_port, make_core, processor_of
+from uav_tui.commands import parse
+from uav_tui.config import load_config
+from uav_tui.core import UavCore
+from uav_tui.errors import ConfigError
+from uav_tui.headless import HeadlessRunner
+from uav_tui.web.throttle import AuthThrottle
+
+FORGED_PATH = "/%1B%5B2J%1B%5BH%1B%5D0;pwned%07%0A[info]%20command:%20arm%0D%0A[info]%20command:%20takeoff"
+"""Clears the screen, retitles the terminal and forges two event lines, once percent-decoded."""
+
+
+def base(core: UavCore) -> str:
+    return f"http://127.0.0.1:{core.web.port}"
+
+
+async def start_headless(config_overrides: dict, script: list | None = None) -> tuple[HeadlessRunner, io.StringIO,
+                                                                                      asyncio.Task[int]]:
+    settings = {"source": "synthetic:?width=160&height=120", "fc": "none", "web": True, "web_host": "127.0.0.1",
+                "web_port": free_port(), "web_token": TOKEN, **config_overrides}
+    out = io.StringIO()
+    runner = HeadlessRunner(load_config(None, settings), out=out, script=script)
+    task = asyncio.create_task(runner.run())
+    for _ in range(400):
+        if runner.core.web is not None and "web page:" in out.getvalue():
+            break
+        await asyncio.sleep(0.05)
+    assert runner.core.web is not None, out.getvalue()
+    return runner, out, task
+
+
+def events_csv(core: UavCore) -> str:
+    return (core.recorder.run_dir / "events.csv").read_text()
+
+
+# -- 7: nothing from outside writes to the operator's terminal, log or CSV ---------------------------
+
+
+async def test_a_request_path_cannot_clear_the_screen_or_forge_a_line(tmp_path: Path) -> None:
+    runner, out, task = await start_headless({"runs_dir": str(tmp_path)})
+    core = runner.core
+    async with aiohttp.ClientSession() as http:
+        async with http.get(URL(base(core) + FORGED_PATH, encoded=True)) as response:
+            assert response.status == 401
+        async with http.get(URL(base(core) + FORGED_PATH, encoded=True), params={"token": TOKEN}) as response:
+            assert response.status == 404
+    runner.request_stop("test finished")
+    assert await task == 0
+    printed, recorded = out.getvalue(), events_csv(core)
+    for text in (printed, recorded):
+        assert "\x1b" not in text and "\x07" not in text and "\r" not in text
+        assert not [line for line in text.splitlines() if "command: arm" in line and "refused" not in line]
+    assert "refused GET '/\\x1b[2J\\x1b[H\\x1b]0;pwned\\x07\\n[info] command: arm" in printed
+    messages = [row["message"] for row in csv.DictReader(io.StringIO(recorded))]
+    assert any(m.startswith("refused GET '/\\x1b[2J") for m in messages)
+
+
+# -- 8: credentials and the token are never printed or recorded -------------------------------------
+
+
+async def test_passwords_and_the_token_stay_out_of_outputs_and_records(tmp_path: Path) -> None:
+    server = RtspTestServer()
+    server.start()
+    try:
+        secret_uri = f"rtsp://admin:Hunter2pw@127.0.0.1:{server.port}/live"
+        script = [(1, parse("wait 1.2")), (2, parse(f"source {secret_uri}")), (3, parse("wait 1.2"))]
+        runner, out, task = await start_headless({"runs_dir": str(tmp_path), "source": secret_uri}, script)
+        core = runner.core
+        for _ in range(400):
+            if "camera switched" in out.getvalue():
+                break
+            await asyncio.sleep(0.05)
+        status = json.dumps(core.status().as_dict(), default=str)  # what the web page and --json show
+        assert await asyncio.wait_for(task, 60) == 0
+    finally:
+        server.stop()
+    printed = out.getvalue()
+    run_json = (core.recorder.run_dir / "run.json").read_text()
+    recorded = events_csv(core)
+    assert "camera switched to rtsp://admin:***@127.0.0.1" in recorded and "rtsp://admin:***@" in run_json
+    assert "command: source rtsp://admin:***@127.0.0.1" in printed and "rtsp://admin:***@" in status
+    for text in (printed, run_json, recorded, status):
+        assert "Hunter2pw" not in text
+    for text in (run_json, recorded):
+        assert TOKEN not in text
+    assert f"web page: http://127.0.0.1:{core.web.port}/?token={TOKEN}" in printed  # only there, for the operator
+
+
+# -- 9: a token worth guessing, and guessing slowed -------------------------------------------------
+
+
+def test_a_short_token_is_a_config_error(tmp_path: Path) -> None:
+    (tmp_path / "uav.toml").write_text('[web]\nweb_token = "k7"\n')
+    with pytest.raises(ConfigError, match="web.web_token must be at least 16 characters"):
+        load_config(tmp_path / "uav.toml")
+    with pytest.raises(ConfigError, match="--web-token must be at least 16 characters"):
+        load_config(None, {"web_token": "k7"})
+    assert load_config(None, {"web_token": "x" * 16}).web.web_token == "x" * 16
+
+
+def test_the_throttle_grows_is_bounded_and_forgets() -> None:
+    now = [0.0]
+    throttle = AuthThrottle(free=3, base_s=1.0, max_delay_s=8.0, forget_s=60.0, clock=lambda: now[0])
+    assert [throttle.failed("a") for _ in range(3)] == [0.0, 0.0, 0.0]
+    delays = []
+    for _ in range(6):
+        delays.append(throttle.failed("a"))
+        assert throttle.retry_after("a") == delays[-1] and throttle.retry_after("b") == 0
+        now[0] += delays[-1]
+    assert delays == [1.0, 2.0, 4.0, 8.0, 8.0, 8.0]
+    now[0] += 61  # a quiet minute: forgotten
+    assert throttle.failed("a") == 0.0
+    throttle.succeeded("a")
+    assert throttle.retry_after("a") == 0
+    crowd = AuthThrottle(max_clients=10, clock=lambda: now[0])
+    for n in range(1000):
+        crowd.failed(f"10.0.{n // 256}.{n % 256}")
+    assert len(crowd._clients) == 10
+
+
+async def test_guessing_gets_429_with_retry_after_then_the_operator_gets_in(web_core: UavCore) -> None:
+    statuses, retry = [], []
+    async with aiohttp.ClientSession() as http:
+        for n in range(8):
+            async with http.get(base(web_core) + "/", params={"token": f"guess-{n}"}) as response:
+                statuses.append(response.status)
+                retry.append(response.headers.get("Retry-After"))
+        assert statuses == [401] * 6 + [429, 429] and retry[6] == "1"
+        async with http.get(web_core.web.url) as response:  # even the right token waits out the block
+            assert response.status == 429
+        await asyncio.sleep(1.1)
+        async with http.get(base(web_core) + "/", params={"token": "guess-again"}) as response:
+            assert response.status == 401  # the next failure doubles the block
+        async with http.get(base(web_core) + "/", params={"token": TOKEN}) as response:
+            assert response.status == 429 and response.headers["Retry-After"] == "2"
+        await asyncio.sleep(2.1)
+        async with http.get(web_core.web.url) as response:
+            assert response.status == 200
+    assert processor_of(web_core).buttons == []
+
+
+# -- 10: other sites' pages cannot send commands ----------------------------------------------------
+
+
+@pytest.mark.parametrize("origin", ["http://evil.example", "null", "http://127.0.0.1:1"])
+async def test_a_foreign_origin_cannot_post_or_open_the_websocket(web_core: UavCore, origin: str) -> None:
+    headers = {"Authorization": f"Bearer {TOKEN}", "Origin": origin}
+    async with aiohttp.ClientSession() as http:
+        for path, body in (("/api/command", {"command": "f 2"}), ("/api/roi", {"point": [0.5, 0.5]}),
+                           ("/offer", {"sdp": "v=0", "type": "offer"})):
+            async with http.post(base(web_core) + path, json=body, headers=headers) as response:
+                assert response.status == 403, path
+                assert "web_origins" in await response.text()
+        with pytest.raises(aiohttp.WSServerHandshakeError) as refused:
+            await http.ws_connect(base(web_core) + "/ws", params={"token": TOKEN}, headers={"Origin": origin})
+        assert refused.value.status == 403
+        same = {"Authorization": f"Bearer {TOKEN}", "Origin": base(web_core)}
+        async with http.post(base(web_core) + "/api/command", json={"command": "f 3"}, headers=same) as response:
+            assert response.status == 200
+    assert processor_of(web_core).buttons == [3] and processor_of(web_core).rois == []
+    assert any("not allowed" in e.message for e in web_core.events.recent if e.kind == "web")
+
+
+async def test_configured_origins_are_allowed() -> None:
+    core = make_core(web_origins="https://gcs.local:8443, http://laptop:9000/")
+    await core.start()
+    try:
+        async with aiohttp.ClientSession() as http:
+            for origin, status in (("https://gcs.local:8443", 200), ("http://laptop:9000", 200),
+                                   ("http://laptop:9001", 403)):
+                headers = {"Authorization": f"Bearer {TOKEN}", "Origin": origin}
+                async with http.post(base(core) + "/api/command", json={"command": "f 1"},
+                                     headers=headers) as response:
+                    assert response.status == status, origin
+        assert processor_of(core).buttons == [1, 1]
+    finally:
+        await core.stop("test finished")
+
+
+# -- 6: impossible values from the page are a 400, not a 500 ----------------------------------------
+
+
+@pytest.mark.parametrize("body", [
+    json.dumps({"command": "roi inf 0 1 1"}).encode(),
+    json.dumps({"command": "roi 1e999 0 10 10"}).encode(),
+    b'{"command": ' + b"[" * 5000 + b"]" * 5000 + b"}",
+    b"[" * 100_000 + b"]" * 100_000,
+    b'{"command": "f 1\xff"}',
+], ids=["roi-inf", "roi-overflow", "nested-5000", "nested-100000", "not-utf8"])
+async def test_impossible_values_are_400_with_a_clear_message(web_core: UavCore, body: bytes) -> None:
+    async with aiohttp.ClientSession() as http, http.post(
+            base(web_core) + "/api/command", params={"token": TOKEN}, data=body) as response:
+        assert response.status == 400
+        text = await response.text()
+        assert "bad argument; usage: roi X Y W H" in text or "not a JSON object" in text
+    async with aiohttp.ClientSession() as http, http.post(
+            base(web_core) + "/api/command", params={"token": TOKEN}, json={"command": "f 4"}) as response:
+        assert response.status == 200  # and the page still works
+    assert processor_of(web_core).buttons == [4] and processor_of(web_core).rois == []
