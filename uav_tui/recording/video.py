@@ -102,13 +102,14 @@ class VideoStage:
 
     Args:
         writer: the disk writer this stage runs in (its disk guards and byte count apply to the video).
+        encoder: an :data:`ENCODERS` entry (default: :func:`choose_encoder`).
     """
 
     accepts = (VideoFrame, VideoDrop, FrameLink)
 
-    def __init__(self, writer: DiskWriter) -> None:
+    def __init__(self, writer: DiskWriter, encoder: tuple[str, str, dict[str, str]] | None = None) -> None:
         self.path = writer.run_dir / VIDEO_FILE
-        self.encoder, self.codec, self._options = choose_encoder()
+        self.encoder, self.codec, self._options = encoder or choose_encoder()
         self.frames_encoded = 0
         self._writer = writer
         self._sink = _Bytes()
