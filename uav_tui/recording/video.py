@@ -37,7 +37,7 @@ TIME_BASE = fractions.Fraction(1, 90_000)
 """MPEG-TS clock: presentation times are the capture times, so the video keeps the camera's real timing."""
 
 UNPROCESSED_AFTER_NS = 5_000_000_000
-"""A frame not processed within this long after capture is indexed without a frame id."""
+"""A frame not processed while the camera captured for this long after it is indexed without a frame id."""
 
 ENCODERS = (("libx264", "h264", {"preset": "ultrafast", "tune": "zerolatency", "crf": "23"}),
             ("mjpeg", "mjpeg", {"q:v": "4"}))
@@ -119,9 +119,12 @@ class VideoStage:
         self._size: tuple[int, int] | None = None
         self._first_ns = 0
         self._last_pts = -1
+        self._newest_ns = 0
         self._waiting: deque[list[Any]] = deque()
 
     def handle(self, item: Any) -> Iterable[Row]:
+        if isinstance(item, VideoFrame | VideoDrop):
+            self._newest_ns = max(self._newest_ns, item.t_mono_ns)
         if isinstance(item, VideoFrame):
             reason = self._writer.image_refused()
             reason = None if reason == "closed" else reason  # frames queued before the close are written
@@ -137,7 +140,9 @@ class VideoStage:
         return []
 
     def due(self, now_ns: int) -> Iterable[Row]:
-        return self._release(now_ns - UNPROCESSED_AFTER_NS)
+        """Rows of frames captured :data:`UNPROCESSED_AFTER_NS` before the newest capture (capture stamps, not
+        this clock: a replay recording its camera carries the recorded ones)."""
+        return self._release(self._newest_ns - UNPROCESSED_AFTER_NS) if self._waiting else []
 
     def drain(self) -> Iterable[Row]:
         if self._stream is not None:
