@@ -12,6 +12,7 @@ by ``speed``, or with ``speed=max`` one at a time as fast as the reader takes th
 from __future__ import annotations
 
 import csv
+import logging
 import threading
 import time
 from collections.abc import Generator, Iterator
@@ -24,6 +25,8 @@ import numpy as np
 from sources.base import CaptureSource
 from sources.errors import SourceError
 from sources.uri import SourceUri
+
+logger = logging.getLogger(__name__)
 
 VIDEO_FILE = "video.ts"
 INDEX_FILE = "video.csv"
@@ -103,6 +106,9 @@ class RunSource(CaptureSource):
         if not self._frames:
             raise SourceError(f"{self.run_dir}: no video (recorded before record_video existed) and no saved "
                               "frames: there is nothing to replay")
+        if self.content != "video" and not self.shown:
+            logger.warning("%s has no video (recorded before record_video existed): replaying its %d saved frames "
+                           "only", self.run_dir, len(self._frames))
         self._images = self._decode() if self.content == "video" else self._saved()
         for _ in range(self.shown):  # reopened after a decoding error: go on where it stopped
             next(self._images, None)
