@@ -1,7 +1,7 @@
 """The ``uav-tui`` command: run the platform (TUI or ``--no-ui``) and its tools.
 
 ``uav-tui [options]`` runs; ``uav-tui sim`` starts the simulated vehicle on its own;
-``uav-tui runs`` lists recorded runs; ``uav-tui report RUN`` draws a run's plots.
+``uav-tui runs`` lists recorded runs; ``uav-tui report [RUN]`` draws a run's plots.
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="uav-tui",
         description="Camera -> your algorithm -> flight controller, with an operator dashboard.",
-        epilog=f"tools: uav-tui sim | runs | report RUN (each has --help)\n\ncommands (keys, --script, web):\n"
+        epilog=f"tools: uav-tui sim | runs | report [RUN] (each has --help)\n\ncommands (keys, --script, web):\n"
                f"{help_text()}",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )

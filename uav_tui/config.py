@@ -29,7 +29,7 @@ def _key(help: str, *, minimum: float | None = None, maximum: float | None = Non
 
 @dataclass(frozen=True)
 class SafetyConfig:
-    """Limits the platform enforces on every vector (ARCHITECTURE.md, safety rules)."""
+    """Limits the platform enforces on every vector (the README's safety rules)."""
 
     max_speed: float = _key("largest |vx|, |vy| executed, m/s", minimum=0.05, maximum=20, default=1.0)
     max_t: float = _key("longest vector duration, s; also the processor-stall limit", minimum=0.1, maximum=10,
@@ -92,6 +92,10 @@ class Config:
 
 SECTIONS = {"safety": SafetyConfig, "recording": RecordingConfig, "web": WebConfig}
 """TOML table name -> the dataclass its keys go to."""
+
+_FLAG_GROUPS = {Config: "camera, processor, flight controller (top of uav.toml)", SafetyConfig: "safety ([safety])",
+                RecordingConfig: "recording ([recording])", WebConfig: "web page ([web])"}
+"""``--help`` group titles: what the flags set and where the same keys go in ``uav.toml``."""
 
 _TOP_LEVEL = tuple(f.name for f in fields(Config) if f.name not in SECTIONS)
 
@@ -156,7 +160,7 @@ def section_of(key: str) -> str | None:
 def add_config_flags(parser: argparse.ArgumentParser) -> None:
     """One flag per key (``--max-speed``, ``--no-record`` ...), all defaulting to 'not given'."""
     for cls in (Config, *SECTIONS.values()):
-        group = parser.add_argument_group(cls.__doc__.splitlines()[0] if cls.__doc__ else cls.__name__)
+        group = parser.add_argument_group(_FLAG_GROUPS[cls])
         for f in fields(cls):
             if cls is Config and f.name in SECTIONS:
                 continue

@@ -101,7 +101,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         server = SimVehicleServer(config_from_args(args))
     except OSError as exc:
-        print(f"uav-tui sim: cannot open the truth port {args.truth_port}: {exc}", file=sys.stderr)
+        print(f"uav-tui sim: error: cannot start the simulated vehicle: {exc}", file=sys.stderr)
         return 2
     previous = {sig: signal.signal(sig, lambda *_: server.stop()) for sig in (signal.SIGTERM, signal.SIGINT)}
     try:
