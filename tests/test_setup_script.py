@@ -13,9 +13,10 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 
 STAND_IN_PYTHON = """#!/usr/bin/env bash
-echo "$*" >> "$(dirname "$0")/../calls.log"
-if [ "$3" = install ] && [ "$4" = -q ] && [ "$5" = -e ]; then touch "$(dirname "$0")/uav-tui"; chmod +x "$(dirname "$0")/uav-tui"; fi
-if [ "$1" = scripts/check_opencv.py ] && [ -e "$(dirname "$0")/../opencv-broken" ]; then exit 1; fi
+bin="$(dirname "$0")"
+echo "$*" >> "$bin/../calls.log"
+if [ "$3" = install ] && [ "$5" = -e ]; then touch "$bin/uav-tui" && chmod +x "$bin/uav-tui"; fi
+if [ "$1" = scripts/check_opencv.py ] && [ -e "$bin/../opencv-broken" ]; then exit 1; fi
 exit 0
 """
 

@@ -14,7 +14,7 @@ from pathlib import Path
 
 from uav_tui.commands import help_text
 from uav_tui.config import add_config_flags, find_config_file, load_config, overrides_from_args
-from uav_tui.errors import CONFIG_ERRORS
+from uav_tui.errors import CONFIG_ERRORS, error_line
 
 TOOLS = ("sim", "runs", "report")
 """Sub-commands; anything else on the command line configures a run."""
@@ -55,7 +55,7 @@ def main(argv: list[str] | None = None) -> int:
 
             script = load_script(Path(args.script))
     except CONFIG_ERRORS as exc:
-        print(f"uav-tui: {exc}", file=sys.stderr)
+        print(error_line(exc), file=sys.stderr)
         return 2
     if args.no_ui:
         from uav_tui.headless import HeadlessRunner

@@ -14,6 +14,8 @@ import time
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
+import psutil
+
 from controllers import connect_controller
 from controllers.base import FlightController
 from processors import load_processor
@@ -65,6 +67,8 @@ class UavCore:
         self.processor_error: str | None = None
         """Last line of the newest processor traceback."""
         self.started_wall_ns = 0
+        self.startup_s: float | None = None
+        """Seconds from the process start to the first processed frame (None until it is processed)."""
         self._frame_listeners: list[Callable[[ProcessedFrame], None]] = []
         self._tasks: list[asyncio.Task[Any]] = []
         self._told_not_recording = False
@@ -195,6 +199,10 @@ class UavCore:
             self._frame_listeners.remove(listener)
 
     def _on_result(self, result: ProcessedFrame) -> None:
+        if self.startup_s is None:
+            self.startup_s = time.time() - psutil.Process().create_time()
+            self.events.emit("info", "platform", f"first frame processed {self.startup_s:.1f} s after the "
+                             "process started")
         if result.error:
             last_line = result.error.strip().splitlines()[-1]
             if last_line != self.processor_error:
@@ -267,4 +275,5 @@ class UavCore:
             vectors_executed=self.gate.executed,
             vectors_rejected=self.gate.rejected,
             recording=self.recorder.status() if self.recorder is not None else {},
+            startup_s=self.startup_s,
         )

@@ -16,7 +16,7 @@ from typing import TextIO
 from uav_tui.commands import Command, parse
 from uav_tui.config import Config
 from uav_tui.core import UavCore
-from uav_tui.errors import KNOWN_ERRORS, CommandError
+from uav_tui.errors import KNOWN_ERRORS, CommandError, error_line
 from uav_tui.events import Event
 from uav_tui.status import CoreStatus
 
@@ -54,10 +54,23 @@ def format_status(status: CoreStatus, elapsed_s: float) -> str:
         alt = "-" if t.rel_alt_m is None else f"{t.rel_alt_m:.1f}m"
         state = "armed" if t.armed else "disarmed"
         line += f" | hb {hb} {t.flight_mode or '?'} {state}{' air' if t.in_air else ''} alt {alt}"
+        if t.north_m is not None and t.east_m is not None:
+            line += f" N {t.north_m:.1f} E {t.east_m:.1f}m"
     line += f" | auto {'ON' if status.autonomy else 'OFF'}"
+    if status.last_vector is not None:
+        vx, vy, vt = status.last_vector
+        line += f" vec {vx:+.2f},{vy:+.2f}m/s {vt:.1f}s"
     if status.last_decision:
         line += f" ({status.last_decision})"
     return line
+
+
+def saved_run_note(core: UavCore) -> str:
+    """Where the core's run was recorded and how to look at it ("" when recording was off)."""
+    if core.recorder is None:
+        return ""
+    run_dir = core.recorder.run_dir
+    return f"run saved in {run_dir}; plots and summary: uav-tui report {run_dir} (all runs: uav-tui runs)"
 
 
 async def run_script(core: UavCore, script: list[tuple[int, Command]], say: Callable[[str], None]) -> str:
@@ -99,7 +112,7 @@ class HeadlessRunner:
         try:
             await self.core.start()
         except KNOWN_ERRORS as exc:
-            self._say(f"error: {exc}")
+            print(error_line(exc), file=sys.stderr, flush=True)
             return EXIT_START_FAILED
         self.core.events.add_listener(self._print_event)
         if self.core.web is not None:
@@ -121,6 +134,8 @@ class HeadlessRunner:
         await asyncio.gather(*tasks, quit_watch, stop_watch, return_exceptions=True)
         await self.core.stop(self._reason)
         self._say(f"stopped: {self._reason}")
+        if note := saved_run_note(self.core):
+            self._say(json.dumps({"run_dir": str(self.core.recorder.run_dir)}) if self.json_lines else note)
         return self.exit_code
 
     def request_stop(self, reason: str) -> None:

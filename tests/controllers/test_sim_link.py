@@ -38,8 +38,8 @@ def test_link_falls_back_to_the_time_of_reading(monkeypatch: pytest.MonkeyPatch)
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="receive timestamps are requested on Linux only")
 def test_simulator_starts_without_receive_timestamps() -> None:
-    code = ("import sys, controllers.sim.link as link; link._SO_TIMESTAMPNS = %d; "
-            "from controllers.sim.__main__ import main; sys.exit(main(sys.argv[1:]))" % UNKNOWN_SOCKET_OPTION)
+    code = (f"import sys, controllers.sim.link as link; link._SO_TIMESTAMPNS = {UNKNOWN_SOCKET_OPTION}; "
+            "from controllers.sim.__main__ import main; sys.exit(main(sys.argv[1:]))")
     process = subprocess.Popen([sys.executable, "-c", code, "--mavlink-port", str(free_udp_port()),
                                 "--truth-port", "0", "--parent-pid", str(os.getpid())], cwd=ROOT,
                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)

@@ -15,7 +15,7 @@ from textual.driver import Driver
 
 from uav_tui.commands import VEHICLE_COMMANDS, parse
 from uav_tui.core import CoreState, UavCore
-from uav_tui.errors import KNOWN_ERRORS, CommandError
+from uav_tui.errors import KNOWN_ERRORS, CommandError, error_line
 from uav_tui.events import Event
 from uav_tui.status import CoreStatus
 from uav_tui.tui._algorithm import AlgorithmPanel
@@ -155,7 +155,7 @@ class UavApp(App[None]):
 
     def _start_failed(self, reason: str) -> None:
         self.start_error = reason
-        self.exit(return_code=2, message=f"uav-tui: cannot start: {reason}")
+        self.exit(return_code=2, message=error_line(f"cannot start: {reason}"))
 
     async def _watch_quit(self) -> None:
         await self.core.quit_requested.wait()
