@@ -93,7 +93,8 @@ class UavCore:
         try:
             processor = await loop.run_in_executor(
                 None, functools.partial(load_processor, self.config.processor, self.config.processor_args))
-            self.controller = await connect_controller(self.config.fc, heartbeat_timeout=self.config.connect_timeout)
+            self.controller = await connect_controller(self.config.fc, heartbeat_timeout=self.config.connect_timeout,
+                                                       sim_vehicle=self.config.sim.vehicle())
             self.telemetry = TelemetryManager(self.controller)
             self.gate.telemetry, self.gate.controller = self.telemetry, self.controller
             processor.instance.tmMgr = self.telemetry
