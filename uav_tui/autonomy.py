@@ -111,7 +111,7 @@ class AutonomyGate:
         if vector is None:
             self.rejected += 1
             result.decision = note
-            self.last_decision = note
+            self.last_vector, self.last_decision = None, note  # no stale vector beside this decision
             self.events.emit("warning", "autonomy", f"frame {result.frame.seq}: vector {note}", "processor")
             return
         self.last_vector = vector

@@ -3,22 +3,30 @@
 from __future__ import annotations
 
 import json
+import math
 import os
 import subprocess
 import sys
+import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from controllers.base import Telemetry
+from sources.buffer import Frame
+from uav_tui.autonomy import AutonomyGate
 from uav_tui.cli import build_parser
-from uav_tui.config import RecordingConfig
+from uav_tui.config import RecordingConfig, SafetyConfig
 from uav_tui.errors import CommandError
+from uav_tui.events import EventLog
 from uav_tui.headless import format_status, load_script
 from uav_tui.recording import Recorder
 from uav_tui.runs_cli import main as tools_main
 from uav_tui.stats import PipelineStats
 from uav_tui.status import CoreStatus
+from uav_tui.telemetry import TelemetryManager
+from uav_tui.worker import ProcessedFrame
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -110,3 +118,13 @@ def test_runs_lists_processor_and_source_without_passwords(tmp_path: Path, capsy
     assert header.split()[-2:] == ["processor", "source"]
     assert first.split()[-2:] == ["csrt", "usb:0?[31m"]
     assert second.split()[-2:] == ["mine.py:Mine", "rtsp://pilot:***@192.0.2.1/cam"]
+
+
+def test_a_rejected_vector_leaves_no_stale_vector_beside_its_decision() -> None:
+    gate = AutonomyGate(SafetyConfig(), TelemetryManager(None), EventLog())
+    for vector in ((0.5, 0.0, 1.0), (math.nan, 0.0, 1.0)):
+        result = ProcessedFrame(Frame(np.zeros((4, 4, 3), np.uint8), 1, time.monotonic_ns(), time.time_ns()), 0)
+        result.vector = vector
+        gate.consider(result)
+        line = format_status(_status(last_vector=gate.last_vector, last_decision=gate.last_decision), 1.0)
+    assert gate.last_vector is None and " vec " not in line and line.endswith(f"auto ON ({gate.last_decision})")
