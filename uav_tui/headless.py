@@ -112,7 +112,7 @@ class HeadlessRunner:
         try:
             await self.core.start()
         except KNOWN_ERRORS as exc:
-            print(error_line(exc), file=sys.stderr, flush=True)
+            self._error(str(exc))
             return EXIT_START_FAILED
         self.core.events.add_listener(self._print_event)
         if self.core.web is not None:
@@ -151,7 +151,7 @@ class HeadlessRunner:
 
     async def _run_script(self) -> None:
         assert self.script is not None
-        failure = await run_script(self.core, self.script, self._say)
+        failure = await run_script(self.core, self.script, self._error)
         if failure:
             self.exit_code = EXIT_SCRIPT_FAILED
             self.request_stop(failure)
@@ -166,6 +166,11 @@ class HeadlessRunner:
                 self._say(json.dumps({"t": round(time.monotonic() - started, 3), **status.as_dict()}, default=str))
             else:
                 self._say(format_status(status, time.monotonic() - started))
+
+    def _error(self, text: str) -> None:
+        """Why the run could not start or its script failed: on stderr, as every command-line error."""
+        with contextlib.suppress(OSError):
+            print(error_line(text), file=sys.stderr, flush=True)
 
     def _say(self, text: str) -> None:
         # A lost terminal must not stop the run: the safety rules decide that, not print().

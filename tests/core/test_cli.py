@@ -64,7 +64,7 @@ def test_vehicle_command_without_a_vehicle_fails_the_script_clearly(tmp_path: Pa
                  "--runs-dir", str(tmp_path / "runs"), cwd=tmp_path)
     assert result.returncode == 1
     assert "button 1" in result.stdout
-    assert "script line 2 (arm) failed" in result.stdout and "--fc sim" in result.stdout
+    assert result.stderr.startswith("uav-tui: error: script line 2 (arm) failed") and "--fc sim" in result.stderr
 
 
 @pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGINT, signal.SIGHUP], ids=["TERM", "INT", "HUP"])
