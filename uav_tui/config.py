@@ -22,8 +22,8 @@ from uav_tui.errors import ConfigError
 
 
 def _key(help: str, *, minimum: float | None = None, maximum: float | None = None, default: Any = MISSING,
-         factory: Any = MISSING, parse: Callable[[str], Any] | None = None) -> Any:
-    metadata = {"help": help, "min": minimum, "max": maximum, "parse": parse}
+         factory: Any = MISSING, parse: Callable[[str], Any] | None = None, metavar: str | None = None) -> Any:
+    metadata = {"help": help, "min": minimum, "max": maximum, "parse": parse, "metavar": metavar}
     if factory is not MISSING:
         return field(default_factory=factory, metadata=metadata)
     return field(default=default, metadata=metadata)
@@ -85,8 +85,9 @@ class SimConfig:
     """The built-in simulated vehicle (``fc = "sim"``); ``uav-tui sim`` takes the same options."""
 
     home: str = _key("where the simulated vehicle boots: LAT,LON,ALT (empty: PX4 SITL's Zurich home)", default="",
-                     parse=_home)
-    wind: str = _key("steady wind on the simulated vehicle: N,E in m/s", default="0,0", parse=parse_wind)
+                     parse=_home, metavar="LAT,LON,ALT")
+    wind: str = _key("steady wind on the simulated vehicle: N,E in m/s", default="0,0", parse=parse_wind,
+                     metavar="N,E")
     noise: bool = _key("add sensor noise to the simulated vehicle's telemetry", default=False)
     seed: int = _key("random seed of the simulated vehicle's noise", minimum=0, maximum=2**31 - 1, default=0)
 
@@ -206,7 +207,7 @@ def add_config_flags(parser: argparse.ArgumentParser) -> None:
                 group.add_argument(f"--{_flag(f.name)}", action=argparse.BooleanOptionalAction, default=None,
                                    help=f.metadata["help"])
             else:
-                group.add_argument(f"--{_flag(f.name)}", default=None, metavar=f.type.upper(),
+                group.add_argument(f"--{_flag(f.name)}", default=None, metavar=f.metadata["metavar"] or f.type.upper(),
                                    help=f"{f.metadata['help']} (default: {f.default})")
 
 
