@@ -19,7 +19,7 @@ import psutil
 from controllers import connect_controller
 from controllers.base import FlightController
 from processors import load_processor
-from sources import CameraSource, open_source
+from sources import CameraSource, open_source, warm_up_source
 from uav_tui.autonomy import AutonomyGate
 from uav_tui.commands import VEHICLE_COMMANDS, Command, parse
 from uav_tui.config import Config
@@ -90,6 +90,8 @@ class UavCore:
         loop = asyncio.get_running_loop()
         self.events.bind(loop)
         self.started_wall_ns = time.time_ns()
+        # The camera's one-off preparation (the sim: camera's ground) overlaps loading and connecting.
+        camera_ready = loop.run_in_executor(None, warm_up_source, self.config.source)
         try:
             processor = await loop.run_in_executor(
                 None, functools.partial(load_processor, self.config.processor, self.config.processor_args))
@@ -98,6 +100,7 @@ class UavCore:
             self.telemetry = TelemetryManager(self.controller)
             self.gate.telemetry, self.gate.controller = self.telemetry, self.controller
             processor.instance.tmMgr = self.telemetry
+            await camera_ready
             self.source = await self.open_source(self.config.source)
             self.worker = ProcessorWorker(processor, self._on_result)
             if self.config.recording.record:
