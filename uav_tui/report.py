@@ -21,6 +21,8 @@ import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from uav_tui.autonomy import check_vector
+from uav_tui.config import SafetyConfig
 from uav_tui.dataset import Dataset, load
 
 logger = logging.getLogger(__name__)
@@ -187,14 +189,20 @@ def _velocity(run: Dataset, ax: Axes) -> None:
 
 
 def commanded_vectors(run: Dataset) -> pd.DataFrame:
-    """Every vector flown, the processor's (executed) and the operator's (``vector`` command): start_s, end_s,
-    forward, right; a vector ends after its duration or when the next one replaces it."""
+    """Every vector flown, the processor's (executed) and the operator's (``vector`` command), clamped to the
+    run's safety limits: start_s, end_s, forward, right; a vector ends after its duration or when the next one
+    replaces it."""
     frames = run.frames[run.frames["decision"].fillna("").str.startswith("executed")]
-    rows = [(t, vx, vy, vt) for t, vx, vy, vt in frames[["t_s", "vx", "vy", "vt"]].itertuples(index=False)]
+    proposed = [(t, (vx, vy, vt)) for t, vx, vy, vt in frames[["t_s", "vx", "vy", "vt"]].itertuples(index=False)]
     operator = run.events[(run.events["kind"] == "command") & run.events["message"].str.match(r"vector \S+ \S+ \S+$")]
     for t, message in operator[["t_s", "message"]].itertuples(index=False):
-        vx, vy, vt = (float(word) for word in message.split()[1:])
-        rows.append((t, vx, vy, vt))
+        proposed.append((t, tuple(float(word) for word in message.split()[1:])))
+    try:
+        safety = SafetyConfig(**run.info.get("config", {}).get("safety", {}))
+    except TypeError:  # recorded by a version with other keys: the defaults
+        safety = SafetyConfig()
+    flown = [(t, check_vector(vector, safety)[0]) for t, vector in proposed]  # clamped as they were flown
+    rows = [(t, *vector) for t, vector in flown if vector is not None]
     table = pd.DataFrame(rows, columns=["start_s", "forward", "right", "t"], dtype="float64").sort_values("start_s")
     replaced = table["start_s"].shift(-1).fillna(np.inf)
     table["end_s"] = np.minimum(table["start_s"] + table["t"], replaced)

@@ -30,10 +30,11 @@ def _frame(core: FakeCore, i: int, result) -> None:
 
 @pytest.fixture
 def hover_run(tmp_path):
-    """A vehicle hovering in place (millimetre noise), heading east, autonomy on in the middle of the run."""
+    """A vehicle hovering in place (millimetre noise), heading east, autonomy on in the middle of the run;
+    max_speed 0.5 m/s."""
     core = FakeCore()
-    recorder = Recorder.open(RecordingConfig(runs_dir=str(tmp_path)), {"processor": {"name": "hover"}},
-                             telemetry_expected=True)
+    info = {"processor": {"name": "hover"}, "config": {"safety": {"max_speed": 0.5}}}
+    recorder = Recorder.open(RecordingConfig(runs_dir=str(tmp_path)), info, telemetry_expected=True)
     recorder.attach(core)
     image = np.zeros((48, 64, 3), np.uint8)
     for i in range(60):
@@ -76,7 +77,8 @@ def test_flight_shows_commanded_and_actual_velocity_and_autonomy_spans(hover_run
     commanded = {c.get_label(): c for c in velocity.collections if isinstance(c, LineCollection)}
     forward = np.array([segment[0][1] for segment in commanded["forward commanded"].get_segments()])
     right = np.array([segment[0][1] for segment in commanded["right commanded"].get_segments()])
-    assert len(forward) == 12 and np.allclose(forward, 0.6) and np.allclose(right, -0.2)
+    assert len(forward) == 12 and np.allclose(right, -0.2)
+    assert np.allclose(forward, 0.5)  # proposed 0.6, flown as clamped to the run's max_speed
     (start, end), = autonomy_spans(run)
     events = run.events[run.events.kind == "autonomy"].t_s.to_numpy()
     assert (start, end) == (events[0], events[1])
