@@ -6,12 +6,12 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 extras="${1:-}"
 case "$extras" in "" | dev) ;; *) echo "usage: bash scripts/setup.sh [dev]" >&2; exit 2 ;; esac
-python3 -c 'import sys; sys.exit(sys.version_info < (3, 11))' || { echo "uav-tui needs Python >= 3.11" >&2; exit 1; }
 inputs="$(cat pyproject.toml scripts/setup.sh | sha256sum | cut -d' ' -f1)"
 # A dev install contains the plain one.
 for done in ${extras:-run dev}; do
     if [ -x .venv/bin/uav-tui ] && [ "$(cat ".venv/.setup-$done" 2>/dev/null)" = "$inputs" ]; then exit 0; fi
 done
+python3 -c 'import sys; sys.exit(sys.version_info < (3, 11))' || { echo "uav-tui needs Python >= 3.11" >&2; exit 1; }
 [ -x .venv/bin/python ] || python3 -m venv .venv
 rm -f .venv/.setup-run .venv/.setup-dev
 .venv/bin/python -m pip install -q --upgrade pip
