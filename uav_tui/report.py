@@ -21,6 +21,7 @@ import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from sources.uri import redact
 from uav_tui.autonomy import check_vector
 from uav_tui.config import SafetyConfig
 from uav_tui.dataset import Dataset, load
@@ -90,7 +91,8 @@ def summary(run: Dataset) -> str:
     with_vector = int(frames["vx"].notna().sum())
     lines = [
         f"run {run.path.name}: {duration:.1f} s, processor {run.info.get('processor', {}).get('name', '?')}, "
-        f"source {run.info.get('source', {}).get('uri', '?')}, fc {run.info.get('controller', {}).get('fc', '?')}",
+        f"source {redact(str(run.info.get('source', {}).get('uri', '?')))}, "
+        f"fc {run.info.get('controller', {}).get('fc', '?')}",
         f"frames: {len(frames)} processed ({len(frames) / duration if duration else 0:.1f}/s), "
         f"{int(frames['saved'].fillna(False).sum())} saved, {int(frames['error'].notna().sum())} with errors",
         f"latency capture->result: p50 {_pct(latency, 50)} ms, p95 {_pct(latency, 95)} ms",

@@ -33,7 +33,8 @@ def hover_run(tmp_path):
     """A vehicle hovering in place (millimetre noise), heading east, autonomy on in the middle of the run;
     max_speed 0.5 m/s."""
     core = FakeCore()
-    info = {"processor": {"name": "hover"}, "config": {"safety": {"max_speed": 0.5}}}
+    info = {"processor": {"name": "hover"}, "config": {"safety": {"max_speed": 0.5}},
+            "source": {"uri": "rtsp://pilot:secret@192.0.2.1/cam"}}
     recorder = Recorder.open(RecordingConfig(runs_dir=str(tmp_path)), info, telemetry_expected=True)
     recorder.attach(core)
     image = np.zeros((48, 64, 3), np.uint8)
@@ -100,5 +101,6 @@ def test_report_html_is_one_self_contained_page(hover_run):
     images = re.findall(r'src="data:image/png;base64,([^"]+)"', page)
     assert [base64.b64decode(image) for image in images] == [(hover_run / name).read_bytes() for name in PLOTS]
     assert text.splitlines()[0].replace("->", "-&gt;") in page
+    assert "rtsp://pilot:***@192.0.2.1/cam" in page and "secret" not in page  # safe to copy off the drone
     assert not re.search(r'(src|href)="(?!data:)', page) and "http" not in page.replace(
         "".join(images), "")  # nothing fetched from anywhere
