@@ -128,3 +128,15 @@ def test_a_rejected_vector_leaves_no_stale_vector_beside_its_decision() -> None:
         gate.consider(result)
         line = format_status(_status(last_vector=gate.last_vector, last_decision=gate.last_decision), 1.0)
     assert gate.last_vector is None and " vec " not in line and line.endswith(f"auto ON ({gate.last_decision})")
+
+
+def test_a_headless_run_without_vehicle_or_web_page_imports_nothing_heavy(tmp_path: Path) -> None:
+    """Start-up time (``scripts/bench_startup.py``): these load only when a plot, the dashboard, the web page
+    or a vehicle asks for them."""
+    heavy = ("matplotlib", "pandas", "textual", "aiortc", "aiohttp", "mavsdk", "skimage", "scipy")
+    code = ("import sys; from uav_tui.cli import main; code = main(['--no-ui', '--duration', '1', '--no-record']); "
+            f"print(sorted(name for name in {heavy!r} if name in sys.modules)); sys.exit(code)")
+    result = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, env={**os.environ, "PYTHONPATH": str(ROOT)},
+                            capture_output=True, text=True, timeout=60)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.splitlines()[-1] == "[]"
