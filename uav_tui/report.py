@@ -1,4 +1,4 @@
-"""``uav-tui report RUN``: a recorded run's plots as PNG files in its folder, plus a short text summary.
+"""``uav-tui report [RUN]``: a recorded run's plots as PNG files in its folder, plus a short text summary.
 
 Plots are drawn on plain ``matplotlib.figure.Figure`` objects (the Agg renderer, no pyplot, no
 display needed): ``track.png`` (ground track, NED east/north coloured by time, executed vectors
