@@ -14,18 +14,24 @@ Implementations are imported on first use, so ``--fc none`` never loads MAVSDK.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from typing import Any
+
 from controllers.base import FlightController, Telemetry
 
 __all__ = ["FlightController", "Telemetry", "connect_controller"]
 
 
-async def connect_controller(address: str, *, heartbeat_timeout: float = 10.0) -> FlightController | None:
+async def connect_controller(address: str, *, heartbeat_timeout: float = 10.0,
+                             sim_vehicle: Mapping[str, Any] | None = None) -> FlightController | None:
     """Connect the flight controller named by ``address``.
 
     Args:
         address: ``none``, ``sim``, or a MAVLink connection string (``serial:///dev/ttyAMA0:57600``,
             ``udpin://0.0.0.0:14540``, ``tcpout://HOST:PORT``, ``udp://:14540``, ...).
         heartbeat_timeout: seconds to wait for the autopilot's first heartbeat.
+        sim_vehicle: for ``sim``: home, wind, seed, noise of the simulated vehicle
+            (:class:`controllers.sim.launcher.SimVehicle`'s arguments).
 
     Returns:
         A connected controller, or None for ``none``.
@@ -39,7 +45,7 @@ async def connect_controller(address: str, *, heartbeat_timeout: float = 10.0) -
     if key == "sim":
         from controllers.sim_controller import start_sim_controller
 
-        return await start_sim_controller(heartbeat_timeout=heartbeat_timeout)
+        return await start_sim_controller(heartbeat_timeout=heartbeat_timeout, **(sim_vehicle or {}))
     if key.startswith("replay:"):
         from controllers.replay import ReplayController
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import logging
+from typing import Any
 
 from controllers.mavsdk_controller import MavsdkController
 from controllers.sim.launcher import SimVehicle
@@ -33,9 +34,10 @@ class SimController(MavsdkController):
             await asyncio.to_thread(self.sim.stop)
 
 
-async def start_sim_controller(*, heartbeat_timeout: float = 10.0) -> SimController:
-    """Start a simulator process and connect to it; the simulator is stopped again if that fails."""
-    sim = SimVehicle()
+async def start_sim_controller(*, heartbeat_timeout: float = 10.0, **vehicle: Any) -> SimController:
+    """Start a simulator process (``vehicle``: :class:`SimVehicle`'s home, wind, seed, noise) and connect to
+    it; the simulator is stopped again if that fails."""
+    sim = SimVehicle(**vehicle)
     await asyncio.to_thread(sim.start)
     controller = SimController(sim)
     try:

@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+import ast
+import difflib
 import hashlib
 import importlib
 import importlib.util
+import inspect
 import sys
 import traceback
 from dataclasses import dataclass, field
@@ -39,6 +42,8 @@ def load(spec: str, builtins: dict[str, str], kwargs: dict[str, Any] | None = No
     kwargs = dict(kwargs or {})
     target = builtins.get(spec) or _entry_point_target(spec) or spec
     location, sep, class_name = target.rpartition(":")
+    if not sep and target.endswith(".py"):
+        raise _file_without_class(Path(target).expanduser(), target)
     if not sep or not location or not class_name:
         known = ", ".join(sorted(builtins))
         raise ProcessorLoadError(
@@ -57,6 +62,7 @@ def load(spec: str, builtins: dict[str, str], kwargs: dict[str, Any] | None = No
             f"{path or location} has no class {class_name}; classes defined there: {', '.join(defined) or 'none'}",
             path=path, class_name=class_name, missing=class_name,
         )
+    _check_arguments(cls, kwargs, path or location)
     try:
         instance = cls(**kwargs)
     except Exception as exc:
@@ -64,6 +70,43 @@ def load(spec: str, builtins: dict[str, str], kwargs: dict[str, Any] | None = No
                                  f"{_describe(exc, path)}", path=path, class_name=class_name) from exc
     info = validate_processor(instance, name=f"{location}:{class_name}", path=path)
     return LoadedProcessor(instance=instance, info=info, spec=spec, kwargs=kwargs)
+
+
+def _file_without_class(path: Path, spec: str) -> ProcessorLoadError:
+    """``--processor bright.py``: name the classes in the file that could be meant (read, not run)."""
+    try:
+        tree = ast.parse(path.read_text(), filename=str(path))
+    except (OSError, SyntaxError, ValueError):
+        return ProcessorLoadError(f"processor {spec!r} names a file but no class: give path/file.py:Class",
+                                  path=str(path))
+    candidates = [node.name for node in tree.body if isinstance(node, ast.ClassDef)
+                  and any(isinstance(item, ast.FunctionDef | ast.AsyncFunctionDef) and item.name == "photo_processing"
+                          for item in node.body)]
+    if not candidates:
+        return ProcessorLoadError(f"processor {spec!r} names a file but no class, and {path} defines no class with "
+                                  "photo_processing(frame)", path=str(path), missing="photo_processing")
+    return ProcessorLoadError(f"processor {spec!r} names a file but no class: use "
+                              f"{' or '.join(f'{spec}:{name}' for name in candidates)}", path=str(path))
+
+
+def _check_arguments(cls: type, kwargs: dict[str, Any], where: str | None) -> None:
+    """Reject constructor arguments ``cls`` does not take, listing those it does (before calling it)."""
+    try:
+        parameters = list(inspect.signature(cls).parameters.values())
+    except (TypeError, ValueError):  # no signature to read (some extension types): let the call decide
+        return
+    if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in parameters):
+        return
+    accepted = [p.name for p in parameters if p.kind in (inspect.Parameter.POSITIONAL_OR_KEYWORD,
+                                                         inspect.Parameter.KEYWORD_ONLY)]
+    for key in kwargs:
+        if key not in accepted:
+            close = difflib.get_close_matches(key, accepted, n=1)
+            hint = f"did you mean {close[0]!r}? " if close else ""
+            takes = f"it takes {', '.join(accepted)}" if accepted else "it takes no arguments"
+            raise ProcessorLoadError(f"{cls.__name__} ({where}) has no constructor argument {key!r} "
+                                     f"(--processor-arg / [processor_args]); {hint}{takes}",
+                                     path=where, class_name=cls.__name__, missing=key)
 
 
 def _entry_point_target(name: str) -> str | None:

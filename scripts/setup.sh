@@ -1,10 +1,21 @@
 #!/usr/bin/env bash
-# Create .venv and install uav-tui with its test tools. Idempotent; needs only python3 >= 3.11.
+# Create .venv and install uav-tui with what running needs; `bash scripts/setup.sh dev` adds the test tools
+# (.ci/run does). Needs only python3 >= 3.11. Skipped at once when pyproject.toml and this script are
+# unchanged since the last successful setup (a stamp in .venv), so scripts/demo.sh starts straight away.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+extras="${1:-}"
+case "$extras" in "" | dev) ;; *) echo "usage: bash scripts/setup.sh [dev]" >&2; exit 2 ;; esac
+inputs="$(cat pyproject.toml scripts/setup.sh | sha256sum | cut -d' ' -f1)"
+# A dev install contains the plain one.
+for done in ${extras:-run dev}; do
+    if [ -x .venv/bin/uav-tui ] && [ "$(cat ".venv/.setup-$done" 2>/dev/null)" = "$inputs" ]; then exit 0; fi
+done
 python3 -c 'import sys; sys.exit(sys.version_info < (3, 11))' || { echo "uav-tui needs Python >= 3.11" >&2; exit 1; }
 [ -x .venv/bin/python ] || python3 -m venv .venv
+rm -f .venv/.setup-run .venv/.setup-dev
 .venv/bin/python -m pip install -q --upgrade pip
-.venv/bin/python -m pip install -q -e ".[dev]"
+.venv/bin/python -m pip install -q -e ".${extras:+[$extras]}"
 # Exactly one package may provide cv2, and it must be the contrib build (CSRT, Darknet loader).
 .venv/bin/python scripts/check_opencv.py
+echo "$inputs" > ".venv/.setup-${extras:-run}"

@@ -28,7 +28,8 @@ SCHEMES: dict[str, str] = {
 }
 """URI scheme -> ``module:Class``. Each class has ``from_uri(SourceUri, **context)``."""
 
-__all__ = ["SCHEMES", "CameraSource", "CaptureSource", "Frame", "FrameBuffer", "create_source", "open_source"]
+__all__ = ["SCHEMES", "CameraSource", "CaptureSource", "Frame", "FrameBuffer", "create_source", "open_source",
+           "warm_up_source"]
 
 
 def create_source(uri: str, **context: Any) -> CameraSource:
@@ -44,6 +45,19 @@ def create_source(uri: str, **context: Any) -> CameraSource:
     module_name, class_name = target.split(":")
     cls = getattr(importlib.import_module(module_name), class_name)
     return cls.from_uri(parsed, **context)
+
+
+def warm_up_source(uri: str) -> None:
+    """Do the slow one-off preparation of the source ``uri`` names, if its class has any (``warm_up``), so that
+    it can overlap other start-up work; blocks. Mistakes in ``uri`` are left for :func:`open_source` to report."""
+    try:
+        parsed = SourceUri.parse(uri)
+        module_name, class_name = SCHEMES[parsed.scheme].split(":")
+        warm_up = getattr(getattr(importlib.import_module(module_name), class_name), "warm_up", None)
+        if warm_up is not None:
+            warm_up(parsed)
+    except (KeyError, SourceError):
+        return
 
 
 def open_source(uri: str, **context: Any) -> CameraSource:

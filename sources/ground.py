@@ -9,8 +9,10 @@ ground looks different to a feature matcher. The texture repeats every ``period_
 from __future__ import annotations
 
 import functools
+import importlib.util
 import logging
 import math
+from pathlib import Path
 
 import cv2
 import numpy as np
@@ -59,16 +61,12 @@ def default_ground(seed: int = 0) -> GroundTexture:
 
 def build_mosaic(size: int, seed: int) -> np.ndarray:
     """A ``size`` x ``size`` BGR ground mosaic, identical for the same seed and seamless when tiled."""
-    try:
-        from skimage import data
-    except ImportError as exc:
-        raise SourceError("the simulated camera needs scikit-image for its ground texture: "
-                          "pip install scikit-image") from exc
+    grass_photo, gravel_photo = _sample_photo("grass"), _sample_photo("gravel")
     rng = np.random.default_rng(seed)
-    grass_a = _tint(_seamless_tiles(data.grass(), size, rng), (0.45, 0.85, 0.55))
-    grass_b = _tint(_seamless_tiles(np.rot90(data.grass()), size, rng), (0.4, 0.75, 0.6))
-    gravel = _tint(_seamless_tiles(data.gravel(), size, rng), (0.75, 0.8, 0.85))
-    soil = _tint(cv2.GaussianBlur(_seamless_tiles(data.gravel(), size, rng), (0, 0), 2), (0.45, 0.6, 0.75))
+    grass_a = _tint(_seamless_tiles(grass_photo, size, rng), (0.45, 0.85, 0.55))
+    grass_b = _tint(_seamless_tiles(np.rot90(grass_photo), size, rng), (0.4, 0.75, 0.6))
+    gravel = _tint(_seamless_tiles(gravel_photo, size, rng), (0.75, 0.8, 0.85))
+    soil = _tint(cv2.GaussianBlur(_seamless_tiles(gravel_photo, size, rng), (0, 0), 2), (0.45, 0.6, 0.75))
     grass = _blend(grass_a, grass_b, _smooth_mask(rng, size, cells=16, sharpness=3.0))  # hides the mirror axes
     ground = _blend(gravel, soil, _smooth_mask(rng, size, cells=10, sharpness=4.0))
     mosaic = _blend(ground, grass, _smooth_mask(rng, size, cells=6, sharpness=6.0))
@@ -76,6 +74,20 @@ def build_mosaic(size: int, seed: int) -> np.ndarray:
     mosaic = cv2.blendLinear(mosaic, np.zeros_like(mosaic), light, 1 - light)
     _scatter_features(mosaic, rng)
     return mosaic
+
+
+def _sample_photo(name: str) -> np.ndarray:
+    """scikit-image's bundled greyscale photograph ``name`` (as ``skimage.data.<name>()`` returns it), read with
+    OpenCV: importing ``skimage.data``'s loader (``skimage.io``) would add a second or more to the start."""
+    spec = importlib.util.find_spec("skimage")
+    if spec is None or spec.origin is None:
+        raise SourceError("the simulated camera needs scikit-image for its ground texture: pip install scikit-image")
+    path = Path(spec.origin).parent / "data" / f"{name}.png"
+    image = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+    if image is None:
+        raise SourceError(f"{path} (scikit-image's sample photograph) is missing: pip install --force-reinstall "
+                          "scikit-image")
+    return image
 
 
 def _seamless_tiles(tile: np.ndarray, size: int, rng: np.random.Generator) -> np.ndarray:

@@ -10,12 +10,12 @@ from __future__ import annotations
 import os
 import threading
 from typing import Any
-from urllib.parse import urlsplit, urlunsplit
+from urllib.parse import urlsplit
 
 import cv2
 
 from sources.errors import SourceError
-from sources.uri import SourceUri
+from sources.uri import SourceUri, redact
 from sources.videocapture import VideoCaptureSource
 
 OPTIONS_ENV = "OPENCV_FFMPEG_CAPTURE_OPTIONS"
@@ -87,12 +87,3 @@ class NetworkSource(VideoCaptureSource):
     def _extra_properties(self) -> dict[str, Any]:
         return {"url": self.device, "ffmpeg_options": self.options}
 
-
-def redact(url: str) -> str:
-    """``url`` with any password replaced by ``***``."""
-    parts = urlsplit(url)
-    if parts.password is None:
-        return url
-    host = parts.hostname or ""
-    netloc = f"{parts.username}:***@{host}" + (f":{parts.port}" if parts.port else "")
-    return urlunsplit(parts._replace(netloc=netloc))

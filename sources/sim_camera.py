@@ -77,6 +77,11 @@ class SimCameraSource(CaptureSource):
         uri.finish()
         return source
 
+    @staticmethod
+    def warm_up(uri: SourceUri) -> None:
+        """Build the ground texture now (a second or more), e.g. while the simulated vehicle starts."""
+        default_ground(uri.take_int("seed", 0) or 0)
+
     def _open_device(self) -> None:
         self._pacer = Pacer(self.fps, self._stop)
         self._t0 = time.monotonic()

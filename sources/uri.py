@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from urllib.parse import parse_qsl
+from urllib.parse import parse_qsl, urlsplit, urlunsplit
 
 from sources.errors import SourceUriError
 
@@ -85,3 +85,13 @@ class SourceUri:
 
     def _bad(self, name: str, value: str, expected: str) -> SourceUriError:
         return SourceUriError(f"camera URI {self.text!r}: {name}={value!r} must be {expected}", key="source")
+
+
+def redact(url: str) -> str:
+    """``url`` with any password replaced by ``***``."""
+    parts = urlsplit(url)
+    if parts.password is None:
+        return url
+    host = parts.hostname or ""
+    netloc = f"{parts.username}:***@{host}" + (f":{parts.port}" if parts.port else "")
+    return urlunsplit(parts._replace(netloc=netloc))

@@ -118,7 +118,7 @@ class AutonomyGate:
         if vector is None:
             self.rejected += 1
             result.decision = note
-            self.last_decision = note
+            self.last_vector, self.last_decision = None, note  # no stale vector beside this decision
             self._rejections.report(note, f"frame {result.frame.seq}: vector {note}")
             return
         self.last_vector = vector

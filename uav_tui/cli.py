@@ -1,7 +1,7 @@
 """The ``uav-tui`` command: run the platform (TUI or ``--no-ui``) and its tools.
 
 ``uav-tui [options]`` runs; ``uav-tui sim`` starts the simulated vehicle on its own;
-``uav-tui runs`` lists recorded runs; ``uav-tui report RUN`` draws a run's plots; ``uav-tui replay RUN...``
+``uav-tui runs`` lists recorded runs; ``uav-tui report [RUN]`` draws a run's plots; ``uav-tui replay RUN...``
 replays recorded runs through a processor.
 """
 
@@ -15,7 +15,7 @@ from pathlib import Path
 
 from uav_tui.commands import help_text
 from uav_tui.config import add_config_flags, find_config_file, load_config, overrides_from_args
-from uav_tui.errors import CONFIG_ERRORS
+from uav_tui.errors import CONFIG_ERRORS, error_line
 from uav_tui.text import SafeFormatter, safe
 
 TOOLS = ("sim", "runs", "report", "replay")
@@ -26,7 +26,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="uav-tui",
         description="Camera -> your algorithm -> flight controller, with an operator dashboard.",
-        epilog=f"tools: uav-tui sim | runs | report RUN | replay RUN... (each has --help)\n\n"
+        epilog=f"tools: uav-tui sim | runs | report [RUN] | replay RUN... (each has --help)\n\n"
                f"commands (keys, --script, web):\n{help_text()}",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
@@ -57,7 +57,7 @@ def main(argv: list[str] | None = None) -> int:
 
             script = load_script(Path(args.script), config.safety)
     except CONFIG_ERRORS as exc:
-        print(safe(f"uav-tui: {exc}", multiline=True), file=sys.stderr)
+        print(safe(error_line(exc), multiline=True), file=sys.stderr)
         return 2
     if args.no_ui:
         from uav_tui.headless import HeadlessRunner

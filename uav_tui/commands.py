@@ -5,6 +5,7 @@
 
 from __future__ import annotations
 
+import difflib
 import math
 import shlex
 from collections.abc import Callable
@@ -129,7 +130,9 @@ def parse(line: str) -> Command | None:
     word = word.lower()
     spec = COMMANDS.get(word)
     if spec is None:
-        raise CommandError(f"unknown command {describe(word)}; commands: {', '.join(COMMANDS)}", key="command")
+        close = difflib.get_close_matches(word, COMMANDS, n=1)
+        hint = f"did you mean {close[0]!r}? " if close else ""
+        raise CommandError(f"unknown command {describe(word)}; {hint}commands: {', '.join(COMMANDS)}", key="command")
     try:
         words = [rest.strip()] if spec.rest and rest.strip() else shlex.split(rest)
     except ValueError as exc:

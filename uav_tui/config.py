@@ -12,17 +12,19 @@ import difflib
 import math
 import os
 import tomllib
+from collections.abc import Callable
 from dataclasses import MISSING, dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any
 
+from controllers.sim.geo import Home, parse_wind
 from uav_tui.errors import ConfigError
 from uav_tui.text import describe
 
 
 def _key(help: str, *, minimum: float | None = None, maximum: float | None = None, default: Any = MISSING,
-         factory: Any = MISSING) -> Any:
-    metadata = {"help": help, "min": minimum, "max": maximum}
+         factory: Any = MISSING, parse: Callable[[str], Any] | None = None, metavar: str | None = None) -> Any:
+    metadata = {"help": help, "min": minimum, "max": maximum, "parse": parse, "metavar": metavar}
     if factory is not MISSING:
         return field(default_factory=factory, metadata=metadata)
     return field(default=default, metadata=metadata)
@@ -34,7 +36,7 @@ MIN_TOKEN_CHARS = 16
 
 @dataclass(frozen=True)
 class SafetyConfig:
-    """Limits the platform enforces on every vector (ARCHITECTURE.md, safety rules)."""
+    """Limits the platform enforces on every vector (the README's safety rules)."""
 
     max_speed: float = _key("largest |vx|, |vy| executed, m/s", minimum=0.05, maximum=20, default=1.0)
     max_t: float = _key("longest vector duration, s; also the processor-stall limit", minimum=0.1, maximum=10,
@@ -95,6 +97,26 @@ class WebConfig:
                                "udpin:0.0.0.0:14580 (empty = off)", default="")
 
 
+def _home(text: str) -> Home | None:
+    return Home.parse(text) if text.strip() else None
+
+
+@dataclass(frozen=True)
+class SimConfig:
+    """The built-in simulated vehicle (``fc = "sim"``); ``uav-tui sim`` takes the same options."""
+
+    home: str = _key("where the simulated vehicle boots: LAT,LON,ALT (empty: PX4 SITL's Zurich home)", default="",
+                     parse=_home, metavar="LAT,LON,ALT")
+    wind: str = _key("steady wind on the simulated vehicle: N,E in m/s", default="0,0", parse=parse_wind,
+                     metavar="N,E")
+    noise: bool = _key("add sensor noise to the simulated vehicle's telemetry", default=False)
+    seed: int = _key("random seed of the simulated vehicle's noise", minimum=0, maximum=2**31 - 1, default=0)
+
+    def vehicle(self) -> dict[str, Any]:
+        """The arguments of :class:`controllers.sim.launcher.SimVehicle` these settings give."""
+        return {"home": _home(self.home), "wind": parse_wind(self.wind), "seed": self.seed, "noise": self.noise}
+
+
 @dataclass(frozen=True)
 class Config:
     """Everything uav-tui can be told. The first three keys are the three plug-in levels."""
@@ -109,10 +131,16 @@ class Config:
     safety: SafetyConfig = field(default_factory=SafetyConfig)
     recording: RecordingConfig = field(default_factory=RecordingConfig)
     web: WebConfig = field(default_factory=WebConfig)
+    sim: SimConfig = field(default_factory=SimConfig)
 
 
-SECTIONS = {"safety": SafetyConfig, "recording": RecordingConfig, "web": WebConfig}
+SECTIONS = {"safety": SafetyConfig, "recording": RecordingConfig, "web": WebConfig, "sim": SimConfig}
 """TOML table name -> the dataclass its keys go to."""
+
+_FLAG_GROUPS = {Config: "camera, processor, flight controller (top of uav.toml)", SafetyConfig: "safety ([safety])",
+                RecordingConfig: "recording ([recording])", WebConfig: "web page ([web])",
+                SimConfig: "built-in simulated vehicle, --fc sim ([sim])"}
+"""``--help`` group titles: what the flags set and where the same keys go in ``uav.toml``."""
 
 _TOP_LEVEL = tuple(f.name for f in fields(Config) if f.name not in SECTIONS)
 
@@ -165,7 +193,19 @@ def load_config(path: Path | None, overrides: dict[str, Any] | None = None) -> C
         else:
             target[key] = _check(Config if section is None else SECTIONS[section], key, value, f"--{_flag(key)}",
                                  "command line")
-    return Config(**top, **{name: cls(**sections[name]) for name, cls in SECTIONS.items()})
+    config = Config(**top, **{name: cls(**sections[name]) for name, cls in SECTIONS.items()})
+    _check_sim_settings(config, where)
+    return config
+
+
+def _check_sim_settings(config: Config, where: str) -> None:
+    """Simulated-vehicle settings with another flight controller would be silently ignored: say so."""
+    if config.fc.strip().lower() == "sim":
+        return
+    for f in fields(SimConfig):
+        if getattr(config.sim, f.name) != f.default:
+            raise ConfigError(f"{where}: {f.name} sets up the built-in simulated vehicle, but fc is {config.fc!r}: "
+                              f"use it with --fc sim (or drop --{_flag(f.name)} / sim.{f.name})", key=f.name)
 
 
 def section_of(key: str) -> str | None:
@@ -181,7 +221,7 @@ def section_of(key: str) -> str | None:
 def add_config_flags(parser: argparse.ArgumentParser) -> None:
     """One flag per key (``--max-speed``, ``--no-record`` ...), all defaulting to 'not given'."""
     for cls in (Config, *SECTIONS.values()):
-        group = parser.add_argument_group(cls.__doc__.splitlines()[0] if cls.__doc__ else cls.__name__)
+        group = parser.add_argument_group(_FLAG_GROUPS[cls])
         for f in fields(cls):
             if cls is Config and f.name in SECTIONS:
                 continue
@@ -192,7 +232,7 @@ def add_config_flags(parser: argparse.ArgumentParser) -> None:
                 group.add_argument(f"--{_flag(f.name)}", action=argparse.BooleanOptionalAction, default=None,
                                    help=f.metadata["help"])
             else:
-                group.add_argument(f"--{_flag(f.name)}", default=None, metavar=f.type.upper(),
+                group.add_argument(f"--{_flag(f.name)}", default=None, metavar=f.metadata["metavar"] or f.type.upper(),
                                    help=f"{f.metadata['help']} (default: {f.default})")
 
 
@@ -239,6 +279,11 @@ def _check(cls: type, key: str, value: Any, name: str, where: str) -> Any:
     low, high = f.metadata.get("min"), f.metadata.get("max")
     if low is not None and not low <= value <= high:
         raise ConfigError(f"{where}: {name} = {value!r} is out of range [{low}, {high}]", key=name)
+    if (parse := f.metadata.get("parse")) is not None:
+        try:
+            parse(value)
+        except ValueError as exc:
+            raise ConfigError(f"{where}: {name}: {exc}", key=name) from None
     if f.type == "str" and key in ("source", "processor", "fc") and not value.strip():
         raise ConfigError(f"{where}: {name} must not be empty", key=name)
     if key == "web_token" and value and len(value) < MIN_TOKEN_CHARS:

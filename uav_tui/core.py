@@ -14,11 +14,13 @@ import time
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
+import psutil
+
 from controllers import connect_controller
 from controllers.base import FlightController
 from controllers.replay_timeline import ReplayTimeline
 from processors import load_processor
-from sources import CameraSource, open_source
+from sources import CameraSource, open_source, warm_up_source
 from uav_tui.autonomy import AutonomyGate
 from uav_tui.commands import VEHICLE_COMMANDS, Command, parse
 from uav_tui.config import Config
@@ -73,6 +75,8 @@ class UavCore:
         self.failure: str | None = None
         """Set by :meth:`fail`: an unhandled error ended the run (the interface exits non-zero, after the hold)."""
         self.started_wall_ns = 0
+        self.startup_s: float | None = None
+        """Seconds from the process start to the first processed frame (None until it is processed)."""
         self._frame_listeners: list[Callable[[ProcessedFrame], None]] = []
         self._tasks: list[asyncio.Task[Any]] = []
         self._told_not_recording = False
@@ -95,10 +99,13 @@ class UavCore:
         loop = asyncio.get_running_loop()
         self.events.bind(loop)
         self.started_wall_ns = time.time_ns()
+        # The camera's one-off preparation (the sim: camera's ground) overlaps loading and connecting.
+        camera_ready = loop.run_in_executor(None, warm_up_source, self.config.source)
         try:
             processor = await loop.run_in_executor(
                 None, functools.partial(load_processor, self.config.processor, self.config.processor_args))
-            self.controller = await connect_controller(self.config.fc, heartbeat_timeout=self.config.connect_timeout)
+            self.controller = await connect_controller(self.config.fc, heartbeat_timeout=self.config.connect_timeout,
+                                                       sim_vehicle=self.config.sim.vehicle())
             self.telemetry = TelemetryManager(self.controller)
             self.replay = getattr(self.controller, "timeline", None)
             if self.replay is not None:
@@ -108,6 +115,7 @@ class UavCore:
                 self.replay.before_show = CommandReplay(self, loop, commands).before_show
             self.gate.telemetry, self.gate.controller = self.telemetry, self.controller
             processor.instance.tmMgr = self.telemetry
+            await camera_ready
             self.source = await self.open_source(self.config.source)
             self.worker = ProcessorWorker(processor, self._on_result)
             if self.config.recording.record:
@@ -224,6 +232,10 @@ class UavCore:
             self.fail(f"frame {result.frame.seq}", exc)
 
     def _handle_result(self, result: ProcessedFrame) -> None:
+        if self.startup_s is None:
+            self.startup_s = time.time() - psutil.Process().create_time()
+            self.events.emit("info", "platform", f"first frame processed {self.startup_s:.1f} s after the "
+                             "process started")
         if result.error:
             last_line = shorten(result.error.strip().splitlines()[-1], 500)
             self._processor_errors.report(last_line, f"frame {result.frame.seq}: {result.error.strip()}")
@@ -297,4 +309,5 @@ class UavCore:
             vectors_executed=self.gate.executed,
             vectors_rejected=self.gate.rejected,
             recording=self.recorder.status() if self.recorder is not None else {},
+            startup_s=self.startup_s,
         )

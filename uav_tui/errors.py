@@ -26,7 +26,7 @@ from sources.errors import SourceError, SourceUriError
 __all__ = [
     "CONFIG_ERRORS", "KNOWN_ERRORS", "CommandDenied", "CommandError", "ConfigError", "ConnectError",
     "ControllerError", "LinkLost", "NoVehicle", "NotSupported", "ProcessorLoadError", "SourceError",
-    "SourceUriError", "UavError",
+    "SourceUriError", "UavError", "error_line",
 ]
 
 
@@ -51,3 +51,8 @@ CONFIG_ERRORS: tuple[type[Exception], ...] = (ConfigError, SourceUriError, Proce
 
 KNOWN_ERRORS: tuple[type[Exception], ...] = (UavError, SourceError, ProcessorLoadError, ControllerError)
 """Every error raised on purpose, by the platform or by a level."""
+
+
+def error_line(message: object, prog: str = "uav-tui") -> str:
+    """How every command-line error is printed: ``PROG: error: MESSAGE``, the way argparse prints its own."""
+    return f"{prog}: error: {message}"

@@ -16,7 +16,7 @@ from typing import Any, TextIO
 from uav_tui.commands import Command, check_limits, parse
 from uav_tui.config import Config, SafetyConfig
 from uav_tui.core import UavCore
-from uav_tui.errors import KNOWN_ERRORS, CommandError
+from uav_tui.errors import KNOWN_ERRORS, CommandError, error_line
 from uav_tui.events import Event
 from uav_tui.status import CoreStatus
 from uav_tui.text import escape, safe
@@ -63,10 +63,23 @@ def format_status(status: CoreStatus, elapsed_s: float) -> str:
         alt = "-" if t.rel_alt_m is None else f"{t.rel_alt_m:.1f}m"
         state = "armed" if t.armed else "disarmed"
         line += f" | hb {hb} {t.flight_mode or '?'} {state}{' air' if t.in_air else ''} alt {alt}"
+        if t.north_m is not None and t.east_m is not None:
+            line += f" N {t.north_m:.1f} E {t.east_m:.1f}m"
     line += f" | auto {'ON' if status.autonomy else 'OFF'}"
+    if status.last_vector is not None:
+        vx, vy, vt = status.last_vector
+        line += f" vec {vx:+.2f},{vy:+.2f}m/s {vt:.1f}s"
     if status.last_decision:
         line += f" ({status.last_decision})"
     return line
+
+
+def saved_run_note(core: UavCore) -> str:
+    """Where the core's run was recorded and how to look at it ("" when recording was off)."""
+    if core.recorder is None:
+        return ""
+    run_dir = core.recorder.run_dir
+    return f"run saved in {run_dir}; plots and summary: uav-tui report {run_dir} (all runs: uav-tui runs)"
 
 
 async def run_script(core: UavCore, script: list[tuple[int, Command]], say: Callable[[str], None]) -> str:
@@ -108,7 +121,7 @@ class HeadlessRunner:
         try:
             await self.core.start()
         except KNOWN_ERRORS as exc:
-            self._say(f"error: {exc}")
+            self._error(str(exc))
             return EXIT_START_FAILED
         try:
             await self._serve(loop)
@@ -118,6 +131,8 @@ class HeadlessRunner:
         finally:
             await self.core.stop(self._reason)
         self._say(f"stopped: {self._reason}")
+        if note := saved_run_note(self.core):
+            self._say(json.dumps({"run_dir": str(self.core.recorder.run_dir)}) if self.json_lines else note)
         return self.exit_code
 
     async def _serve(self, loop: asyncio.AbstractEventLoop) -> None:
@@ -166,7 +181,7 @@ class HeadlessRunner:
 
     async def _run_script(self) -> None:
         assert self.script is not None
-        failure = await run_script(self.core, self.script, self._say)
+        failure = await run_script(self.core, self.script, self._error)
         if failure:
             self.exit_code = EXIT_SCRIPT_FAILED
             self.request_stop(failure)
@@ -181,6 +196,11 @@ class HeadlessRunner:
                 self._say(json.dumps({"t": round(time.monotonic() - started, 3), **status.as_dict()}, default=str))
             else:
                 self._say(format_status(status, time.monotonic() - started))
+
+    def _error(self, text: str) -> None:
+        """Why the run could not start or its script failed: on stderr, as every command-line error."""
+        with contextlib.suppress(OSError):
+            print(safe(error_line(text), multiline=True), file=sys.stderr, flush=True)
 
     def _say(self, text: str, *, redact: bool = True) -> None:
         """Print one line: escaped, and with passwords hidden unless ``redact`` is False (the page's URL)."""

@@ -1,13 +1,18 @@
-"""``uav-tui report RUN``: a recorded run's plots as PNG files in its folder, plus a short text summary.
+"""``uav-tui report [RUN]``: a recorded run's plots as PNG files in its folder, plus a short text summary.
 
 Plots are drawn on plain ``matplotlib.figure.Figure`` objects (the Agg renderer, no pyplot, no
 display needed): ``track.png`` (ground track, NED east/north coloured by time, executed vectors
-marked), ``flight.png`` (altitude and attitude over time), ``processing.png`` (processed FPS and
-latency over time), ``extra.png`` (the processor's ``tmMgr.save`` fields over time); ``summary.txt``.
+circled), ``flight.png`` (altitude, attitude, commanded vs actual velocity, autonomy shaded),
+``processing.png`` (processed FPS and latency over time), ``extra.png`` (each of the processor's
+``tmMgr.save`` fields over time on its own axis); ``summary.txt``; and ``report.html``, all of it in
+one self-contained page (images embedded) to open on the drone or copy off it.
 """
 
 from __future__ import annotations
 
+import base64
+import html
+import io
 import logging
 from pathlib import Path
 
@@ -16,13 +21,22 @@ import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from uav_tui.autonomy import check_vector
+from uav_tui.config import SafetyConfig
 from uav_tui.dataset import Dataset, load
-from uav_tui.report_replay import write_replay_plot
+from uav_tui.report_replay import REPLAY_PLOT, replay_figure
+from uav_tui.text import redact
 
 logger = logging.getLogger(__name__)
 
 PLOTS = ("track.png", "flight.png", "processing.png", "extra.png")
-"""The files a report writes into the run folder (and ``summary.txt``)."""
+"""The plots a report writes into the run folder (and ``summary.txt``, ``report.html``)."""
+
+RATE_WINDOW_S = 1.0
+"""The processing rate is counted over this many seconds."""
+
+MIN_TRACK_M = 2.0
+"""The ground track's axes span at least this much, so that GPS noise is not drawn as a flight."""
 
 
 def write_report(run_dir: str | Path) -> tuple[list[Path], str]:
@@ -32,21 +46,44 @@ def write_report(run_dir: str | Path) -> tuple[list[Path], str]:
         ``(paths written, summary text)``.
     """
     run = load(run_dir)
-    painters = (_track, _flight, _processing, _extra)
-    paths = []
-    for name, paint in zip(PLOTS, painters, strict=True):
-        figure = Figure(figsize=(8, 6), layout="constrained")
-        paint(run, figure)
+    paths, images = [], {}
+    figures = draw(run)
+    replayed = replay_figure(run)  # a replayed run: its vectors beside the recorded run's
+    if replayed is not None:
+        figures[REPLAY_PLOT] = replayed
+    for name, figure in figures.items():
+        buffer = io.BytesIO()
+        figure.savefig(buffer, format="png", dpi=100)
+        images[name] = buffer.getvalue()
         path = run.path / name
-        figure.savefig(path, dpi=100)
+        path.write_bytes(images[name])
         paths.append(path)
-    replay_plot = write_replay_plot(run)  # a replayed run: its vectors beside the recorded run's
-    if replay_plot is not None:
-        paths.append(replay_plot)
     text = summary(run)
     (run.path / "summary.txt").write_text(text + "\n")
-    paths.append(run.path / "summary.txt")
+    (run.path / "report.html").write_text(_html(run.path.name, text, images))
+    paths += [run.path / "summary.txt", run.path / "report.html"]
     return paths, text
+
+
+def draw(run: Dataset) -> dict[str, Figure]:
+    """Every plot of ``run``, by its file name in :data:`PLOTS`."""
+    figures = {}
+    for name, paint in zip(PLOTS, (_track, _flight, _processing, _extra), strict=True):
+        figures[name] = Figure(figsize=(8, 6), layout="constrained")
+        paint(run, figures[name])
+    return figures
+
+
+def _html(title: str, text: str, images: dict[str, bytes]) -> str:
+    """One page with everything inline: no file beside it and nothing from the network is needed."""
+    figures = "\n".join(f'<figure><img alt="{html.escape(name)}" src="data:image/png;base64,'
+                        f'{base64.b64encode(data).decode()}"><figcaption>{html.escape(name)}</figcaption></figure>'
+                        for name, data in images.items())
+    return (f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8"><title>uav-tui run {html.escape(title)}'
+            '</title>\n<style>body{font-family:sans-serif;margin:1em auto;max-width:820px}img{max-width:100%}'
+            'pre{background:#f4f4f4;padding:.6em;white-space:pre-wrap}</style></head>\n'
+            f'<body><h1>uav-tui run {html.escape(title)}</h1>\n<pre>{html.escape(text)}</pre>\n{figures}\n'
+            '</body></html>\n')
 
 
 def summary(run: Dataset) -> str:
@@ -59,7 +96,8 @@ def summary(run: Dataset) -> str:
     with_vector = int(frames["vx"].notna().sum())
     lines = [
         f"run {run.path.name}: {duration:.1f} s, processor {run.info.get('processor', {}).get('name', '?')}, "
-        f"source {run.info.get('source', {}).get('uri', '?')}, fc {run.info.get('controller', {}).get('fc', '?')}",
+        f"source {redact(str(run.info.get('source', {}).get('uri', '?')))}, "
+        f"fc {run.info.get('controller', {}).get('fc', '?')}",
         f"frames: {len(frames)} processed ({len(frames) / duration if duration else 0:.1f}/s), "
         f"{int(frames['saved'].fillna(False).sum())} saved, {int(frames['error'].notna().sum())} with errors",
         f"latency capture->result: p50 {_pct(latency, 50)} ms, p95 {_pct(latency, 95)} ms",
@@ -93,23 +131,30 @@ def _track(run: Dataset, figure: Figure) -> None:
     if track.empty:
         _nothing(ax, "no position telemetry in this run")
         return
-    points = ax.scatter(track["east_m"], track["north_m"], c=track["t_s"], cmap="viridis", s=6)
+    points = ax.scatter(track["east_m"], track["north_m"], c=track["t_s"], cmap="viridis", s=6, zorder=3)
     figure.colorbar(points, ax=ax, label="time, s")
     executed = run.frames[run.frames["decision"] == "executed"].dropna(subset=["north_m", "east_m"])
-    if len(executed):
-        ax.scatter(executed["east_m"], executed["north_m"], marker="x", color="red", s=40, label="vector executed")
+    if len(executed):  # open rings under the track: the time colours stay visible
+        ax.scatter(executed["east_m"], executed["north_m"], marker="o", facecolors="none", edgecolors="red",
+                   linewidths=0.8, s=60, zorder=2, label="vector executed")
         ax.legend(loc="best")
-    ax.set_aspect("equal", adjustable="datalim")
+    east, north = track["east_m"], track["north_m"]
+    # Square limits, at least MIN_TRACK_M wide: a vehicle that did not move is not drawn on centimetre axes.
+    half = max((east.max() - east.min()) * 1.1, (north.max() - north.min()) * 1.1, MIN_TRACK_M) / 2
+    ax.set_xlim((east.max() + east.min()) / 2 - half, (east.max() + east.min()) / 2 + half)
+    ax.set_ylim((north.max() + north.min()) / 2 - half, (north.max() + north.min()) / 2 + half)
+    ax.set_aspect("equal", adjustable="box")
     ax.grid(True, alpha=0.3)
 
 
 def _flight(run: Dataset, figure: Figure) -> None:
-    altitude, attitude = figure.subplots(2, 1, sharex=True)
+    figure.set_size_inches(8, 8)
+    altitude, attitude, velocity = figure.subplots(3, 1, sharex=True)
     telemetry = run.telemetry
-    altitude.set_title("Altitude and attitude")
+    altitude.set_title("Altitude, attitude and velocity (autonomy on: shaded)")
     altitude.set_ylabel("relative altitude, m")
     attitude.set_ylabel("degrees")
-    attitude.set_xlabel("time since start, s")
+    velocity.set_xlabel("time since start, s")
     if telemetry["rel_alt_m"].notna().any():
         altitude.plot(telemetry["t_s"], telemetry["rel_alt_m"], color="tab:blue")
     else:
@@ -123,8 +168,67 @@ def _flight(run: Dataset, figure: Figure) -> None:
         attitude.legend(loc="best")
     else:
         _nothing(attitude, "no attitude telemetry")
-    for ax in (altitude, attitude):
+    _velocity(run, velocity)
+    for start, end in autonomy_spans(run):
+        for ax in (altitude, attitude, velocity):
+            ax.axvspan(start, end, color="tab:green", alpha=0.12, linewidth=0)
+    for ax in (altitude, attitude, velocity):
         ax.grid(True, alpha=0.3)
+
+
+def _velocity(run: Dataset, ax: Axes) -> None:
+    """Body-frame velocity (forward, right): commanded vectors as segments over their duration, actual as lines."""
+    ax.set_ylabel("body velocity, m/s")
+    telemetry = run.telemetry[["t_s", "vn_ms", "ve_ms", "yaw_deg"]].dropna()
+    commanded = commanded_vectors(run)
+    if telemetry.empty and commanded.empty:
+        _nothing(ax, "no velocity telemetry and no vectors")
+        return
+    yaw = np.radians(telemetry["yaw_deg"].astype("float64"))
+    north, east = telemetry["vn_ms"].astype("float64"), telemetry["ve_ms"].astype("float64")
+    actual = {"forward": north * np.cos(yaw) + east * np.sin(yaw), "right": -north * np.sin(yaw) + east * np.cos(yaw)}
+    for (axis, values), colour in zip(actual.items(), ("tab:blue", "tab:orange"), strict=True):
+        ax.plot(telemetry["t_s"], values, color=colour, linewidth=1, label=f"{axis} actual")
+        if len(commanded):
+            ax.hlines(commanded[axis], commanded["start_s"], commanded["end_s"], colors=colour, linewidths=2.5,
+                      alpha=0.6, label=f"{axis} commanded")
+    ax.legend(loc="best", fontsize="small", ncols=2)
+
+
+def commanded_vectors(run: Dataset) -> pd.DataFrame:
+    """Every vector flown, the processor's (executed) and the operator's (``vector`` command), clamped to the
+    run's safety limits: start_s, end_s, forward, right; a vector ends after its duration or when the next one
+    replaces it."""
+    frames = run.frames[run.frames["decision"].fillna("").str.startswith("executed")]
+    proposed = [(t, (vx, vy, vt)) for t, vx, vy, vt in frames[["t_s", "vx", "vy", "vt"]].itertuples(index=False)]
+    operator = run.events[(run.events["kind"] == "command") & run.events["message"].str.match(r"vector \S+ \S+ \S+$")]
+    for t, message in operator[["t_s", "message"]].itertuples(index=False):
+        proposed.append((t, tuple(float(word) for word in message.split()[1:])))
+    try:
+        safety = SafetyConfig(**run.info.get("config", {}).get("safety", {}))
+    except TypeError:  # recorded by a version with other keys: the defaults
+        safety = SafetyConfig()
+    flown = [(t, check_vector(vector, safety)[0]) for t, vector in proposed]  # clamped as they were flown
+    rows = [(t, *vector) for t, vector in flown if vector is not None]
+    table = pd.DataFrame(rows, columns=["start_s", "forward", "right", "t"], dtype="float64").sort_values("start_s")
+    replaced = table["start_s"].shift(-1).fillna(np.inf)
+    table["end_s"] = np.minimum(table["start_s"] + table["t"], replaced)
+    return table.reset_index(drop=True)
+
+
+def autonomy_spans(run: Dataset) -> list[tuple[float, float]]:
+    """(start, end) seconds of every stretch with autonomy on (a run that ended with it on: to the end)."""
+    spans, since = [], None
+    switches = run.events[run.events["kind"] == "autonomy"]
+    for t, message in switches[["t_s", "message"]].itertuples(index=False):
+        if message == "autonomy ON" and since is None:
+            since = t
+        elif message.startswith("autonomy OFF") and since is not None:
+            spans.append((since, t))
+            since = None
+    if since is not None:
+        spans.append((since, _duration_s(run)))
+    return spans
 
 
 def _processing(run: Dataset, figure: Figure) -> None:
@@ -137,9 +241,8 @@ def _processing(run: Dataset, figure: Figure) -> None:
     if frames.empty:
         _nothing(rate, "no frames processed")
         return
-    done_s = frames["t_end_ns"].astype("float64") / 1e9
-    interval = done_s.diff().rolling(10, min_periods=1).mean()  # over the last 10 frames
-    rate.plot(frames["t_s"], 1 / interval.where(interval > 0), color="tab:blue")
+    done_s = (frames["t_end_ns"].astype("float64") - frames["t_end_ns"].min()) / 1e9
+    rate.plot(*processing_rate(frames["t_s"], done_s), color="tab:blue")
     rate.set_ylim(bottom=0)
     latency.plot(frames["t_s"], _latency_ms(frames), ".", markersize=2, label="capture -> result")
     busy = (frames["t_end_ns"] - frames["t_start_ns"]).astype("float64") / 1e6
@@ -149,20 +252,32 @@ def _processing(run: Dataset, figure: Figure) -> None:
         ax.grid(True, alpha=0.3)
 
 
+def processing_rate(t_s: pd.Series, done_s: pd.Series) -> tuple[np.ndarray, np.ndarray]:
+    """Frames finished per second over the last :data:`RATE_WINDOW_S` before each frame (from one full window
+    after the first frame on: a shorter window at the start would turn the first few frames into a spike)."""
+    done = done_s.to_numpy(dtype="float64")
+    in_window = np.arange(1, len(done) + 1) - np.searchsorted(done, done - RATE_WINDOW_S, side="right")
+    full = done >= RATE_WINDOW_S
+    return t_s.to_numpy(dtype="float64")[full], in_window[full] / RATE_WINDOW_S
+
+
 def _extra(run: Dataset, figure: Figure) -> None:
-    ax = figure.add_subplot()
-    ax.set_title("Processor fields saved with tmMgr.save")
-    ax.set_xlabel("time since start, s")
     numeric = [name for name in run.extra_columns if pd.api.types.is_numeric_dtype(run.frames[name])
                and not pd.api.types.is_bool_dtype(run.frames[name])]
     if not numeric:
+        ax = figure.add_subplot()
+        ax.set_title("Processor fields saved with tmMgr.save")
         _nothing(ax, "the processor saved no numeric fields")
         return
-    for name in numeric:
+    figure.set_size_inches(8, max(3.0, 1.6 * len(numeric) + 0.8))
+    axes = figure.subplots(len(numeric), 1, sharex=True, squeeze=False)[:, 0]
+    axes[0].set_title("Processor fields saved with tmMgr.save (each on its own scale)")
+    axes[-1].set_xlabel("time since start, s")
+    for ax, name in zip(axes, numeric, strict=True):
         rows = run.frames[["t_s", name]].dropna()
-        ax.plot(rows["t_s"], rows[name], ".-", markersize=3, linewidth=0.8, label=name)
-    ax.legend(loc="best")
-    ax.grid(True, alpha=0.3)
+        ax.plot(rows["t_s"], rows[name], ".-", markersize=3, linewidth=0.8)
+        ax.set_ylabel(name, fontsize="small")
+        ax.grid(True, alpha=0.3)
 
 
 def _latency_ms(frames: pd.DataFrame) -> pd.Series:

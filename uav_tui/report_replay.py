@@ -14,21 +14,19 @@ from matplotlib.figure import Figure
 
 from uav_tui.dataset import Dataset, compare, load
 
-PLOT = "replay.png"
+REPLAY_PLOT = "replay.png"
 BOX = ("box_x", "box_y", "box_w", "box_h")
 
 
-def write_replay_plot(run: Dataset) -> Path | None:
-    """Draw ``replay.png`` into the replayed run's folder; None when ``run`` is not a replay (or its source is gone)."""
+def replay_figure(run: Dataset) -> Figure | None:
+    """The ``replay.png`` figure of a replayed run; None when ``run`` is not a replay (or its source is gone)."""
     source = Path(run.info.get("replay_of", {}).get("run", ""))
     if not source.parts or not (source / "run.json").is_file():
         return None
     original = load(source)
     figure = Figure(figsize=(8, 8), layout="constrained")
     paint_replay(compare(original, run), figure, names=(_processor_name(original), _processor_name(run)))
-    path = run.path / PLOT
-    figure.savefig(path, dpi=100)
-    return path
+    return figure
 
 
 def paint_replay(joined: pd.DataFrame, figure: Figure, names: tuple[str, str]) -> None:

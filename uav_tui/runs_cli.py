@@ -10,7 +10,8 @@ from pathlib import Path
 from typing import Any
 
 from uav_tui.config import find_config_file, load_config
-from uav_tui.errors import KNOWN_ERRORS, UavError
+from uav_tui.errors import KNOWN_ERRORS, UavError, error_line
+from uav_tui.text import redact
 
 
 def main(name: str, argv: list[str]) -> int:
@@ -32,12 +33,13 @@ def main(name: str, argv: list[str]) -> int:
             return _report(find_run(runs_dir, args.run))
         return _list(runs_dir)
     except KNOWN_ERRORS as exc:
-        print(f"uav-tui {name}: {exc}", file=sys.stderr)
+        print(error_line(exc, f"uav-tui {name}"), file=sys.stderr)
         return 2
 
 
 def list_runs(runs_dir: Path) -> list[dict[str, Any]]:
-    """One dict per run folder under ``runs_dir``, oldest first: name, path, start, duration_s, frames, bytes."""
+    """One dict per run folder under ``runs_dir``, oldest first: name, path, start, duration_s, frames, bytes,
+    processor (as it was named), source (URI without password)."""
     found = []
     for path in sorted(p for p in runs_dir.glob("*") if (p / "run.json").is_file()):
         try:
@@ -53,7 +55,8 @@ def list_runs(runs_dir: Path) -> list[dict[str, Any]]:
             frames = max(0, _count_lines(path / "frames.csv") - 1)
         found.append({"name": path.name, "path": path, "start": info.get("start_utc", "?"),
                       "duration_s": (end - start) / 1e9 if start and end else None, "frames": frames,
-                      "bytes": sum(p.stat().st_size for p in files), "finished": "end_wall_ns" in info})
+                      "bytes": sum(p.stat().st_size for p in files), "finished": "end_wall_ns" in info,
+                      "processor": _spec(info.get("processor")), "source": redact(_spec(info.get("source"), "uri"))})
     return found
 
 
@@ -62,12 +65,13 @@ def _list(runs_dir: Path) -> int:
     if not runs:
         print(f"no recorded runs in {runs_dir}")
         return 0
-    print(f"{'run':<24} {'start (UTC)':<20} {'duration':>9} {'frames':>7} {'size':>9}")
+    print(f"{'run':<24} {'start (UTC)':<20} {'duration':>9} {'frames':>7} {'size':>9}  {'processor':<24} source")
     for run in runs:
         duration = "?" if run["duration_s"] is None else str(datetime.timedelta(seconds=round(run["duration_s"])))
         start = run["start"].replace("+00:00", "").replace("T", " ")
         note = "" if run["finished"] else "  (not closed)"
-        print(f"{run['name']:<24} {start:<20} {duration:>9} {run['frames']:>7} {run['bytes'] / 1e6:>7.1f}MB{note}")
+        print(f"{_cell(run['name'], 24):<24} {_cell(start, 20):<20} {duration:>9} {run['frames']:>7} "
+              f"{run['bytes'] / 1e6:>7.1f}MB  {_cell(run['processor'], 24):<24} {_cell(run['source'], 40)}{note}")
     return 0
 
 
@@ -92,6 +96,19 @@ def _report(run_dir: Path) -> int:
     for path in paths:
         print(f"wrote {path}")
     return 0
+
+
+def _spec(part: Any, key: str = "spec") -> str:
+    """What the user named (``template``, ``mine.py:Mine``, ``usb:0``) from a ``run.json`` section."""
+    if not isinstance(part, dict):
+        return "?"
+    return str(part.get(key) or part.get("name") or "?")
+
+
+def _cell(text: str, width: int) -> str:
+    """``text`` safe for a terminal (no control characters) and at most ``width`` characters."""
+    text = "".join(c if c.isprintable() else "?" for c in str(text))
+    return text if len(text) <= width else text[: width - 1] + "…"
 
 
 def _count_lines(path: Path) -> int:

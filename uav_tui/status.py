@@ -31,6 +31,8 @@ class CoreStatus:
     vectors_rejected: int
     recording: dict[str, Any] = field(default_factory=dict)
     """Run folder, frames saved, rows written, drops (empty when recording is off)."""
+    startup_s: float | None = None
+    """Seconds from the process start to the first processed frame (None before it)."""
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready form (for ``--json`` and the web page)."""

@@ -8,7 +8,7 @@ import signal
 import sys
 from collections.abc import Sequence
 
-from controllers.sim.geo import Home
+from controllers.sim.geo import Home, parse_wind
 from controllers.sim.physics import PhysicsConfig
 from controllers.sim.vehicle import ServerConfig, SimVehicleServer
 
@@ -16,10 +16,10 @@ logger = logging.getLogger(__name__)
 
 
 def _pair(text: str) -> tuple[float, float]:
-    parts = text.split(",")
-    if len(parts) != 2:
-        raise argparse.ArgumentTypeError(f"expected N,E got {text!r}")
-    return float(parts[0]), float(parts[1])
+    try:
+        return parse_wind(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from exc
 
 
 def _home(text: str) -> Home:
@@ -101,7 +101,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         server = SimVehicleServer(config_from_args(args))
     except OSError as exc:
-        print(f"uav-tui sim: cannot open the truth port {args.truth_port}: {exc}", file=sys.stderr)
+        print(f"uav-tui sim: error: cannot start the simulated vehicle: {exc}", file=sys.stderr)
         return 2
     previous = {sig: signal.signal(sig, lambda *_: server.stop()) for sig in (signal.SIGTERM, signal.SIGINT)}
     try:

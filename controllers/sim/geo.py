@@ -46,3 +46,14 @@ class Home:
         north = math.radians(lat - self.lat_deg) * EARTH_RADIUS_M
         east = math.radians(lon - self.lon_deg) * EARTH_RADIUS_M * math.cos(math.radians(self.lat_deg))
         return north, east, self.alt_m - alt
+
+
+def parse_wind(text: str) -> tuple[float, float]:
+    """``"N,E"`` in m/s -> (north, east); ValueError when it is not two finite numbers."""
+    parts = text.split(",")
+    if len(parts) != 2:
+        raise ValueError(f"wind must be N,E (m/s), got {text!r}")
+    north, east = (float(part) for part in parts)
+    if not (math.isfinite(north) and math.isfinite(east)):
+        raise ValueError(f"wind must be finite, got {text!r}")
+    return north, east

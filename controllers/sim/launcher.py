@@ -43,7 +43,8 @@ class SimVehicle:
         home: where the vehicle boots (default: PX4 SITL's Zurich home).
         wind: steady wind (north, east) in m/s.
         seed: random seed for the noise.
-        extra_args: more ``python -m controllers.sim`` options, e.g. ``("--noise",)``.
+        noise: add sensor noise to the telemetry.
+        extra_args: more ``python -m controllers.sim`` options, e.g. ``("--rtl-alt", "20")``.
     """
 
     def __init__(
@@ -52,11 +53,12 @@ class SimVehicle:
         wind: tuple[float, float] | None = None,
         seed: int = 0,
         extra_args: Sequence[str] = (),
+        noise: bool = False,
     ) -> None:
         self.home = Home(*home) if isinstance(home, tuple) else (home or Home())
         self.wind = wind or (0.0, 0.0)
         self.seed = seed
-        self.extra_args = tuple(extra_args)
+        self.extra_args = (*(("--noise",) if noise else ()), *extra_args)
         self.mavlink_port = 0
         self.truth_port = 0
         self._proc: subprocess.Popen[bytes] | None = None

@@ -53,7 +53,10 @@ class MavlinkLink:
         self._sock.bind((host, 0))
         self._sock.settimeout(0.2)
         if sys.platform.startswith("linux"):
-            self._sock.setsockopt(socket.SOL_SOCKET, _SO_TIMESTAMPNS, 1)
+            try:
+                self._sock.setsockopt(socket.SOL_SOCKET, _SO_TIMESTAMPNS, 1)
+            except OSError as exc:  # e.g. ENOPROTOOPT under an emulator: stamp datagrams when read instead
+                logger.info("no kernel receive timestamps (%s); arrival time is the time of reading", exc)
         self._tx = mavlink.MAVLink(None, srcSystem=SYSTEM_ID, srcComponent=COMPONENT_ID)
         self._rx = mavlink.MAVLink(None)
         self._rx.robust_parsing = True

@@ -80,7 +80,11 @@ class TruthServer:
     def __init__(self, server: SimVehicleServer, port: int) -> None:
         self.s = server
         self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        self.sock.bind(("127.0.0.1", port))
+        try:
+            self.sock.bind(("127.0.0.1", port))
+        except OSError as exc:
+            self.sock.close()
+            raise OSError(exc.errno, f"cannot open the truth port {port}: {exc.strerror}") from exc
         self.sock.settimeout(0.2)
         self.port = self.sock.getsockname()[1]
         self._subscribers: dict[tuple[str, int], None] = {}

@@ -52,7 +52,8 @@ def test_processor_import_error_says_file_line_and_what_is_missing(tmp_path: Pat
     (tmp_path / "mine.py").write_text("import numpy\nimport missing_dependency\n")
     result = uav("--no-ui", "--duration", "1", "--processor", "mine.py:Mine", cwd=tmp_path)
     assert result.returncode == 2
-    assert "mine.py:2" in result.stdout and "missing_dependency" in result.stdout
+    assert result.stderr.startswith("uav-tui: error: ") and "mine.py:2" in result.stderr
+    assert "missing_dependency" in result.stderr
 
 
 def test_vehicle_command_without_a_vehicle_fails_the_script_clearly(tmp_path: Path) -> None:
@@ -63,7 +64,7 @@ def test_vehicle_command_without_a_vehicle_fails_the_script_clearly(tmp_path: Pa
                  "--runs-dir", str(tmp_path / "runs"), cwd=tmp_path)
     assert result.returncode == 1
     assert "button 1" in result.stdout
-    assert "script line 2 (arm) failed" in result.stdout and "--fc sim" in result.stdout
+    assert result.stderr.startswith("uav-tui: error: script line 2 (arm) failed") and "--fc sim" in result.stderr
 
 
 @pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGINT, signal.SIGHUP], ids=["TERM", "INT", "HUP"])

@@ -46,8 +46,8 @@ def circle_run(tmp_path):
 
 def test_report_writes_every_plot_and_a_summary(circle_run):
     paths, text = write_report(circle_run)
-    assert [p.name for p in paths] == [*PLOTS, "summary.txt"]
-    for path in paths[:-1]:
+    assert [p.name for p in paths] == [*PLOTS, "summary.txt", "report.html"]
+    for path in paths[:len(PLOTS)]:
         data = path.read_bytes()
         assert data.startswith(b"\x89PNG") and len(data) > 15_000, path.name
     assert "frames: 40 processed" in text and "40 saved" in text

@@ -23,7 +23,7 @@ from uav_tui.commands import Command
 from uav_tui.config import Config
 from uav_tui.core import CoreState, UavCore
 from uav_tui.events import EventLog
-from uav_tui.headless import EXIT_SCRIPT_FAILED, run_script
+from uav_tui.headless import EXIT_SCRIPT_FAILED, run_script, saved_run_note
 from uav_tui.tui._terminal import CHECK_PERIOD_S, TerminalWatch, driver_for
 from uav_tui.tui.app import LOG_ORIGIN, UavApp
 
@@ -45,6 +45,10 @@ def run_tui(config: Config, *, duration: float | None = None, script: list[tuple
         return asyncio.run(session.run())
     except KeyboardInterrupt:
         return 130
+    finally:
+        if note := saved_run_note(session.core):
+            with contextlib.suppress(OSError):  # the terminal may be gone (SIGHUP)
+                print(note, flush=True)
 
 
 class TuiSession:

@@ -15,7 +15,7 @@ from textual.driver import Driver
 
 from uav_tui.commands import VEHICLE_COMMANDS, parse
 from uav_tui.core import CoreState, UavCore
-from uav_tui.errors import KNOWN_ERRORS, CommandError
+from uav_tui.errors import KNOWN_ERRORS, CommandError, error_line
 from uav_tui.events import Event
 from uav_tui.headless import EXIT_UNHANDLED_ERROR
 from uav_tui.status import CoreStatus
@@ -159,7 +159,7 @@ class UavApp(App[None]):
 
     def _start_failed(self, reason: str) -> None:
         self.start_error = reason
-        self.exit(return_code=2, message=safe(f"uav-tui: cannot start: {reason}", multiline=True))
+        self.exit(return_code=2, message=safe(error_line(f"cannot start: {reason}"), multiline=True))
 
     async def _watch_quit(self) -> None:
         await self.core.quit_requested.wait()

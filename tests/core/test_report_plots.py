@@ -1,0 +1,106 @@
+"""What the report's plots show: each extra field on its own scale, the track under its markers and on metre
+axes, commanded vs actual velocity with autonomy spans, a processing rate without a start-up spike, and
+one self-contained report.html."""
+
+from __future__ import annotations
+
+import base64
+import re
+import time
+
+import numpy as np
+import pandas as pd
+import pytest
+from matplotlib.collections import LineCollection, PathCollection
+from matplotlib.patches import Rectangle
+
+from uav_tui import dataset
+from uav_tui.config import RecordingConfig
+from uav_tui.recording import Recorder
+from uav_tui.report import PLOTS, autonomy_spans, draw, processing_rate, write_report
+
+from .recorder_fakes import FakeCore
+
+
+def _frame(core: FakeCore, i: int, result) -> None:
+    core.telemetry.save(result.frame.image, offset_m=0.001 * (i % 3), inliers=240 + i)
+    result.vector = (0.6, -0.2, 0.5) if i % 5 == 0 else None
+    result.decision = "executed" if result.vector else "no vector"
+
+
+@pytest.fixture
+def hover_run(tmp_path):
+    """A vehicle hovering in place (millimetre noise), heading east, autonomy on in the middle of the run;
+    max_speed 0.5 m/s."""
+    core = FakeCore()
+    info = {"processor": {"name": "hover"}, "config": {"safety": {"max_speed": 0.5}},
+            "source": {"uri": "rtsp://pilot:secret@192.0.2.1/cam"}}
+    recorder = Recorder.open(RecordingConfig(runs_dir=str(tmp_path)), info, telemetry_expected=True)
+    recorder.attach(core)
+    image = np.zeros((48, 64, 3), np.uint8)
+    for i in range(60):
+        if i == 15:
+            core.events.emit("info", "autonomy", "autonomy ON", "tui")
+        if i == 45:
+            core.events.emit("info", "autonomy", "autonomy OFF: operator", "tui")
+        core.telemetry.apply({"north_m": 3.0 + 0.002 * (i % 2), "east_m": -1.0, "down_m": -5.0, "rel_alt_m": 5.0,
+                              "vn_ms": 0.0, "ve_ms": 0.5, "yaw_deg": 90.0, "in_air": True})
+        time.sleep(0.004)
+        core.process(image, i, lambda result, i=i: _frame(core, i, result))
+    recorder.close()
+    return recorder.run_dir
+
+
+def test_each_extra_field_gets_its_own_axis(hover_run):
+    axes = draw(dataset.load(hover_run))["extra.png"].axes
+    assert [ax.get_ylabel() for ax in axes] == ["offset_m", "inliers"]
+    low, high = axes[0].get_ylim()
+    assert high - low < 0.01  # millimetres are not flattened by the inliers' scale of ~250
+
+
+def test_track_markers_leave_the_track_visible_and_a_hover_is_drawn_in_metres(hover_run):
+    ax = draw(dataset.load(hover_run))["track.png"].axes[0]
+    track, executed = (c for c in ax.collections if isinstance(c, PathCollection))
+    assert executed.get_label() == "vector executed"
+    assert executed.get_zorder() < track.get_zorder()
+    assert executed.get_facecolors().size == 0 or not executed.get_facecolors()[:, 3].any()  # open rings
+    for low, high in (ax.get_xlim(), ax.get_ylim()):
+        assert high - low == pytest.approx(2.0)  # 2 mm of noise is not stretched over the whole plot
+    assert ax.get_xlim()[0] < -1.0 < ax.get_xlim()[1] and ax.get_ylim()[0] < 3.0 < ax.get_ylim()[1]
+
+
+def test_flight_shows_commanded_and_actual_velocity_and_autonomy_spans(hover_run):
+    run = dataset.load(hover_run)
+    altitude, _, velocity = draw(run)["flight.png"].axes[:3]
+    lines = {line.get_label(): line for line in velocity.get_lines()}
+    # heading east at 0.5 m/s north-east frame: forward 0.5, right 0
+    assert np.allclose(lines["forward actual"].get_ydata(), 0.5) and np.allclose(lines["right actual"].get_ydata(), 0)
+    commanded = {c.get_label(): c for c in velocity.collections if isinstance(c, LineCollection)}
+    forward = np.array([segment[0][1] for segment in commanded["forward commanded"].get_segments()])
+    right = np.array([segment[0][1] for segment in commanded["right commanded"].get_segments()])
+    assert len(forward) == 12 and np.allclose(right, -0.2)
+    assert np.allclose(forward, 0.5)  # proposed 0.6, flown as clamped to the run's max_speed
+    (start, end), = autonomy_spans(run)
+    events = run.events[run.events.kind == "autonomy"].t_s.to_numpy()
+    assert (start, end) == (events[0], events[1])
+    shaded = [patch for patch in altitude.patches if isinstance(patch, Rectangle)]
+    assert len(shaded) == 1 and shaded[0].get_x() == pytest.approx(start)
+
+
+def test_processing_rate_has_no_start_up_spike():
+    done = np.concatenate([[0.0, 0.0005, 0.001, 0.0015], 0.002 + np.arange(1, 120) / 30])  # a burst, then 30 FPS
+    t_s = pd.Series(done + 2.0)
+    _, rate = processing_rate(t_s, pd.Series(done))
+    assert len(rate) and rate.max() <= 34 and np.median(rate) == pytest.approx(30, abs=1)
+
+
+def test_report_html_is_one_self_contained_page(hover_run):
+    paths, text = write_report(hover_run)
+    assert [p.name for p in paths] == [*PLOTS, "summary.txt", "report.html"]
+    page = (hover_run / "report.html").read_text()
+    images = re.findall(r'src="data:image/png;base64,([^"]+)"', page)
+    assert [base64.b64decode(image) for image in images] == [(hover_run / name).read_bytes() for name in PLOTS]
+    assert text.splitlines()[0].replace("->", "-&gt;") in page
+    assert "rtsp://pilot:***@192.0.2.1/cam" in page and "secret" not in page  # safe to copy off the drone
+    assert not re.search(r'(src|href)="(?!data:)', page) and "http" not in page.replace(
+        "".join(images), "")  # nothing fetched from anywhere
