@@ -168,3 +168,13 @@ def test_the_replay_command_names_the_new_run_and_explains_bad_input(flight, tmp
     with pytest.raises(SystemExit):
         main(["replay", flight.name, "--runs-dir", runs, "--speed", "fast"])
     assert "--speed: speed must be a positive number or 'max'" in capsys.readouterr().err
+
+
+def test_a_paced_replay_shows_recorded_frames_at_their_recorded_times(flight, tmp_path):
+    result = _replay(flight, BRIGHTNESS, tmp_path, speed="8")
+    index = pd.read_csv(flight / "video.csv", dtype={"video_frame": "Int64"})
+    recorded = set(index.loc[index["video_frame"].notna(), "t_mono_ns"])
+    frames = dataset.load(result.replay).frames
+    assert len(frames) > 20 and set(frames["t_mono_ns"]) <= recorded  # a slow processor may skip some
+    assert frames["t_mono_ns"].is_monotonic_increasing
+    assert frames["decision"].str.startswith("executed").any()  # autonomy was on for part of the flight
