@@ -5,6 +5,7 @@ address                              controller
 ==================================  ==========================================================
 ``none``                             no vehicle (returns None)
 ``sim``                              the built-in simulated vehicle, started and stopped with it
+``replay:RUN[?speed=S|max]``         the recorded vehicle of a run folder (:mod:`controllers.replay`)
 anything else                        :class:`controllers.mavsdk_controller.MavsdkController`
 ==================================  ==========================================================
 
@@ -45,6 +46,10 @@ async def connect_controller(address: str, *, heartbeat_timeout: float = 10.0,
         from controllers.sim_controller import start_sim_controller
 
         return await start_sim_controller(heartbeat_timeout=heartbeat_timeout, **(sim_vehicle or {}))
+    if key.startswith("replay:"):
+        from controllers.replay import ReplayController
+
+        return ReplayController.open(address)
     from controllers.mavsdk_controller import MavsdkController
 
     controller = MavsdkController()

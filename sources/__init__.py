@@ -24,6 +24,7 @@ SCHEMES: dict[str, str] = {
     "http": "sources.network:NetworkSource",
     "https": "sources.network:NetworkSource",
     "sim": "sources.sim_camera:SimCameraSource",
+    "run": "sources.run:RunSource",
 }
 """URI scheme -> ``module:Class``. Each class has ``from_uri(SourceUri, **context)``."""
 

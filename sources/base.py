@@ -43,6 +43,7 @@ class CaptureSource:
         _open_device()   open the device, set width/height/fps; raise SourceError with advice
         _grab()          block for the next frame; None when the read failed
         _close_device()  release the device (called once per successful open)
+        _capture_times() the recorded capture times of the grabbed image (replays only)
         _extra_properties()  source-specific entries for get_properties()
 
     A failed ``_grab`` marks the source stalled, closes the device and reopens it with back-off
@@ -141,6 +142,10 @@ class CaptureSource:
     def _close_device(self) -> None:
         """Release the device; nothing by default."""
 
+    def _capture_times(self) -> tuple[int | None, int | None]:
+        """(monotonic, wall) ns of the image ``_grab`` just returned; None: now (a replay returns recorded ones)."""
+        return None, None
+
     def _extra_properties(self) -> dict[str, Any]:
         return {}
 
@@ -158,7 +163,7 @@ class CaptureSource:
                     break
                 if image is not None:
                     self.stalled_since = None
-                    self.buffer.put(image)
+                    self.buffer.put(image, *self._capture_times())
                 else:
                     self._recover(reason)
         finally:

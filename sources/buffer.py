@@ -50,9 +50,12 @@ class FrameBuffer:
         self.overwritten = 0
         """Frames replaced before any reader took them."""
 
-    def put(self, image: np.ndarray) -> Frame:
-        """Stamp ``image`` with the next sequence number and the capture times, and publish it."""
-        t_mono, t_wall = time.monotonic_ns(), time.time_ns()
+    def put(self, image: np.ndarray, t_mono_ns: int | None = None, t_wall_ns: int | None = None) -> Frame:
+        """Stamp ``image`` with the next sequence number and the capture times, and publish it.
+
+        A replaying source passes the recorded capture times; live sources let the buffer take them now.
+        """
+        t_mono, t_wall = t_mono_ns or time.monotonic_ns(), t_wall_ns or time.time_ns()
         with self._cond:
             if self._frame is not None and self._frame.seq > self._read_seq:
                 self.overwritten += 1

@@ -12,6 +12,7 @@ from __future__ import annotations
 import asyncio
 import logging
 import math
+import time
 from collections.abc import Callable
 from numbers import Real
 from typing import Any
@@ -85,6 +86,8 @@ class AutonomyGate:
         self._wake = asyncio.Event()
         self._flown = False
         """A vector was sent since autonomy was last switched on."""
+        self.clock: Callable[[], int] = time.monotonic_ns
+        """Monotonic ns that frame ages are measured against (a replay's recorded clock in a replay)."""
 
     def enable(self, origin: str) -> None:
         if self.controller is None:
@@ -140,8 +143,9 @@ class AutonomyGate:
         age = self.controller.heartbeat_age_s()
         if age >= self.safety.link_timeout:
             return f"not executed: link lost (heartbeat {age:.1f} s old)"
-        if result.frame.age_s >= self.safety.max_frame_age:
-            return f"not executed: frame {result.frame.age_s:.2f} s old"
+        frame_age_s = (self.clock() - result.frame.t_mono_ns) / 1e9
+        if frame_age_s >= self.safety.max_frame_age:
+            return f"not executed: frame {frame_age_s:.2f} s old"
         return ""
 
     async def run(self) -> None:

@@ -1,7 +1,8 @@
 """The ``uav-tui`` command: run the platform (TUI or ``--no-ui``) and its tools.
 
 ``uav-tui [options]`` runs; ``uav-tui sim`` starts the simulated vehicle on its own;
-``uav-tui runs`` lists recorded runs; ``uav-tui report [RUN]`` draws a run's plots.
+``uav-tui runs`` lists recorded runs; ``uav-tui report [RUN]`` draws a run's plots; ``uav-tui replay RUN...``
+replays recorded runs through a processor.
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ from uav_tui.config import add_config_flags, find_config_file, load_config, over
 from uav_tui.errors import CONFIG_ERRORS, error_line
 from uav_tui.text import SafeFormatter, safe
 
-TOOLS = ("sim", "runs", "report")
+TOOLS = ("sim", "runs", "report", "replay")
 """Sub-commands; anything else on the command line configures a run."""
 
 
@@ -25,8 +26,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="uav-tui",
         description="Camera -> your algorithm -> flight controller, with an operator dashboard.",
-        epilog=f"tools: uav-tui sim | runs | report [RUN] (each has --help)\n\ncommands (keys, --script, web):\n"
-               f"{help_text()}",
+        epilog=f"tools: uav-tui sim | runs | report [RUN] | replay RUN... (each has --help)\n\n"
+               f"commands (keys, --script, web):\n{help_text()}",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("--config", metavar="PATH", help="TOML file (default: $UAV_TUI_CONFIG, ./uav.toml, "
@@ -84,6 +85,10 @@ def _run_tool(name: str, argv: list[str]) -> int:
         from controllers.sim.__main__ import main as sim_main
 
         return sim_main(argv)
+    if name == "replay":
+        from uav_tui.replay.cli import main as replay_main
+
+        return replay_main(argv)
     from uav_tui import runs_cli
 
     return runs_cli.main(name, argv)

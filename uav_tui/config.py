@@ -69,6 +69,8 @@ class RecordingConfig:
 
     record: bool = _key("record the run (telemetry, frames, events)", default=True)
     runs_dir: str = _key("folder that holds one sub-folder per run", default="runs")
+    record_video: bool = _key("record the camera stream as one video with an index (video.ts, video.csv)",
+                              default=True)
     record_every: int = _key("also save every Nth raw frame (0 = only frames the processor saves)", minimum=0,
                              maximum=100000, default=0)
     jpeg_quality: int = _key("JPEG quality of saved frames", minimum=10, maximum=100, default=90)

@@ -18,6 +18,7 @@ import psutil
 
 from controllers import connect_controller
 from controllers.base import FlightController
+from controllers.replay_timeline import ReplayTimeline
 from processors import load_processor
 from sources import CameraSource, open_source, warm_up_source
 from uav_tui.autonomy import AutonomyGate
@@ -27,6 +28,8 @@ from uav_tui.errors import KNOWN_ERRORS, NoVehicle, SourceError, UavError
 from uav_tui.events import EventLog, Repeats
 from uav_tui.operations import Operations
 from uav_tui.recording import Recorder, describe
+from uav_tui.replay.gate import ReplayGate
+from uav_tui.replay.operator import CommandReplay, recorded_commands
 from uav_tui.status import CoreStatus
 from uav_tui.telemetry import TelemetryManager
 from uav_tui.text import shorten
@@ -63,6 +66,8 @@ class UavCore:
         self.worker: ProcessorWorker | None = None
         self.recorder: Recorder | None = None
         """Writes the run's dataset (None with ``--no-record``)."""
+        self.replay: ReplayTimeline | None = None
+        """Where a replay is on the recorded clock (``--fc replay:RUN``), else None."""
         self.quit_requested = asyncio.Event()
         """Set by the ``quit`` command; the interface that runs the core then stops it."""
         self.processor_error: str | None = None
@@ -102,6 +107,12 @@ class UavCore:
             self.controller = await connect_controller(self.config.fc, heartbeat_timeout=self.config.connect_timeout,
                                                        sim_vehicle=self.config.sim.vehicle())
             self.telemetry = TelemetryManager(self.controller)
+            self.replay = getattr(self.controller, "timeline", None)
+            if self.replay is not None:
+                self.gate = ReplayGate(self.config.safety, self.telemetry, self.events, self.controller)
+                self.add_frame_listener(lambda result: self.replay.frame_done())
+                commands = recorded_commands(self.controller.run_dir / "events.csv")  # type: ignore[attr-defined]
+                self.replay.before_show = CommandReplay(self, loop, commands).before_show
             self.gate.telemetry, self.gate.controller = self.telemetry, self.controller
             processor.instance.tmMgr = self.telemetry
             await camera_ready
@@ -110,7 +121,8 @@ class UavCore:
             if self.config.recording.record:
                 self.recorder = await loop.run_in_executor(None, functools.partial(
                     Recorder.open, self.config.recording, describe(self),
-                    telemetry_expected=self.controller is not None, started_wall_ns=self.started_wall_ns))
+                    telemetry_expected=self.controller is not None, started_wall_ns=self.started_wall_ns,
+                    replayed=self.replay is not None))
                 self.recorder.attach(self)
             else:
                 self.telemetry.saver = self._save_without_recording
@@ -234,7 +246,7 @@ class UavCore:
 
     def _newest_frame_age(self) -> float | None:
         frame = self.source.buffer.peek() if self.source is not None else None
-        return None if frame is None else frame.age_s
+        return None if frame is None else (self.gate.clock() - frame.t_mono_ns) / 1e9
 
     async def open_source(self, uri: str) -> CameraSource:
         """Open the camera ``uri`` names (in a thread: opening can block), with the sim vehicle's pose for sim:."""
@@ -244,6 +256,8 @@ class UavCore:
             if sim is None:
                 raise SourceError("the sim: camera renders the simulated vehicle's view: use it with --fc sim")
             context["pose_provider"] = sim.truth().latest
+        if uri.startswith("run:") and self.replay is not None:
+            context["timeline"] = self.replay
         return await asyncio.get_running_loop().run_in_executor(None, functools.partial(open_source, uri, **context))
 
     # -- commands --------------------------------------------------------------------------------

@@ -9,6 +9,9 @@ Example::
     run.telemetry.plot(x="east_m", y="north_m")
     saved = run.frames[run.frames.saved]          # rows whose image is in run.path / saved.image
 
+    both = dataset.compare("runs/<flight>", "runs/<its replay>")   # the same frames, side by side
+    both[["t_s_a", "vx_a", "vx_b", "decision_a", "decision_b"]]
+
 Every table is indexed by capture / receive time (a UTC ``DatetimeIndex`` named ``time``, from the
 wall clock) and has ``t_s``, seconds since the run started on the monotonic clock (use it to compare
 rows: the wall clock may be stepped by NTP). Nanosecond columns are ``Int64``, flags ``boolean``,
@@ -126,3 +129,21 @@ def _index(table: pd.DataFrame, start_mono_ns: int) -> pd.DataFrame:
     wall = table["t_wall_ns"].fillna(0).to_numpy(dtype="int64")
     table.index = pd.DatetimeIndex(pd.to_datetime(wall, unit="ns", utc=True), name="time")
     return table
+
+
+def compare(run_a: str | Path | Dataset, run_b: str | Path | Dataset, *, how: str = "inner") -> pd.DataFrame:
+    """The frames two runs of the same flight share (a flight and its replays), joined on capture time.
+
+    Every frames column appears twice, with the suffix ``_a`` (from ``run_a``) and ``_b``, except
+    ``t_mono_ns``, the capture time both rows carry; the index is ``run_a``'s time. ``how="outer"``
+    keeps frames only one run processed (a paced replay skips frames a slow processor could not take).
+    """
+    frames_a, frames_b = (_as_dataset(run).frames for run in (run_a, run_b))
+    left = frames_a.add_suffix("_a").rename(columns={"t_mono_ns_a": "t_mono_ns"})
+    right = frames_b.add_suffix("_b").rename(columns={"t_mono_ns_b": "t_mono_ns"}).reset_index(drop=True)
+    joined = left.reset_index().merge(right, on="t_mono_ns", how=how, validate="one_to_one")
+    return joined.set_index("time").sort_values("t_mono_ns")
+
+
+def _as_dataset(run: str | Path | Dataset) -> Dataset:
+    return run if isinstance(run, Dataset) else load(run)

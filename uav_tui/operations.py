@@ -101,6 +101,8 @@ class Operations:
         assert core.worker is not None
         new = await core.open_source(uri)
         old, core.source = core.source, new
+        if core.recorder is not None:
+            core.recorder.watch(new)
         core.worker.attach(new.buffer)
         if old is not None:
             await asyncio.get_running_loop().run_in_executor(None, old.close)

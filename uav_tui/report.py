@@ -24,6 +24,7 @@ from matplotlib.figure import Figure
 from uav_tui.autonomy import check_vector
 from uav_tui.config import SafetyConfig
 from uav_tui.dataset import Dataset, load
+from uav_tui.report_replay import REPLAY_PLOT, replay_figure
 from uav_tui.text import redact
 
 logger = logging.getLogger(__name__)
@@ -46,7 +47,11 @@ def write_report(run_dir: str | Path) -> tuple[list[Path], str]:
     """
     run = load(run_dir)
     paths, images = [], {}
-    for name, figure in draw(run).items():
+    figures = draw(run)
+    replayed = replay_figure(run)  # a replayed run: its vectors beside the recorded run's
+    if replayed is not None:
+        figures[REPLAY_PLOT] = replayed
+    for name, figure in figures.items():
         buffer = io.BytesIO()
         figure.savefig(buffer, format="png", dpi=100)
         images[name] = buffer.getvalue()

@@ -30,7 +30,7 @@ def main(name: str, argv: list[str]) -> int:
     try:
         runs_dir = Path(args.runs_dir or load_config(find_config_file(args.config)).recording.runs_dir).expanduser()
         if name == "report":
-            return _report(_find_run(runs_dir, args.run))
+            return _report(find_run(runs_dir, args.run))
         return _list(runs_dir)
     except KNOWN_ERRORS as exc:
         print(error_line(exc, f"uav-tui {name}"), file=sys.stderr)
@@ -75,7 +75,8 @@ def _list(runs_dir: Path) -> int:
     return 0
 
 
-def _find_run(runs_dir: Path, name: str | None) -> Path:
+def find_run(runs_dir: Path, name: str | None) -> Path:
+    """The run folder ``name`` names (a path, or a name under ``runs_dir``); the newest run for None."""
     if name is None:
         runs = list_runs(runs_dir)
         if not runs:

@@ -20,7 +20,8 @@ Saver = Callable[[Any, dict[str, Any]], None]
 
 _FIELDS = frozenset(TELEMETRY_FIELDS)
 _UPDATABLE = _FIELDS - {"t_mono_ns", "t_wall_ns", "heartbeat_age_s"}
-"""Fields a controller update may set; receive stamps and heartbeat age are set here."""
+"""Fields a controller update may set; receive stamps and heartbeat age are set here (a replayed
+update brings its recorded receive stamps)."""
 
 
 class TelemetryManager:
@@ -78,8 +79,8 @@ class TelemetryManager:
             self._latest = dataclasses.replace(
                 self._latest,
                 **known,
-                t_mono_ns=time.monotonic_ns(),
-                t_wall_ns=time.time_ns(),
+                t_mono_ns=update.get("t_mono_ns") or time.monotonic_ns(),
+                t_wall_ns=update.get("t_wall_ns") or time.time_ns(),
                 heartbeat_age_s=self._heartbeat_age(),
             )
             latest = self._latest

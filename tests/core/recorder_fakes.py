@@ -25,6 +25,7 @@ class FakeCore:
         self.events = EventLog()
         self.telemetry = TelemetryManager(None)
         self.worker = _Worker()
+        self.source = None
         self._listeners: list[Callable[[ProcessedFrame], None]] = []
 
     def add_frame_listener(self, listener: Callable[[ProcessedFrame], None]) -> None:

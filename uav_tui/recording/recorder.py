@@ -39,10 +39,20 @@ from uav_tui.recording.rows import (
     image_name,
 )
 from uav_tui.recording.run_info import new_run_dir, write_json
+from uav_tui.recording.video import (
+    INDEX_COLUMNS,
+    INDEX_TABLE,
+    FrameLink,
+    VideoDrop,
+    VideoFrame,
+    VideoStage,
+    describe_video,
+)
 from uav_tui.recording.writer import MB, DiskWriter, Rename
 from uav_tui.worker import ProcessedFrame
 
 if TYPE_CHECKING:
+    from sources import CameraSource, Frame
     from uav_tui.core import UavCore
 
 logger = logging.getLogger(__name__)
@@ -68,10 +78,12 @@ class Recorder:
         info: what ``run.json`` says about the run (config, versions, source, processor, controller).
         telemetry_expected: False without a flight controller: frame rows need not wait for telemetry.
         writer_factory: builds the writer (default :class:`DiskWriter`; tests pass a throttled one).
+        replayed: the run replays a recorded one: rows follow the recorded clock (see :class:`FrameAligner`).
     """
 
     def __init__(self, run_dir: Path, config: RecordingConfig, info: dict[str, Any], *,
-                 telemetry_expected: bool, writer_factory: Callable[..., DiskWriter] | None = None) -> None:
+                 telemetry_expected: bool, writer_factory: Callable[..., DiskWriter] | None = None,
+                 replayed: bool = False) -> None:
         self.run_dir = run_dir
         self.config = config
         self.info = info
@@ -85,10 +97,17 @@ class Recorder:
         self._provisional = itertools.count(1)
         self._saves: dict[int, _Save] = {}
         self._last: tuple[ProcessedFrame, int] | None = None
+        self._watched: CameraSource | None = None
+        aligner = FrameAligner(telemetry_expected=telemetry_expected, run_dir=run_dir, recorded_clock=replayed)
+        tables = {**TABLES, INDEX_TABLE: INDEX_COLUMNS} if config.record_video else TABLES
         self.writer = (writer_factory or DiskWriter)(
-            run_dir, TABLES, stage=FrameAligner(telemetry_expected=telemetry_expected, run_dir=run_dir),
-            jpeg_quality=config.jpeg_quality, max_disk_bytes=int(config.max_disk_mb * MB),
-            min_free_bytes=int(config.min_free_mb * MB), on_problem=self._problem)
+            run_dir, tables, stages=[aligner], jpeg_quality=config.jpeg_quality,
+            max_disk_bytes=int(config.max_disk_mb * MB), min_free_bytes=int(config.min_free_mb * MB),
+            on_problem=self._problem)
+        self.video = VideoStage(self.writer) if config.record_video else None
+        """Encodes the camera stream into ``video.ts`` (None when ``record_video`` is off)."""
+        if self.video is not None:
+            self.writer.stages.append(self.video)
 
     @classmethod
     def open(cls, config: RecordingConfig, info: dict[str, Any], *, telemetry_expected: bool,
@@ -104,6 +123,8 @@ class Recorder:
             (run_dir / "frames").mkdir()
             (run_dir / PENDING).mkdir()
             info = {**info, "start_wall_ns": started, "start_mono_ns": time.monotonic_ns()}
+            if config.record_video:
+                info["video"] = describe_video()
             recorder = cls(run_dir, config, info, telemetry_expected=telemetry_expected, **kwargs)
             write_json(run_dir / "run.json", recorder.info)
         except OSError as exc:
@@ -124,6 +145,27 @@ class Recorder:
             self.on_event(event)
         core.events.add_listener(self.on_event)
         core.add_frame_listener(self.on_frame)
+        if core.source is not None:
+            self.watch(core.source)
+
+    def watch(self, source: CameraSource) -> None:
+        """Record ``source``'s frames into the video from now on (the camera was switched). Call it before
+        the processor worker attaches to the source, so each frame is copied before it may be drawn on."""
+        if self.video is None:
+            return
+        if self._watched is not None:
+            self._watched.buffer.remove_listener(self._on_capture)
+        self._watched = source
+        source.buffer.add_listener(self._on_capture)
+
+    # -- capture thread --------------------------------------------------------------------------
+
+    def _on_capture(self, frame: Frame) -> None:
+        """Queue a copy of the frame as captured, before the processor can draw on it (~0.1 ms at 640x480)."""
+        reason = self.writer.put_pixels(VideoFrame(frame.image, frame.seq, frame.t_mono_ns, frame.t_wall_ns),
+                                        copy=True)
+        if reason is not None and reason != "closed":
+            self.writer.put(VideoDrop(frame.seq, frame.t_mono_ns, frame.t_wall_ns, reason))
 
     # -- processor thread ------------------------------------------------------------------------
 
@@ -173,6 +215,8 @@ class Recorder:
         self.frames += 1
         self._last = (result, frame_id)
         self.writer.put(frame_record(result, frame_id, image, extra))
+        if self.video is not None:
+            self.writer.put(FrameLink(result.frame.t_mono_ns, frame_id))
 
     def on_telemetry(self, telemetry: Telemetry) -> None:
         t_mono = telemetry.t_mono_ns or time.monotonic_ns()
@@ -202,10 +246,13 @@ class Recorder:
         writer = self.writer
         return {"run_dir": str(self.run_dir), "frames": self.frames, "frames_saved": writer.images_written,
                 "rows_written": dict(writer.rows_written), "bytes": writer.bytes_written,
+                "video_frames": self.video.frames_encoded if self.video is not None else None,
                 "dropped": writer.dropped_total, "drops": dict(writer.dropped)}
 
     def close(self, end: dict[str, Any] | None = None) -> None:
         """Write everything queued, then finish ``run.json`` with the end time and counts. Blocks."""
+        if self._watched is not None:
+            self._watched.buffer.remove_listener(self._on_capture)
         self.writer.close()
         # Images of frames whose results never arrived (in flight at the stop) have no row: drop them.
         shutil.rmtree(self.run_dir / PENDING, ignore_errors=True)

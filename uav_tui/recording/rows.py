@@ -126,6 +126,11 @@ class FrameAligner:
     not extrapolated. Every frame waits at least ``min_hold_ns``, so a ``snapshot`` of the newest
     frame still finds its row and marks it saved.
 
+    While telemetry flows, rows are released when a sample arrives, as if time were its receive
+    stamp (rows due just before it first, without it; then those it completes): what a row holds
+    depends on the recorded stamps alone, not on when the writer thread ran, so a replay computes
+    the same row. Ticks (``due``) only release rows that waited ``hold_ns``.
+
     A row's ``saved`` says whether its image file is on disk when the row is written (images are
     queued before their rows, so a frame dropped by a full disk or the size cap is not claimed).
 
@@ -134,23 +139,32 @@ class FrameAligner:
         min_hold_ns: shortest wait.
         telemetry_expected: False with ``--fc none``: frames wait only ``min_hold_ns``.
         run_dir: where image names point (None: do not check the files).
+        recorded_clock: a replay: ticks read the newest capture or receive time handled, not this
+            computer's clock, so rows are released as they were in the recorded run, at any speed.
     """
 
+    accepts = (TelemetrySample, FrameRecord, MarkSaved)
+
     def __init__(self, hold_ns: int = 500_000_000, min_hold_ns: int = 200_000_000,
-                 telemetry_expected: bool = True, run_dir: Path | None = None) -> None:
+                 telemetry_expected: bool = True, run_dir: Path | None = None, recorded_clock: bool = False) -> None:
         self.hold_ns = hold_ns
         self.min_hold_ns = min_hold_ns
         self.run_dir = run_dir
         self.telemetry_expected = telemetry_expected
+        self.recorded_clock = recorded_clock
         self.history = TelemetryHistory()
         self._waiting: deque[FrameRecord] = deque()
+        self._newest_ns = 0
 
     def handle(self, item: Any) -> Iterable[Row]:
         if isinstance(item, TelemetrySample):
+            rows = self._release(item.t_mono_ns - 1)  # rows due before this sample arrived go out without it
             self.history.add(item.telemetry, item.t_mono_ns)
-            return [telemetry_row(item)]
+            self._newest_ns = max(self._newest_ns, item.t_mono_ns)
+            return [*rows, *self._release(item.t_mono_ns), telemetry_row(item)]
         if isinstance(item, FrameRecord):
             self._waiting.append(item)
+            self._newest_ns = max(self._newest_ns, item.t_mono_ns)
         elif isinstance(item, MarkSaved):
             for record in self._waiting:
                 if record.frame_id == item.frame_id:
@@ -160,12 +174,16 @@ class FrameAligner:
         return []
 
     def due(self, now_ns: int) -> Iterable[Row]:
+        return self._release(self._newest_ns if self.recorded_clock else now_ns, timed_out=self.telemetry_expected)
+
+    def _release(self, now_ns: int, *, timed_out: bool = False) -> list[Row]:
+        """Rows ready at ``now_ns``: those that waited ``hold_ns`` if ``timed_out``, else also covered ones."""
         rows = []
         while self._waiting:
             record = self._waiting[0]
             age = now_ns - record.t_mono_ns
-            if age < self.min_hold_ns or (age < self.hold_ns and self.telemetry_expected
-                                          and not self.history.covers(record.t_mono_ns)):
+            if age < self.min_hold_ns or age < self.hold_ns and (timed_out or self.telemetry_expected
+                                                                 and not self.history.covers(record.t_mono_ns)):
                 break
             rows.append(self._row(self._waiting.popleft()))
         return rows

@@ -19,7 +19,7 @@ if TYPE_CHECKING:
 RUN_NAME_FORMAT = "%Y-%m-%dT%H-%M-%SZ"
 """Run folders are named after their UTC start, sortable, without ':' (FAT/exFAT sticks cannot hold it)."""
 
-_PACKAGES = ("uav-tui", "numpy", "opencv-contrib-python-headless", "mavsdk", "textual", "pandas")
+_PACKAGES = ("uav-tui", "numpy", "opencv-contrib-python-headless", "mavsdk", "textual", "pandas", "av")
 
 
 def utc_text(wall_ns: int) -> str:
@@ -45,6 +45,7 @@ def describe(core: UavCore) -> dict[str, Any]:
     """What ``run.json`` says about a started core's run."""
     source = core.source.get_properties() if core.source is not None else {}
     processor = core.worker.processor if core.worker is not None else None
+    replayed = getattr(core.controller, "run_dir", None) if core.replay is not None else None
     config = dataclasses.asdict(core.config)
     config["web"]["web_token"] = "***" if core.config.web.web_token else ""  # never recorded
     return {
@@ -56,6 +57,7 @@ def describe(core: UavCore) -> dict[str, Any]:
             "name": processor.info.name, "spec": processor.spec, "path": processor.info.path,
             "capabilities": sorted(processor.info.capabilities), "kwargs": _plain(processor.kwargs)},
         "controller": {"fc": core.config.fc, "description": getattr(core.controller, "description", "none")},
+        **({"replay_of": {"run": str(Path(replayed).resolve()), "name": Path(replayed).name}} if replayed else {}),
     }
 
 

@@ -1,8 +1,9 @@
 """The disk writer: one thread behind a bounded queue; nothing that feeds it ever waits for the disk.
 
 Items are CSV rows (:class:`Row`), JPEG frames (queued with :meth:`DiskWriter.put_image`), renames
-of written files (:class:`Rename`) or anything a :class:`Stage` understands (the stage runs on the
-writer thread and turns items into rows). Items are handled in the order they were queued. When
+of written files (:class:`Rename`) or anything one of its :class:`Stage` objects accepts (stages run
+on the writer thread and turn items into rows; images for a stage go through :meth:`DiskWriter.put_pixels`).
+Items are handled in the order they were queued. When
 the queue is full, the disk is full, the run folder reached its size cap or the disk its free-space
 floor, the item is dropped and counted, and the first drop of each kind is reported once through
 ``on_problem``.
@@ -59,13 +60,22 @@ class Rename:
 
 
 @dataclass(slots=True)
-class _Image:
-    name: str
+class Pixels:
+    """A queued item holding an image: counted against ``max_image_bytes`` until the writer handled it."""
+
     image: np.ndarray
+
+
+@dataclass(slots=True)
+class _Image(Pixels):
+    name: str = ""
 
 
 class Stage(Protocol):
     """Turns queued items into rows on the writer thread (e.g. frames waiting for telemetry)."""
+
+    accepts: tuple[type, ...]
+    """The item types this stage handles."""
 
     def handle(self, item: Any) -> Iterable[Row]:
         """Rows that ``item`` produces at once."""
@@ -96,7 +106,7 @@ class DiskWriter:
     Args:
         run_dir: the run folder (exists).
         tables: table name -> column names (the header written when the file is created).
-        stage: optional item -> rows converter run on the writer thread.
+        stages: item -> rows converters run on the writer thread (more can be appended before ``start``).
         jpeg_quality: 10..100.
         max_disk_bytes: stop writing (frames and rows) once this much was written (0: no cap).
         min_free_bytes: stop writing (frames and rows) when the disk has less free space.
@@ -106,13 +116,13 @@ class DiskWriter:
         flush_s: how often collected rows are appended to the files.
     """
 
-    def __init__(self, run_dir: Path, tables: dict[str, Sequence[str]], *, stage: Stage | None = None,
+    def __init__(self, run_dir: Path, tables: dict[str, Sequence[str]], *, stages: Sequence[Stage] = (),
                  jpeg_quality: int = 90, max_disk_bytes: int = 0, min_free_bytes: int = 0,
                  on_problem: Callable[[str, str], None] | None = None, max_items: int = 4096,
                  max_image_bytes: int = 48 * MB, flush_s: float = 0.5) -> None:
         self.run_dir = Path(run_dir)
         self.tables = {name: list(columns) for name, columns in tables.items()}
-        self.stage = stage
+        self.stages = list(stages)
         self.jpeg_quality = jpeg_quality
         self.max_disk_bytes = max_disk_bytes
         self.min_free_bytes = min_free_bytes
@@ -157,19 +167,39 @@ class DiskWriter:
         The guards (size cap, free space, queued image bytes) are checked before anything is copied.
         With ``copy=True`` the pixels are copied first, so the caller may go on changing its array.
         """
+        if self._reserve(image.nbytes) is not None:
+            return False
+        return self._put_reserved(_Image(image.copy() if copy else image, name))
+
+    def put_pixels(self, item: Pixels, *, copy: bool = False) -> str | None:
+        """Queue a stage's item that holds an image, under the guards of :meth:`put_image`.
+
+        Returns None when it was queued, else why it was dropped (counted like a dropped image).
+        With ``copy=True`` the pixels are copied once the guards let them in.
+        """
+        reason = self._reserve(item.image.nbytes)
+        if reason is None and copy:
+            item.image = item.image.copy()
+        if reason is None and not self._put_reserved(item):
+            reason = "queue_full"
+        return reason
+
+    def _reserve(self, nbytes: int) -> str | None:
         reason = self.image_refused()
         if reason is None:
             with self._lock:
-                if self._image_bytes_queued + image.nbytes > self.max_image_bytes:
+                if self._image_bytes_queued + nbytes > self.max_image_bytes:
                     reason = "queue_full"
                 else:
-                    self._image_bytes_queued += image.nbytes
+                    self._image_bytes_queued += nbytes
         if reason is not None:
             self._drop(reason)
-            return False
-        if self.put(_Image(name, image.copy() if copy else image)):
+        return reason
+
+    def _put_reserved(self, item: Pixels) -> bool:
+        if self.put(item):
             return True
-        self._image_done(image.nbytes)
+        self._image_done(item.image.nbytes)
         return False
 
     def image_refused(self) -> str | None:
@@ -235,15 +265,16 @@ class DiskWriter:
             if item is not _IDLE:
                 self._handle(item)
             now = time.monotonic_ns()
-            if self.stage is not None and now >= next_tick:
-                self._collect(self.stage.due, now)
+            if now >= next_tick:
+                for stage in self.stages:
+                    self._collect(stage.due, now)
                 next_tick = now + tick_ns
             if now >= next_flush:
                 self._flush()
                 self._free_bytes = self._disk_free()
                 next_flush = now + int(self.flush_s * 1e9)
-        if self.stage is not None:
-            self._collect(self.stage.drain)
+        for stage in self.stages:
+            self._collect(stage.drain)
         self._flush()
         for fd, _ in self._files.values():
             os.close(fd)
@@ -253,21 +284,22 @@ class DiskWriter:
         try:
             if isinstance(item, Row):
                 self._pending[item.table].append(item.values)
-            elif isinstance(item, _Image):
-                try:
-                    self._write_image(item)
-                finally:
-                    self._image_done(item.image.nbytes)
             elif isinstance(item, Rename):
                 source = self.run_dir / item.source
                 if source.exists():
                     os.replace(source, self.run_dir / item.target)
-            elif self.stage is not None:
-                self._collect(self.stage.handle, item)
-                self._collect(self.stage.due, time.monotonic_ns())
+            elif isinstance(item, _Image):
+                self._write_image(item)
+            else:
+                stage = next(stage for stage in self.stages if isinstance(item, stage.accepts))
+                self._collect(stage.handle, item)
+                self._collect(stage.due, time.monotonic_ns())
         except Exception as exc:  # noqa: BLE001 - the writer must outlive any bad item
             logger.exception("DiskWriter(%s): cannot write %r", self.run_dir, type(item).__name__)
             self._drop("write_error", detail=f"{type(item).__name__}: {exc!r}")
+        finally:
+            if isinstance(item, Pixels):
+                self._image_done(item.image.nbytes)
 
     def _collect(self, produce: Callable[..., Iterable[Row]], *args: Any) -> None:
         for row in produce(*args):

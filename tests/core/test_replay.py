@@ -1,0 +1,180 @@
+"""A simulated flight recorded with its video, then replayed through processors (``run:`` + ``replay:``)."""
+
+from __future__ import annotations
+
+import asyncio
+import csv
+import dataclasses
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from sources.run import read_video
+from sources.synthetic import SyntheticScene
+from uav_tui import dataset
+from uav_tui.cli import main
+from uav_tui.config import load_config
+from uav_tui.jobs import run_jobs
+from uav_tui.recording.interpolate import CONTINUOUS, DISCRETE
+from uav_tui.replay.runner import ReplayJob, replay_run
+from uav_tui.report import write_report
+
+from .flight_helpers import flying_core, wait_until
+
+BRIGHTNESS = "tests.core.replay_processors:Brightness"
+DARKNESS = "tests.core.replay_processors:Darkness"
+WIDTH, HEIGHT = 160, 120
+
+
+async def _fly(tmp_path: Path) -> Path:
+    async with flying_core(tmp_path, processor=BRIGHTNESS, record=True, runs_dir=str(tmp_path / "runs"),
+                           source=f"synthetic:?width={WIDTH}&height={HEIGHT}&fps=30") as core:
+        await core.execute("autonomy on")
+        await wait_until(lambda: core.gate.executed >= 10, 15, "vectors flown under autonomy")
+        await core.execute("f 2")  # the operator reverses the processor's steering
+        await wait_until(lambda: core.gate.executed >= 20, 15, "reversed vectors flown under autonomy")
+        await core.execute("autonomy off")
+        await asyncio.sleep(1.0)
+        run_dir = core.recorder.run_dir
+    return run_dir
+
+
+@pytest.fixture(scope="module")
+def flight(tmp_path_factory) -> Path:
+    """A recorded flight: takeoff, brightness-steered vectors under autonomy, reversed by F2, then autonomy off."""
+    return asyncio.run(_fly(tmp_path_factory.mktemp("flight")))
+
+
+def _replay(run: Path, processor: str, out: Path, speed: str = "max"):
+    config = load_config(None, {"processor": processor, "runs_dir": str(out)})
+    return replay_run(ReplayJob(str(run), config, speed))
+
+
+def _video_frames(path: Path) -> list[np.ndarray]:
+    return list(read_video(path))
+
+
+def test_the_video_has_one_frame_per_index_row_each_joining_a_frame_row(flight):
+    index = pd.read_csv(flight / "video.csv", dtype={"frame_id": "Int64", "video_frame": "Int64"})
+    run = dataset.load(flight)
+    decoded = _video_frames(flight / "video.ts")
+    encoded = index.dropna(subset=["video_frame"])
+    assert run.info["video"]["codec"] in ("h264", "mjpeg") and run.info["video"]["container"] == "mpegts"
+    assert len(decoded) == len(encoded) > 100
+    assert encoded["video_frame"].tolist() == list(range(len(encoded)))
+    assert index["t_mono_ns"].is_monotonic_increasing and index["t_mono_ns"].is_unique
+
+    # Each processed frame's index row names it, with the capture time frames.csv has for it.
+    linked = index.dropna(subset=["frame_id"]).merge(run.frames, on="frame_id", suffixes=("", "_frame"))
+    assert len(linked) == index["frame_id"].notna().sum() >= 0.9 * len(encoded)
+    assert (linked["t_mono_ns"] == linked["t_mono_ns_frame"]).all()
+    assert (linked["seq"] == linked["seq_frame"]).all()
+
+    # The video holds the camera image as captured: the synthetic scene, without the processor's overlay.
+    scene = SyntheticScene(WIDTH, HEIGHT)
+    for position in (1, len(decoded) // 2, len(decoded) - 1):
+        seq = int(encoded["seq"].iloc[position])
+        image = decoded[position].astype(np.float64)
+        error = {n: np.sqrt(np.mean((image - scene.render(n - 1)) ** 2)) for n in range(seq - 1, seq + 2)}
+        assert min(error, key=error.get) == seq and error[seq] < 16, f"video frame {position}: {error}"
+        assert decoded[position][:16, :16].mean() < 230  # the overlay (white) was drawn after the copy
+
+
+def test_replay_at_max_speed_is_deterministic_and_sees_the_recorded_vehicle(flight, tmp_path):
+    first = _replay(flight, BRIGHTNESS, tmp_path / "one")
+    second = _replay(flight, BRIGHTNESS, tmp_path / "two")
+    original, one, two = (dataset.load(path) for path in (flight, first.replay, second.replay))
+    assert first.content == "video" and one.info["replay_of"]["run"] == str(flight.resolve())
+    index = pd.read_csv(flight / "video.csv", dtype={"video_frame": "Int64"})
+    assert len(one.frames) == len(two.frames) == index["video_frame"].notna().sum()  # every frame, in lockstep
+
+    columns = ["t_mono_ns", "vx", "vy", "vt", "decision", "telemetry", *CONTINUOUS, *DISCRETE]
+    pd.testing.assert_frame_equal(one.frames[columns].reset_index(drop=True),
+                                  two.frames[columns].reset_index(drop=True))
+
+    # The telemetry interpolated for each frame is the recorded run's.
+    joined = dataset.compare(original, one)
+    assert len(joined) >= 0.9 * len(one.frames)
+    for name in CONTINUOUS:
+        a, b = joined[f"{name}_a"].to_numpy(np.float64), joined[f"{name}_b"].to_numpy(np.float64)
+        assert np.allclose(a, b, atol=1e-6, rtol=0, equal_nan=True), name
+    for name in DISCRETE:
+        assert joined[f"{name}_a"].equals(joined[f"{name}_b"].rename(f"{name}_a")), name
+
+    # The same processor on the recorded video, given the operator's F2 when it was given: the same vectors
+    # (up to the video's compression), reversed from the same frame on.
+    replayed = one.events[one.events["origin"] == "replay"]
+    assert replayed["message"].tolist() == ["f 2", "F2 sent to the processor"]
+    assert np.allclose(joined["vx_a"], joined["vx_b"], atol=0.05)
+    assert (np.sign(joined["vx_a"]) == np.sign(joined["vx_b"]))[joined["vx_a"].abs() > 0.05].all()
+
+    # Judged as in the flight: autonomy on exactly where it was; executed there and only there, never sent.
+    executed_a = joined["decision_a"].str.startswith("executed")
+    executed_b = joined["decision_b"].str.startswith("executed")
+    assert executed_b.sum() >= 20
+    assert (executed_a == executed_b).mean() > 0.97
+    assert set(joined.loc[~executed_b, "decision_b"]) <= {"not executed: autonomy off"}
+
+    # tmMgr.snapshot() inside the replayed processor saw the newest recorded telemetry at each capture.
+    telemetry = pd.read_csv(flight / "telemetry.csv")
+    times = telemetry["t_mono_ns"].to_numpy()
+    newest = np.searchsorted(times, one.frames["t_mono_ns"].to_numpy(np.int64), side="right") - 1
+    after = newest >= 0  # frames captured before the first telemetry saw none (t_mono_ns 0)
+    frames = one.frames[after]
+    assert (one.frames.loc[~after, "seen_t_mono_ns"] == 0).all() and after.mean() > 0.9
+    assert (frames["seen_t_mono_ns"].to_numpy(np.int64) == times[newest[after]]).all()
+    assert np.allclose(frames["seen_north_m"], telemetry["north_m"].to_numpy()[newest[after]], equal_nan=True)
+    modes = telemetry["flight_mode"].fillna("").to_numpy()
+    assert frames["seen_mode"].fillna("").tolist() == modes[newest[after]].tolist()
+
+
+def test_two_processors_on_the_same_flight_in_parallel_compare_frame_by_frame(flight, tmp_path):
+    config = load_config(None, {"runs_dir": str(tmp_path)})
+    jobs = [ReplayJob(str(flight), dataclasses.replace(config, processor=name), "max")
+            for name in (BRIGHTNESS, DARKNESS)]
+    bright, dark = run_jobs(replay_run, jobs, workers=2)
+    joined = dataset.compare(bright.replay, dark.replay)
+    assert len(joined) == bright.frames == dark.frames
+    assert joined["vx_a"].notna().all() and joined["vx_b"].notna().all()
+    assert np.allclose(joined["vx_a"], -joined["vx_b"])
+
+    paths, _ = write_report(dark.replay)
+    assert Path(dark.replay, "replay.png") in paths and Path(dark.replay, "replay.png").stat().st_size > 10_000
+
+
+def test_a_run_recorded_before_video_replays_its_saved_frames_only(flight, tmp_path):
+    old = tmp_path / "old"
+    shutil.copytree(flight, old, ignore=shutil.ignore_patterns("video.*"))
+    result = _replay(old, DARKNESS, tmp_path / "replays")
+    with open(old / "frames.csv", newline="") as handle:
+        saved = [row for row in csv.DictReader(handle) if row["image"]]
+    assert result.content == "saved frames" and result.frames == len(saved) > 10
+
+
+def test_the_replay_command_names_the_new_run_and_explains_bad_input(flight, tmp_path, capsys):
+    runs = str(flight.parent)
+    assert main(["replay", flight.name, "--runs-dir", runs, "--processor", DARKNESS, "--speed", "max",
+                 "--workers", "1"]) == 0
+    line = capsys.readouterr().out.strip().splitlines()[-1]
+    new_run = Path(line.rsplit("-> ", 1)[1])
+    assert line.startswith(f"{flight.name}: ") and dataset.load(new_run).info["replay_of"]["name"] == flight.name
+    shutil.rmtree(new_run)
+
+    assert main(["replay", "no-such-run", "--runs-dir", runs]) == 2
+    assert "neither a run folder nor a run in" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        main(["replay", flight.name, "--runs-dir", runs, "--speed", "fast"])
+    assert "--speed: speed must be a positive number or 'max'" in capsys.readouterr().err
+
+
+def test_a_paced_replay_shows_recorded_frames_at_their_recorded_times(flight, tmp_path):
+    result = _replay(flight, BRIGHTNESS, tmp_path, speed="8")
+    index = pd.read_csv(flight / "video.csv", dtype={"video_frame": "Int64"})
+    recorded = set(index.loc[index["video_frame"].notna(), "t_mono_ns"])
+    frames = dataset.load(result.replay).frames
+    assert len(frames) > 20 and set(frames["t_mono_ns"]) <= recorded  # a slow processor may skip some
+    assert frames["t_mono_ns"].is_monotonic_increasing
+    assert frames["decision"].str.startswith("executed").any()  # autonomy was on for part of the flight

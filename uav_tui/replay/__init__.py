@@ -1,0 +1,1 @@
+"""Replaying recorded runs: the autonomy gate of a replay and ``uav-tui replay``."""

@@ -1,0 +1,58 @@
+"""``uav-tui replay RUN... --processor X``: replay recorded runs through a processor, each into a new run."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from controllers.replay_timeline import parse_speed
+from uav_tui.config import find_config_file, load_config, overrides_from_args
+from uav_tui.errors import KNOWN_ERRORS
+from uav_tui.jobs import run_jobs
+from uav_tui.replay.runner import ReplayJob, replay_run, summary_line
+from uav_tui.runs_cli import find_run
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="uav-tui replay",
+        description="Replay recorded runs (their video and telemetry, at the recorded times) through a processor. "
+                    "Each replay is written as a new run whose run.json names the source run; vectors are judged "
+                    "by the autonomy gate as in the recorded run (autonomy on when it was on) and never sent.")
+    parser.add_argument("runs", nargs="+", metavar="RUN", help="run folder, or its name under the runs folder")
+    parser.add_argument("--processor", help="processor: short name, module:Class or path/file.py:Class "
+                        "(default: the configuration's)")
+    parser.add_argument("--processor-arg", dest="processor_args", action="append", default=None,
+                        metavar="KEY=VALUE", help="processor constructor argument (TOML value), repeatable")
+    parser.add_argument("--speed", default="1", help="1 = real time (default), 4 = four times as fast, max = every "
+                        "frame as fast as the processor goes, deterministic")
+    parser.add_argument("--workers", type=int, metavar="N", help="replay N runs at once in local processes "
+                        "(default: one per core)")
+    parser.add_argument("--cluster", metavar="ADDRESS", help="run the replays on this Dask scheduler "
+                        "(tcp://HOST:8786)")
+    parser.add_argument("--runs-dir", metavar="DIR", help="where the runs are and the replays go "
+                        "(default: runs_dir of the configuration)")
+    parser.add_argument("--config", metavar="PATH", help="TOML file (safety limits, runs_dir, processor)")
+    return parser
+
+
+def main(argv: list[str]) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        parse_speed(args.speed)
+    except ValueError as exc:
+        parser.error(f"--speed: {exc}")
+    try:
+        config = load_config(find_config_file(args.config), overrides_from_args(args))
+        runs_dir = Path(config.recording.runs_dir).expanduser()
+        jobs = [ReplayJob(str(find_run(runs_dir, name)), config, args.speed) for name in args.runs]
+        results = run_jobs(replay_run, jobs, workers=args.workers, cluster=args.cluster,
+                           progress=lambda done, total: print(f"replayed {done}/{total}", file=sys.stderr))
+    except KNOWN_ERRORS as exc:
+        print(f"uav-tui replay: {exc}", file=sys.stderr)
+        return 2
+    for result in results:
+        print(summary_line(result))
+    return 0

@@ -1,0 +1,63 @@
+"""The autonomy gate of a replay: on exactly when it was on in the recorded run; nothing is ever sent."""
+
+from __future__ import annotations
+
+import asyncio
+import bisect
+import csv
+from pathlib import Path
+
+from controllers.replay import ReplayController
+from uav_tui.autonomy import AutonomyGate
+from uav_tui.config import SafetyConfig
+from uav_tui.events import EventLog
+from uav_tui.telemetry import TelemetryManager
+from uav_tui.worker import ProcessedFrame
+
+
+def autonomy_switches(events_csv: Path) -> list[tuple[int, bool]]:
+    """(t_mono_ns, on) each time autonomy was switched on or off in a recorded run, oldest first."""
+    switches = []
+    if events_csv.is_file():
+        with open(events_csv, newline="") as handle:
+            for row in csv.DictReader(handle):
+                message = row.get("message") or ""
+                if row.get("kind") == "autonomy" and row.get("t_mono_ns") and message.startswith(("autonomy ON",
+                                                                                                   "autonomy OFF")):
+                    switches.append((int(row["t_mono_ns"]), message.startswith("autonomy ON")))
+    switches.sort()
+    return switches
+
+
+class ReplayGate(AutonomyGate):
+    """Judges every replayed vector as the recorded run's gate would have, on the recorded clock.
+
+    Autonomy counts as on for a frame when it was on at the frame's capture time in ``events.csv``;
+    the frame's age is taken on the replay's clock (zero in lockstep: the replay waits for it). The
+    decision is recorded in ``frames.csv``; the vector is never sent anywhere.
+    """
+
+    def __init__(self, safety: SafetyConfig, telemetry: TelemetryManager, events: EventLog,
+                 controller: ReplayController) -> None:
+        super().__init__(safety, telemetry, events)
+        self.controller = controller
+        self.clock = controller.timeline.now
+        self.switches = autonomy_switches(controller.run_dir / "events.csv")
+        self._times = [t for t, _ in self.switches]
+
+    def enabled_at(self, t_mono_ns: int) -> bool:
+        """Whether autonomy was on in the recorded run at ``t_mono_ns``."""
+        index = bisect.bisect_right(self._times, t_mono_ns)
+        return index > 0 and self.switches[index - 1][1]
+
+    def consider(self, result: ProcessedFrame) -> None:
+        self.enabled = self.enabled_at(result.frame.t_mono_ns)
+        super().consider(result)
+        self._pending = None  # judged and recorded, never sent
+
+    async def run(self) -> None:
+        """Nothing to send: a replayed vector never leaves the platform."""
+        await asyncio.Event().wait()
+
+    async def watch(self, *_: object) -> None:
+        """No watchdog: whether autonomy is on comes from the recording, frame by frame."""

@@ -1,0 +1,69 @@
+"""The operator's commands to the processor (F1-F4, ROI), replayed at their recorded times."""
+
+from __future__ import annotations
+
+import asyncio
+import csv
+import logging
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from uav_tui.commands import Command, parse
+from uav_tui.errors import KNOWN_ERRORS
+
+if TYPE_CHECKING:
+    from uav_tui.core import UavCore
+
+logger = logging.getLogger(__name__)
+
+PROCESSOR_WORDS = frozenset({"f", "roi"})
+"""Commands that reach the processor (``customize_processing``, ``catch_cmd``); the vehicle's are not replayed."""
+
+COMMAND_TIMEOUT_S = 5.0
+
+
+def recorded_commands(events_csv: Path) -> list[tuple[int, Command]]:
+    """(t_mono_ns, command) for each processor command the operator gave in a recorded run, oldest first."""
+    commands = []
+    if events_csv.is_file():
+        with open(events_csv, newline="") as handle:
+            for row in csv.DictReader(handle):
+                if row.get("kind") != "command" or row.get("level") != "info" or not row.get("t_mono_ns"):
+                    continue
+                try:
+                    command = parse(row.get("message") or "")
+                except KNOWN_ERRORS:
+                    continue  # a command's outcome ("F1 sent to the processor"), not the command
+                if command is not None and command.word in PROCESSOR_WORDS:
+                    commands.append((int(row["t_mono_ns"]), command))
+    commands.sort(key=lambda item: item[0])
+    return commands
+
+
+class CommandReplay:
+    """Gives the replayed processor each recorded command before the first frame captured after it.
+
+    :meth:`before_show` runs on the camera thread (the timeline's ``before_show`` hook) and waits for
+    the command to finish, so the processor has it before that frame, in lockstep and paced alike.
+    """
+
+    def __init__(self, core: UavCore, loop: asyncio.AbstractEventLoop, commands: list[tuple[int, Command]]) -> None:
+        self.core = core
+        self.loop = loop
+        self.commands = commands
+        self.replayed = 0
+
+    def before_show(self, t_ns: int) -> None:
+        while self.replayed < len(self.commands) and self.commands[self.replayed][0] <= t_ns:
+            command = self.commands[self.replayed][1]
+            self.replayed += 1
+            future = asyncio.run_coroutine_threadsafe(self._execute(command), self.loop)
+            try:
+                future.result(COMMAND_TIMEOUT_S)
+            except (*KNOWN_ERRORS, TimeoutError) as exc:  # the core's event log has said why
+                logger.info("replayed command %s failed: %s", command, exc)
+
+    async def _execute(self, command: Command) -> None:
+        while self.core.state.value == "new":  # the camera can run ahead of the core's start
+            await asyncio.sleep(0.01)
+        await self.core.execute(command, origin="replay")

@@ -1,0 +1,59 @@
+"""``replay.png`` in a replayed run's report: the recorded processor's vectors beside the replayed one's.
+
+Drawn by ``uav-tui report`` when the run's ``run.json`` names the run it replays (``replay_of``) and
+that run is still there: vx and vy per frame from both, the frames whose vector the autonomy gate
+executed (or would have), and the tracked ``box`` (``box_x`` .. ``box_h``) when both runs report one.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pandas as pd
+from matplotlib.figure import Figure
+
+from uav_tui.dataset import Dataset, compare, load
+
+REPLAY_PLOT = "replay.png"
+BOX = ("box_x", "box_y", "box_w", "box_h")
+
+
+def replay_figure(run: Dataset) -> Figure | None:
+    """The ``replay.png`` figure of a replayed run; None when ``run`` is not a replay (or its source is gone)."""
+    source = Path(run.info.get("replay_of", {}).get("run", ""))
+    if not source.parts or not (source / "run.json").is_file():
+        return None
+    original = load(source)
+    figure = Figure(figsize=(8, 8), layout="constrained")
+    paint_replay(compare(original, run), figure, names=(_processor_name(original), _processor_name(run)))
+    return figure
+
+
+def paint_replay(joined: pd.DataFrame, figure: Figure, names: tuple[str, str]) -> None:
+    """Plot a :func:`uav_tui.dataset.compare` table: the original (``_a``) and the replay (``_b``)."""
+    has_box = all(f"{c}_{side}" in joined for c in BOX for side in "ab")
+    axes = figure.subplots(3 if has_box else 2, 1, sharex=True)
+    t_s = joined["t_s_a"]
+    figure.suptitle(f"Original ({names[0]}) vs replayed ({names[1]}): {len(joined)} frames")
+    for ax, component in zip(axes, ("vx", "vy"), strict=False):
+        for side, name, style in (("a", names[0], "-"), ("b", names[1], "--")):
+            ax.plot(t_s, joined[f"{component}_{side}"], style, linewidth=1, label=f"{name}")
+            executed = joined[f"decision_{side}"].fillna("").str.startswith("executed")
+            ax.plot(t_s[executed], joined.loc[executed, f"{component}_{side}"], "x" if side == "a" else "+",
+                    markersize=5, label=f"{name}: executed")
+        ax.set_ylabel(f"{component}, m/s")
+        ax.legend(loc="best", fontsize="small")
+        ax.grid(True, alpha=0.3)
+    if has_box:
+        ax = axes[2]
+        for side, name, style in (("a", names[0], "-"), ("b", names[1], "--")):
+            ax.plot(t_s, joined[f"box_x_{side}"] + joined[f"box_w_{side}"] / 2, style, label=f"{name}: box centre x")
+            ax.plot(t_s, joined[f"box_y_{side}"] + joined[f"box_h_{side}"] / 2, style, label=f"{name}: box centre y")
+        ax.set_ylabel("px")
+        ax.legend(loc="best", fontsize="small")
+        ax.grid(True, alpha=0.3)
+    axes[-1].set_xlabel("time since the original run started, s")
+
+
+def _processor_name(run: Dataset) -> str:
+    return run.info.get("processor", {}).get("name", "?")
