@@ -7,6 +7,7 @@ from typing import Any
 
 from controllers.base import Telemetry
 from uav_tui.stats import PipelineStats
+from uav_tui.worker import ProcessorState
 
 
 @dataclass(frozen=True)
@@ -31,6 +32,8 @@ class CoreStatus:
     vectors_rejected: int
     recording: dict[str, Any] = field(default_factory=dict)
     """Run folder, frames saved, rows written, drops (empty when recording is off)."""
+    processor_state: ProcessorState | None = None
+    """Where the processor runs and how it is doing: running, restarting N, crashed: reason; PID, memory."""
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready form (for ``--json`` and the web page)."""
