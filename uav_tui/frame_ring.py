@@ -12,9 +12,11 @@ them. Holds are counted, and a slot goes back to the free list when the count re
   So the preview, the recorder's queue and the web encoder may keep ``result.frame.image`` as long as
   they need: the slot is not reused before they let go, and nobody has to remember to release it.
 
-When every slot is held (readers keep many frames), the ring grows up to ``max_slots``; past that the
-capture side skips frames until one is released (``starved`` counts it). A slot of another size (the
-camera changed) is never reused: free slots of the old size are unlinked.
+When readers keep many frames the ring grows, up to ``max_slots``. Before it runs dry, ``lend`` hands
+out a private copy instead of a view (``copied`` counts them), so a reader that keeps every frame costs
+memory, as it would with the thread worker, but never stops the pipeline; if the child itself keeps
+frames and every slot is held, the capture side skips frames until one is free (``starved``). A slot
+of another size (the camera changed) is never reused: free slots of the old size are unlinked.
 """
 
 from __future__ import annotations
@@ -32,6 +34,8 @@ logger = logging.getLogger(__name__)
 
 MAX_SLOTS = 8
 """One in the child, one being written, the rest held by readers (preview, web, recorder, snapshot)."""
+RESERVE = 2
+"""Slots ``lend`` keeps available for the frames to come; below that it copies."""
 
 
 @dataclass(eq=False)
@@ -61,6 +65,8 @@ class FrameRing:
         self.max_slots = max_slots
         self.starved = 0
         """Frames skipped because every slot was held."""
+        self.copied = 0
+        """Frames lent as private copies because readers held too many slots."""
         self._slots: list[Slot] = []
         self._lock = threading.RLock()
         self._on_free = on_free
@@ -84,8 +90,15 @@ class FrameRing:
             return slot
 
     def lend(self, slot: Slot) -> np.ndarray:
-        """A view of ``slot`` that holds it until the view and every array made from it are gone."""
+        """A view of ``slot`` that holds it until the view and every array made from it are gone.
+
+        A private copy instead when fewer than :data:`RESERVE` slots would be left for new frames.
+        """
         with self._lock:
+            available = sum(s.holds == 0 for s in self._slots) + self.max_slots - len(self._slots)
+            if available < RESERVE:
+                self.copied += 1
+                return slot.array().copy()
             slot.holds += 1
         view = slot.array()
         weakref.finalize(view, self._drop, slot)

@@ -1,21 +1,35 @@
-"""The processor worker: newest frame wins, calls are serialized, exceptions are never fatal."""
+"""The processor worker: newest frame wins, calls are serialized, exceptions are never fatal.
+
+Each test runs with both hosts of a processor: its own process (the default) and a platform thread.
+"""
 
 from __future__ import annotations
 
 import asyncio
+import os
 import threading
 import time
+from collections.abc import AsyncIterator, Callable
+from contextlib import asynccontextmanager
 from pathlib import Path
+from typing import Any
 
 import numpy as np
+import pytest
 
 from processors import load_processor
 from sources.buffer import FrameBuffer
 from sources.synthetic import SyntheticSource
+from uav_tui.events import EventLog
+from uav_tui.process_worker import ProcessWorker
 from uav_tui.worker import ProcessedFrame, ProcessorWorker
 
+Worker = ProcessorWorker | ProcessWorker
+BOTH = pytest.mark.parametrize("isolation", ["process", "thread"])
+"""Run a test with the processor in its own process and on a platform thread."""
+
 SLOW = '''
-import threading, time
+import os, threading, time
 
 class Slow:
     def __init__(self, delay=0.03):
@@ -31,6 +45,7 @@ class Slow:
     def customize_processing(self, id):
         self.threads.add(threading.get_ident())
         self.buttons.append(id)
+        return os.getpid(), sorted(self.threads), self.buttons
 '''
 
 FAILING = '''
@@ -49,7 +64,21 @@ class Failing:
 '''
 
 
-async def collect(worker: ProcessorWorker, results: list[ProcessedFrame], count: int, timeout: float = 10) -> None:
+@asynccontextmanager
+async def running_worker(isolation: str, spec: str, on_result: Callable[[ProcessedFrame], None],
+                         kwargs: dict[str, Any] | None = None) -> AsyncIterator[Worker]:
+    """A started worker of either kind (its ``run()`` task is the caller's)."""
+    if isolation == "thread":
+        worker: Worker = ProcessorWorker(load_processor(spec, kwargs), on_result)
+    else:
+        worker = await ProcessWorker.start(spec, kwargs or {}, on_result, events=EventLog(), on_fault=print)
+    try:
+        yield worker
+    finally:
+        worker.close()
+
+
+async def collect(worker: Worker, results: list[ProcessedFrame], count: int, timeout: float = 10) -> None:
     task = asyncio.create_task(worker.run())
     deadline = time.monotonic() + timeout
     try:
@@ -60,19 +89,18 @@ async def collect(worker: ProcessorWorker, results: list[ProcessedFrame], count:
     assert len(results) >= count, f"only {len(results)} frames processed"
 
 
-async def test_slow_processor_sees_the_newest_frame_and_skips_are_counted(tmp_path: Path) -> None:
+@BOTH
+async def test_slow_processor_sees_the_newest_frame_and_skips_are_counted(tmp_path: Path, isolation: str) -> None:
     (tmp_path / "slow.py").write_text(SLOW)
-    processor = load_processor(f"{tmp_path}/slow.py:Slow", {"delay": 0.03})
     source = SyntheticSource(fps=200, width=160, height=120)
     results: list[ProcessedFrame] = []
-    worker = ProcessorWorker(processor, results.append)
     assert source.open()
     try:
-        worker.attach(source.buffer)
-        await collect(worker, results, 20)
+        async with running_worker(isolation, f"{tmp_path}/slow.py:Slow", results.append, {"delay": 0.03}) as worker:
+            worker.attach(source.buffer)
+            await collect(worker, results, 20)
     finally:
         source.close()
-        worker.close()
     period_ms, processing_ms = 1000 / 200, 30
     ages_ms = [(r.t_start_ns - r.frame.t_mono_ns) / 1e6 for r in results[1:]]
     # The frame a processor starts on was captured at most one period before it started, plus scheduling
@@ -85,38 +113,36 @@ async def test_slow_processor_sees_the_newest_frame_and_skips_are_counted(tmp_pa
     assert stats.processing_ms_p50 >= processing_ms * 0.9
 
 
-async def test_all_calls_run_on_one_thread(tmp_path: Path) -> None:
+@BOTH
+async def test_all_calls_run_on_one_thread(tmp_path: Path, isolation: str) -> None:
     (tmp_path / "slow.py").write_text(SLOW)
-    processor = load_processor(f"{tmp_path}/slow.py:Slow", {"delay": 0.005})
     buffer = FrameBuffer()
     results: list[ProcessedFrame] = []
-    worker = ProcessorWorker(processor, results.append)
-    worker.attach(buffer)
-    task = asyncio.create_task(worker.run())
-    for _ in range(5):
-        buffer.put(np.zeros((4, 4, 3), np.uint8))
-        await worker.call("customize_processing", 2)
-        await asyncio.sleep(0.01)
-    task.cancel()
-    worker.close()
-    instance = processor.instance
-    assert instance.buttons == [2] * 5
-    assert len(instance.threads) == 1 and threading.get_ident() not in instance.threads
+    async with running_worker(isolation, f"{tmp_path}/slow.py:Slow", results.append, {"delay": 0.005}) as worker:
+        worker.attach(buffer)
+        task = asyncio.create_task(worker.run())
+        for _ in range(5):
+            buffer.put(np.zeros((4, 4, 3), np.uint8))
+            pid, threads, buttons = await worker.call("customize_processing", 2)
+            await asyncio.sleep(0.01)
+        task.cancel()
+    assert results and buttons == [2] * 5
+    assert len(threads) == 1 and threading.get_ident() not in threads
+    assert (pid != os.getpid()) == (isolation == "process")
 
 
-async def test_exceptions_are_caught_counted_and_keep_the_loop_alive(tmp_path: Path) -> None:
+@BOTH
+async def test_exceptions_are_caught_counted_and_keep_the_loop_alive(tmp_path: Path, isolation: str) -> None:
     (tmp_path / "failing.py").write_text(FAILING)
-    processor = load_processor(f"{tmp_path}/failing.py:Failing")
     buffer = FrameBuffer()
     results: list[ProcessedFrame] = []
-    worker = ProcessorWorker(processor, results.append)
-    worker.attach(buffer)
-    task = asyncio.create_task(worker.run())
-    for _ in range(6):
-        buffer.put(np.zeros((4, 4, 3), np.uint8))
-        await asyncio.sleep(0.03)
-    task.cancel()
-    worker.close()
+    async with running_worker(isolation, f"{tmp_path}/failing.py:Failing", results.append) as worker:
+        worker.attach(buffer)
+        task = asyncio.create_task(worker.run())
+        for _ in range(6):
+            buffer.put(np.zeros((4, 4, 3), np.uint8))
+            await asyncio.sleep(0.03)
+        task.cancel()
     assert len(results) == 6
     failed = [r for r in results if r.error]
     assert len(failed) == 3 and worker.snapshot().errors == 3
