@@ -21,7 +21,6 @@ of another size (the camera changed) is never reused: free slots of the old size
 
 from __future__ import annotations
 
-import logging
 import threading
 import weakref
 from collections.abc import Callable
@@ -29,8 +28,6 @@ from dataclasses import dataclass
 from multiprocessing.shared_memory import SharedMemory
 
 import numpy as np
-
-logger = logging.getLogger(__name__)
 
 MAX_SLOTS = 8
 """One in the child, one being written, the rest held by readers (preview, web, recorder, snapshot)."""
@@ -117,10 +114,10 @@ class FrameRing:
         return len(self._slots)
 
     def close(self) -> None:
-        """Unlink every slot; slots still held are unlinked when the last hold goes."""
+        """Unlink every slot now (views still held stay valid); each is unmapped when its last hold goes."""
         with self._lock:
             self._closed = True
-            self._unlink([s for s in self._slots if s.holds == 0])
+            self._unlink(self._slots[:])
 
     def _drop(self, slot: Slot) -> None:
         with self._lock:
@@ -128,16 +125,15 @@ class FrameRing:
             if slot.holds > 0:
                 return
             if self._closed:
-                self._unlink([slot])
+                slot.shm.close()
                 return
         self._on_free()
 
     def _unlink(self, slots: list[Slot]) -> None:
+        """Remove ``slots`` from the ring and the system; unmap those nobody holds."""
         for slot in slots:
             self._slots.remove(slot)
-            try:
+            slot.shm.unlink()
+            if slot.holds == 0:
                 slot.shm.close()
-                slot.shm.unlink()
-            except (BufferError, FileNotFoundError) as exc:
-                logger.warning("FrameRing: slot %s not released cleanly: %s", slot.name, exc)
         self._on_unlink([s.name for s in slots])

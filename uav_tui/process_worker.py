@@ -213,8 +213,12 @@ class ProcessWorker:
         call_id = next(self._call_ids)
         future: asyncio.Future[Any] = asyncio.get_running_loop().create_future()
         child.calls[call_id] = _Call(f"{method}{args!r}", time.monotonic_ns(), future)
-        with self._lock:
-            child.conn.send(("call", call_id, method, args))
+        try:
+            with self._lock:
+                child.conn.send(("call", call_id, method, args))
+        except OSError:
+            child.calls.pop(call_id)
+            raise UavError(f"the processor is not running ({self.state_text})") from None
         return await future
 
     async def reload(self) -> ProcessorInfo:
@@ -308,7 +312,7 @@ class ProcessWorker:
 
     def _running_child(self) -> _Child:
         child = self._child
-        if child is None:
+        if child is None or child.proc.poll() is not None:
             raise UavError(f"the processor is not running ({self.state_text})")
         return child
 
@@ -377,17 +381,20 @@ class ProcessWorker:
             elif not loop.is_closed():
                 loop.call_soon_threadsafe(self._on_message, child, message)
         returncode = child.proc.wait()
-        child.output_done.wait(0.5)  # the last lines of its output belong in the report
+        if not loop.is_closed():  # stop autonomy first; the report waits for the last lines of output
+            loop.call_soon_threadsafe(self._on_death, child, returncode)
+        child.output_done.wait(0.5)
         if not loop.is_closed():
             loop.call_soon_threadsafe(self._on_exit, child, returncode)
 
     def _read_output(self, child: _Child) -> None:
         assert child.proc.stdout is not None
-        for raw in child.proc.stdout:
-            line = raw.decode("utf-8", "replace").rstrip()
-            line = "".join(c if c.isprintable() else "?" for c in line)[:LINE_CHARS]
-            child.tail.append(line)
-            logger.info("processor pid %s: %s", child.pid, line)
+        with child.proc.stdout as output:
+            for raw in output:
+                line = raw.decode("utf-8", "replace").rstrip()
+                line = "".join(c if c.isprintable() else "?" for c in line)[:LINE_CHARS]
+                child.tail.append(line)
+                logger.info("processor pid %s: %s", child.pid, line)
         child.output_done.set()
 
     def _take_result(self, child: _Child, message: tuple[Any, ...]) -> None:
@@ -453,8 +460,17 @@ class ProcessWorker:
                 else:
                     call.future.set_exception(ProcessorRaised(value))
 
+    def _on_death(self, child: _Child, returncode: int) -> None:
+        """The current child is gone: stop autonomy at once (``on_fault``), before anything else."""
+        if child is self._child and not self._closing:
+            self.state_text = "crashed"
+            self._on_fault(f"processor (pid {child.pid}) {self._reason(child, returncode)}")
+
+    def _reason(self, child: _Child, returncode: int) -> str:
+        return child.kill_reason or describe_exit(returncode, self.memory_mb)
+
     def _on_exit(self, child: _Child, returncode: int) -> None:
-        reason = child.kill_reason or describe_exit(returncode, self.memory_mb)
+        reason = self._reason(child, returncode)
         with self._lock:
             child.in_flight = None
         self._release(child, list(child.held))
@@ -474,7 +490,6 @@ class ProcessWorker:
         self._child = None
         message = f"processor (pid {child.pid}) {reason}"
         self.events.emit("error", "processor", message + (f"; last output:\n{tail}" if tail else ""))
-        self._on_fault(message)
         self._restart_task = asyncio.create_task(self._restart(reason), name="processor restart")
 
     async def _restart(self, reason: str) -> None:
