@@ -51,7 +51,7 @@ LOAD_TIMEOUT_S = 60.0
 MAX_RESTARTS = 5
 """Restarts allowed within :data:`RESTART_WINDOW_S`; one more crash and the platform gives up."""
 RESTART_WINDOW_S = 60.0
-TAIL_LINES = 12
+TAIL_LINES = 30
 """Lines of the child's output kept for the crash report."""
 LINE_CHARS = 300
 

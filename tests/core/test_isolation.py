@@ -104,7 +104,7 @@ async def test_the_processor_process_loads_no_platform_module(tmp_path: Path) ->
         loaded = await worker.call("customize_processing", 1)
     finally:
         worker.close()
-    assert "processors.child" in loaded and "numpy" in loaded  # it is the processor's process ...
+    assert "processors.loading" in loaded and "numpy" in loaded  # it is the processor's process ...
     platform = [name for name in loaded if name.split(".")[0] in ("uav_tui", "sources", "controllers")]
     assert platform == []  # ... and the platform's modules never came in
 
@@ -167,6 +167,7 @@ async def test_a_dying_processor_is_reported_the_vehicle_holds_and_it_restarts(
         await wait_until(lambda: any(cause in m for m in messages(core, "processor")), 3, "the crash report")
         report = next(m for m in messages(core, "processor") if cause in m)
         assert {"segfault": "Segmentation fault", "memory": "MemoryError", "exit": ""}[crash] in report
+        assert crash == "exit" or "faulty.py" in report  # where in the researcher's code it died
         await wait_until(lambda: core.worker.state().state == "running" and core.worker.state().pid != old_pid, 10,
                          "the restart")
         run_dir = core.recorder.run_dir
