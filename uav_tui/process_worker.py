@@ -13,6 +13,7 @@ its output), ``on_fault`` stops autonomy, and a fresh child with the same argume
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import dataclasses
 import itertools
 import logging
@@ -52,7 +53,7 @@ MAX_RESTARTS = 5
 """Restarts allowed within :data:`RESTART_WINDOW_S`; one more crash and the platform gives up."""
 RESTART_WINDOW_S = 60.0
 TAIL_LINES = 30
-"""Lines of the child's output kept for the crash report."""
+"""Lines of the child's output (its stdout and stderr, forwarded to ours) kept for the crash report."""
 LINE_CHARS = 300
 
 
@@ -394,7 +395,8 @@ class ProcessWorker:
                 line = raw.decode("utf-8", "replace").rstrip()
                 line = "".join(c if c.isprintable() else "?" for c in line)[:LINE_CHARS]
                 child.tail.append(line)
-                logger.info("processor pid %s: %s", child.pid, line)
+                with contextlib.suppress(OSError, ValueError):  # where print() goes in thread isolation too
+                    print(line, file=sys.stdout, flush=True)
         child.output_done.set()
 
     def _take_result(self, child: _Child, message: tuple[Any, ...]) -> None:

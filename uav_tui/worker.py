@@ -63,6 +63,17 @@ class ProcessorState:
     memory_mb: float | None
     """Resident memory of the processor's process (None in thread mode: it is the platform's)."""
 
+    def summary(self) -> str:
+        """``running, pid 4242, 38 MB``; ``restarting 2``; ``crashed: reason``; ``in a platform thread``."""
+        if self.isolation == "thread":
+            return "in a platform thread"
+        parts = [self.state]
+        if self.pid is not None:
+            parts.append(f"pid {self.pid}")
+        if self.memory_mb is not None:
+            parts.append(f"{self.memory_mb:.0f} MB")
+        return ", ".join(parts)
+
 
 class ProcessorWorker:
     """Runs a processor on one dedicated thread, always on the newest frame of a buffer.

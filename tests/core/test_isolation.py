@@ -23,6 +23,7 @@ from uav_tui.config import load_config
 from uav_tui.core import UavCore
 from uav_tui.errors import ProcessorLoadError, UavError
 from uav_tui.events import EventLog
+from uav_tui.headless import format_status
 from uav_tui.process_worker import ProcessWorker
 
 MAX_T = 1.5
@@ -247,6 +248,7 @@ async def test_reload_swaps_only_a_processor_that_loads(tmp_path: Path) -> None:
     try:
         await wait_until(lambda: core.worker.last is not None, 10, "a frame")
         pid = core.worker.state().pid
+        assert f"processor running, pid {pid}, " in format_status(core.status(), 1.0)  # and its memory
         path.write_text("class Versioned:\n    def photo_processing(self, frame)\n")
         with pytest.raises(ProcessorLoadError, match="reload failed, .* keeps running: .*SyntaxError"):
             await core.execute("reload")
