@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import dataclasses
 import itertools
 import logging
 import multiprocessing
@@ -32,6 +31,7 @@ from typing import Any
 
 import numpy as np
 
+from controllers.base import TELEMETRY_FIELDS
 from processors import LoadedProcessor
 from processors.base import ProcessorInfo
 from processors.child import MEMORY_EXIT_CODE
@@ -140,7 +140,10 @@ class ProcessWorker:
         self._on_result = on_result
         self._on_fault = on_fault
         self._lock = threading.RLock()
-        self._ring = FrameRing(on_free=self._dispatch, on_unlink=self._forget)
+        self._send_lock = threading.Lock()
+        self._wake = threading.Condition(self._lock)
+        self._nudged = False
+        self._ring = FrameRing(on_free=self._nudge, on_unlink=self._forget)
         self._to_forget: list[str] = []
         self._child: _Child | None = None
         self._buffer: FrameBuffer | None = None
@@ -152,6 +155,7 @@ class ProcessWorker:
         self._all_children: list[_Child] = []
         self._closing = False
         self._running = False
+        threading.Thread(target=self._feed, name=f"processor-feeder({spec})", daemon=True).start()
 
     @classmethod
     async def start(cls, spec: str, kwargs: dict[str, Any], on_result: Callable[[ProcessedFrame], None],
@@ -179,7 +183,7 @@ class ProcessWorker:
                 self._buffer.remove_listener(self._on_frame)
             self._buffer = buffer
             buffer.add_listener(self._on_frame)
-        self._dispatch()
+        self._nudge()
 
     async def run(self) -> None:
         """The watchdog: kill a child silent for longer than ``timeout_s``; until cancelled, then stop all."""
@@ -214,12 +218,9 @@ class ProcessWorker:
         call_id = next(self._call_ids)
         future: asyncio.Future[Any] = asyncio.get_running_loop().create_future()
         child.calls[call_id] = _Call(f"{method}{args!r}", time.monotonic_ns(), future)
-        try:
-            with self._lock:
-                child.conn.send(("call", call_id, method, args))
-        except OSError:
+        if not self._send(child, ("call", call_id, method, args)):
             child.calls.pop(call_id)
-            raise UavError(f"the processor is not running ({self.state_text})") from None
+            raise UavError(f"the processor is not running ({self.state_text})")
         return await future
 
     async def reload(self) -> ProcessorInfo:
@@ -251,10 +252,11 @@ class ProcessWorker:
 
     def close(self) -> None:
         """Stop taking frames and kill every child at once (whatever the processor is doing). Idempotent."""
-        with self._lock:
+        with self._wake:
             self._closing = True
             if self._buffer is not None:
                 self._buffer.remove_listener(self._on_frame)
+            self._wake.notify()
         if self._restart_task is not None:
             self._restart_task.cancel()
         for child in self._all_children:
@@ -302,7 +304,7 @@ class ProcessWorker:
             self._child = child
             self._sent = (None, 0)
         self.state_text = "running"
-        self._dispatch()
+        self._nudge()
 
     def _retire(self, child: _Child, why: str) -> None:
         child.kill_reason = why
@@ -317,13 +319,35 @@ class ProcessWorker:
             raise UavError(f"the processor is not running ({self.state_text})")
         return child
 
-    # -- frames (capture thread, pipe reader thread, or whoever freed a slot) ---------------------
+    # -- frames (the feeder thread; anyone may nudge it) -----------------------------------------
 
     def _on_frame(self, frame: Frame) -> None:
-        self._dispatch()
+        self._nudge()
 
-    def _dispatch(self) -> None:
-        """Hand the newest frame to the child if it is idle and has not seen it."""
+    def _nudge(self) -> None:
+        """Wake the feeder: a frame arrived, the child finished one, a slot was freed, a child started."""
+        with self._wake:
+            self._nudged = True
+            self._wake.notify()
+
+    def _feed(self) -> None:
+        """The feeder thread: copies the newest frame into a slot and sends it whenever the child is idle.
+
+        The copy runs here, not on the capture thread, so the camera decodes its next frame meanwhile.
+        """
+        while True:
+            with self._wake:
+                self._wake.wait_for(lambda: self._nudged or self._closing)
+                if self._closing:
+                    return
+                self._nudged = False
+            try:
+                self._hand_over()
+            except Exception:  # a bug here must not stop the frames: say so, go on with the next one
+                logger.exception("ProcessWorker(%s): handing a frame over failed", self.spec)
+
+    def _hand_over(self) -> None:
+        """Hand the newest frame to the child if it is idle and has not seen it (feeder thread only)."""
         with self._lock:
             child, buffer = self._child, self._buffer
             if self._closing or child is None or buffer is None or child.in_flight is not None:
@@ -340,20 +364,27 @@ class ProcessWorker:
             assert frame is not None
             if frame.image.shape != slot.shape:  # the camera changed size in between: take it next time
                 self._ring.release_child(slot)
+                self._nudged = True
                 return
-            np.copyto(slot.array(), frame.image)
             self._sent = (buffer, frame.seq)
             child.held[slot.name] = slot
             child.in_flight = _InFlight(frame.seq, frame.t_mono_ns, frame.t_wall_ns, slot, time.monotonic_ns())
-            telemetry = dataclasses.asdict(self.telemetry.snapshot()) if self.telemetry is not None else {}
             forget, self._to_forget = self._to_forget, []
-            try:
-                if forget:
-                    child.conn.send(("forget", forget))
-                child.conn.send(("frame", slot.name, slot.shape, frame.seq, frame.t_mono_ns, frame.t_wall_ns,
-                                 telemetry))
-            except OSError:
-                pass  # the child is gone: its pipe reader reports it
+        np.copyto(slot.array(), frame.image)  # the slot is ours alone until it is sent
+        snapshot = self.telemetry.snapshot() if self.telemetry is not None else None
+        telemetry = {name: getattr(snapshot, name) for name in TELEMETRY_FIELDS} if snapshot is not None else {}
+        if forget:
+            self._send(child, ("forget", forget))
+        self._send(child, ("frame", slot.name, slot.shape, frame.seq, frame.t_mono_ns, frame.t_wall_ns, telemetry))
+
+    def _send(self, child: _Child, message: tuple[Any, ...]) -> bool:
+        """Send one message to ``child``; False when it is gone (its pipe reader reports that)."""
+        try:
+            with self._send_lock:
+                child.conn.send(message)
+        except OSError:
+            return False
+        return True
 
     def _forget(self, names: list[str]) -> None:
         self._to_forget.extend(names)
@@ -405,7 +436,7 @@ class ProcessWorker:
             flight, child.in_flight = child.in_flight, None
             image = self._ring.lend(flight.slot) if flight is not None and flight.frame_seq == seq else None
         self._release(child, released)
-        self._dispatch()
+        self._nudge()
         if flight is None or image is None or self._loop is None or self._loop.is_closed():
             return
         frame = Frame(image, seq, flight.t_mono_ns, flight.t_wall_ns)
