@@ -3,14 +3,16 @@
 Ownership. A slot is free or held; it is written only while free, so nobody ever sees it change under
 them. Holds are counted, and a slot goes back to the free list when the count reaches zero:
 
-- ``acquire`` hands a free slot to the capture side, which copies the newest frame into it once and
-  sends it to the processor's process: that is the **child's hold**. The child draws its overlay into
-  the slot; ``release_child`` drops the hold when the child reports it no longer references the frame
-  (usually right after the frame; later if the researcher kept the array, e.g. the previous frame).
-- ``lend`` gives the platform a NumPy view for the frame's :class:`ProcessedFrame`: the **view's hold**,
-  dropped by a finalizer when the last reference to that view (or any array derived from it) is gone.
-  So the preview, the recorder's queue and the web encoder may keep ``result.frame.image`` as long as
-  they need: the slot is not reused before they let go, and nobody has to remember to release it.
+- ``capture_view`` gives a camera a free slot to decode into (through ``FrameBuffer``'s allocator), so
+  the frame is written once, in shared memory. That view holds the slot for as long as it lives (a
+  **view's hold**, dropped by a finalizer when the last reference to the view, or to any array made
+  from it, is gone): the buffer, the preview, the recorder's queue and the web encoder may keep
+  ``frame.image`` as long as they need, and nobody has to remember to release it.
+- Handing a frame to the child adds the **child's hold**: ``take_for_child`` for a frame captured into
+  a slot (no copy); ``acquire`` for a frame of the camera's own (a free slot, the frame copied in
+  once). The child draws its overlay into the slot; ``release_child`` drops the hold when the child
+  reports it no longer references the frame (right after it, or later if the researcher kept it).
+- ``lend`` gives a copied-in slot's view to the frame's ``ProcessedFrame`` (a view's hold again).
 
 When readers keep many frames the ring grows, up to ``max_slots``. Before it runs dry, ``lend`` hands
 out a private copy instead of a view (``copied`` counts them), so a reader that keeps every frame costs
@@ -29,7 +31,7 @@ from multiprocessing.shared_memory import SharedMemory
 
 import numpy as np
 
-MAX_SLOTS = 8
+MAX_SLOTS = 12
 """One in the child, one being written, the rest held by readers (preview, web, recorder, snapshot)."""
 RESERVE = 2
 """Slots ``lend`` keeps available for the frames to come; below that it copies."""
@@ -44,6 +46,11 @@ class Slot:
     @property
     def name(self) -> str:
         return self.shm.name
+
+    @property
+    def address(self) -> int:
+        """Where the slot's pixels are mapped in this process."""
+        return self.array().__array_interface__["data"][0]
 
     def array(self) -> np.ndarray:
         return np.ndarray(self.shape, dtype=np.uint8, buffer=self.shm.buf)
@@ -70,20 +77,34 @@ class FrameRing:
         self._on_unlink = on_unlink
         self._closed = False
 
-    def acquire(self, shape: tuple[int, ...]) -> Slot | None:
-        """A free slot of ``shape`` with the child's hold taken, or None when every slot is held."""
+    def capture_view(self, shape: tuple[int, ...]) -> np.ndarray | None:
+        """A free slot as an array for a camera to decode into (``FrameBuffer`` allocator), or None.
+
+        The view holds the slot (as :meth:`lend`'s do), so the frame that carries it keeps its pixels
+        until every reader let go. None when only :data:`RESERVE` slots are left: the camera then
+        allocates its own array and the frame is copied into a slot when it is handed over.
+        """
         with self._lock:
-            stale = [s for s in self._slots if s.holds == 0 and s.shape != shape]
-            if stale:
-                self._unlink(stale)
-            slot = next((s for s in self._slots if s.holds == 0), None)
-            if slot is None and len(self._slots) < self.max_slots and not self._closed:
-                slot = Slot(SharedMemory(create=True, size=int(np.prod(shape))), shape)
-                self._slots.append(slot)
+            slot = self._take_free(shape, keep=RESERVE)
+            if slot is None:
+                return None
+        return self._view(slot)
+
+    def take_for_child(self, image: np.ndarray) -> Slot | None:
+        """The slot ``image`` was captured into, with the child's hold taken; None if it is not one of ours."""
+        address = image.__array_interface__["data"][0]
+        with self._lock:
+            slot = next((s for s in self._slots if s.address == address and s.shape == image.shape), None)
+            if slot is not None:
+                slot.holds += 1
+            return slot
+
+    def acquire(self, shape: tuple[int, ...]) -> Slot | None:
+        """A free slot of ``shape`` with the child's hold taken (the frame is copied in), or None."""
+        with self._lock:
+            slot = self._take_free(shape, keep=0)
             if slot is None:
                 self.starved += 1
-                return None
-            slot.holds = 1
             return slot
 
     def lend(self, slot: Slot) -> np.ndarray:
@@ -92,14 +113,11 @@ class FrameRing:
         A private copy instead when fewer than :data:`RESERVE` slots would be left for new frames.
         """
         with self._lock:
-            available = sum(s.holds == 0 for s in self._slots) + self.max_slots - len(self._slots)
-            if available < RESERVE:
+            if self._available() < RESERVE:
                 self.copied += 1
                 return slot.array().copy()
             slot.holds += 1
-        view = slot.array()
-        weakref.finalize(view, self._drop, slot)
-        return view
+        return self._view(slot)
 
     def release_child(self, slot: Slot) -> None:
         """The child no longer references ``slot`` (or died)."""
@@ -118,6 +136,29 @@ class FrameRing:
         with self._lock:
             self._closed = True
             self._unlink(self._slots[:])
+
+    def _available(self) -> int:
+        return sum(s.holds == 0 for s in self._slots) + self.max_slots - len(self._slots)
+
+    def _take_free(self, shape: tuple[int, ...], keep: int) -> Slot | None:
+        """A free slot of ``shape`` (created if there is room) with one hold, leaving ``keep`` available."""
+        stale = [s for s in self._slots if s.holds == 0 and s.shape != shape]
+        if stale:
+            self._unlink(stale)
+        if self._closed or self._available() <= keep:
+            return None
+        slot = next((s for s in self._slots if s.holds == 0), None)
+        if slot is None:
+            slot = Slot(SharedMemory(create=True, size=int(np.prod(shape))), shape)
+            self._slots.append(slot)
+        slot.holds = 1
+        return slot
+
+    def _view(self, slot: Slot) -> np.ndarray:
+        """A view of ``slot`` whose finalizer drops one hold (taken by the caller)."""
+        view = slot.array()
+        weakref.finalize(view, self._drop, slot)
+        return view
 
     def _drop(self, slot: Slot) -> None:
         with self._lock:

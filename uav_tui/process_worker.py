@@ -63,10 +63,10 @@ class ProcessorRaised(Exception):
 
 @dataclass(slots=True)
 class _InFlight:
-    frame_seq: int
-    t_mono_ns: int
-    t_wall_ns: int
+    frame: Frame
     slot: Slot
+    copied: bool
+    """The frame was copied into ``slot`` (False: it was captured there)."""
     sent_ns: int
 
 
@@ -181,7 +181,9 @@ class ProcessWorker:
         with self._lock:
             if self._buffer is not None:
                 self._buffer.remove_listener(self._on_frame)
+                self._buffer.set_allocator(None)
             self._buffer = buffer
+            buffer.set_allocator(self._ring.capture_view)  # cameras that can decode into shared memory do
             buffer.add_listener(self._on_frame)
         self._nudge()
 
@@ -226,6 +228,9 @@ class ProcessWorker:
     async def reload(self) -> ProcessorInfo:
         """Start a new child with the code as it is now; swap only once it loaded (else the old one keeps running)."""
         fresh = await self._start_child()
+        if self._restart_task is not None:  # the operator's fixed code replaces a crashed processor's restarts
+            self._restart_task.cancel()
+            self._restarts.clear()
         old = self._child
         self._adopt(fresh)
         if old is not None:
@@ -256,6 +261,7 @@ class ProcessWorker:
             self._closing = True
             if self._buffer is not None:
                 self._buffer.remove_listener(self._on_frame)
+                self._buffer.set_allocator(None)
             self._wake.notify()
         if self._restart_task is not None:
             self._restart_task.cancel()
@@ -322,7 +328,7 @@ class ProcessWorker:
     # -- frames (the feeder thread; anyone may nudge it) -----------------------------------------
 
     def _on_frame(self, frame: Frame) -> None:
-        self._nudge()
+        self._try_hand_over(may_copy=False)  # capture thread: a frame captured into a slot goes at once
 
     def _nudge(self) -> None:
         """Wake the feeder: a frame arrived, the child finished one, a slot was freed, a child started."""
@@ -341,36 +347,44 @@ class ProcessWorker:
                 if self._closing:
                     return
                 self._nudged = False
-            try:
-                self._hand_over()
-            except Exception:  # a bug here must not stop the frames: say so, go on with the next one
-                logger.exception("ProcessWorker(%s): handing a frame over failed", self.spec)
+            self._try_hand_over(may_copy=True)
 
-    def _hand_over(self) -> None:
-        """Hand the newest frame to the child if it is idle and has not seen it (feeder thread only)."""
+    def _try_hand_over(self, *, may_copy: bool) -> None:
+        try:
+            self._hand_over(may_copy=may_copy)
+        except Exception:  # a bug here must not stop the frames (or the camera): say so, go on
+            logger.exception("ProcessWorker(%s): handing a frame over failed", self.spec)
+
+    def _hand_over(self, *, may_copy: bool) -> None:
+        """Hand the newest frame to the child if it is idle and has not seen it.
+
+        A frame captured into a slot goes from whichever thread noticed (no copy, no thread switch);
+        one that must be copied is left to the feeder thread (``may_copy``), off the capture thread.
+        """
         with self._lock:
             child, buffer = self._child, self._buffer
             if self._closing or child is None or buffer is None or child.in_flight is not None:
                 return
             if self._sent == (buffer, buffer.newest_seq):
                 return
-            newest = buffer.peek()
-            if newest is None:
-                return
-            slot = self._ring.acquire(newest.image.shape)
-            if slot is None:
-                return
             frame = buffer.latest()
-            assert frame is not None
-            if frame.image.shape != slot.shape:  # the camera changed size in between: take it next time
-                self._ring.release_child(slot)
+            if frame is None:
+                return
+            slot = self._ring.take_for_child(frame.image)
+            copied = slot is None
+            if copied and not may_copy:
                 self._nudged = True
+                self._wake.notify()
                 return
             self._sent = (buffer, frame.seq)
+            slot = slot or self._ring.acquire(frame.image.shape)
+            if slot is None:
+                return  # every slot held: this frame is skipped, a newer one or a freed slot nudges again
             child.held[slot.name] = slot
-            child.in_flight = _InFlight(frame.seq, frame.t_mono_ns, frame.t_wall_ns, slot, time.monotonic_ns())
+            child.in_flight = _InFlight(frame, slot, copied, time.monotonic_ns())
             forget, self._to_forget = self._to_forget, []
-        np.copyto(slot.array(), frame.image)  # the slot is ours alone until it is sent
+        if copied:
+            np.copyto(slot.array(), frame.image)  # the slot is ours alone until it is sent
         snapshot = self.telemetry.snapshot() if self.telemetry is not None else None
         telemetry = {name: getattr(snapshot, name) for name in TELEMETRY_FIELDS} if snapshot is not None else {}
         if forget:
@@ -434,12 +448,13 @@ class ProcessWorker:
         _, seq, start, end, t_vector, vector, box, error, saves, released = message
         with self._lock:
             flight, child.in_flight = child.in_flight, None
-            image = self._ring.lend(flight.slot) if flight is not None and flight.frame_seq == seq else None
         self._release(child, released)
-        self._nudge()
-        if flight is None or image is None or self._loop is None or self._loop.is_closed():
+        self._try_hand_over(may_copy=False)
+        if flight is None or flight.frame.seq != seq or self._loop is None or self._loop.is_closed():
             return
-        frame = Frame(image, seq, flight.t_mono_ns, flight.t_wall_ns)
+        frame = flight.frame
+        if flight.copied:  # the overlay is in the slot, not in the camera's array
+            frame = Frame(self._ring.lend(flight.slot), seq, frame.t_mono_ns, frame.t_wall_ns)
         result = ProcessedFrame(frame=frame, t_start_ns=start, t_end_ns=end, t_vector_ns=t_vector, vector=vector,
                                 error=error, box=box)
         self._loop.call_soon_threadsafe(self._deliver, child, result, saves)

@@ -14,10 +14,12 @@ from contextlib import asynccontextmanager
 from pathlib import Path
 from typing import Any
 
+import cv2
 import numpy as np
 import pytest
 
 from processors import load_processor
+from sources import open_source
 from sources.buffer import FrameBuffer
 from sources.synthetic import SyntheticSource
 from uav_tui.events import EventLog
@@ -166,3 +168,49 @@ def test_frame_buffer_counts_overwrites_and_stamps() -> None:
     assert buffer.overwritten == 2  # the third frame was read before the fourth replaced it
     assert buffer.wait_newer(4, timeout=0.01) is None
     assert buffer.wait_newer(3, timeout=0.01).seq == 4
+
+
+DRAWING = '''
+class Drawing:
+    def __init__(self):
+        self.count = 0
+
+    def photo_processing(self, frame):
+        self.count += 1
+        frame[:8, :8] = self.count % 251  # the overlay: which call drew on this frame
+'''
+
+
+async def test_frames_kept_by_readers_are_never_overwritten(tmp_path: Path) -> None:
+    """Process isolation: a reader may keep ``result.frame.image`` (a shared-memory slot) as long as it likes."""
+    (tmp_path / "drawing.py").write_text(DRAWING)
+    video = tmp_path / "clip.mp4"
+    writer = cv2.VideoWriter(str(video), cv2.VideoWriter_fourcc(*"mp4v"), 30, (160, 120))
+    for i in range(20):
+        writer.write(np.full((120, 160, 3), i * 10, np.uint8))
+    writer.release()
+    source = open_source(f"file:{video}?realtime=0")  # decodes straight into the worker's slots
+    kept: list[tuple[np.ndarray, np.ndarray]] = []
+    processed = 0
+
+    def on_result(result: ProcessedFrame) -> None:
+        nonlocal processed
+        processed += 1
+        if processed % 10 == 0 and len(kept) < 5:
+            kept.append((result.frame.image, result.frame.image.copy()))  # the view, and what it showed then
+
+    try:
+        async with running_worker("process", f"{tmp_path}/drawing.py:Drawing", on_result) as worker:
+            worker.attach(source.buffer)
+            task = asyncio.create_task(worker.run())
+            deadline = time.monotonic() + 20
+            while processed < 200 and time.monotonic() < deadline:
+                await asyncio.sleep(0.01)
+            task.cancel()
+    finally:
+        source.close()
+    assert processed >= 200 and len(kept) == 5
+    overlays = [int(copy[0, 0, 0]) for _, copy in kept]
+    assert overlays == [n % 251 for n in (10, 20, 30, 40, 50)]  # the child's drawing reached the platform
+    for view, copy in kept:
+        assert np.array_equal(view, copy)  # 150 frames later, still the same pixels
