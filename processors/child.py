@@ -21,7 +21,7 @@ child -> platform::
     ("reply", call_id, ok, value_or_error, saves, released)
 
 ``saves`` are the ``tmMgr.save(frame, **extra)`` calls made meanwhile: ``(image, extra)``, the image
-``None`` when it was the slot itself (the platform reads it from there, nothing is pickled).
+copied at the call (what is drawn afterwards must not reach the dataset), so it is pickled.
 ``released`` names the slots this process no longer references: a processor may keep a frame (the
 previous one, for optical flow) and the platform must not reuse that slot until it lets go.
 
@@ -65,9 +65,7 @@ class FrameTelemetry:
 
     def __init__(self) -> None:
         self.current: SimpleNamespace = SimpleNamespace()
-        self.saves: list[tuple[Any, dict[str, Any]]] = []
-        self.slot_view: np.ndarray | None = None
-        """The frame being processed (a view of its shared-memory slot)."""
+        self.saves: list[tuple[np.ndarray, dict[str, Any]]] = []
 
     def snapshot(self) -> SimpleNamespace:
         """The telemetry at the capture of the frame being processed (fields as in ``controllers.base.Telemetry``)."""
@@ -83,11 +81,10 @@ class FrameTelemetry:
         image = getattr(frame, "image", frame)
         if not isinstance(image, np.ndarray) or image.ndim not in (2, 3):
             raise TypeError(f"tmMgr.save(frame, **extra): frame must be an image array, got {type(image).__name__}")
-        view = self.slot_view
-        same = view is not None and image.shape == view.shape and _address(image) == _address(view)
-        self.saves.append((None if same else np.array(image), {k: _picklable(v) for k, v in extra.items()}))
+        # A copy: the image as it is now, not with what photo_processing draws on it afterwards.
+        self.saves.append((np.array(image), {k: _picklable(v) for k, v in extra.items()}))
 
-    def take_saves(self) -> list[tuple[Any, dict[str, Any]]]:
+    def take_saves(self) -> list[tuple[np.ndarray, dict[str, Any]]]:
         saves, self.saves = self.saves, []
         return saves
 
@@ -128,10 +125,6 @@ class Slots:
             resource_tracker.unregister(shm._name, "shared_memory")  # type: ignore[attr-defined]
         self._mapped[name] = shm
         return shm
-
-
-def _address(array: np.ndarray) -> int:
-    return array.__array_interface__["data"][0]
 
 
 def _picklable(value: Any) -> Any:
@@ -185,7 +178,6 @@ class ChildRunner:
                 telemetry: dict[str, Any]) -> tuple[Any, ...]:
         self.telemetry.current = SimpleNamespace(**telemetry)
         image = self.slots.view(slot, shape)
-        self.telemetry.slot_view = image
         vector, box, error, t_vector = None, None, None, 0
         start = time.monotonic_ns()
         try:
@@ -200,7 +192,6 @@ class ChildRunner:
         except Exception:  # noqa: BLE001 - counted and reported by the platform, never fatal
             end = time.monotonic_ns()
             error = traceback.format_exc()
-        self.telemetry.slot_view = None
         del image
         return ("result", seq, start, end, t_vector, vector, box, error, self.telemetry.take_saves(),
                 self.slots.released())

@@ -482,9 +482,7 @@ class ProcessWorker:
         self.current = result
         try:
             for image, extra in saves:
-                image = result.frame.image if image is None and result is not None else image
-                if image is not None:
-                    self.telemetry.save(image, **extra)
+                self.telemetry.save(image, **extra)
         finally:
             self.current = None
 
