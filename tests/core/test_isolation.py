@@ -21,7 +21,7 @@ from tests.core.flight_helpers import fly_under_autonomy, flying_core, speed, wa
 from uav_tui import dataset
 from uav_tui.config import load_config
 from uav_tui.core import UavCore
-from uav_tui.errors import ProcessorLoadError, UavError
+from uav_tui.errors import ConfigError, ProcessorLoadError, UavError
 from uav_tui.events import EventLog
 from uav_tui.headless import format_status
 from uav_tui.process_worker import ProcessWorker
@@ -260,3 +260,9 @@ async def test_reload_swaps_only_a_processor_that_loads(tmp_path: Path) -> None:
     finally:
         await core.stop()
 
+
+
+def test_isolation_accepts_only_process_or_thread() -> None:
+    assert load_config(None, {"isolation": "thread"}).isolation == "thread"
+    with pytest.raises(ConfigError, match="isolation must be one of process, thread, got 'procss'"):
+        load_config(None, {"isolation": "procss"})
