@@ -448,13 +448,16 @@ class ProcessWorker:
         _, seq, start, end, t_vector, vector, box, error, saves, released = message
         with self._lock:
             flight, child.in_flight = child.in_flight, None
+            ours = flight is not None and flight.frame.seq == seq
+            # A copied-in frame's overlay is in the slot: lend it before the child's hold goes.
+            slot_view = self._ring.lend(flight.slot) if ours and flight.copied else None
         self._release(child, released)
         self._try_hand_over(may_copy=False)
-        if flight is None or flight.frame.seq != seq or self._loop is None or self._loop.is_closed():
+        if not ours or self._loop is None or self._loop.is_closed():
             return
         frame = flight.frame
-        if flight.copied:  # the overlay is in the slot, not in the camera's array
-            frame = Frame(self._ring.lend(flight.slot), seq, frame.t_mono_ns, frame.t_wall_ns)
+        if slot_view is not None:
+            frame = Frame(slot_view, seq, frame.t_mono_ns, frame.t_wall_ns)
         result = ProcessedFrame(frame=frame, t_start_ns=start, t_end_ns=end, t_vector_ns=t_vector, vector=vector,
                                 error=error, box=box)
         self._loop.call_soon_threadsafe(self._deliver, child, result, saves)

@@ -181,15 +181,19 @@ class Drawing:
 '''
 
 
-async def test_frames_kept_by_readers_are_never_overwritten(tmp_path: Path) -> None:
-    """Process isolation: a reader may keep ``result.frame.image`` (a shared-memory slot) as long as it likes."""
+@pytest.mark.parametrize("camera", ["file", "synthetic"])
+async def test_frames_kept_by_readers_are_never_overwritten(tmp_path: Path, camera: str) -> None:
+    """Process isolation: a reader may keep ``result.frame.image`` (a shared-memory slot) as long as it likes.
+
+    A file is decoded straight into the slots; the synthetic camera draws its own arrays, copied in.
+    """
     (tmp_path / "drawing.py").write_text(DRAWING)
     video = tmp_path / "clip.mp4"
     writer = cv2.VideoWriter(str(video), cv2.VideoWriter_fourcc(*"mp4v"), 30, (160, 120))
     for i in range(20):
         writer.write(np.full((120, 160, 3), i * 10, np.uint8))
     writer.release()
-    source = open_source(f"file:{video}?realtime=0")  # decodes straight into the worker's slots
+    source = open_source(f"file:{video}?realtime=0" if camera == "file" else "synthetic:?fps=200&width=160&height=120")
     kept: list[tuple[np.ndarray, np.ndarray]] = []
     processed = 0
 
