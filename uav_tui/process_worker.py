@@ -13,20 +13,13 @@ its output), ``on_fault`` stops autonomy, and a fresh child with the same argume
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import itertools
 import logging
-import multiprocessing
-import os
-import signal
 import subprocess
-import sys
 import threading
 import time
 from collections import deque
 from collections.abc import Callable
-from dataclasses import dataclass, field
-from multiprocessing.connection import Connection
 from typing import Any
 
 import numpy as np
@@ -34,12 +27,12 @@ import numpy as np
 from controllers.base import TELEMETRY_FIELDS
 from processors import LoadedProcessor
 from processors.base import ProcessorInfo
-from processors.child import MEMORY_EXIT_CODE
 from processors.errors import ProcessorLoadError
 from sources.buffer import Frame, FrameBuffer
 from uav_tui.errors import UavError
 from uav_tui.events import EventLog
-from uav_tui.frame_ring import FrameRing, Slot
+from uav_tui.frame_ring import FrameRing
+from uav_tui.processor_process import ChildProcess, InFlight, PendingCall, describe_exit, rss_mb, spawn
 from uav_tui.stats import PipelineStats, RollingStats
 from uav_tui.telemetry import TelemetryManager
 from uav_tui.worker import ProcessedFrame, ProcessorState
@@ -52,56 +45,10 @@ LOAD_TIMEOUT_S = 60.0
 MAX_RESTARTS = 5
 """Restarts allowed within :data:`RESTART_WINDOW_S`; one more crash and the platform gives up."""
 RESTART_WINDOW_S = 60.0
-TAIL_LINES = 30
-"""Lines of the child's output (its stdout and stderr, forwarded to ours) kept for the crash report."""
-LINE_CHARS = 300
 
 
 class ProcessorRaised(Exception):
     """The researcher's method raised in the child; the message is ``Type: message``."""
-
-
-@dataclass(slots=True)
-class _InFlight:
-    frame: Frame
-    slot: Slot
-    copied: bool
-    """The frame was copied into ``slot`` (False: it was captured there)."""
-    sent_ns: int
-
-
-@dataclass(slots=True)
-class _Call:
-    what: str
-    sent_ns: int
-    future: asyncio.Future[Any]
-
-
-@dataclass(eq=False)
-class _Child:
-    """One processor process, its pipe and what it has been given."""
-
-    proc: subprocess.Popen[bytes]
-    conn: Connection
-    ready: asyncio.Future[ProcessorInfo]
-    tail: deque[str] = field(default_factory=lambda: deque(maxlen=TAIL_LINES))
-    in_flight: _InFlight | None = None
-    calls: dict[int, _Call] = field(default_factory=dict)
-    held: dict[str, Slot] = field(default_factory=dict)
-    """Slots the child may still reference."""
-    kill_reason: str = ""
-    """Why the platform killed it (empty: it died by itself)."""
-    output_done: threading.Event = field(default_factory=threading.Event)
-
-    @property
-    def pid(self) -> int:
-        return self.proc.pid
-
-    def busy_since_ns(self) -> int | None:
-        starts = [c.sent_ns for c in self.calls.values()]
-        if self.in_flight is not None:
-            starts.append(self.in_flight.sent_ns)
-        return min(starts, default=None)
 
 
 class ProcessWorker:
@@ -145,14 +92,14 @@ class ProcessWorker:
         self._nudged = False
         self._ring = FrameRing(on_free=self._nudge, on_unlink=self._forget)
         self._to_forget: list[str] = []
-        self._child: _Child | None = None
+        self._child: ChildProcess | None = None
         self._buffer: FrameBuffer | None = None
         self._sent: tuple[FrameBuffer | None, int] = (None, 0)
         self._loop: asyncio.AbstractEventLoop | None = None
         self._call_ids = itertools.count(1)
         self._restarts: deque[float] = deque()
         self._restart_task: asyncio.Task[None] | None = None
-        self._all_children: list[_Child] = []
+        self._all_children: list[ChildProcess] = []
         self._closing = False
         self._running = False
         threading.Thread(target=self._feed, name=f"processor-feeder({spec})", daemon=True).start()
@@ -198,9 +145,7 @@ class ProcessWorker:
                 child = self._child
                 busy = self.busy_s
                 if child is not None and busy > self.timeout_s and not child.kill_reason:
-                    child.kill_reason = (f"no answer for {busy:.1f} s (processor_timeout = {self.timeout_s:g} s): "
-                                         "killed")
-                    child.proc.kill()
+                    child.kill(f"no answer for {busy:.1f} s (processor_timeout = {self.timeout_s:g} s): killed")
         finally:
             self.close()
             await asyncio.get_running_loop().run_in_executor(None, self._reap, 2.0)
@@ -219,7 +164,7 @@ class ProcessWorker:
                            f"restarted after processor_timeout = {self.timeout_s:g} s")
         call_id = next(self._call_ids)
         future: asyncio.Future[Any] = asyncio.get_running_loop().create_future()
-        child.calls[call_id] = _Call(f"{method}{args!r}", time.monotonic_ns(), future)
+        child.calls[call_id] = PendingCall(f"{method}{args!r}", time.monotonic_ns(), future)
         if not self._send(child, ("call", call_id, method, args)):
             child.calls.pop(call_id)
             raise UavError(f"the processor is not running ({self.state_text})")
@@ -253,7 +198,7 @@ class ProcessWorker:
     def state(self) -> ProcessorState:
         child = self._child
         pid = child.pid if child is not None else None
-        return ProcessorState(self.isolation, self.state_text, pid, _rss_mb(pid) if pid else None)
+        return ProcessorState(self.isolation, self.state_text, pid, rss_mb(pid) if pid else None)
 
     def close(self) -> None:
         """Stop taking frames and kill every child at once (whatever the processor is doing). Idempotent."""
@@ -266,8 +211,7 @@ class ProcessWorker:
         if self._restart_task is not None:
             self._restart_task.cancel()
         for child in self._all_children:
-            if child.proc.poll() is None:
-                child.proc.kill()
+            child.kill("stopped")
             for call in child.calls.values():
                 if not call.future.done():
                     call.future.cancel()
@@ -275,35 +219,25 @@ class ProcessWorker:
 
     # -- children --------------------------------------------------------------------------------
 
-    async def _start_child(self) -> _Child:
+    async def _start_child(self) -> ChildProcess:
         loop = self._loop = asyncio.get_running_loop()
-        ours, theirs = multiprocessing.Pipe()
-        env = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in sys.path if p)}
-        proc = await loop.run_in_executor(None, lambda: subprocess.Popen(
-            [sys.executable, "-m", "processors.child", str(theirs.fileno())], pass_fds=(theirs.fileno(),),
-            stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, env=env))
-        theirs.close()
-        child = _Child(proc, ours, loop.create_future())
+        child = await loop.run_in_executor(None, spawn, loop.create_future())
         self._all_children.append(child)
-        threading.Thread(target=self._read_output, args=(child,), name=f"processor-{proc.pid}-output",
+        threading.Thread(target=self._read_pipe, args=(child,), name=f"processor-{child.pid}-pipe",
                          daemon=True).start()
-        threading.Thread(target=self._read_pipe, args=(child,), name=f"processor-{proc.pid}-pipe", daemon=True).start()
-        ours.send(("load", self.spec, self.kwargs, self.memory_mb))
+        self._send(child, ("load", self.spec, self.kwargs, self.memory_mb))
         try:
             await asyncio.wait_for(asyncio.shield(child.ready), LOAD_TIMEOUT_S)
         except TimeoutError:
-            child.kill_reason = "killed"
-            proc.kill()
+            child.kill("killed")
             raise ProcessorLoadError(f"{self.spec} did not finish loading within {LOAD_TIMEOUT_S:g} s",
                                      class_name=self.spec.rpartition(":")[2]) from None
         except BaseException:
-            if proc.poll() is None:
-                child.kill_reason = "killed"
-                proc.kill()
+            child.kill("killed")
             raise
         return child
 
-    def _adopt(self, child: _Child) -> None:
+    def _adopt(self, child: ChildProcess) -> None:
         info = child.ready.result()
         self.processor = LoadedProcessor(instance=None, info=info, spec=self.spec, kwargs=self.kwargs)
         with self._lock:
@@ -312,14 +246,13 @@ class ProcessWorker:
         self.state_text = "running"
         self._nudge()
 
-    def _retire(self, child: _Child, why: str) -> None:
-        child.kill_reason = why
-        child.proc.kill()
+    def _retire(self, child: ChildProcess, why: str) -> None:
+        child.kill(why)
         for call in child.calls.values():
             if not call.future.done():
                 call.future.set_exception(UavError(f"{call.what} not answered: the processor was {why}"))
 
-    def _running_child(self) -> _Child:
+    def _running_child(self) -> ChildProcess:
         child = self._child
         if child is None or child.proc.poll() is not None:
             raise UavError(f"the processor is not running ({self.state_text})")
@@ -381,7 +314,7 @@ class ProcessWorker:
             if slot is None:
                 return  # every slot held: this frame is skipped, a newer one or a freed slot nudges again
             child.held[slot.name] = slot
-            child.in_flight = _InFlight(frame, slot, copied, time.monotonic_ns())
+            child.in_flight = InFlight(frame, slot, copied, time.monotonic_ns())
             forget, self._to_forget = self._to_forget, []
         if copied:
             np.copyto(slot.array(), frame.image)  # the slot is ours alone until it is sent
@@ -391,7 +324,7 @@ class ProcessWorker:
             self._send(child, ("forget", forget))
         self._send(child, ("frame", slot.name, slot.shape, frame.seq, frame.t_mono_ns, frame.t_wall_ns, telemetry))
 
-    def _send(self, child: _Child, message: tuple[Any, ...]) -> bool:
+    def _send(self, child: ChildProcess, message: tuple[Any, ...]) -> bool:
         """Send one message to ``child``; False when it is gone (its pipe reader reports that)."""
         try:
             with self._send_lock:
@@ -403,7 +336,7 @@ class ProcessWorker:
     def _forget(self, names: list[str]) -> None:
         self._to_forget.extend(names)
 
-    def _release(self, child: _Child, names: list[str]) -> None:
+    def _release(self, child: ChildProcess, names: list[str]) -> None:
         with self._lock:
             slots = [child.held.pop(name) for name in names if name in child.held]
         for slot in slots:
@@ -411,7 +344,7 @@ class ProcessWorker:
 
     # -- the child's output (reader threads) ------------------------------------------------------
 
-    def _read_pipe(self, child: _Child) -> None:
+    def _read_pipe(self, child: ChildProcess) -> None:
         loop = self._loop
         assert loop is not None
         while True:
@@ -433,18 +366,7 @@ class ProcessWorker:
         if not loop.is_closed():
             loop.call_soon_threadsafe(self._on_exit, child, returncode)
 
-    def _read_output(self, child: _Child) -> None:
-        assert child.proc.stdout is not None
-        with child.proc.stdout as output:
-            for raw in output:
-                line = raw.decode("utf-8", "replace").rstrip()
-                line = "".join(c if c.isprintable() else "?" for c in line)[:LINE_CHARS]
-                child.tail.append(line)
-                with contextlib.suppress(OSError, ValueError):  # where print() goes in thread isolation too
-                    print(line, file=sys.stdout, flush=True)
-        child.output_done.set()
-
-    def _take_result(self, child: _Child, message: tuple[Any, ...]) -> None:
+    def _take_result(self, child: ChildProcess, message: tuple[Any, ...]) -> None:
         _, seq, start, end, t_vector, vector, box, error, saves, released = message
         with self._lock:
             flight, child.in_flight = child.in_flight, None
@@ -464,7 +386,7 @@ class ProcessWorker:
 
     # -- on the loop -----------------------------------------------------------------------------
 
-    def _deliver(self, child: _Child, result: ProcessedFrame, saves: list[tuple[Any, dict[str, Any]]]) -> None:
+    def _deliver(self, child: ChildProcess, result: ProcessedFrame, saves: list[tuple[Any, dict[str, Any]]]) -> None:
         if child is not self._child or self._closing:
             return
         self._store(saves, result)
@@ -489,7 +411,7 @@ class ProcessWorker:
         finally:
             self.current = None
 
-    def _on_message(self, child: _Child, message: tuple[Any, ...]) -> None:
+    def _on_message(self, child: ChildProcess, message: tuple[Any, ...]) -> None:
         kind = message[0]
         if kind == "ready":
             if not child.ready.done():
@@ -509,16 +431,16 @@ class ProcessWorker:
                 else:
                     call.future.set_exception(ProcessorRaised(value))
 
-    def _on_death(self, child: _Child, returncode: int) -> None:
+    def _on_death(self, child: ChildProcess, returncode: int) -> None:
         """The current child is gone: stop autonomy at once (``on_fault``), before anything else."""
         if child is self._child and not self._closing:
             self.state_text = "crashed"
             self._on_fault(f"processor (pid {child.pid}) {self._reason(child, returncode)}")
 
-    def _reason(self, child: _Child, returncode: int) -> str:
+    def _reason(self, child: ChildProcess, returncode: int) -> str:
         return child.kill_reason or describe_exit(returncode, self.memory_mb)
 
-    def _on_exit(self, child: _Child, returncode: int) -> None:
+    def _on_exit(self, child: ChildProcess, returncode: int) -> None:
         reason = self._reason(child, returncode)
         with self._lock:
             child.in_flight = None
@@ -575,22 +497,3 @@ class ProcessWorker:
             except subprocess.TimeoutExpired:
                 logger.error("ProcessWorker(%s): pid %s did not exit", self.spec, child.pid)
 
-
-def describe_exit(returncode: int, memory_mb: float | None) -> str:
-    """``exited with code 3``, ``killed by SIGSEGV``, ``hit processor_memory_mb = 300 MB`` ..."""
-    if returncode == MEMORY_EXIT_CODE and memory_mb:
-        return f"ran out of memory: processor_memory_mb = {memory_mb:g} MB reached"
-    if returncode < 0:
-        name = signal.Signals(-returncode).name if -returncode in signal.valid_signals() else str(-returncode)
-        hint = " (out of memory? the kernel's OOM killer sends it)" if -returncode == signal.SIGKILL else ""
-        return f"killed by {name}{hint}"
-    return f"exited with code {returncode}"
-
-
-def _rss_mb(pid: int) -> float | None:
-    """Resident memory of ``pid`` in MB (Linux ``/proc``), None where unknown."""
-    try:
-        with open(f"/proc/{pid}/statm") as statm:
-            return int(statm.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 1e6
-    except (OSError, ValueError, IndexError):
-        return None
