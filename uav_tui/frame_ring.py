@@ -23,10 +23,13 @@ of another size (the camera changed) is never reused: free slots of the old size
 
 from __future__ import annotations
 
+import contextlib
+import sys
 import threading
 import weakref
 from collections.abc import Callable
 from dataclasses import dataclass
+from multiprocessing import resource_tracker
 from multiprocessing.shared_memory import SharedMemory
 
 import numpy as np
@@ -76,6 +79,7 @@ class FrameRing:
         self._on_free = on_free
         self._on_unlink = on_unlink
         self._closed = False
+        _start_resource_tracker()
 
     def capture_view(self, shape: tuple[int, ...]) -> np.ndarray | None:
         """A free slot as an array for a camera to decode into (``FrameBuffer`` allocator), or None.
@@ -178,3 +182,13 @@ class FrameRing:
             if slot.holds == 0:
                 slot.shm.close()
         self._on_unlink([s.name for s in slots])
+
+
+def _start_resource_tracker() -> None:
+    """Start multiprocessing's resource tracker (it unlinks our slots if this process is killed) now.
+
+    It is started on the first SharedMemory and hands it ``sys.stderr``'s descriptor; under the
+    dashboard, Textual has replaced ``sys.stderr`` with an object that has none, so give it the real one.
+    """
+    with contextlib.redirect_stderr(sys.__stderr__ or sys.stderr):
+        resource_tracker.ensure_running()
