@@ -63,13 +63,14 @@ class ProcessWorker:
         on_fault: called on the loop with the reason when the child dies or is killed (stop autonomy).
         timeout_s: a frame or call unanswered this long gets the child killed and restarted.
         memory_mb: the child's address-space cap (RLIMIT_AS), None for none.
+        first_backoff_s: the wait before the first restart; it doubles with each one.
     """
 
     isolation = "process"
 
     def __init__(self, spec: str, kwargs: dict[str, Any], on_result: Callable[[ProcessedFrame], None], *,
                  events: EventLog, on_fault: Callable[[str], None], timeout_s: float = 5.0,
-                 memory_mb: float | None = None) -> None:
+                 memory_mb: float | None = None, first_backoff_s: float = 1.0) -> None:
         self.spec, self.kwargs = spec, dict(kwargs)
         self.processor = LoadedProcessor(instance=None, info=ProcessorInfo(spec, None, frozenset()), spec=spec,
                                          kwargs=self.kwargs)
@@ -83,6 +84,7 @@ class ProcessWorker:
         self.events = events
         self.timeout_s = timeout_s
         self.memory_mb = memory_mb
+        self.first_backoff_s = first_backoff_s
         self.state_text = "starting"
         self._on_result = on_result
         self._on_fault = on_fault
@@ -476,7 +478,7 @@ class ProcessWorker:
                 return
             attempt = len(self._restarts) + 1
             self.state_text = f"restarting {attempt}"
-            await asyncio.sleep(2 ** (attempt - 1))
+            await asyncio.sleep(self.first_backoff_s * 2 ** (attempt - 1))
             self._restarts.append(time.monotonic())
             try:
                 child = await self._start_child()

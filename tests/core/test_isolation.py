@@ -15,8 +15,10 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
+from sources.buffer import FrameBuffer
 from tests.core.flight_helpers import fly_under_autonomy, flying_core, speed, wait_until
 from uav_tui import dataset
 from uav_tui.config import load_config
@@ -266,3 +268,43 @@ def test_isolation_accepts_only_process_or_thread() -> None:
     assert load_config(None, {"isolation": "thread"}).isolation == "thread"
     with pytest.raises(ConfigError, match="isolation must be one of process, thread, got 'procss'"):
         load_config(None, {"isolation": "procss"})
+
+
+CRASH_LOOP = '''
+import os
+from pathlib import Path
+
+class CrashLoop:
+    """Dies on its first frame; every later construction fails."""
+
+    def __init__(self, marker):
+        if Path(marker).exists():
+            raise RuntimeError("still broken")
+        self.marker = marker
+
+    def photo_processing(self, frame):
+        Path(self.marker).touch()
+        os._exit(3)
+'''
+
+
+async def test_after_five_restarts_in_a_minute_it_gives_up_and_says_so(tmp_path: Path) -> None:
+    (tmp_path / "crash_loop.py").write_text(CRASH_LOOP)
+    events, faults = EventLog(), []
+    worker = await ProcessWorker.start(f"{tmp_path}/crash_loop.py:CrashLoop", {"marker": str(tmp_path / "died")},
+                                       print, events=events, on_fault=faults.append, first_backoff_s=0.05)
+    buffer = FrameBuffer()
+    worker.attach(buffer)
+    task = asyncio.create_task(worker.run())
+    try:
+        buffer.put(np.zeros((4, 4, 3), np.uint8))
+        await wait_until(lambda: worker.state().state.startswith("crashed: "), 30, "the platform to give up")
+    finally:
+        task.cancel()
+        await asyncio.gather(task, return_exceptions=True)
+    messages = [e.message for e in events.recent]
+    restarts = [m.split(":")[0] for m in messages if m.startswith("restart ")]
+    assert restarts == [f"restart {n} failed" for n in range(1, 6)]
+    assert any(m.startswith("gave up: 5 restarts within 60 s") for m in messages)
+    assert worker.state().state == "crashed: restart failed: " + messages[-2].partition(" failed: ")[2]
+    assert len(faults) == 1 and "exited with code 3" in faults[0]  # autonomy was stopped once, at the death
