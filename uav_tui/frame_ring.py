@@ -15,9 +15,9 @@ them. Holds are counted, and a slot goes back to the free list when the count re
 - ``lend`` gives a copied-in slot's view to the frame's ``ProcessedFrame`` (a view's hold again).
 
 When readers keep many frames the ring grows, up to ``max_slots``. Before it runs dry, ``lend`` hands
-out a private copy instead of a view (``copied`` counts them), so a reader that keeps every frame costs
+out a private copy instead of a view, so a reader that keeps every frame costs
 memory, as it would with the thread worker, but never stops the pipeline; if the child itself keeps
-frames and every slot is held, the capture side skips frames until one is free (``starved``). A slot
+frames and every slot is held, the capture side skips frames until one is free. A slot
 of another size (the camera changed) is never reused: free slots of the old size are unlinked.
 """
 
@@ -70,10 +70,6 @@ class FrameRing:
     def __init__(self, *, max_slots: int = MAX_SLOTS, on_free: Callable[[], None] = lambda: None,
                  on_unlink: Callable[[list[str]], None] = lambda names: None) -> None:
         self.max_slots = max_slots
-        self.starved = 0
-        """Frames skipped because every slot was held."""
-        self.copied = 0
-        """Frames lent as private copies because readers held too many slots."""
         self._slots: list[Slot] = []
         self._lock = threading.RLock()
         self._on_free = on_free
@@ -106,10 +102,7 @@ class FrameRing:
     def acquire(self, shape: tuple[int, ...]) -> Slot | None:
         """A free slot of ``shape`` with the child's hold taken (the frame is copied in), or None."""
         with self._lock:
-            slot = self._take_free(shape, keep=0)
-            if slot is None:
-                self.starved += 1
-            return slot
+            return self._take_free(shape, keep=0)
 
     def lend(self, slot: Slot) -> np.ndarray:
         """A view of ``slot`` that holds it until the view and every array made from it are gone.
@@ -118,7 +111,6 @@ class FrameRing:
         """
         with self._lock:
             if self._available() < RESERVE:
-                self.copied += 1
                 return slot.array().copy()
             slot.holds += 1
         return self._view(slot)
@@ -126,14 +118,6 @@ class FrameRing:
     def release_child(self, slot: Slot) -> None:
         """The child no longer references ``slot`` (or died)."""
         self._drop(slot)
-
-    def find(self, name: str) -> Slot | None:
-        with self._lock:
-            return next((s for s in self._slots if s.name == name), None)
-
-    @property
-    def size(self) -> int:
-        return len(self._slots)
 
     def close(self) -> None:
         """Unlink every slot now (views still held stay valid); each is unmapped when its last hold goes."""
