@@ -80,6 +80,8 @@ class ProcessWorker:
         """The frame whose ``tmMgr.save`` requests are being stored (None between frames)."""
         self.last: ProcessedFrame | None = None
         self.consecutive_errors = 0
+        self.hand_over_failures = 0
+        """Frames that could not be handed to the child (a platform fault; the first is logged)."""
         self.telemetry: TelemetryManager | None = None
         self.events = events
         self.timeout_s = timeout_s
@@ -287,8 +289,11 @@ class ProcessWorker:
     def _try_hand_over(self, *, may_copy: bool) -> None:
         try:
             self._hand_over(may_copy=may_copy)
-        except Exception:  # a bug here must not stop the frames (or the camera): say so, go on
-            logger.exception("ProcessWorker(%s): handing a frame over failed", self.spec)
+        except Exception as exc:  # a bug here must not stop the camera: say so once, go on
+            self.hand_over_failures += 1
+            if self.hand_over_failures == 1:
+                logger.exception("ProcessWorker(%s): handing a frame over failed (logged once)", self.spec)
+                self.events.emit("error", "processor", f"frames cannot be handed to the processor: {exc!r}")
 
     def _hand_over(self, *, may_copy: bool) -> None:
         """Hand the newest frame to the child if it is idle and has not seen it.
