@@ -49,6 +49,7 @@ class FrameBuffer:
         """Frames put since creation."""
         self.overwritten = 0
         """Frames replaced before any reader took them."""
+        self._allocator: Callable[[tuple[int, ...]], np.ndarray | None] | None = None
 
     def put(self, image: np.ndarray, t_mono_ns: int | None = None, t_wall_ns: int | None = None) -> Frame:
         """Stamp ``image`` with the next sequence number and the capture times, and publish it.
@@ -104,6 +105,19 @@ class FrameBuffer:
                 self._read_seq = self._frame.seq
                 self._cond.notify_all()
             return self._frame
+
+    def set_allocator(self, allocator: Callable[[tuple[int, ...]], np.ndarray | None] | None) -> None:
+        """Let the reader provide the arrays frames are captured into (shared memory, say); None: the source's own."""
+        self._allocator = allocator
+
+    def new_image(self, shape: tuple[int, ...]) -> np.ndarray | None:
+        """An array of ``shape`` for the next frame to be decoded into, or None (then the source allocates).
+
+        Sources that can write into a given array (OpenCV's ``read(image)``) ask for one, so a reader
+        that shares frames with another process gets them written once, in place.
+        """
+        allocator = self._allocator
+        return allocator(shape) if allocator is not None else None
 
     def add_listener(self, listener: Callable[[Frame], None]) -> None:
         """Call ``listener(frame)`` on the capture thread after every put."""

@@ -73,11 +73,11 @@ class FileSource(VideoCaptureSource):
 
     def _read_frame(self) -> np.ndarray | None:
         assert self._capture is not None
-        ok, image = self._capture.read()
+        ok, image = self._capture.read(self._target())
         if not ok:  # end of file: start over
             self.loops += 1
             self._capture.set(cv2.CAP_PROP_POS_FRAMES, 0)
-            ok, image = self._capture.read()
+            ok, image = self._capture.read(self._target())
         return image if ok else None
 
     def _extra_properties(self) -> dict[str, Any]:

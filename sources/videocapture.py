@@ -79,8 +79,12 @@ class VideoCaptureSource(CaptureSource):
 
     def _read_frame(self) -> np.ndarray | None:
         assert self._capture is not None
-        ok, image = self._capture.read()
+        ok, image = self._capture.read(self._target())
         return image if ok else None
+
+    def _target(self) -> np.ndarray | None:
+        """The array the reader wants the next frame decoded into (None: OpenCV allocates one)."""
+        return self.buffer.new_image((self.height, self.width, 3)) if self.width and self.height else None
 
     def _close_device(self) -> None:
         self._first = None

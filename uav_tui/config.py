@@ -128,11 +128,23 @@ class Config:
     connect_timeout: float = _key("seconds to wait for the autopilot's first heartbeat", minimum=0.5, maximum=300,
                                   default=10.0)
     processor_args: dict[str, Any] = _key("keyword arguments for the processor's constructor", factory=dict)
+    isolation: str = _key("where the processor runs: 'process' (its own process: a hang or crash cannot take the "
+                          "platform down) or 'thread' (in the platform, for debugging with breakpoints)",
+                          default="process")
+    processor_timeout: float = _key("a processor call unanswered this long (s) gets its process killed and restarted",
+                                    minimum=0.5, maximum=600, default=5.0)
+    processor_call_timeout: float = _key("operator calls into the processor (F-keys, target selection) fail after "
+                                         "this long (s)", minimum=0.05, maximum=60, default=1.0)
+    processor_memory_mb: float = _key("cap on the processor process's address space, MB (RLIMIT_AS; 0 = no cap)",
+                                      minimum=0, maximum=1e6, default=0)
     safety: SafetyConfig = field(default_factory=SafetyConfig)
     recording: RecordingConfig = field(default_factory=RecordingConfig)
     web: WebConfig = field(default_factory=WebConfig)
     sim: SimConfig = field(default_factory=SimConfig)
 
+
+ISOLATION_MODES = ("process", "thread")
+"""Values of ``isolation``."""
 
 SECTIONS = {"safety": SafetyConfig, "recording": RecordingConfig, "web": WebConfig, "sim": SimConfig}
 """TOML table name -> the dataclass its keys go to."""
@@ -289,6 +301,8 @@ def _check(cls: type, key: str, value: Any, name: str, where: str) -> Any:
     if key == "web_token" and value and len(value) < MIN_TOKEN_CHARS:
         raise ConfigError(f"{where}: {name} must be at least {MIN_TOKEN_CHARS} characters (it has {len(value)}); "
                           "leave it empty for a random one per start", key=name)
+    if key == "isolation" and value not in ISOLATION_MODES:
+        raise ConfigError(f"{where}: {name} must be one of {', '.join(ISOLATION_MODES)}, got {value!r}", key=name)
     return value
 
 

@@ -27,6 +27,7 @@ from uav_tui.config import Config
 from uav_tui.errors import KNOWN_ERRORS, NoVehicle, SourceError, UavError
 from uav_tui.events import EventLog, Repeats
 from uav_tui.operations import Operations
+from uav_tui.process_worker import ProcessWorker
 from uav_tui.recording import Recorder, describe
 from uav_tui.replay.gate import ReplayGate
 from uav_tui.replay.operator import CommandReplay, recorded_commands
@@ -40,6 +41,9 @@ if TYPE_CHECKING:  # aiortc and pymavlink are imported only when the side channe
     from uav_tui.web.mavlink_tracking import CameraTracking
 
 logger = logging.getLogger(__name__)
+
+Worker = ProcessorWorker | ProcessWorker
+"""The two hosts of a processor (``isolation = "thread" | "process"``); they have one public surface."""
 
 
 class CoreState(enum.Enum):
@@ -63,7 +67,7 @@ class UavCore:
         self.gate = AutonomyGate(config.safety, self.telemetry, self.events)
         self.controller: FlightController | None = None
         self.source: CameraSource | None = None
-        self.worker: ProcessorWorker | None = None
+        self.worker: Worker | None = None
         self.recorder: Recorder | None = None
         """Writes the run's dataset (None with ``--no-record``)."""
         self.replay: ReplayTimeline | None = None
@@ -102,8 +106,7 @@ class UavCore:
         # The camera's one-off preparation (the sim: camera's ground) overlaps loading and connecting.
         camera_ready = loop.run_in_executor(None, warm_up_source, self.config.source)
         try:
-            processor = await loop.run_in_executor(
-                None, functools.partial(load_processor, self.config.processor, self.config.processor_args))
+            self.worker = await self._start_worker()
             self.controller = await connect_controller(self.config.fc, heartbeat_timeout=self.config.connect_timeout,
                                                        sim_vehicle=self.config.sim.vehicle())
             self.telemetry = TelemetryManager(self.controller)
@@ -114,10 +117,9 @@ class UavCore:
                 commands = recorded_commands(self.controller.run_dir / "events.csv")  # type: ignore[attr-defined]
                 self.replay.before_show = CommandReplay(self, loop, commands).before_show
             self.gate.telemetry, self.gate.controller = self.telemetry, self.controller
-            processor.instance.tmMgr = self.telemetry
+            self.worker.bind_telemetry(self.telemetry)
             await camera_ready
             self.source = await self.open_source(self.config.source)
-            self.worker = ProcessorWorker(processor, self._on_result)
             if self.config.recording.record:
                 self.recorder = await loop.run_in_executor(None, functools.partial(
                     Recorder.open, self.config.recording, describe(self),
@@ -137,12 +139,30 @@ class UavCore:
                                     lambda: self.worker.consecutive_errors), "watchdog")
         self.state = CoreState.RUNNING
         self.events.emit("info", "platform", f"started: source {self.config.source}, processor "
-                         f"{processor.info.name}, fc {self.config.fc}")
+                         f"{self.worker.processor.info.name} ({self.config.isolation}), fc {self.config.fc}")
         try:
             await self._start_side_channels()
         except BaseException:
             await self._release()
             raise
+
+    async def _start_worker(self) -> Worker:
+        """Load the processor where ``isolation`` says: its own process (default) or a thread of this one."""
+        config = self.config
+        if config.isolation == "thread":
+            processor = await asyncio.get_running_loop().run_in_executor(
+                None, functools.partial(load_processor, config.processor, config.processor_args))
+            return ProcessorWorker(processor, self._on_result)
+        return await ProcessWorker.start(
+            config.processor, config.processor_args, self._on_result, events=self.events,
+            on_fault=self._on_processor_fault, timeout_s=config.processor_timeout,
+            memory_mb=config.processor_memory_mb or None)
+
+    def _on_processor_fault(self, reason: str) -> None:
+        """The processor's process died or was killed: autonomy off, and hold if a vector flies."""
+        self.processor_error = reason
+        if self.gate.enabled:
+            self._spawn(self.gate.disable("watchdog", reason), "processor fault")
 
     async def _start_side_channels(self) -> None:
         """The web page and MAVLink click-to-track, when configured (aiortc is imported only then)."""
@@ -299,6 +319,7 @@ class UavCore:
             processor=loaded.info.name,
             capabilities=loaded.info.capabilities,
             processor_error=self.processor_error,
+            processor_state=self.worker.state(),
             fc=self.config.fc,
             fc_description=getattr(self.controller, "description", "none"),
             heartbeat_age_s=self.controller.heartbeat_age_s() if self.controller else None,

@@ -58,6 +58,8 @@ def format_status(status: CoreStatus, elapsed_s: float) -> str:
     line = (f"{elapsed_s:6.1f}s cam {p.capture_fps:4.1f}fps proc {p.processed_fps:4.1f}fps "
             f"age {p.frame_age_ms:3.0f}ms p50/p95 {p.processing_ms_p50:.1f}/{p.processing_ms_p95:.1f}ms "
             f"skip {p.frames_skipped} err {p.errors}")
+    if status.processor_state is not None:
+        line += f" | processor {status.processor_state.summary()}"
     if status.fc != "none":
         hb = "-" if status.heartbeat_age_s is None else f"{status.heartbeat_age_s:.1f}s"
         alt = "-" if t.rel_alt_m is None else f"{t.rel_alt_m:.1f}m"

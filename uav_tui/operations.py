@@ -3,13 +3,12 @@
 from __future__ import annotations
 
 import asyncio
-import functools
 from typing import TYPE_CHECKING, Any
 
-from processors import load_processor
 from uav_tui.autonomy import check_vector
 from uav_tui.commands import Command, check_limits
 from uav_tui.errors import CommandError, ProcessorLoadError, UavError
+from uav_tui.process_worker import ProcessorRaised
 from uav_tui.text import describe, shorten
 
 if TYPE_CHECKING:
@@ -84,17 +83,14 @@ class Operations:
     async def _reload(self, *, origin: str) -> str:
         core = self.core
         assert core.worker is not None
-        current = core.worker.processor
+        name = core.worker.processor.info.name
         try:
-            fresh = await asyncio.get_running_loop().run_in_executor(None, functools.partial(
-                load_processor, current.spec, current.kwargs, fresh=True))
+            info = await core.worker.reload()
         except ProcessorLoadError as exc:
-            raise ProcessorLoadError(f"reload failed, {current.info.name} keeps running: {exc}", path=exc.path,
+            raise ProcessorLoadError(f"reload failed, {name} keeps running: {exc}", path=exc.path,
                                      class_name=exc.class_name, missing=exc.missing) from exc
-        fresh.instance.tmMgr = core.telemetry
-        await core.worker.replace(fresh)
         core.processor_error = None
-        return f"processor {fresh.info.name} reloaded"
+        return f"processor {info.name} reloaded"
 
     async def _source(self, uri: str, *, origin: str) -> str:
         core = self.core
@@ -126,8 +122,16 @@ class Operations:
         loaded = worker.processor
         if method not in loaded.info.capabilities:
             raise UavError(f"processor {loaded.info.name} has no {method}() method")
+        timeout = self.core.config.processor_call_timeout
         try:
-            await worker.call(method, *args)
-        except Exception as exc:  # the researcher's code raised: report it, keep running
+            await asyncio.wait_for(worker.call(method, *args), timeout)
+        except TimeoutError:
+            raise UavError(f"{loaded.info.name}.{method}{describe(args)} did not return within {timeout:g} s "
+                           "(processor_call_timeout); the processor may be hung") from None
+        except UavError:
+            raise
+        except ProcessorRaised as exc:
+            raise UavError(f"{loaded.info.name}.{method}{describe(args)} raised {shorten(str(exc), 500)}") from exc
+        except Exception as exc:  # the researcher's code raised (thread isolation): report it, keep running
             raise UavError(f"{loaded.info.name}.{method}{describe(args)} raised {type(exc).__name__}: "
                            f"{shorten(str(exc), 500)}") from exc

@@ -7,6 +7,7 @@ from typing import Any
 
 from controllers.base import Telemetry
 from uav_tui.stats import PipelineStats
+from uav_tui.worker import ProcessorState
 
 
 @dataclass(frozen=True)
@@ -33,6 +34,8 @@ class CoreStatus:
     """Run folder, frames saved, rows written, drops (empty when recording is off)."""
     startup_s: float | None = None
     """Seconds from the process start to the first processed frame (None before it)."""
+    processor_state: ProcessorState | None = None
+    """Where the processor runs and how it is doing: running, restarting N, crashed: reason; PID, memory."""
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready form (for ``--json`` and the web page)."""

@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import asyncio
+import functools
 import logging
+import os
 import threading
 import time
 import traceback
@@ -13,10 +15,11 @@ from concurrent.futures import Future
 from dataclasses import dataclass, field
 from typing import Any
 
-from processors import LoadedProcessor
-from processors.base import Box, read_box
+from processors import LoadedProcessor, load_processor
+from processors.base import Box, ProcessorInfo, read_box
 from sources.buffer import Frame, FrameBuffer
 from uav_tui.stats import PipelineStats, RollingStats
+from uav_tui.telemetry import TelemetryManager
 
 logger = logging.getLogger(__name__)
 
@@ -48,6 +51,30 @@ class ProcessedFrame:
     """The processor's ``box`` attribute after this frame (what it tracks), or None."""
 
 
+@dataclass(frozen=True, slots=True)
+class ProcessorState:
+    """How the processor's host is doing, for the status line, the TUI and the web page."""
+
+    isolation: str
+    """``process`` (its own process) or ``thread`` (a thread of the platform)."""
+    state: str
+    """``starting``, ``running``, ``restarting N`` or ``crashed: reason``."""
+    pid: int | None
+    memory_mb: float | None
+    """Resident memory of the processor's process (None in thread mode: it is the platform's)."""
+
+    def summary(self) -> str:
+        """``running, pid 4242, 38 MB``; ``restarting 2``; ``crashed: reason``; ``in a platform thread``."""
+        if self.isolation == "thread":
+            return "in a platform thread"
+        parts = [self.state]
+        if self.pid is not None:
+            parts.append(f"pid {self.pid}")
+        if self.memory_mb is not None:
+            parts.append(f"{self.memory_mb:.0f} MB")
+        return ", ".join(parts)
+
+
 class ProcessorWorker:
     """Runs a processor on one dedicated thread, always on the newest frame of a buffer.
 
@@ -56,13 +83,18 @@ class ProcessorWorker:
     processor. Frames that arrive meanwhile replace each other, so a slow processor skips frames and
     never queues them. ``call`` runs an operator command (``catch_cmd``, ``customize_processing``) on
     the same thread between two frames, so researchers never need a lock.
+
+    This is ``isolation = "thread"``: a breakpoint in the processor works, but a processor that holds
+    the GIL, hangs or crashes takes the platform with it (see :class:`~uav_tui.process_worker.ProcessWorker`).
     """
+
+    isolation = "thread"
 
     def __init__(self, processor: LoadedProcessor, on_result: Callable[[ProcessedFrame], None]) -> None:
         self.processor = processor
         self.stats = RollingStats()
         self.current: ProcessedFrame | None = None
-        """The frame being processed (read on the processor thread by ``tmMgr.save``)."""
+        """The frame being processed (read on the processor thread by ``tmMgr.save``); None between frames."""
         self.last: ProcessedFrame | None = None
         """The newest finished frame."""
         self.consecutive_errors = 0
@@ -76,6 +108,10 @@ class ProcessorWorker:
         self._busy_since_ns: int | None = None
 
     # -- loop side -------------------------------------------------------------------------------
+
+    def bind_telemetry(self, telemetry: TelemetryManager) -> None:
+        """Give the processor its ``tmMgr``."""
+        self.processor.instance.tmMgr = telemetry
 
     def attach(self, buffer: FrameBuffer) -> None:
         """Take frames from ``buffer`` from now on (a new source)."""
@@ -113,6 +149,18 @@ class ProcessorWorker:
             self.consecutive_errors = 0
             return old
         return await self._submit(swap)
+
+    async def reload(self) -> ProcessorInfo:
+        """Re-import the processor's code and swap the new instance in; a load error keeps the old one."""
+        current = self.processor
+        fresh = await asyncio.get_running_loop().run_in_executor(None, functools.partial(
+            load_processor, current.spec, current.kwargs, fresh=True))
+        fresh.instance.tmMgr = current.instance.tmMgr
+        await self.replace(fresh)
+        return fresh.info
+
+    def state(self) -> ProcessorState:
+        return ProcessorState(self.isolation, "running", os.getpid(), None)
 
     def snapshot(self) -> PipelineStats:
         captured = self._buffer.captured if self._buffer is not None else 0
@@ -209,6 +257,7 @@ class ProcessorWorker:
             self.consecutive_errors += 1
         finally:
             self._busy_since_ns = None
+            self.current = None
         return result
 
 

@@ -39,7 +39,7 @@ class FakeCore:
         try:
             processor(result)
         finally:
-            self.worker.busy_s = 0.0
+            self.worker.current, self.worker.busy_s = None, 0.0
         result.t_end_ns = result.t_end_ns or frame.t_mono_ns + 3_000_000
         for listener in self._listeners:
             listener(result)

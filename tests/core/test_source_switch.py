@@ -13,7 +13,7 @@ from uav_tui.errors import SourceError
 
 async def test_switching_sources_keeps_processor_and_link(tmp_path: Path) -> None:
     async with flying_core(tmp_path) as core:
-        processor = core.worker.processor.instance
+        pid = core.worker.state().pid  # the processor's own process: the same one throughout
         controller = core.controller
         await core.execute("f 1")  # the steering processor now streams vectors (autonomy stays off)
         for uri in ("sim:?width=320&height=240", "synthetic:?width=200&height=100&seed=3"):
@@ -23,7 +23,7 @@ async def test_switching_sources_keeps_processor_and_link(tmp_path: Path) -> Non
             await wait_until(lambda p=processed: core.worker.stats.frames_processed > p + 10, 5, f"frames from {uri}")
             assert core.status().source_uri == uri
             assert core.worker.last.frame.image.shape[:2] == tuple(reversed(core.source.get_frame_size()))
-        assert core.worker.processor.instance is processor and processor.mode == "fly"
+        assert core.worker.state().pid == pid and core.worker.last.vector == (0.6, 0.0, 2.0)  # still in "fly" mode
         assert core.controller is controller and controller.heartbeat_age_s() < core.config.safety.link_timeout
         assert core.telemetry.snapshot().in_air and core.truth.latest()["mode"] == "HOLD"
 

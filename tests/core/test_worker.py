@@ -1,22 +1,37 @@
-"""The processor worker: newest frame wins, calls are serialized, exceptions are never fatal."""
+"""The processor worker: newest frame wins, calls are serialized, exceptions are never fatal.
+
+Each test runs with both hosts of a processor: its own process (the default) and a platform thread.
+"""
 
 from __future__ import annotations
 
 import asyncio
+import os
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import AsyncIterator, Callable
+from contextlib import asynccontextmanager
 from pathlib import Path
+from typing import Any
 
+import cv2
 import numpy as np
+import pytest
 
 from processors import load_processor
+from sources import open_source
 from sources.buffer import FrameBuffer
 from sources.synthetic import SyntheticSource
+from uav_tui.events import EventLog
+from uav_tui.process_worker import ProcessWorker
 from uav_tui.worker import ProcessedFrame, ProcessorWorker
 
+Worker = ProcessorWorker | ProcessWorker
+BOTH = pytest.mark.parametrize("isolation", ["process", "thread"])
+"""Run a test with the processor in its own process and on a platform thread."""
+
 SLOW = '''
-import threading, time
+import os, threading, time
 
 class Slow:
     def __init__(self, delay=0.03):
@@ -32,6 +47,7 @@ class Slow:
     def customize_processing(self, id):
         self.threads.add(threading.get_ident())
         self.buttons.append(id)
+        return os.getpid(), sorted(self.threads), self.buttons
 '''
 
 GATED = '''
@@ -75,7 +91,21 @@ async def until(condition: Callable[[], object], what: str, timeout: float = 10)
         await asyncio.sleep(0.005)
 
 
-async def collect(worker: ProcessorWorker, results: list[ProcessedFrame], count: int, timeout: float = 10) -> None:
+@asynccontextmanager
+async def running_worker(isolation: str, spec: str, on_result: Callable[[ProcessedFrame], None],
+                         kwargs: dict[str, Any] | None = None) -> AsyncIterator[Worker]:
+    """A started worker of either kind (its ``run()`` task is the caller's)."""
+    if isolation == "thread":
+        worker: Worker = ProcessorWorker(load_processor(spec, kwargs), on_result)
+    else:
+        worker = await ProcessWorker.start(spec, kwargs or {}, on_result, events=EventLog(), on_fault=print)
+    try:
+        yield worker
+    finally:
+        worker.close()
+
+
+async def collect(worker: Worker, results: list[ProcessedFrame], count: int, timeout: float = 10) -> None:
     task = asyncio.create_task(worker.run())
     deadline = time.monotonic() + timeout
     try:
@@ -86,19 +116,18 @@ async def collect(worker: ProcessorWorker, results: list[ProcessedFrame], count:
     assert len(results) >= count, f"only {len(results)} frames processed"
 
 
-async def test_slow_processor_skips_frames_and_counts_them(tmp_path: Path) -> None:
+@BOTH
+async def test_slow_processor_skips_frames_and_counts_them(tmp_path: Path, isolation: str) -> None:
     (tmp_path / "slow.py").write_text(SLOW)
-    processor = load_processor(f"{tmp_path}/slow.py:Slow", {"delay": 0.03})
     source = SyntheticSource(fps=200, width=160, height=120)
     results: list[ProcessedFrame] = []
-    worker = ProcessorWorker(processor, results.append)
     assert source.open()
     try:
-        worker.attach(source.buffer)
-        await collect(worker, results, 20)
+        async with running_worker(isolation, f"{tmp_path}/slow.py:Slow", results.append, {"delay": 0.03}) as worker:
+            worker.attach(source.buffer)
+            await collect(worker, results, 20)
     finally:
         source.close()
-        worker.close()
     seqs = [r.frame.seq for r in results]
     assert seqs == sorted(seqs) and len(set(seqs)) == len(seqs)
     stats = worker.snapshot()
@@ -106,63 +135,60 @@ async def test_slow_processor_skips_frames_and_counts_them(tmp_path: Path) -> No
     assert stats.processing_ms_p50 >= 30 * 0.9  # sleep(0.03) never takes less
 
 
-async def test_a_busy_processor_gets_the_newest_frame_next(tmp_path: Path) -> None:
+@BOTH
+async def test_a_busy_processor_gets_the_newest_frame_next(tmp_path: Path, isolation: str) -> None:
     (tmp_path / "gated.py").write_text(GATED)
     gate = tmp_path / "gate"
-    processor = load_processor(f"{tmp_path}/gated.py:Gated", {"gate": str(gate)})
     buffer = FrameBuffer()
     results: list[ProcessedFrame] = []
-    worker = ProcessorWorker(processor, results.append)
-    worker.attach(buffer)
-    task = asyncio.create_task(worker.run())
-    try:
-        buffer.put(np.zeros((4, 4, 3), np.uint8))
-        assert await asyncio.to_thread(buffer.wait_read, 10), "the worker never took frame 1"
-        for _ in range(4):  # frames 2..5 arrive while frame 1 is being processed
+    async with running_worker(isolation, f"{tmp_path}/gated.py:Gated", results.append, {"gate": str(gate)}) as worker:
+        worker.attach(buffer)
+        task = asyncio.create_task(worker.run())
+        try:
             buffer.put(np.zeros((4, 4, 3), np.uint8))
-        gate.touch()
-        await until(lambda: len(results) >= 2, "two processed frames")
-    finally:
-        task.cancel()
-        worker.close()
+            assert await asyncio.to_thread(buffer.wait_read, 10), "the worker never took frame 1"
+            for _ in range(4):  # frames 2..5 arrive while frame 1 is being processed
+                buffer.put(np.zeros((4, 4, 3), np.uint8))
+            gate.touch()
+            await until(lambda: len(results) >= 2, "two processed frames")
+        finally:
+            task.cancel()
     assert [r.frame.seq for r in results] == [1, 5]  # 2, 3 and 4 were replaced, never queued
     assert buffer.overwritten == 3 and worker.snapshot().frames_skipped == 3
 
 
-async def test_all_calls_run_on_one_thread(tmp_path: Path) -> None:
+@BOTH
+async def test_all_calls_run_on_one_thread(tmp_path: Path, isolation: str) -> None:
     (tmp_path / "slow.py").write_text(SLOW)
-    processor = load_processor(f"{tmp_path}/slow.py:Slow", {"delay": 0.005})
     buffer = FrameBuffer()
     results: list[ProcessedFrame] = []
-    worker = ProcessorWorker(processor, results.append)
-    worker.attach(buffer)
-    task = asyncio.create_task(worker.run())
-    for _ in range(5):
-        buffer.put(np.zeros((4, 4, 3), np.uint8))
-        await worker.call("customize_processing", 2)
-        await asyncio.sleep(0.01)
-    task.cancel()
-    worker.close()
-    instance = processor.instance
-    assert instance.buttons == [2] * 5
-    assert len(instance.threads) == 1 and threading.get_ident() not in instance.threads
-
-
-async def test_exceptions_are_caught_counted_and_keep_the_loop_alive(tmp_path: Path) -> None:
-    (tmp_path / "failing.py").write_text(FAILING)
-    processor = load_processor(f"{tmp_path}/failing.py:Failing")
-    buffer = FrameBuffer()
-    results: list[ProcessedFrame] = []
-    worker = ProcessorWorker(processor, results.append)
-    worker.attach(buffer)
-    task = asyncio.create_task(worker.run())
-    try:
-        for n in range(1, 7):  # one frame at a time: each is processed before the next arrives
+    async with running_worker(isolation, f"{tmp_path}/slow.py:Slow", results.append, {"delay": 0.005}) as worker:
+        worker.attach(buffer)
+        task = asyncio.create_task(worker.run())
+        for _ in range(5):
             buffer.put(np.zeros((4, 4, 3), np.uint8))
-            await until(lambda n=n: len(results) == n, f"frame {n} processed")
-    finally:
+            pid, threads, buttons = await worker.call("customize_processing", 2)
+            await asyncio.sleep(0.01)
         task.cancel()
-        worker.close()
+    assert results and buttons == [2] * 5
+    assert len(threads) == 1 and threading.get_ident() not in threads
+    assert (pid != os.getpid()) == (isolation == "process")
+
+
+@BOTH
+async def test_exceptions_are_caught_counted_and_keep_the_loop_alive(tmp_path: Path, isolation: str) -> None:
+    (tmp_path / "failing.py").write_text(FAILING)
+    buffer = FrameBuffer()
+    results: list[ProcessedFrame] = []
+    async with running_worker(isolation, f"{tmp_path}/failing.py:Failing", results.append) as worker:
+        worker.attach(buffer)
+        task = asyncio.create_task(worker.run())
+        try:
+            for n in range(1, 7):  # one frame at a time: each is processed before the next arrives
+                buffer.put(np.zeros((4, 4, 3), np.uint8))
+                await until(lambda n=n: len(results) == n, f"frame {n} processed")
+        finally:
+            task.cancel()
     failed = [r for r in results if r.error]
     assert len(failed) == 3 and worker.snapshot().errors == 3
     assert "failing.py\", line 10" in failed[0].error and "ValueError: bad frame 1" in failed[0].error
@@ -185,3 +211,53 @@ def test_frame_buffer_counts_overwrites_and_stamps() -> None:
     assert buffer.overwritten == 2  # the third frame was read before the fourth replaced it
     assert buffer.wait_newer(4, timeout=0.01) is None
     assert buffer.wait_newer(3, timeout=0.01).seq == 4
+
+
+DRAWING = '''
+class Drawing:
+    def __init__(self):
+        self.count = 0
+
+    def photo_processing(self, frame):
+        self.count += 1
+        frame[:8, :8] = self.count % 251  # the overlay: which call drew on this frame
+'''
+
+
+@pytest.mark.parametrize("camera", ["file", "synthetic"])
+async def test_frames_kept_by_readers_are_never_overwritten(tmp_path: Path, camera: str) -> None:
+    """Process isolation: a reader may keep ``result.frame.image`` (a shared-memory slot) as long as it likes.
+
+    A file is decoded straight into the slots; the synthetic camera draws its own arrays, copied in.
+    """
+    (tmp_path / "drawing.py").write_text(DRAWING)
+    video = tmp_path / "clip.mp4"
+    writer = cv2.VideoWriter(str(video), cv2.VideoWriter_fourcc(*"mp4v"), 30, (160, 120))
+    for i in range(20):
+        writer.write(np.full((120, 160, 3), i * 10, np.uint8))
+    writer.release()
+    source = open_source(f"file:{video}?realtime=0" if camera == "file" else "synthetic:?fps=200&width=160&height=120")
+    kept: list[tuple[np.ndarray, np.ndarray]] = []
+    processed = 0
+
+    def on_result(result: ProcessedFrame) -> None:
+        nonlocal processed
+        processed += 1
+        if processed % 10 == 0 and len(kept) < 5:
+            kept.append((result.frame.image, result.frame.image.copy()))  # the view, and what it showed then
+
+    try:
+        async with running_worker("process", f"{tmp_path}/drawing.py:Drawing", on_result) as worker:
+            worker.attach(source.buffer)
+            task = asyncio.create_task(worker.run())
+            deadline = time.monotonic() + 20
+            while processed < 200 and time.monotonic() < deadline:
+                await asyncio.sleep(0.01)
+            task.cancel()
+    finally:
+        source.close()
+    assert processed >= 200 and len(kept) == 5
+    overlays = [int(copy[0, 0, 0]) for _, copy in kept]
+    assert overlays == [n % 251 for n in (10, 20, 30, 40, 50)]  # the child's drawing reached the platform
+    for view, copy in kept:
+        assert np.array_equal(view, copy)  # 150 frames later, still the same pixels

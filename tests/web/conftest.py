@@ -49,7 +49,7 @@ def free_port(kind: int = socket.SOCK_STREAM) -> int:
 def make_core(**overrides: Any) -> UavCore:
     settings = {"source": "synthetic:", "fc": "none", "processor": "tests.web.conftest:RecordingProcessor",
                 "record": False, "web": True, "web_host": "127.0.0.1", "web_port": free_port(),
-                "web_token": TOKEN, **overrides}
+                "web_token": TOKEN, "isolation": "thread", **overrides}  # processor_of() reads the object
     return UavCore(load_config(None, settings))
 
 

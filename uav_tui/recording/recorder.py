@@ -1,6 +1,7 @@
 """The Recorder: joins a running core to the disk writer, one folder per run.
 
-Threads: ``save`` runs on the processor thread (it is ``tmMgr.saver``); ``on_frame``,
+Threads: ``save`` runs on the processor thread (it is ``tmMgr.saver``; with process isolation the
+child's saves are replayed on the event loop, just before their frame's result); ``on_frame``,
 ``on_telemetry``, ``on_event`` and ``snapshot`` on the event loop; all of them only queue work. The
 writer thread encodes, interpolates and writes. ``open`` and ``close`` block: run them in an executor.
 
@@ -137,8 +138,8 @@ class Recorder:
     def attach(self, core: UavCore) -> None:
         """Become the core's ``tmMgr`` saver and listen to its frames, telemetry and events."""
         self._emit = lambda level, message: core.events.emit(level, "recorder", message)  # type: ignore[arg-type]
-        # Only while a frame is being processed (busy) does ``current`` belong to the calling processor.
-        self._current = lambda: core.worker.current if core.worker is not None and core.worker.busy_s > 0 else None
+        # The worker's ``current`` is the frame whose saves are being made, None between frames.
+        self._current = lambda: core.worker.current if core.worker is not None else None
         core.telemetry.saver = self.save
         core.telemetry.add_listener(self.on_telemetry)
         for event in core.events.recent:  # what happened before the recorder existed (e.g. a source warning)

@@ -1,4 +1,4 @@
-"""The algorithm panel: which processor runs, what it can do, its last vector and errors."""
+"""The algorithm panel: which processor runs and where, what it can do, its last vector and errors."""
 
 from __future__ import annotations
 
@@ -29,5 +29,8 @@ class AlgorithmPanel(StatusPanel):
         errors = Text(str(status.pipeline.errors))
         if status.processor_error:
             errors.append(" ").append(self.styled(status.processor_error, "bad"))
-        return self.rows(("proc", status.processor.rsplit(":", 1)[-1]), ("has", has or "photo_processing only"),
-                         ("vec", vector), ("auto", auto), ("err", errors))
+        name, host = Text(status.processor.rsplit(":", 1)[-1]), status.processor_state
+        if host is not None:  # where it runs: its own process (pid, memory) or a platform thread
+            name.append(" ").append(self.styled(host.summary(), "good" if host.state == "running" else "bad"))
+        return self.rows(("proc", name), ("has", has or "photo_processing only"), ("vec", vector), ("auto", auto),
+                         ("err", errors))

@@ -143,6 +143,12 @@ function showStatus(message) {
       `${t.in_air ? " air" : ""} alt ${fmt(t.rel_alt_m, 1, "m")} bat ${fmt(t.battery_pct, 0, "%")}`;
   }
   if (s.last_decision) line += ` | ${s.last_decision}`;
+  const host = s.processor_state;
+  if (host) {
+    line += host.isolation === "thread" ? " | processor in a platform thread" :
+      ` | processor ${host.state}${host.pid ? " pid " + host.pid : ""}` +
+      `${host.memory_mb === null ? "" : " " + host.memory_mb.toFixed(0) + " MB"}`;
+  }
   if (s.processor_error) line += ` | processor error: ${s.processor_error}`;
   line += ` | ${message.viewers} watching`;
   $("status").textContent = line;

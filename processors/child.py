@@ -1,0 +1,232 @@
+"""The processor's own process: ``python -m processors.child FD`` runs one processor behind a pipe.
+
+The platform (``uav_tui.process_worker``) starts this module in a fresh interpreter and talks to it
+over the :class:`~multiprocessing.connection.Connection` on file descriptor ``FD``. It imports only
+this level (``processors``), NumPy and the researcher's code: a GIL-bound loop, a hang, ``os._exit``,
+a segfault or a leak here cannot freeze or kill the flight path.
+
+Messages, platform -> child (pickled tuples)::
+
+    ("load", spec, kwargs, memory_mb)        first message: cap memory, construct the processor
+    ("frame", slot, shape, seq, t_mono_ns, t_wall_ns, telemetry)
+                                             process the image in shared-memory ``slot`` (read and
+                                             drawn in place), with the telemetry attached to it
+    ("call", call_id, method, args)          catch_cmd / customize_processing
+    ("forget", [slot, ...])                  the platform freed these slots: unmap them
+
+child -> platform::
+
+    ("ready", ProcessorInfo) | ("load_error", message, path, class_name, missing)
+    ("result", seq, t_start_ns, t_end_ns, t_vector_ns, vector, box, error, saves, released)
+    ("reply", call_id, ok, value_or_error, saves, released)
+
+``saves`` are the ``tmMgr.save(frame, **extra)`` calls made meanwhile: ``(image, extra)``, the image
+copied at the call (what is drawn afterwards must not reach the dataset), so it is pickled.
+``released`` names the slots this process no longer references: a processor may keep a frame (the
+previous one, for optical flow) and the platform must not reuse that slot until it lets go.
+
+Calls run one at a time in this process's main thread, so a researcher never needs a lock.
+A ``MemoryError`` (``processor_memory_mb`` reached) ends the process with :data:`MEMORY_EXIT_CODE`.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import faulthandler
+import os
+import pickle
+import resource
+import signal
+import sys
+import time
+import traceback
+import weakref
+from multiprocessing import resource_tracker
+from multiprocessing.connection import Connection
+from multiprocessing.shared_memory import SharedMemory
+from types import SimpleNamespace
+from typing import Any
+
+import numpy as np
+
+from processors import load_processor
+from processors.base import read_box
+from processors.errors import ProcessorLoadError
+
+MEMORY_EXIT_CODE = 86
+"""Exit status after a MemoryError: the ``processor_memory_mb`` cap was reached."""
+
+_PR_SET_PDEATHSIG = 1
+
+
+class FrameTelemetry:
+    """``self.tmMgr`` inside the child: the telemetry the platform attached to the frame being processed."""
+
+    def __init__(self) -> None:
+        self.current: SimpleNamespace = SimpleNamespace()
+        self.saves: list[tuple[np.ndarray, dict[str, Any]]] = []
+
+    def snapshot(self) -> SimpleNamespace:
+        """The telemetry at the capture of the frame being processed (fields as in ``controllers.base.Telemetry``)."""
+        return self.current
+
+    def link_alive(self, max_age_s: float = 1.5) -> bool:
+        """True when the autopilot's heartbeat was younger than ``max_age_s`` when the frame was handed over."""
+        age = getattr(self.current, "heartbeat_age_s", None)
+        return age is not None and age < max_age_s
+
+    def save(self, frame: Any, **extra: Any) -> None:
+        """Store ``frame`` with the telemetry of its capture and ``extra`` columns (sent with the result)."""
+        image = getattr(frame, "image", frame)
+        if not isinstance(image, np.ndarray) or image.ndim not in (2, 3):
+            raise TypeError(f"tmMgr.save(frame, **extra): frame must be an image array, got {type(image).__name__}")
+        # A copy: the image as it is now, not with what photo_processing draws on it afterwards.
+        self.saves.append((np.array(image), {k: _picklable(v) for k, v in extra.items()}))
+
+    def take_saves(self) -> list[tuple[np.ndarray, dict[str, Any]]]:
+        saves, self.saves = self.saves, []
+        return saves
+
+
+class Slots:
+    """The shared-memory slots this process has mapped, and which of its frame views are still alive."""
+
+    def __init__(self) -> None:
+        self._mapped: dict[str, SharedMemory] = {}
+        self._alive: dict[str, weakref.ref[np.ndarray]] = {}
+
+    def view(self, name: str, shape: tuple[int, ...]) -> np.ndarray:
+        shm = self._mapped.get(name) or self._attach(name)
+        array = np.ndarray(shape, dtype=np.uint8, buffer=shm.buf)
+        self._alive[name] = weakref.ref(array)
+        return array
+
+    def released(self) -> list[str]:
+        """Slots no view of which is referenced any more (each reported once)."""
+        gone = [name for name, ref in self._alive.items() if ref() is None]
+        for name in gone:
+            del self._alive[name]
+        return gone
+
+    def forget(self, names: list[str]) -> None:
+        for name in names:
+            shm = self._mapped.pop(name, None)
+            if shm is not None and name not in self._alive:
+                shm.close()
+
+    def _attach(self, name: str) -> SharedMemory:
+        try:
+            shm = SharedMemory(name, track=False)  # type: ignore[call-arg]  # Python >= 3.13
+        except TypeError:
+            # Before 3.13 attaching registers the slot with a resource tracker that would unlink it when
+            # this process exits; the platform owns every slot and unlinks it itself.
+            shm = SharedMemory(name)
+            resource_tracker.unregister(shm._name, "shared_memory")  # type: ignore[attr-defined]
+        self._mapped[name] = shm
+        return shm
+
+
+def _picklable(value: Any) -> Any:
+    try:
+        pickle.dumps(value)
+    except Exception:  # noqa: BLE001 - anything a researcher returns is reported, never fatal
+        return repr(value)[:200]
+    return value
+
+
+def _limit_memory(memory_mb: float | None) -> None:
+    if memory_mb:
+        limit = int(memory_mb * 1024 * 1024)
+        _, hard = resource.getrlimit(resource.RLIMIT_AS)
+        resource.setrlimit(resource.RLIMIT_AS, (limit, hard if hard != resource.RLIM_INFINITY else limit))
+
+
+def _die_with_parent() -> None:
+    """Linux: be killed when the platform dies, whatever this process is doing."""
+    with contextlib.suppress(OSError, AttributeError):  # not Linux
+        ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGKILL)
+
+
+class ChildRunner:
+    """Serves one processor: frames and calls in arrival order, one at a time."""
+
+    def __init__(self, conn: Connection, loaded: Any) -> None:
+        self.conn = conn
+        self.loaded = loaded
+        self.instance = loaded.instance
+        self.telemetry = FrameTelemetry()
+        self.instance.tmMgr = self.telemetry
+        self.slots = Slots()
+        self.has_vector = "getPreparedVector" in loaded.info.capabilities
+
+    def serve(self) -> None:
+        while True:
+            try:
+                message = self.conn.recv()
+            except (EOFError, OSError):
+                return
+            kind = message[0]
+            if kind == "frame":
+                self.conn.send(self.process(*message[1:]))
+            elif kind == "call":
+                self.conn.send(self.call(*message[1:]))
+            elif kind == "forget":
+                self.slots.forget(message[1])
+
+    def process(self, slot: str, shape: tuple[int, ...], seq: int, t_mono_ns: int, t_wall_ns: int,
+                telemetry: dict[str, Any]) -> tuple[Any, ...]:
+        self.telemetry.current = SimpleNamespace(**telemetry)
+        image = self.slots.view(slot, shape)
+        vector, box, error, t_vector = None, None, None, 0
+        start = time.monotonic_ns()
+        try:
+            self.instance.photo_processing(image)
+            end = time.monotonic_ns()
+            if self.has_vector:
+                vector = _picklable(self.instance.getPreparedVector())
+                t_vector = time.monotonic_ns()
+            box = read_box(self.instance)
+        except MemoryError:
+            raise
+        except Exception:  # noqa: BLE001 - counted and reported by the platform, never fatal
+            end = time.monotonic_ns()
+            error = traceback.format_exc()
+        del image
+        return ("result", seq, start, end, t_vector, vector, box, error, self.telemetry.take_saves(),
+                self.slots.released())
+
+    def call(self, call_id: int, method: str, args: tuple[Any, ...]) -> tuple[Any, ...]:
+        try:
+            value, ok = _picklable(getattr(self.instance, method)(*args)), True
+        except MemoryError:
+            raise
+        except Exception as exc:  # noqa: BLE001 - handed to the operator as the command's error
+            value, ok = f"{type(exc).__name__}: {exc}", False
+        return ("reply", call_id, ok, value, self.telemetry.take_saves(), self.slots.released())
+
+
+def main(fd: int) -> int:
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C reaches the whole process group: the platform decides
+    faulthandler.enable()  # a segfault in native code leaves a Python traceback on stderr
+    _die_with_parent()
+    conn = Connection(fd)
+    _, spec, kwargs, memory_mb = conn.recv()
+    try:
+        _limit_memory(memory_mb)
+        try:
+            loaded = load_processor(spec, kwargs)
+        except ProcessorLoadError as exc:
+            conn.send(("load_error", str(exc), exc.path, exc.class_name, exc.missing))
+            return 0
+        conn.send(("ready", loaded.info))
+        ChildRunner(conn, loaded).serve()
+    except MemoryError:
+        traceback.print_exc()
+        print(f"processor_memory_mb = {memory_mb:g} MB reached", file=sys.stderr, flush=True)
+        os._exit(MEMORY_EXIT_CODE)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(int(sys.argv[1])))

@@ -1,0 +1,506 @@
+"""The processor in its own process: same surface as :class:`~uav_tui.worker.ProcessorWorker`, nothing shared.
+
+Frames go to the child through :class:`~uav_tui.frame_ring.FrameRing` (copied once into a shared-memory
+slot by the capture thread when the child is idle, newest frame first; never pickled); results, calls
+and ``tmMgr.save`` requests over a pipe (protocol in :mod:`processors.child`). A reader thread per
+child takes results off the pipe and hands the next frame over at once, so the event loop only gets
+finished results. The watchdog (``run``, on the loop) kills a child that stays silent longer than
+``processor_timeout``; a child that dies for any reason is reported (exit code or signal, last lines of
+its output), ``on_fault`` stops autonomy, and a fresh child with the same arguments is started after
+1, 2, 4 ... s, at most :data:`MAX_RESTARTS` times a minute.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import itertools
+import logging
+import subprocess
+import threading
+import time
+from collections import deque
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from controllers.base import TELEMETRY_FIELDS
+from processors import LoadedProcessor
+from processors.base import ProcessorInfo
+from processors.errors import ProcessorLoadError
+from sources.buffer import Frame, FrameBuffer
+from uav_tui.errors import UavError
+from uav_tui.events import EventLog
+from uav_tui.frame_ring import FrameRing
+from uav_tui.processor_process import ChildProcess, InFlight, PendingCall, describe_exit, rss_mb, spawn
+from uav_tui.stats import PipelineStats, RollingStats
+from uav_tui.telemetry import TelemetryManager
+from uav_tui.worker import ProcessedFrame, ProcessorState
+
+logger = logging.getLogger(__name__)
+
+WATCH_PERIOD_S = 0.05
+LOAD_TIMEOUT_S = 60.0
+"""A processor that takes longer to import and construct is killed (YOLO on a Pi needs a few seconds)."""
+MAX_RESTARTS = 5
+"""Restarts allowed within :data:`RESTART_WINDOW_S`; one more crash and the platform gives up."""
+RESTART_WINDOW_S = 60.0
+
+
+class ProcessorRaised(Exception):
+    """The researcher's method raised in the child; the message is ``Type: message``."""
+
+
+class ProcessWorker:
+    """Runs a processor in a child process, always on the newest frame of a buffer.
+
+    Create with :meth:`start` (loads the processor in its process; raises ProcessorLoadError).
+
+    Args:
+        spec, kwargs: the processor to load (as ``load_processor``), again at every restart.
+        on_result: called on the loop with every processed frame.
+        events: where crashes, restarts and give-ups are reported.
+        on_fault: called on the loop with the reason when the child dies or is killed (stop autonomy).
+        timeout_s: a frame or call unanswered this long gets the child killed and restarted.
+        memory_mb: the child's address-space cap (RLIMIT_AS), None for none.
+        first_backoff_s: the wait before the first restart; it doubles with each one.
+    """
+
+    isolation = "process"
+
+    def __init__(self, spec: str, kwargs: dict[str, Any], on_result: Callable[[ProcessedFrame], None], *,
+                 events: EventLog, on_fault: Callable[[str], None], timeout_s: float = 5.0,
+                 memory_mb: float | None = None, first_backoff_s: float = 1.0) -> None:
+        self.spec, self.kwargs = spec, dict(kwargs)
+        self.processor = LoadedProcessor(instance=None, info=ProcessorInfo(spec, None, frozenset()), spec=spec,
+                                         kwargs=self.kwargs)
+        """What was loaded; ``instance`` is None: the object lives in the child."""
+        self.stats = RollingStats()
+        self.current: ProcessedFrame | None = None
+        """The frame whose ``tmMgr.save`` requests are being stored (None between frames)."""
+        self.last: ProcessedFrame | None = None
+        self.consecutive_errors = 0
+        self.hand_over_failures = 0
+        """Frames that could not be handed to the child (a platform fault; the first is logged)."""
+        self.telemetry: TelemetryManager | None = None
+        self.events = events
+        self.timeout_s = timeout_s
+        self.memory_mb = memory_mb
+        self.first_backoff_s = first_backoff_s
+        self.state_text = "starting"
+        self._on_result = on_result
+        self._on_fault = on_fault
+        self._lock = threading.RLock()
+        self._send_lock = threading.Lock()
+        self._wake = threading.Condition(self._lock)
+        self._nudged = False
+        self._ring = FrameRing(on_free=self._nudge, on_unlink=self._forget)
+        self._to_forget: list[str] = []
+        self._child: ChildProcess | None = None
+        self._buffer: FrameBuffer | None = None
+        self._sent: tuple[FrameBuffer | None, int] = (None, 0)
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._call_ids = itertools.count(1)
+        self._restarts: deque[float] = deque()
+        self._restart_task: asyncio.Task[None] | None = None
+        self._all_children: list[ChildProcess] = []
+        self._closing = False
+        self._running = False
+        threading.Thread(target=self._feed, name=f"processor-feeder({spec})", daemon=True).start()
+
+    @classmethod
+    async def start(cls, spec: str, kwargs: dict[str, Any], on_result: Callable[[ProcessedFrame], None],
+                    **options: Any) -> ProcessWorker:
+        """Start the child and wait until the processor is constructed (ProcessorLoadError if it cannot be)."""
+        worker = cls(spec, kwargs, on_result, **options)
+        worker._loop = asyncio.get_running_loop()
+        try:
+            worker._adopt(await worker._start_child())
+        except BaseException:
+            worker.close()
+            raise
+        return worker
+
+    # -- the common worker surface ---------------------------------------------------------------
+
+    def bind_telemetry(self, telemetry: TelemetryManager) -> None:
+        """Attach ``telemetry.snapshot()`` to every frame handed over, store ``tmMgr.save`` through it."""
+        self.telemetry = telemetry
+
+    def attach(self, buffer: FrameBuffer) -> None:
+        """Take frames from ``buffer`` from now on (a new source)."""
+        with self._lock:
+            if self._buffer is not None:
+                self._buffer.remove_listener(self._on_frame)
+                self._buffer.set_allocator(None)
+            self._buffer = buffer
+            buffer.set_allocator(self._ring.capture_view)  # cameras that can decode into shared memory do
+            buffer.add_listener(self._on_frame)
+        self._nudge()
+
+    async def run(self) -> None:
+        """The watchdog: kill a child silent for longer than ``timeout_s``; until cancelled, then stop all."""
+        if self._running:
+            raise RuntimeError("ProcessWorker.run() is already running")
+        self._running = True
+        try:
+            while True:
+                await asyncio.sleep(WATCH_PERIOD_S)
+                child = self._child
+                busy = self.busy_s
+                if child is not None and busy > self.timeout_s and not child.kill_reason:
+                    child.kill(f"no answer for {busy:.1f} s (processor_timeout = {self.timeout_s:g} s): killed")
+        finally:
+            self.close()
+            await asyncio.get_running_loop().run_in_executor(None, self._reap, 2.0)
+
+    async def call(self, method: str, *args: Any) -> Any:
+        """Call ``processor.<method>(*args)`` in the child; raises ProcessorRaised if it raised there.
+
+        A call still unanswered from before makes this one fail at once (UavError): commands never
+        queue behind a hung processor. The caller bounds the wait (``processor_call_timeout``).
+        """
+        child = self._running_child()
+        overdue = [c for c in child.calls.values() if c.future.done()]
+        if overdue:
+            waited = (time.monotonic_ns() - overdue[0].sent_ns) / 1e9
+            raise UavError(f"the processor has not returned from {overdue[0].what} for {waited:.1f} s; it is "
+                           f"restarted after processor_timeout = {self.timeout_s:g} s")
+        call_id = next(self._call_ids)
+        future: asyncio.Future[Any] = asyncio.get_running_loop().create_future()
+        child.calls[call_id] = PendingCall(f"{method}{args!r}", time.monotonic_ns(), future)
+        if not self._send(child, ("call", call_id, method, args)):
+            child.calls.pop(call_id)
+            raise UavError(f"the processor is not running ({self.state_text})")
+        return await future
+
+    async def reload(self) -> ProcessorInfo:
+        """Start a new child with the code as it is now; swap only once it loaded (else the old one keeps running)."""
+        fresh = await self._start_child()
+        if self._restart_task is not None:  # the operator's fixed code replaces a crashed processor's restarts
+            self._restart_task.cancel()
+            self._restarts.clear()
+        old = self._child
+        self._adopt(fresh)
+        if old is not None:
+            self._retire(old, "replaced by a reload")
+        self.consecutive_errors = 0
+        return fresh.ready.result()
+
+    def snapshot(self) -> PipelineStats:
+        captured = self._buffer.captured if self._buffer is not None else 0
+        child = self._child
+        return self.stats.snapshot(captured, child.busy_since_ns() if child is not None else None)
+
+    @property
+    def busy_s(self) -> float:
+        """Seconds the oldest unanswered frame or call has been with the child (0 when idle)."""
+        child = self._child
+        since = child.busy_since_ns() if child is not None else None
+        return (time.monotonic_ns() - since) / 1e9 if since else 0.0
+
+    def state(self) -> ProcessorState:
+        child = self._child
+        pid = child.pid if child is not None else None
+        return ProcessorState(self.isolation, self.state_text, pid, rss_mb(pid) if pid else None)
+
+    def close(self) -> None:
+        """Stop taking frames and kill every child at once (whatever the processor is doing). Idempotent."""
+        with self._wake:
+            self._closing = True
+            if self._buffer is not None:
+                self._buffer.remove_listener(self._on_frame)
+                self._buffer.set_allocator(None)
+            self._wake.notify()
+        if self._restart_task is not None:
+            self._restart_task.cancel()
+        for child in self._all_children:
+            child.kill("stopped")
+            for call in child.calls.values():
+                if not call.future.done():
+                    call.future.cancel()
+        self._ring.close()
+
+    # -- children --------------------------------------------------------------------------------
+
+    async def _start_child(self) -> ChildProcess:
+        loop = self._loop = asyncio.get_running_loop()
+        child = await loop.run_in_executor(None, spawn, loop.create_future())
+        self._all_children.append(child)
+        threading.Thread(target=self._read_pipe, args=(child,), name=f"processor-{child.pid}-pipe",
+                         daemon=True).start()
+        self._send(child, ("load", self.spec, self.kwargs, self.memory_mb))
+        try:
+            await asyncio.wait_for(asyncio.shield(child.ready), LOAD_TIMEOUT_S)
+        except TimeoutError:
+            child.kill("killed")
+            raise ProcessorLoadError(f"{self.spec} did not finish loading within {LOAD_TIMEOUT_S:g} s",
+                                     class_name=self.spec.rpartition(":")[2]) from None
+        except BaseException:
+            child.kill("killed")
+            raise
+        return child
+
+    def _adopt(self, child: ChildProcess) -> None:
+        info = child.ready.result()
+        self.processor = LoadedProcessor(instance=None, info=info, spec=self.spec, kwargs=self.kwargs)
+        with self._lock:
+            self._child = child
+            self._sent = (None, 0)
+        self.state_text = "running"
+        self._nudge()
+
+    def _retire(self, child: ChildProcess, why: str) -> None:
+        child.kill(why)
+        for call in child.calls.values():
+            if not call.future.done():
+                call.future.set_exception(UavError(f"{call.what} not answered: the processor was {why}"))
+
+    def _running_child(self) -> ChildProcess:
+        child = self._child
+        if child is None or child.proc.poll() is not None:
+            raise UavError(f"the processor is not running ({self.state_text})")
+        return child
+
+    # -- frames (the feeder thread; anyone may nudge it) -----------------------------------------
+
+    def _on_frame(self, frame: Frame) -> None:
+        self._try_hand_over(may_copy=False)  # capture thread: a frame captured into a slot goes at once
+
+    def _nudge(self) -> None:
+        """Wake the feeder: a frame arrived, the child finished one, a slot was freed, a child started."""
+        with self._wake:
+            self._nudged = True
+            self._wake.notify()
+
+    def _feed(self) -> None:
+        """The feeder thread: copies the newest frame into a slot and sends it whenever the child is idle.
+
+        The copy runs here, not on the capture thread, so the camera decodes its next frame meanwhile.
+        """
+        while True:
+            with self._wake:
+                self._wake.wait_for(lambda: self._nudged or self._closing)
+                if self._closing:
+                    return
+                self._nudged = False
+            self._try_hand_over(may_copy=True)
+
+    def _try_hand_over(self, *, may_copy: bool) -> None:
+        try:
+            self._hand_over(may_copy=may_copy)
+        except Exception as exc:  # a bug here must not stop the camera: say so once, go on
+            self.hand_over_failures += 1
+            if self.hand_over_failures == 1:
+                logger.exception("ProcessWorker(%s): handing a frame over failed (logged once)", self.spec)
+                self.events.emit("error", "processor", f"frames cannot be handed to the processor: {exc!r}")
+
+    def _hand_over(self, *, may_copy: bool) -> None:
+        """Hand the newest frame to the child if it is idle and has not seen it.
+
+        A frame captured into a slot goes from whichever thread noticed (no copy, no thread switch);
+        one that must be copied is left to the feeder thread (``may_copy``), off the capture thread.
+        """
+        with self._lock:
+            child, buffer = self._child, self._buffer
+            if self._closing or child is None or buffer is None or child.in_flight is not None:
+                return
+            if self._sent == (buffer, buffer.newest_seq):
+                return
+            frame = buffer.latest()
+            if frame is None:
+                return
+            slot = self._ring.take_for_child(frame.image)
+            copied = slot is None
+            if copied and not may_copy:
+                self._nudged = True
+                self._wake.notify()
+                return
+            self._sent = (buffer, frame.seq)
+            slot = slot or self._ring.acquire(frame.image.shape)
+            if slot is None:
+                return  # every slot held: this frame is skipped, a newer one or a freed slot nudges again
+            child.held[slot.name] = slot
+            child.in_flight = InFlight(frame, slot, copied, time.monotonic_ns())
+            forget, self._to_forget = self._to_forget, []
+        if copied:
+            np.copyto(slot.array(), frame.image)  # the slot is ours alone until it is sent
+        snapshot = self.telemetry.snapshot() if self.telemetry is not None else None
+        telemetry = {name: getattr(snapshot, name) for name in TELEMETRY_FIELDS} if snapshot is not None else {}
+        if forget:
+            self._send(child, ("forget", forget))
+        self._send(child, ("frame", slot.name, slot.shape, frame.seq, frame.t_mono_ns, frame.t_wall_ns, telemetry))
+
+    def _send(self, child: ChildProcess, message: tuple[Any, ...]) -> bool:
+        """Send one message to ``child``; False when it is gone (its pipe reader reports that)."""
+        try:
+            with self._send_lock:
+                child.conn.send(message)
+        except OSError:
+            return False
+        return True
+
+    def _forget(self, names: list[str]) -> None:
+        self._to_forget.extend(names)
+
+    def _release(self, child: ChildProcess, names: list[str]) -> None:
+        with self._lock:
+            slots = [child.held.pop(name) for name in names if name in child.held]
+        for slot in slots:
+            self._ring.release_child(slot)
+
+    # -- the child's output (reader threads) ------------------------------------------------------
+
+    def _read_pipe(self, child: ChildProcess) -> None:
+        loop = self._loop
+        assert loop is not None
+        while True:
+            try:
+                message = child.conn.recv()
+            except (EOFError, OSError):
+                break
+            except Exception:  # noqa: BLE001 - an unpicklable message: say so, keep reading
+                logger.exception("ProcessWorker(%s): unreadable message from pid %s", self.spec, child.pid)
+                continue
+            if message[0] == "result":
+                self._take_result(child, message)
+            elif not loop.is_closed():
+                loop.call_soon_threadsafe(self._on_message, child, message)
+        returncode = child.proc.wait()
+        if not loop.is_closed():  # stop autonomy first; the report waits for the last lines of output
+            loop.call_soon_threadsafe(self._on_death, child, returncode)
+        child.output_done.wait(0.5)
+        if not loop.is_closed():
+            loop.call_soon_threadsafe(self._on_exit, child, returncode)
+
+    def _take_result(self, child: ChildProcess, message: tuple[Any, ...]) -> None:
+        _, seq, start, end, t_vector, vector, box, error, saves, released = message
+        with self._lock:
+            flight, child.in_flight = child.in_flight, None
+            ours = flight is not None and flight.frame.seq == seq
+            # A copied-in frame's overlay is in the slot: lend it before the child's hold goes.
+            slot_view = self._ring.lend(flight.slot) if ours and flight.copied else None
+        self._release(child, released)
+        self._try_hand_over(may_copy=False)
+        if not ours or self._loop is None or self._loop.is_closed():
+            return
+        frame = flight.frame
+        if slot_view is not None:
+            frame = Frame(slot_view, seq, frame.t_mono_ns, frame.t_wall_ns)
+        result = ProcessedFrame(frame=frame, t_start_ns=start, t_end_ns=end, t_vector_ns=t_vector, vector=vector,
+                                error=error, box=box)
+        self._loop.call_soon_threadsafe(self._deliver, child, result, saves)
+
+    # -- on the loop -----------------------------------------------------------------------------
+
+    def _deliver(self, child: ChildProcess, result: ProcessedFrame, saves: list[tuple[Any, dict[str, Any]]]) -> None:
+        if child is not self._child or self._closing:
+            return
+        self._store(saves, result)
+        if result.error:
+            self.stats.errors += 1
+            self.consecutive_errors += 1
+        else:
+            self.consecutive_errors = 0
+        self.stats.add(result.frame.seq, result.frame.t_mono_ns, result.t_start_ns, result.t_end_ns,
+                       result.t_vector_ns or result.t_end_ns)
+        self.last = result
+        self._on_result(result)
+
+    def _store(self, saves: list[tuple[Any, dict[str, Any]]], result: ProcessedFrame | None) -> None:
+        """Replay the child's ``tmMgr.save`` calls here, where the recorder is."""
+        if not saves or self.telemetry is None:
+            return
+        self.current = result
+        try:
+            for image, extra in saves:
+                self.telemetry.save(image, **extra)
+        finally:
+            self.current = None
+
+    def _on_message(self, child: ChildProcess, message: tuple[Any, ...]) -> None:
+        kind = message[0]
+        if kind == "ready":
+            if not child.ready.done():
+                child.ready.set_result(message[1])
+        elif kind == "load_error":
+            _, text, path, class_name, missing = message
+            if not child.ready.done():
+                child.ready.set_exception(ProcessorLoadError(text, path=path, class_name=class_name, missing=missing))
+        elif kind == "reply":
+            _, call_id, ok, value, saves, released = message
+            self._release(child, released)
+            self._store(saves, None)
+            call = child.calls.pop(call_id, None)
+            if call is not None and not call.future.done():
+                if ok:
+                    call.future.set_result(value)
+                else:
+                    call.future.set_exception(ProcessorRaised(value))
+
+    def _on_death(self, child: ChildProcess, returncode: int) -> None:
+        """The current child is gone: stop autonomy at once (``on_fault``), before anything else."""
+        if child is self._child and not self._closing:
+            self.state_text = "crashed"
+            self._on_fault(f"processor (pid {child.pid}) {self._reason(child, returncode)}")
+
+    def _reason(self, child: ChildProcess, returncode: int) -> str:
+        return child.kill_reason or describe_exit(returncode, self.memory_mb)
+
+    def _on_exit(self, child: ChildProcess, returncode: int) -> None:
+        reason = self._reason(child, returncode)
+        with self._lock:
+            child.in_flight = None
+        self._release(child, list(child.held))
+        tail = "\n".join(child.tail)
+        if not child.ready.done():
+            output = f"; its output:\n{tail}" if tail else ""
+            child.ready.set_exception(ProcessorLoadError(
+                f"the processor's process {reason} while loading {self.spec}{output}",
+                class_name=self.spec.rpartition(":")[2]))
+        for call in child.calls.values():
+            if not call.future.done():
+                call.future.set_exception(UavError(f"{call.what} not answered: the processor {reason}"))
+        if child in self._all_children:
+            self._all_children.remove(child)
+        if child is not self._child or self._closing:
+            return
+        self._child = None
+        message = f"processor (pid {child.pid}) {reason}"
+        self.events.emit("error", "processor", message + (f"; last output:\n{tail}" if tail else ""))
+        self._restart_task = asyncio.create_task(self._restart(reason), name="processor restart")
+
+    async def _restart(self, reason: str) -> None:
+        """Start a fresh child after 1, 2, 4 ... s; give up after MAX_RESTARTS within a minute."""
+        while not self._closing:
+            now = time.monotonic()
+            while self._restarts and self._restarts[0] < now - RESTART_WINDOW_S:
+                self._restarts.popleft()
+            if len(self._restarts) >= MAX_RESTARTS:
+                self.state_text = f"crashed: {reason}"
+                self.events.emit("error", "processor", f"gave up: {MAX_RESTARTS} restarts within "
+                                 f"{RESTART_WINDOW_S:g} s; the processor stays off ({reason}); fix it and 'reload'")
+                return
+            attempt = len(self._restarts) + 1
+            self.state_text = f"restarting {attempt}"
+            await asyncio.sleep(self.first_backoff_s * 2 ** (attempt - 1))
+            self._restarts.append(time.monotonic())
+            try:
+                child = await self._start_child()
+            except ProcessorLoadError as exc:
+                reason = f"restart failed: {exc}"
+                self.events.emit("error", "processor", f"restart {attempt} failed: {exc}")
+                continue
+            self._adopt(child)
+            self.events.emit("warning", "processor", f"processor restarted (pid {child.pid}, attempt {attempt}); "
+                             "its state is new: select the target again")
+            return
+
+    def _reap(self, timeout: float) -> None:
+        deadline = time.monotonic() + timeout
+        for child in self._all_children:
+            try:
+                child.proc.wait(max(0.0, deadline - time.monotonic()))
+            except subprocess.TimeoutExpired:
+                logger.error("ProcessWorker(%s): pid %s did not exit", self.spec, child.pid)
+

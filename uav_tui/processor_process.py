@@ -1,0 +1,132 @@
+"""One processor process as the platform sees it: how it is started, what it printed, how it ended.
+
+:class:`ChildProcess` is the handle :class:`~uav_tui.process_worker.ProcessWorker` keeps per child:
+the process, its pipe, the frame and calls it has been given, the slots it may still reference, and
+the last lines of its output (stdout and stderr together, forwarded to the platform's stdout the way
+``print()`` reaches it with thread isolation, and kept for the crash report).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import multiprocessing
+import os
+import signal
+import subprocess
+import sys
+import threading
+from collections import deque
+from dataclasses import dataclass, field
+from multiprocessing.connection import Connection
+from typing import Any
+
+from processors.base import ProcessorInfo
+from processors.child import MEMORY_EXIT_CODE
+from sources.buffer import Frame
+from uav_tui.frame_ring import Slot
+
+TAIL_LINES = 30
+"""Lines of the child's output kept for the crash report (a faulthandler dump fits)."""
+LINE_CHARS = 300
+
+
+@dataclass(slots=True)
+class InFlight:
+    """The frame the child is processing."""
+
+    frame: Frame
+    slot: Slot
+    copied: bool
+    """The frame was copied into ``slot`` (False: it was captured there)."""
+    sent_ns: int
+
+
+@dataclass(slots=True)
+class PendingCall:
+    """An operator call sent to the child and not answered yet."""
+
+    what: str
+    sent_ns: int
+    future: asyncio.Future[Any]
+
+
+@dataclass(eq=False)
+class ChildProcess:
+    """One processor process, its pipe and what it has been given."""
+
+    proc: subprocess.Popen[bytes]
+    conn: Connection
+    ready: asyncio.Future[ProcessorInfo]
+    tail: deque[str] = field(default_factory=lambda: deque(maxlen=TAIL_LINES))
+    in_flight: InFlight | None = None
+    calls: dict[int, PendingCall] = field(default_factory=dict)
+    held: dict[str, Slot] = field(default_factory=dict)
+    """Slots the child may still reference."""
+    kill_reason: str = ""
+    """Why the platform killed it (empty: it died by itself)."""
+    output_done: threading.Event = field(default_factory=threading.Event)
+
+    @property
+    def pid(self) -> int:
+        return self.proc.pid
+
+    def busy_since_ns(self) -> int | None:
+        """When the oldest frame or call still unanswered was sent (None when idle)."""
+        starts = [c.sent_ns for c in self.calls.values()]
+        if self.in_flight is not None:
+            starts.append(self.in_flight.sent_ns)
+        return min(starts, default=None)
+
+    def kill(self, reason: str) -> None:
+        """SIGKILL, whatever the processor is doing; ``reason`` goes into the report."""
+        self.kill_reason = self.kill_reason or reason
+        if self.proc.poll() is None:
+            self.proc.kill()
+
+
+def spawn(ready: asyncio.Future[ProcessorInfo]) -> ChildProcess:
+    """Start ``python -m processors.child`` with a pipe to it; its output is read on a thread. Blocks briefly."""
+    ours, theirs = multiprocessing.Pipe()
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in sys.path if p)}  # what this process imports
+    try:
+        proc = subprocess.Popen([sys.executable, "-m", "processors.child", str(theirs.fileno())],
+                                pass_fds=(theirs.fileno(),), stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+                                stderr=subprocess.STDOUT, env=env)
+    finally:
+        theirs.close()
+    child = ChildProcess(proc, ours, ready)
+    threading.Thread(target=_read_output, args=(child,), name=f"processor-{proc.pid}-output", daemon=True).start()
+    return child
+
+
+def _read_output(child: ChildProcess) -> None:
+    assert child.proc.stdout is not None
+    with child.proc.stdout as output:
+        for raw in output:
+            line = raw.decode("utf-8", "replace").rstrip()
+            line = "".join(c if c.isprintable() else "?" for c in line)[:LINE_CHARS]
+            child.tail.append(line)
+            with contextlib.suppress(OSError, ValueError):
+                print(line, file=sys.stdout, flush=True)
+    child.output_done.set()
+
+
+def describe_exit(returncode: int, memory_mb: float | None) -> str:
+    """``exited with code 3``, ``killed by SIGSEGV``, ``ran out of memory: processor_memory_mb = 300 MB reached``."""
+    if returncode == MEMORY_EXIT_CODE and memory_mb:
+        return f"ran out of memory: processor_memory_mb = {memory_mb:g} MB reached"
+    if returncode < 0:
+        name = signal.Signals(-returncode).name if -returncode in signal.valid_signals() else str(-returncode)
+        hint = " (out of memory? the kernel's OOM killer sends it)" if -returncode == signal.SIGKILL else ""
+        return f"killed by {name}{hint}"
+    return f"exited with code {returncode}"
+
+
+def rss_mb(pid: int) -> float | None:
+    """Resident memory of ``pid`` in MB (Linux ``/proc``), None where unknown."""
+    try:
+        with open(f"/proc/{pid}/statm") as statm:
+            return int(statm.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 1e6
+    except (OSError, ValueError, IndexError):
+        return None
