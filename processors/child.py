@@ -22,6 +22,10 @@ child -> platform::
 
 ``saves`` are the ``tmMgr.save(frame, **extra)`` calls made meanwhile: ``(image, extra)``, the image
 copied at the call (what is drawn afterwards must not reach the dataset), so it is pickled.
+The processor's log records go to stderr one per line, as ``LOG_TAG level name "json text"``, so the
+platform logs them as its own (escaped and redacted like every record); anything else the process
+prints is forwarded line by line, escaped.
+
 ``released`` names the slots this process no longer references: a processor may keep a frame (the
 previous one, for optical flow) and the platform must not reuse that slot until it lets go.
 
@@ -34,6 +38,8 @@ from __future__ import annotations
 import contextlib
 import ctypes
 import faulthandler
+import json
+import logging
 import os
 import pickle
 import resource
@@ -54,10 +60,39 @@ from processors import load_processor
 from processors.base import read_box
 from processors.errors import ProcessorLoadError
 
+LOG_LEVEL_ENV = "UAV_TUI_PROCESSOR_LOG_LEVEL"
+"""The platform's log level, for the child's root logger."""
+
 MEMORY_EXIT_CODE = 86
 """Exit status after a MemoryError: the ``processor_memory_mb`` cap was reached."""
 
+LOG_TAG = "\x00uav-tui-log\t"
+"""Starts a stderr line that carries one log record: ``LOG_TAG + f"{levelno}\\t{name}\\t{json text}"``."""
+
 _PR_SET_PDEATHSIG = 1
+
+
+class TaggedLogHandler(logging.Handler):
+    """Writes each log record on one tagged stderr line, for the platform to log it as its own."""
+
+    def emit(self, record: logging.LogRecord) -> None:
+        try:
+            text = json.dumps(self.format(record))
+            sys.stderr.write(f"{LOG_TAG}{record.levelno}\t{record.name}\t{text}\n")
+            sys.stderr.flush()
+        except Exception:  # noqa: BLE001 - logging must never break the processor
+            self.handleError(record)
+
+
+def parse_log_line(line: str) -> tuple[int, str, str] | None:
+    """``(levelno, logger name, text)`` of a tagged stderr line, or None for any other line."""
+    if not line.startswith(LOG_TAG):
+        return None
+    try:
+        level, name, text = line[len(LOG_TAG):].split("\t", 2)
+        return int(level), name, str(json.loads(text))
+    except ValueError:
+        return None
 
 
 class FrameTelemetry:
@@ -209,6 +244,7 @@ class ChildRunner:
 def main(fd: int) -> int:
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C reaches the whole process group: the platform decides
     faulthandler.enable()  # a segfault in native code leaves a Python traceback on stderr
+    logging.basicConfig(level=os.environ.get(LOG_LEVEL_ENV, "WARNING"), handlers=[TaggedLogHandler()])
     _die_with_parent()
     conn = Connection(fd)
     _, spec, kwargs, memory_mb = conn.recv()

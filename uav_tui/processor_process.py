@@ -2,14 +2,16 @@
 
 :class:`ChildProcess` is the handle :class:`~uav_tui.process_worker.ProcessWorker` keeps per child:
 the process, its pipe, the frame and calls it has been given, the slots it may still reference, and
-the last lines of its output (stdout and stderr together, forwarded to the platform's stdout the way
-``print()`` reaches it with thread isolation, and kept for the crash report).
+the last lines of its output (stdout and stderr together, forwarded escaped to the platform's stdout
+the way ``print()`` reaches it with thread isolation, and kept for the crash report). Its log records
+are logged by the platform, through the platform's own (escaping) handlers.
 """
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
+import logging
 import multiprocessing
 import os
 import signal
@@ -22,9 +24,10 @@ from multiprocessing.connection import Connection
 from typing import Any
 
 from processors.base import ProcessorInfo
-from processors.child import MEMORY_EXIT_CODE
+from processors.child import LOG_LEVEL_ENV, MEMORY_EXIT_CODE, parse_log_line
 from sources.buffer import Frame
 from uav_tui.frame_ring import Slot
+from uav_tui.text import safe, shorten
 
 TAIL_LINES = 30
 """Lines of the child's output kept for the crash report (a faulthandler dump fits)."""
@@ -88,7 +91,8 @@ class ChildProcess:
 def spawn(ready: asyncio.Future[ProcessorInfo]) -> ChildProcess:
     """Start ``python -m processors.child`` with a pipe to it; its output is read on a thread. Blocks briefly."""
     ours, theirs = multiprocessing.Pipe()
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in sys.path if p)}  # what this process imports
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in sys.path if p),  # what this process imports
+           LOG_LEVEL_ENV: logging.getLevelName(logging.getLogger().getEffectiveLevel())}
     try:
         proc = subprocess.Popen([sys.executable, "-m", "processors.child", str(theirs.fileno())],
                                 pass_fds=(theirs.fileno(),), stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
@@ -104,8 +108,12 @@ def _read_output(child: ChildProcess) -> None:
     assert child.proc.stdout is not None
     with child.proc.stdout as output:
         for raw in output:
-            line = raw.decode("utf-8", "replace").rstrip()
-            line = "".join(c if c.isprintable() else "?" for c in line)[:LINE_CHARS]
+            line = raw.decode("utf-8", "replace").rstrip("\n")
+            if record := parse_log_line(line):
+                level, name, text = record
+                logging.getLogger(name).log(level, "%s", shorten(text, 4000))
+                continue
+            line = shorten(safe(line), LINE_CHARS)
             child.tail.append(line)
             with contextlib.suppress(OSError, ValueError):
                 print(line, file=sys.stdout, flush=True)

@@ -146,7 +146,7 @@ async def test_a_busy_processor_gets_the_newest_frame_next(tmp_path: Path, isola
         task = asyncio.create_task(worker.run())
         try:
             buffer.put(np.zeros((4, 4, 3), np.uint8))
-            assert await asyncio.to_thread(buffer.wait_read, 10), "the worker never took frame 1"
+            await until(lambda: worker.busy_s > 0, "frame 1 being processed")
             for _ in range(4):  # frames 2..5 arrive while frame 1 is being processed
                 buffer.put(np.zeros((4, 4, 3), np.uint8))
             gate.touch()
