@@ -41,7 +41,8 @@ class CaptureSource:
     reconnect back-off live here::
 
         _open_device()   open the device, set width/height/fps; raise SourceError with advice
-        _grab()          block for the next frame; None when the read failed
+        _grab()          block for the next frame; None when the read failed (it may set
+                         ``captured_mono_ns`` when it knows the capture time better than "now")
         _close_device()  release the device (called once per successful open)
         _extra_properties()  source-specific entries for get_properties()
 
@@ -67,6 +68,8 @@ class CaptureSource:
         self._lock = threading.Lock()
         self._device_lock = threading.Lock()
         self._device_open = False
+        self.captured_mono_ns: int | None = None
+        """Set by ``_grab`` to the monotonic time its image shows; the buffer stamps "now" otherwise."""
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}({self.device})"
@@ -158,7 +161,7 @@ class CaptureSource:
                     break
                 if image is not None:
                     self.stalled_since = None
-                    self.buffer.put(image)
+                    self.buffer.put(image, self.captured_mono_ns)
                 else:
                     self._recover(reason)
         finally:

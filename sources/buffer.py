@@ -50,9 +50,14 @@ class FrameBuffer:
         self.overwritten = 0
         """Frames replaced before any reader took them."""
 
-    def put(self, image: np.ndarray) -> Frame:
-        """Stamp ``image`` with the next sequence number and the capture times, and publish it."""
+    def put(self, image: np.ndarray, captured_mono_ns: int | None = None) -> Frame:
+        """Stamp ``image`` with the next sequence number and the capture times, and publish it.
+
+        ``captured_mono_ns``: when the image was taken, if the source knows it better than "now".
+        """
         t_mono, t_wall = time.monotonic_ns(), time.time_ns()
+        if captured_mono_ns is not None:
+            t_mono, t_wall = captured_mono_ns, t_wall - (t_mono - captured_mono_ns)
         with self._cond:
             if self._frame is not None and self._frame.seq > self._read_seq:
                 self.overwritten += 1
