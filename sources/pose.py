@@ -46,8 +46,8 @@ class PoseProvider(Protocol):
 class _Series:
     """Timestamped vectors, read back by linear interpolation (``angular`` components wrap at 360)."""
 
-    def __init__(self, angular: tuple[bool, ...]) -> None:
-        self.angular = angular
+    def __init__(self, angular: tuple[bool, ...], history: int) -> None:
+        self.angular, self.history = angular, history
         self.times: list[int] = []
         self.values: list[tuple[float, ...]] = []
 
@@ -56,8 +56,8 @@ class _Series:
             return  # out of order or repeated: the newer sample already counts
         self.times.append(t_ns)
         self.values.append(values)
-        if len(self.times) > 2 * HISTORY:
-            del self.times[:-HISTORY], self.values[:-HISTORY]
+        if len(self.times) > 2 * self.history:
+            del self.times[:-self.history], self.values[:-self.history]
 
     def at(self, t_ns: int) -> tuple[tuple[float, ...], float]:
         """(values at ``t_ns``, seconds extrapolated past the newest sample)."""
@@ -85,12 +85,13 @@ class PoseTrack:
     ``add_position`` / ``add_attitude`` may be called from the event loop while the camera calls
     the track from its capture thread. Samples are interpolated linearly (the shorter way round for
     angles), extrapolated from the last two samples for at most :data:`MAX_EXTRAPOLATION_S`.
+    At least the newest ``history`` samples of each kind are kept.
     """
 
-    def __init__(self) -> None:
+    def __init__(self, history: int = HISTORY) -> None:
         self._lock = threading.Lock()
-        self._position = _Series((False, False, False))
-        self._attitude = _Series((True, True, True))
+        self._position = _Series((False, False, False), history)
+        self._attitude = _Series((True, True, True), history)
 
     def add_position(self, t_mono_ns: int, north_m: float, east_m: float, down_m: float) -> None:
         """A local-position sample (m, NED from home) valid at ``t_mono_ns``."""

@@ -10,6 +10,7 @@ from contextlib import asynccontextmanager
 from pathlib import Path
 from typing import Any
 
+from controllers.sim.launcher import SimVehicle
 from uav_tui.config import load_config
 from uav_tui.core import UavCore
 
@@ -68,19 +69,23 @@ async def fly_under_autonomy(core: UavCore, until: Callable[[], Any], what: str,
 
 
 @asynccontextmanager
-async def flying_core(tmp_path: Path, *, altitude: float = 3.0, **overrides: Any) -> AsyncIterator[UavCore]:
+async def flying_core(tmp_path: Path, *, altitude: float = 3.0, vehicle: SimVehicle | None = None,
+                      **overrides: Any) -> AsyncIterator[UavCore]:
     """A core on the simulated vehicle, airborne at ``altitude``; by default with the steering test processor.
 
+    ``vehicle``: a simulator running on its own, reached over MAVLink only (``fc`` = its udpin:// address);
+    by default the core starts its own (``--fc sim``). ``core.truth`` reads the vehicle's truth channel.
     ``overrides`` are config keys (``processor=``, ``source=``, ``max_t=`` ...).
     """
     processor = tmp_path / "steering.py"
     processor.write_text(STEERING_PROCESSOR)
-    settings = {"fc": "sim", "source": "synthetic:?width=160&height=120", "processor": f"{processor}:Steering",
+    fc = vehicle.connection_string if vehicle is not None else "sim"
+    settings = {"fc": fc, "source": "synthetic:?width=160&height=120", "processor": f"{processor}:Steering",
                 "record": False, **overrides}
     core = UavCore(load_config(None, settings))
     await core.start()
     try:
-        truth = core.controller.sim.truth()
+        truth = vehicle.truth() if vehicle is not None else core.controller.sim.truth()
         core.truth = truth  # type: ignore[attr-defined]
         await core.execute("arm")
         await core.execute(f"takeoff {altitude}")
