@@ -4,8 +4,9 @@ The built-in simulator runs on its own; the platform (a real UavCore) reaches it
 PX4 or ArduPilot SITL. For every frame the camera draws, the pose it used is compared with the
 simulator's truth at the frame's capture time (truth datagrams interpolated; same monotonic clock).
 For comparison, ``truth_channel_latest`` is what the former ``--fc sim`` path drew: the newest truth
-datagram at capture. ``extrapolation_ms`` is how far past the newest telemetry sample each frame's
-pose lay (the pose's latency behind the frame).
+datagram at capture. Latency: ``delivery_ms`` is how long after the instant a sample describes it
+reached the platform (autopilot clock mapped onto ours), ``extrapolation_ms`` how far past the newest
+sample each frame's pose lay.
 
 Flight: take off to 10 m, vector 1 m/s forward, vector back-right, orbit 5 m at 2 m/s (the yaw
 swings to face the centre at up to 90 deg/s), hold; steady wind 1.0 N / 0.5 E m/s.
@@ -36,6 +37,12 @@ from tests.core.flight_helpers import flying_core  # noqa: E402
 from tests.core.pose_error import FramePoses, TruthHistory, errors, percentiles  # noqa: E402
 
 
+async def measure_delivery(controller: Any, delays_ns: list[int]) -> None:
+    """Append, for every pose sample, how long after the instant it describes it arrived here."""
+    async for sample in controller.pose_samples():
+        delays_ns.append(time.monotonic_ns() - sample.t_mono_ns)
+
+
 async def fly(args: argparse.Namespace, vehicle: SimVehicle) -> dict[str, Any]:
     source = f"sim:?fps={args.fps:g}&width=640&height=480&targets=1"
     with tempfile.TemporaryDirectory() as folder:
@@ -43,6 +50,8 @@ async def fly(args: argparse.Namespace, vehicle: SimVehicle) -> dict[str, Any]:
                                processor="template") as core:
             history = TruthHistory(vehicle.truth())
             frames = FramePoses(core.source, core.truth)
+            delivery_ns: list[int] = []
+            delivery = asyncio.create_task(measure_delivery(core.controller, delivery_ns))
             frames.recording = True
             started = time.monotonic()
             for command, seconds in (("vector 1 0 2", 2.5), ("vector -1 1 2", 2.5), ("orbit 5 2", args.orbit_s),
@@ -51,6 +60,7 @@ async def fly(args: argparse.Namespace, vehicle: SimVehicle) -> dict[str, Any]:
                 await asyncio.sleep(seconds)
             frames.recording = False
             elapsed = time.monotonic() - started
+            delivery.cancel()
             frames.close()
             await asyncio.sleep(0.2)  # the truth just after the last frame, so it interpolates
             history.close()
@@ -61,6 +71,7 @@ async def fly(args: argparse.Namespace, vehicle: SimVehicle) -> dict[str, Any]:
         "fps_measured": round(len(frames.frames) / elapsed, 1),
         "frames_without_vehicle_pose": sum(not f.from_vehicle for f in frames.frames),
         "telemetry": {name: percentiles(values) for name, values in telemetry.items()},
+        "delivery_ms": percentiles(np.array(delivery_ns) / 1e6, 1),
         "extrapolation_ms": percentiles(lead_ms, 1),
         "truth_channel_latest": {name: percentiles(values) for name, values in latest.items()},
     }
