@@ -71,7 +71,7 @@ async def test_camera_pose_matches_the_truth_at_30_fps_while_manoeuvring(tmp_pat
     assert len(error["position_m"]) > 0.9 * len(drawn)
     assert np.percentile(error["position_m"], 95) < 0.05, error["position_m"]
     assert np.percentile(error["yaw_deg"], 95) < 1.0 and np.percentile(error["tilt_deg"], 95) < 1.0
-    assert error["position_m"].max() < 0.25 and error["yaw_deg"].max() < 5.0
+    assert np.percentile(error["position_m"], 99) < 0.15 and np.percentile(error["yaw_deg"], 99) < 3.0
 
 
 async def test_without_a_vehicle_the_sim_camera_says_what_it_needs(tmp_path: Path) -> None:
