@@ -42,6 +42,6 @@ def test_readme_demo_holds_position_from_the_camera_on_a_real_autopilot(
     assert drawn == {"vehicle telemetry"}
     assert max(r["telemetry"]["rel_alt_m"] or 0 for r in demo.status) > 9  # took off to 10 m
     reference, pushed, back = (estimated_ne(demo, c) for c in ("f 1", "autonomy on", "autonomy off"))
-    assert math.dist(pushed, reference) > 1.5
+    assert math.dist(pushed, reference) > 1.0  # PX4 accelerates more gently than the built-in vehicle
     assert math.dist(back, reference) < 0.7, f"ended {math.dist(back, reference):.2f} m from the reference"
     assert (demo.run.frames.decision == "executed").sum() > 3
