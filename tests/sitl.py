@@ -119,18 +119,19 @@ def px4_sih(workdir: Path) -> Iterator[Sitl]:
 def arducopter(workdir: Path) -> Iterator[Sitl]:
     """ArduCopter SITL, ``--model quad``; the ground side connects to its SERIAL0 TCP port."""
     binary = require(ARDUCOPTER_BIN, "ArduCopter")
-    instance = free_instance([(5760, socket.SOCK_STREAM), (5762, socket.SOCK_STREAM)], step=10)
+    instance = free_instance([(5760, socket.SOCK_STREAM), (5762, socket.SOCK_STREAM), (5501, socket.SOCK_DGRAM)],
+                             step=10)  # 5501+10N: the SITL's RC input
     defaults = binary.parents[3] / "Tools/autotest/default_params/copter.parm"
     command = [str(binary), "--model", "quad", "--speedup", "1", "--defaults", str(defaults),
                "--home", ARDUCOPTER_HOME, "-I", str(instance), "--wipe", "--serial0", "tcp:0", "--serial1", "tcp:2"]
     port = 5760 + 10 * instance
     with running("arducopter", command, workdir, {}, f"tcpout://127.0.0.1:{port}", ARDUCOPTER_READY_S) as sitl:
-        wait_listening(sitl, port)
+        wait_listening(sitl, port + 2)  # SERIAL1, opened with SERIAL0: probing it leaves SERIAL0 to uav-tui
         yield sitl
 
 
 def wait_listening(sitl: Sitl, port: int, timeout_s: float = 30.0) -> None:
-    """Until the SITL accepts TCP connections on ``port`` (a client that connects earlier is refused)."""
+    """Until the SITL accepts TCP connections on ``port`` (uav-tui connecting earlier would be refused)."""
     deadline = time.monotonic() + timeout_s
     while time.monotonic() < deadline and sitl.process.poll() is None:
         with contextlib.suppress(OSError), socket.create_connection(("127.0.0.1", port), timeout=1):
