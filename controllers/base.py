@@ -57,6 +57,9 @@ class FlightController(Protocol):
     ``set_fly_vector`` returns as soon as the vector is running; the controller streams the
     body-frame velocity setpoint at >= 10 Hz for ``t`` seconds, then sends zero and puts the vehicle
     in a holding mode itself. A new vector replaces the running one.
+
+    Optional: ``pose_samples()``, an async iterator of timestamped position and attitude samples
+    (:class:`controllers.mavsdk_pose.PoseSample`), which the ``sim:`` camera is drawn from.
     """
 
     description: str

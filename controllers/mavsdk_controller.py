@@ -28,6 +28,7 @@ from controllers.mavlink_commands import px4_set_mode, send_command, velocity_bo
 from controllers.mavsdk_errors import map_mavsdk_errors
 from controllers.mavsdk_link import LinkMonitor
 from controllers.mavsdk_log import route_mavsdk_log
+from controllers.mavsdk_pose import POSE_RATE_HZ, PoseSample, pose_samples, request_pose_rate
 from controllers.mavsdk_telemetry import merged_updates, set_rates
 from controllers.vector_stream import DEFAULT_RATE_HZ, VectorStream
 
@@ -307,3 +308,19 @@ class MavsdkController:
             raise ControllerError("telemetry: not connected (call connect() first)")
         async for update in merged_updates(self._telemetry, self.heartbeat_age_s, self._stop):
             yield update
+
+    async def pose_samples(self, rate_hz: float = POSE_RATE_HZ) -> AsyncIterator[PoseSample]:
+        """Position and attitude samples, each stamped with when it was valid (see :mod:`controllers.mavsdk_pose`).
+
+        Asks the autopilot for LOCAL_POSITION_NED and ATTITUDE at ``rate_hz`` first; ends when the
+        controller closes. What the ``sim:`` camera is drawn from, for every autopilot.
+        """
+        if self._system is None:
+            raise ControllerError("pose_samples: not connected (call connect() first)")
+        try:
+            async with asyncio.timeout(SETUP_TIMEOUT_S):
+                await request_pose_rate(self._direct, self._sysid, rate_hz)
+        except TimeoutError:
+            logger.warning("pose rate: no answer within %.0f s; keeping the current rates", SETUP_TIMEOUT_S)
+        async for sample in pose_samples(self._direct, self._sysid, self._stop):
+            yield sample

@@ -42,6 +42,8 @@ sys.path.insert(0, str(ROOT))
 
 from sources import create_source  # noqa: E402
 from sources.base import CameraSource  # noqa: E402
+from sources.pose import PoseAt  # noqa: E402
+from sources.sim_geometry import Pose  # noqa: E402
 from sources.uri import SourceUri  # noqa: E402
 from sources.usb import UsbSource  # noqa: E402
 
@@ -93,10 +95,10 @@ def _clip(folder: Path) -> Path:
     return create_video_file(folder / "bench.mp4", frames=90, width=WIDTH, height=HEIGHT, fps=FPS)
 
 
-def _circling_pose() -> dict[str, float]:
-    t = time.monotonic()
-    return {"n": 5 * math.cos(0.2 * t), "e": 5 * math.sin(0.2 * t), "d": -12.0, "roll": 2.0, "pitch": -1.0,
-            "yaw": math.degrees(0.2 * t) % 360}
+def _circling_pose(t_mono_ns: int) -> PoseAt:
+    t = t_mono_ns / 1e9
+    return PoseAt(Pose(5 * math.cos(0.2 * t), 5 * math.sin(0.2 * t), -12.0, 2.0, -1.0, math.degrees(0.2 * t) % 360),
+                  0.0)
 
 
 def measure(source: CameraSource, seconds: float) -> dict[str, Any]:

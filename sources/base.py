@@ -143,7 +143,8 @@ class CaptureSource:
         """Release the device; nothing by default."""
 
     def _capture_times(self) -> tuple[int | None, int | None]:
-        """(monotonic, wall) ns of the image ``_grab`` just returned; None: now (a replay returns recorded ones)."""
+        """(monotonic, wall) ns of the image ``_grab`` just returned, where the source knows them better
+        than "now" (a replay returns recorded ones, a rendered camera the instant it shows); None: now."""
         return None, None
 
     def _extra_properties(self) -> dict[str, Any]:

@@ -54,9 +54,12 @@ class FrameBuffer:
     def put(self, image: np.ndarray, t_mono_ns: int | None = None, t_wall_ns: int | None = None) -> Frame:
         """Stamp ``image`` with the next sequence number and the capture times, and publish it.
 
-        A replaying source passes the recorded capture times; live sources let the buffer take them now.
+        A source that knows when its image was taken better than "now" passes the times (a replay its
+        recorded ones); given only the monotonic time, the wall time is derived from it.
         """
-        t_mono, t_wall = t_mono_ns or time.monotonic_ns(), t_wall_ns or time.time_ns()
+        t_mono, t_wall = time.monotonic_ns(), time.time_ns()
+        if t_mono_ns is not None:
+            t_mono, t_wall = t_mono_ns, t_wall_ns or t_wall - (t_mono - t_mono_ns)
         with self._cond:
             if self._frame is not None and self._frame.seq > self._read_seq:
                 self.overwritten += 1

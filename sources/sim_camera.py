@@ -1,16 +1,15 @@
-"""``sim:`` — a camera rendered from the simulated vehicle's pose.
+"""``sim:`` — a camera rendered from the connected vehicle's pose, whatever the autopilot.
 
-The platform passes ``pose_provider``: a callable returning the vehicle's latest truth datagram
-(``{"n", "e", "d", "roll", "pitch", "yaw"}``, metres NED and degrees) or None before the first one.
-Closing the loop through vision: the processor's vectors move the simulated vehicle, which moves
-the image. This module knows nothing about the vehicle beyond that callable.
+The platform passes ``pose_provider`` (:class:`sources.pose.PoseProvider`): the vehicle's pose at a
+given capture time, from its telemetry (the built-in simulator, PX4 or ArduPilot SITL alike).
+Closing the loop through vision: the processor's vectors move the vehicle, which moves the image.
+This module knows nothing about the vehicle beyond that callable.
 """
 
 from __future__ import annotations
 
 import logging
 import time
-from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
@@ -19,14 +18,12 @@ from sources.base import CaptureSource
 from sources.errors import SourceUriError
 from sources.ground import default_ground
 from sources.pacing import Pacer
+from sources.pose import PoseAt, PoseProvider
 from sources.sim_geometry import PinholeCamera, Pose
 from sources.sim_render import SimRenderer, default_targets
 from sources.uri import SourceUri
 
 logger = logging.getLogger(__name__)
-
-PoseProvider = Callable[[], Mapping[str, Any] | None]
-"""Returns the vehicle's latest pose datagram, or None when there is none yet."""
 
 MOUNT_TILT_DEG = {"down": 90.0, "forward": 0.0}
 """Camera tilt below the vehicle's nose for each named mount; ``tilt=`` overrides it."""
@@ -36,7 +33,7 @@ class SimCameraSource(CaptureSource):
     """A pinhole camera over a textured ground, at the pose ``pose_provider`` reports.
 
     URI: ``sim:[?width=640&height=480&fps=30&hfov=62&mount=down|forward&tilt=DEG&targets=N
-    &target_speed=1.0&noise=2&seed=0]``. Without a pose (no provider, or no datagram yet) it renders
+    &target_speed=1.0&noise=2&seed=0]``. Without a pose (no provider, or no telemetry yet) it renders
     a hover at 10 m over the origin, so the pipeline always has frames.
     """
 
@@ -53,11 +50,14 @@ class SimCameraSource(CaptureSource):
         self.pose_provider = pose_provider
         self.pose = Pose()
         self.pose_from_vehicle = False
+        self.pose_extrapolated_s = 0.0
+        """How far past the newest telemetry sample the last frame's pose was extrapolated."""
         self.renderer: SimRenderer | None = None
         self._pacer: Pacer | None = None
         self._t0 = 0.0
         self._t = 0.0
         self._index = 0
+        self._captured_mono_ns = 0
 
     @classmethod
     def from_uri(cls, uri: SourceUri, *, pose_provider: PoseProvider | None = None,
@@ -92,25 +92,33 @@ class SimCameraSource(CaptureSource):
             self.renderer = SimRenderer(self.camera, default_ground(self.seed), self.targets, self.noise, self.seed)
         if not self._pacer.wait():
             return None
-        self.pose, self.pose_from_vehicle = self._current_pose()
-        self._t = time.monotonic() - self._t0
+        self._captured_mono_ns = time.monotonic_ns()  # the instant this frame shows
+        self.pose, self.pose_from_vehicle = self._pose_at(self._captured_mono_ns)
+        self._t = self._captured_mono_ns / 1e9 - self._t0
         image = self.renderer.render(self.pose, self._t, self._index)
         self._index += 1
         return image
 
-    def _current_pose(self) -> tuple[Pose, bool]:
+    def _capture_times(self) -> tuple[int | None, int | None]:
+        return self._captured_mono_ns, None  # the frame shows the pose at this instant, not at publishing
+
+    def _pose_at(self, t_mono_ns: int) -> tuple[Pose, bool]:
         if self.pose_provider is None:
             return Pose(), False
         try:
-            values = self.pose_provider()
+            found: PoseAt | None = self.pose_provider(t_mono_ns)
         except Exception as exc:  # noqa: BLE001 - a broken provider must not stop the camera
             self._fail(f"pose provider failed: {exc}")
             return self.pose, self.pose_from_vehicle
-        return (Pose.from_mapping(dict(values)), True) if values else (Pose(), False)
+        if found is None:
+            return Pose(), False
+        self.pose_extrapolated_s = found.extrapolated_s
+        return found.pose, True
 
     def _extra_properties(self) -> dict[str, Any]:
         p = self.pose
         positions = [dict(zip(("n", "e"), target.position(self._t)[:2], strict=True)) for target in self.targets]
         return {"hfov": self.camera.hfov_deg, "tilt": self.camera.tilt_deg, "targets": positions,
                 "pose": {"n": p.n, "e": p.e, "d": p.d, "roll": p.roll, "pitch": p.pitch, "yaw": p.yaw},
-                "pose_source": "vehicle" if self.pose_from_vehicle else "default hover at 10 m (no pose yet)"}
+                "pose_source": "vehicle telemetry" if self.pose_from_vehicle else "default hover at 10 m (no pose yet)",
+                "pose_extrapolated_ms": round(self.pose_extrapolated_s * 1000, 1)}

@@ -21,6 +21,8 @@ from controllers.base import FlightController
 from controllers.replay_timeline import ReplayTimeline
 from processors import load_processor
 from sources import CameraSource, open_source, warm_up_source
+from sources.pose import PoseTrack
+from uav_tui import pose_feed
 from uav_tui.autonomy import AutonomyGate
 from uav_tui.commands import VEHICLE_COMMANDS, Command, parse
 from uav_tui.config import Config
@@ -90,6 +92,8 @@ class UavCore:
         """The web page's WebServer (``web.url`` has the token) when ``web`` is on, else None."""
         self.camera_tracking: CameraTracking | None = None
         """The MAVLink camera component when ``camera_mavlink`` is set, else None."""
+        self.pose_track: PoseTrack | None = None
+        """The vehicle's pose from telemetry, once a ``sim:`` camera asked for it."""
 
     # -- lifecycle -------------------------------------------------------------------------------
 
@@ -269,16 +273,27 @@ class UavCore:
         return None if frame is None else (self.gate.clock() - frame.t_mono_ns) / 1e9
 
     async def open_source(self, uri: str) -> CameraSource:
-        """Open the camera ``uri`` names (in a thread: opening can block), with the sim vehicle's pose for sim:."""
+        """Open the camera ``uri`` names (in a thread: opening can block), with the vehicle's pose for sim:."""
         context: dict[str, Any] = {}
         if uri.startswith("sim:"):
-            sim = getattr(self.controller, "sim", None)
-            if sim is None:
-                raise SourceError("the sim: camera renders the simulated vehicle's view: use it with --fc sim")
-            context["pose_provider"] = sim.truth().latest
+            context["pose_provider"] = await self._vehicle_pose()
         if uri.startswith("run:") and self.replay is not None:
             context["timeline"] = self.replay
         return await asyncio.get_running_loop().run_in_executor(None, functools.partial(open_source, uri, **context))
+
+    async def _vehicle_pose(self) -> PoseTrack:
+        """The pose track fed from the controller's telemetry, started on first use (any MAVLink autopilot)."""
+        if self.pose_track is None:
+            samples = getattr(self.controller, "pose_samples", None)
+            if samples is None:
+                raise SourceError("the sim: camera draws the vehicle's view from its MAVLink telemetry: use it with "
+                                  "--fc sim or a MAVLink connection string (e.g. udpin://0.0.0.0:14540)")
+            self.pose_track = PoseTrack()
+            self._spawn(pose_feed.feed(samples(), self.pose_track), "pose")
+            if not await pose_feed.wait_first_pose(self.pose_track):
+                self.events.emit("warning", "source", "no position/attitude telemetry yet: the sim: camera shows "
+                                 "a hover at 10 m until it comes")
+        return self.pose_track
 
     # -- commands --------------------------------------------------------------------------------
 

@@ -10,6 +10,7 @@ from contextlib import asynccontextmanager
 from pathlib import Path
 from typing import Any
 
+from controllers.sim.launcher import SimVehicle
 from controllers.sim.truth import TruthClient
 from uav_tui.config import Config, load_config
 from uav_tui.core import UavCore
@@ -76,14 +77,17 @@ async def fly_under_autonomy(core: UavCore, until: Callable[[], Any], what: str,
     await wait_until(until, timeout, what)
 
 
-def steering_config(tmp_path: Path, **overrides: Any) -> Config:
+def steering_config(tmp_path: Path, *, vehicle: SimVehicle | None = None, **overrides: Any) -> Config:
     """A run's config: the steering test processor, a small synthetic camera, the built-in simulator, no recording.
 
+    ``vehicle``: a simulator running on its own, reached over MAVLink only (``fc`` = its udpin:// address);
+    by default the core starts its own (``--fc sim``).
     ``overrides`` are config keys (``processor=``, ``source=``, ``fc=``, ``max_t=`` ...).
     """
     processor = tmp_path / "steering.py"
     processor.write_text(STEERING_PROCESSOR)
-    settings = {"fc": "sim", "source": "synthetic:?width=160&height=120", "processor": f"{processor}:Steering",
+    fc = vehicle.connection_string if vehicle is not None else "sim"
+    settings = {"fc": fc, "source": "synthetic:?width=160&height=120", "processor": f"{processor}:Steering",
                 "record": False, **overrides}
     return load_config(None, settings)
 
@@ -99,17 +103,17 @@ async def take_off(core: UavCore, truth: TruthClient, altitude: float = 3.0) -> 
 
 @asynccontextmanager
 async def flying_core(tmp_path: Path, *, altitude: float = 3.0, truth: TruthClient | None = None,
-                      **overrides: Any) -> AsyncIterator[UavCore]:
+                      vehicle: SimVehicle | None = None, **overrides: Any) -> AsyncIterator[UavCore]:
     """A core on the simulated vehicle, airborne at ``altitude``; by default with the steering test processor.
 
-    ``core.truth`` is the simulator's ground truth: the built-in simulator's, or ``truth`` when ``fc=``
-    names a simulator the test started itself (one that outlives the core). ``overrides``: see
-    :func:`steering_config`.
+    ``core.truth`` is the simulator's ground truth: the built-in simulator's, ``vehicle``'s (a simulator
+    reached over MAVLink only), or ``truth`` when ``fc=`` names a simulator the test started itself
+    (one that outlives the core). ``overrides``: see :func:`steering_config`.
     """
-    core = UavCore(steering_config(tmp_path, **overrides))
+    core = UavCore(steering_config(tmp_path, vehicle=vehicle, **overrides))
     await core.start()
     try:
-        truth = truth or core.controller.sim.truth()
+        truth = truth or (vehicle.truth() if vehicle is not None else core.controller.sim.truth())
         core.truth = truth  # type: ignore[attr-defined]
         await take_off(core, truth, altitude)
         yield core

@@ -1,7 +1,9 @@
 """The reference processors closing the loop through vision on the simulated vehicle and camera.
 
 These prove the sign conventions end to end: the processor's vectors move the simulated vehicle,
-which moves the camera image the processor sees next.
+which moves the camera image the processor sees next. The simulator runs on its own and the
+platform reaches it over MAVLink only (as it reaches PX4 or ArduPilot SITL): the camera's pose
+comes from telemetry; the truth channel is read by the test alone.
 """
 
 from __future__ import annotations
@@ -11,6 +13,7 @@ import math
 import time
 from pathlib import Path
 
+from controllers.sim.launcher import SimVehicle
 from sources.sim_geometry import Pose, project_ground_point
 from tests.core.flight_helpers import flying_core, wait_until
 
@@ -19,9 +22,12 @@ def horizontal_distance(a: dict, n: float, e: float) -> float:
     return math.hypot(a["n"] - n, a["e"] - e)
 
 
-async def test_position_hold_brings_the_vehicle_back_and_holds_it_against_wind(tmp_path: Path) -> None:
+async def test_position_hold_brings_the_vehicle_back_and_holds_it_against_wind(tmp_path: Path,
+                                                                               sim_vehicle: SimVehicle) -> None:
     async with flying_core(tmp_path, altitude=10, processor="position_hold", source="sim:?width=480&height=360",
-                           max_speed=1.5) as core:
+                           max_speed=1.5, vehicle=sim_vehicle) as core:
+        assert not hasattr(core.controller, "sim")  # MAVLink only: the platform has no truth channel
+        assert core.source.get_properties()["pose_source"] == "vehicle telemetry"
         truth = core.truth
         await asyncio.sleep(1.0)
         reference = truth.latest()
@@ -43,9 +49,10 @@ async def test_position_hold_brings_the_vehicle_back_and_holds_it_against_wind(t
         assert core.gate.executed > 5 and core.gate.enabled
 
 
-async def test_tracker_follows_a_target_driving_on_the_ground(tmp_path: Path) -> None:
+async def test_tracker_follows_a_target_driving_on_the_ground(tmp_path: Path, sim_vehicle: SimVehicle) -> None:
     async with flying_core(tmp_path, altitude=12, processor="csrt", processor_args={"gain": 2.0, "max_speed": 1.5},
-                           source="sim:?width=480&height=360&targets=1&target_speed=0.6", max_speed=1.5) as core:
+                           source="sim:?width=480&height=360&targets=1&target_speed=0.6", max_speed=1.5,
+                           vehicle=sim_vehicle) as core:
         truth = core.truth
         source = core.source
         target = source.get_properties()["targets"][0]

@@ -8,6 +8,8 @@ import cv2
 import pytest
 
 from sources import CameraSource, create_source
+from sources.pose import PoseAt
+from sources.sim_geometry import Pose
 from sources.uri import SourceUri
 from sources.usb import UsbSource
 
@@ -38,7 +40,8 @@ def _picam_standin(request: pytest.FixtureRequest) -> CameraSource:
 
 
 def _sim(request: pytest.FixtureRequest) -> CameraSource:
-    return create_source("sim:?width=160&height=120&fps=60", pose_provider=lambda: {"n": 1.0, "e": 2.0, "d": -12.0})
+    return create_source("sim:?width=160&height=120&fps=60",
+                         pose_provider=lambda t_mono_ns: PoseAt(Pose(n=1.0, e=2.0, d=-12.0), 0.0))
 
 
 def _rtsp(request: pytest.FixtureRequest) -> CameraSource:

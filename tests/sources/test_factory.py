@@ -28,7 +28,7 @@ def test_kind_matches_the_scheme(uri: str, kind: str) -> None:
 def test_platform_context_is_accepted_by_every_source() -> None:
     # The platform may pass pose_provider whatever the URI, e.g. when switching sources at run time.
     for uri in ("usb:0", "picam:0", "rtsp://cam.local/s", "file:x.mp4", "synthetic:", "sim:"):
-        create_source(uri, pose_provider=lambda: None)
+        create_source(uri, pose_provider=lambda t_mono_ns: None)
 
 
 def test_unknown_scheme_lists_the_known_ones() -> None:

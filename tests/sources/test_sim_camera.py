@@ -10,6 +10,7 @@ import pytest
 
 from sources import create_source
 from sources.ground import default_ground
+from sources.pose import PoseAt
 from sources.sim_camera import SimCameraSource
 from sources.sim_geometry import PinholeCamera, Pose, project_ground_point
 from sources.sim_render import SKY_BGR, SimRenderer, default_targets
@@ -116,13 +117,15 @@ def test_targets_appear_where_projected() -> None:
 
 
 def test_pose_provider_drives_the_view_and_failures_are_reported() -> None:
-    poses = iter([None, {"n": 2.0, "e": 1.0, "d": -8.0, "roll": 1.0, "pitch": 0.0, "yaw": 45.0, "vn": 0.3}])
+    poses = iter([None, PoseAt(Pose(n=2.0, e=1.0, d=-8.0, roll=1.0, pitch=0.0, yaw=45.0), 0.012)])
+    asked: list[int] = []
 
-    def provider():
+    def provider(t_mono_ns: int) -> PoseAt | None:
+        asked.append(t_mono_ns)
         try:
             return next(poses)
         except StopIteration:
-            raise ConnectionError("truth channel closed") from None
+            raise ConnectionError("telemetry gone") from None
 
     source = create_source("sim:?width=64&height=48&fps=100", pose_provider=provider)
     assert source.open()
@@ -133,7 +136,9 @@ def test_pose_provider_drives_the_view_and_failures_are_reported() -> None:
         assert source.buffer.wait_newer(second.seq + 1, 5) is not None  # keeps delivering after the failure
         props = source.get_properties()
         assert props["pose"] == {"n": 2.0, "e": 1.0, "d": -8.0, "roll": 1.0, "pitch": 0.0, "yaw": 45.0}
-        assert props["pose_source"] == "vehicle" and "truth channel closed" in props["last_error"]
+        assert props["pose_source"] == "vehicle telemetry" and "telemetry gone" in props["last_error"]
+        assert props["pose_extrapolated_ms"] == 12.0
+        assert asked[1] == second.t_mono_ns  # the pose is the one at the frame's capture time
     finally:
         source.close()
 

@@ -1,0 +1,135 @@
+"""The vehicle's pose at a camera's pace: LOCAL_POSITION_NED and ATTITUDE from any MAVLink autopilot.
+
+Asked for at :data:`POSE_RATE_HZ` with MAV_CMD_SET_MESSAGE_INTERVAL, as a ground station asks
+(PX4, ArduPilot and the built-in simulator all honour it; ArduPilot's REQUEST_DATA_STREAM, sent at
+connect, would reset it, so it is sent after). Each sample is stamped with the time it was valid:
+the autopilot's ``time_boot_ms`` mapped onto this computer's ``time.monotonic_ns()`` by
+:class:`BootClock`, so the delivery delay through MAVSDK and the event loop does not shift it.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import collections
+import json
+import logging
+import math
+import time
+from collections.abc import AsyncIterator
+from dataclasses import dataclass
+from typing import Literal
+
+from mavsdk.asyncio.plugins.mavlink_direct import MavlinkDirectAsync, MavlinkMessage
+
+from controllers.mavlink_commands import command_long, send_command
+
+logger = logging.getLogger(__name__)
+
+MAV_CMD_SET_MESSAGE_INTERVAL = 511
+POSE_MESSAGES = {"LOCAL_POSITION_NED": 32, "ATTITUDE": 30}
+"""Message name -> MAVLink id."""
+
+POSE_RATE_HZ = 50.0
+"""Rate asked for each pose message: a 30 FPS camera then interpolates between samples 20 ms apart."""
+
+CLOCK_WINDOW_S = 10.0
+"""The clock offset is the smallest (receive time - autopilot time) seen over this window."""
+
+CLOCK_RESET_S = 1.0
+"""An offset this much above the estimate means the autopilot's clock restarted: estimate afresh."""
+
+
+@dataclass(frozen=True, slots=True)
+class PoseSample:
+    """One position (``north_m, east_m, down_m``) or attitude (``roll, pitch, yaw`` degrees) sample."""
+
+    kind: Literal["position", "attitude"]
+    t_mono_ns: int
+    """When the autopilot measured it, on this computer's ``time.monotonic_ns()`` clock."""
+    values: tuple[float, float, float]
+
+
+class BootClock:
+    """Maps an autopilot's ``time_boot_ms`` onto ``time.monotonic_ns()``.
+
+    The offset is the minimum of (receive time - boot time) over :data:`CLOCK_WINDOW_S`: the sample
+    that arrived fastest bounds the transport delay best. Slow drift is followed by the window.
+    """
+
+    def __init__(self) -> None:
+        self._offsets: collections.deque[tuple[int, int]] = collections.deque()  # (received_ns, offset), rising
+
+    def to_mono_ns(self, boot_ms: int, received_mono_ns: int) -> int:
+        offset = received_mono_ns - boot_ms * 1_000_000
+        window = self._offsets
+        if window and offset - window[0][1] > CLOCK_RESET_S * 1e9:
+            window.clear()  # the autopilot rebooted: its clock started again from zero
+        while window and window[-1][1] >= offset:
+            window.pop()
+        window.append((received_mono_ns, offset))
+        while received_mono_ns - window[0][0] > CLOCK_WINDOW_S * 1e9:
+            window.popleft()
+        return boot_ms * 1_000_000 + window[0][1]
+
+
+def message_interval_command(target_system: int, message_id: int, rate_hz: float) -> MavlinkMessage:
+    """SET_MESSAGE_INTERVAL: ``message_id`` every ``1 / rate_hz`` seconds."""
+    return command_long(target_system, MAV_CMD_SET_MESSAGE_INTERVAL, message_id, 1e6 / rate_hz)
+
+
+async def request_pose_rate(direct: MavlinkDirectAsync, target_system: int, rate_hz: float = POSE_RATE_HZ) -> None:
+    """Ask for both pose messages at ``rate_hz``; a refusal is logged (the default rate still works)."""
+
+    async def one(name: str, message_id: int) -> None:
+        try:
+            await send_command(direct, message_interval_command(target_system, message_id, rate_hz))
+        except Exception as exc:  # noqa: BLE001 - refused or unanswered: the camera still gets samples
+            logger.warning("autopilot refused %s at %g Hz (%s); the sim: camera interpolates what comes", name,
+                           rate_hz, exc)
+
+    await asyncio.gather(*(one(name, message_id) for name, message_id in POSE_MESSAGES.items()))
+
+
+def parse_pose_message(message: MavlinkMessage) -> tuple[Literal["position", "attitude"], int,
+                                                          tuple[float, float, float]] | None:
+    """(kind, time_boot_ms, values) from a LOCAL_POSITION_NED or ATTITUDE message; None if malformed."""
+    try:
+        fields = json.loads(message.fields_json)
+        boot_ms = int(fields["time_boot_ms"])
+        if message.message_name == "LOCAL_POSITION_NED":
+            return "position", boot_ms, (float(fields["x"]), float(fields["y"]), float(fields["z"]))
+        angles = tuple(math.degrees(float(fields[name])) for name in ("roll", "pitch", "yaw"))
+        return "attitude", boot_ms, angles  # type: ignore[return-value]
+    except (ValueError, KeyError, TypeError):
+        return None
+
+
+async def pose_samples(direct: MavlinkDirectAsync, system_id: int, stop: asyncio.Event) -> AsyncIterator[PoseSample]:
+    """Position and attitude samples from ``system_id`` as they arrive, until ``stop`` is set."""
+    queue: asyncio.Queue[PoseSample | None] = asyncio.Queue()
+    clock = BootClock()
+
+    async def pump(name: str) -> None:
+        try:
+            async for message in direct.subscribe_message(name):
+                received = time.monotonic_ns()
+                parsed = parse_pose_message(message) if message.system_id == system_id else None
+                if parsed is not None:
+                    kind, boot_ms, values = parsed
+                    queue.put_nowait(PoseSample(kind, clock.to_mono_ns(boot_ms, received), values))
+        except Exception:
+            logger.exception("pose stream %s failed", name)
+
+    async def end_on_stop() -> None:
+        await stop.wait()
+        queue.put_nowait(None)
+
+    tasks = [asyncio.create_task(pump(name), name=f"pose-{name}") for name in POSE_MESSAGES]
+    tasks.append(asyncio.create_task(end_on_stop()))
+    try:
+        while (sample := await queue.get()) is not None:
+            yield sample
+    finally:
+        for task in tasks:
+            task.cancel()
+        await asyncio.gather(*tasks, return_exceptions=True)

@@ -1,0 +1,32 @@
+"""The ``sim:`` camera's pose, fed from the flight controller's telemetry (any MAVLink autopilot)."""
+
+from __future__ import annotations
+
+import asyncio
+import time
+from collections.abc import AsyncIterator
+
+from controllers.mavsdk_pose import PoseSample
+from sources.pose import PoseTrack
+
+FIRST_POSE_TIMEOUT_S = 5.0
+"""How long opening a ``sim:`` camera waits for the vehicle's first pose before drawing the default hover."""
+
+
+async def feed(samples: AsyncIterator[PoseSample], track: PoseTrack) -> None:
+    """Copy ``controller.pose_samples()`` into ``track`` until the controller closes."""
+    async for sample in samples:
+        if sample.kind == "position":
+            track.add_position(sample.t_mono_ns, *sample.values)
+        else:
+            track.add_attitude(sample.t_mono_ns, *sample.values)
+
+
+async def wait_first_pose(track: PoseTrack, timeout_s: float = FIRST_POSE_TIMEOUT_S) -> bool:
+    """True once ``track`` knows a pose; False after ``timeout_s``."""
+    deadline = time.monotonic() + timeout_s
+    while track(time.monotonic_ns()) is None:
+        if time.monotonic() > deadline:
+            return False
+        await asyncio.sleep(0.02)
+    return True
