@@ -45,13 +45,16 @@ class ScriptedCapture:
     def get(self, prop: int) -> float:
         return self.props.get(prop, 0.0)
 
-    def read(self) -> tuple[bool, np.ndarray | None]:
+    def read(self, image: np.ndarray | None = None) -> tuple[bool, np.ndarray | None]:
         if self.remaining is not None:
             if self.remaining <= 0:
                 return False, None
             self.remaining -= 1
         time.sleep(0.005)
-        return True, np.full((48, 64, 3), 7, np.uint8)
+        if image is None or image.shape != (48, 64, 3):
+            return True, np.full((48, 64, 3), 7, np.uint8)
+        image[:] = 7  # as OpenCV does: decoded into the array it was given
+        return True, image
 
     def release(self) -> None:
         self.released = True
