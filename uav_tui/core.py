@@ -92,6 +92,7 @@ class UavCore:
             self.controller = await connect_controller(self.config.fc, heartbeat_timeout=self.config.connect_timeout)
             self.telemetry = TelemetryManager(self.controller)
             self.gate.telemetry, self.gate.controller = self.telemetry, self.controller
+            await self._check_autopilot_failsafe()
             processor.instance.tmMgr = self.telemetry
             self.source = await self.open_source(self.config.source)
             self.worker = ProcessorWorker(processor, self._on_result)
@@ -119,6 +120,18 @@ class UavCore:
         except BaseException:
             await self._release()
             raise
+
+    async def _check_autopilot_failsafe(self) -> None:
+        """Read (and set) the autopilot's offboard-loss failsafe; autonomy is refused while it is too slow."""
+        check = getattr(self.controller, "check_failsafe", None)
+        if check is None:
+            return
+        safety = self.config.safety
+        report = await check(safety.max_t, tune=safety.tune_autopilot_failsafe)
+        self.events.emit("info", "autonomy", report.summary())
+        if not report.ok:
+            self.gate.refusal = "; ".join(report.problems)
+            self.events.emit("error", "autonomy", f"autonomy will be refused: {self.gate.refusal}")
 
     async def _start_side_channels(self) -> None:
         """The web page and MAVLink click-to-track, when configured (aiortc is imported only then)."""

@@ -96,12 +96,12 @@ class HeadlessRunner:
                 loop.add_signal_handler(signum, self._say, "SIGHUP: terminal lost, continuing headless")
             else:
                 loop.add_signal_handler(signum, self.request_stop, name)
+        self.core.events.add_listener(self._print_event)  # before start: what it finds at connect is printed
         try:
             await self.core.start()
         except KNOWN_ERRORS as exc:
             self._say(f"error: {exc}")
             return EXIT_START_FAILED
-        self.core.events.add_listener(self._print_event)
         if self.core.web is not None:
             url = self.core.web.url
             self._say(json.dumps({"web_url": url}) if self.json_lines else f"web page: {url}")

@@ -66,7 +66,7 @@ class SimVehicle:
     @property
     def connection_string(self) -> str:
         """The MAVSDK address that reaches this vehicle."""
-        return f"udpin://0.0.0.0:{self.mavlink_port}"
+        return f"udpin://127.0.0.1:{self.mavlink_port}"
 
     @property
     def pid(self) -> int | None:
