@@ -2,7 +2,7 @@
 
 PX4: against the simulated vehicle, which serves COM_OF_LOSS_T / COM_OBL_RC_ACT over the PARAM
 protocol and honours them. ArduCopter: against the recording stand-in serving GUID_TIMEOUT (no
-ArduPilot SITL here; tests marked ``sitl`` in tests/test_sitl_failsafe.py fly the real ones).
+ArduPilot SITL here; tests marked ``sitl`` in test_sitl_failsafe.py check the real ones).
 """
 
 from __future__ import annotations
