@@ -39,6 +39,7 @@ class AbandoningExecutor(ThreadPoolExecutor):
         super().__init__(max_workers=1, thread_name_prefix="mavsdk-unused")
         self._running: dict[int, str] = {}
         self._running_lock = threading.Lock()
+        self._shut_down = False
 
     @property
     def running(self) -> list[str]:
@@ -69,8 +70,9 @@ class AbandoningExecutor(ThreadPoolExecutor):
 
     def shutdown(self, wait: bool = True, *, cancel_futures: bool = False) -> None:
         """Return at once: a call blocked in MAVSDK is abandoned (its daemon thread dies with the process)."""
-        if self.running:
+        if self.running and not self._shut_down:
             logger.warning("abandoning MAVSDK calls still blocked: %s", ", ".join(self.running))
+        self._shut_down = True
 
 
 _installed: weakref.WeakKeyDictionary[asyncio.AbstractEventLoop, AbandoningExecutor] = weakref.WeakKeyDictionary()

@@ -179,7 +179,8 @@ class MavsdkController:
                 async with asyncio.timeout(CLOSE_HOLD_TIMEOUT_S):
                     await self._vectors.stop_and_hold()
             except (ControllerError, TimeoutError) as exc:
-                logger.error("MavsdkController: could not put the vehicle in hold while closing: %s", exc)
+                logger.error("MavsdkController: could not put the vehicle in hold while closing: %s",
+                             str(exc) or f"no answer within {CLOSE_HOLD_TIMEOUT_S:g} s")
         self._closed = True
         self._stop.set()
         await self._vectors.cancel()

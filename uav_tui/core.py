@@ -73,6 +73,8 @@ class UavCore:
         """The web page's WebServer (``web.url`` has the token) when ``web`` is on, else None."""
         self.camera_tracking: CameraTracking | None = None
         """The MAVLink camera component when ``camera_mavlink`` is set, else None."""
+        self.abandoned_calls: list[str] = []
+        """Flight-controller calls still blocked when the core stopped (the process should exit non-zero)."""
 
     # -- lifecycle -------------------------------------------------------------------------------
 
@@ -176,6 +178,10 @@ class UavCore:
             await asyncio.get_running_loop().run_in_executor(None, self.source.close)
         if self.controller is not None:
             await self.controller.close()
+            self.abandoned_calls = list(getattr(self.controller, "unfinished_calls", ()))
+            if self.abandoned_calls:
+                self.events.emit("error", "link", "flight controller calls still blocked, abandoned: "
+                                 + ", ".join(self.abandoned_calls))
         if self.recorder is not None:
             self.telemetry.saver = None
             await asyncio.get_running_loop().run_in_executor(None, self.recorder.close)

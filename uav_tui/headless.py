@@ -20,7 +20,7 @@ from uav_tui.errors import KNOWN_ERRORS, CommandError
 from uav_tui.events import Event
 from uav_tui.status import CoreStatus
 
-EXIT_OK, EXIT_SCRIPT_FAILED, EXIT_START_FAILED = 0, 1, 2
+EXIT_OK, EXIT_SCRIPT_FAILED, EXIT_START_FAILED, EXIT_ABANDONED = 0, 1, 2, 3
 
 
 def load_script(path: Path) -> list[tuple[int, Command]]:
@@ -121,7 +121,7 @@ class HeadlessRunner:
         await asyncio.gather(*tasks, quit_watch, stop_watch, return_exceptions=True)
         await self.core.stop(self._reason)
         self._say(f"stopped: {self._reason}")
-        return self.exit_code
+        return EXIT_ABANDONED if self.core.abandoned_calls else self.exit_code
 
     def request_stop(self, reason: str) -> None:
         if not self._stop.is_set():
