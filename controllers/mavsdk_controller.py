@@ -188,15 +188,16 @@ class MavsdkController:
             await self._link.stop()
         # Telemetry iterators end on _stop; their unsubscribe is a no-op once MAVSDK is destroyed.
         mavsdk, self._mavsdk = self._mavsdk, None
-        if mavsdk is not None:
+        if self.unfinished_calls:
+            # Destroying MAVSDK under a call still inside it can crash the process: leave it to the exit.
+            logger.error("MavsdkController closed with MAVSDK calls still blocked (abandoned): %s",
+                         ", ".join(self.unfinished_calls))
+        elif mavsdk is not None:
             try:
                 async with asyncio.timeout(RELEASE_TIMEOUT_S):
                     await asyncio.to_thread(mavsdk.destroy)
             except TimeoutError:
                 logger.error("MavsdkController: MAVSDK did not release within %.0f s; abandoned", RELEASE_TIMEOUT_S)
-        if self.unfinished_calls:
-            logger.error("MavsdkController closed with MAVSDK calls still blocked (abandoned): %s",
-                         ", ".join(self.unfinished_calls))
         logger.info("MavsdkController closed (%s)", self.description)
 
     @property

@@ -78,7 +78,8 @@ def test_frozen_autopilot_during_hold_does_not_keep_uav_tui_alive(tmp_path: Path
         process.stdout.close()
         truth.close()
     out = "".join(seen)
-    assert "hold before exit failed" in out and "stopped: " in out
+    assert "hold before exit failed" in out, out
+    assert "stopped: " in out, (process.returncode, out[-600:])
     # Non-zero exactly when a MAVSDK call was still blocked at the end (then it says which).
     abandoned = "flight controller calls still blocked, abandoned" in out
     assert process.returncode == (EXIT_ABANDONED if abandoned else 0), out
