@@ -23,6 +23,7 @@ from uav_tui.commands import VEHICLE_COMMANDS, Command, parse
 from uav_tui.config import Config
 from uav_tui.errors import KNOWN_ERRORS, NoVehicle, SourceError, UavError
 from uav_tui.events import EventLog
+from uav_tui.link import LinkWatch
 from uav_tui.operations import Operations
 from uav_tui.recording import Recorder, describe
 from uav_tui.status import CoreStatus
@@ -73,6 +74,8 @@ class UavCore:
         """The web page's WebServer (``web.url`` has the token) when ``web`` is on, else None."""
         self.camera_tracking: CameraTracking | None = None
         """The MAVLink camera component when ``camera_mavlink`` is set, else None."""
+        self.link: LinkWatch | None = None
+        """Link-loss / recovery events and the dead-simulator report (None without a flight controller)."""
         self.abandoned_calls: list[str] = []
         """Flight-controller calls still blocked when the core stopped (the process should exit non-zero)."""
 
@@ -111,6 +114,9 @@ class UavCore:
         self.worker.attach(self.source.buffer)
         self._spawn(self.worker.run(), "processor")
         self._spawn(self.telemetry.run(), "telemetry")
+        if self.controller is not None:
+            self.link = LinkWatch(self.controller, self.events, self.config.safety.link_timeout)
+            self._spawn(self.link.run(), "link")
         self._spawn(self.gate.run(), "autonomy")
         self._spawn(self.gate.watch(self._newest_frame_age, lambda: self.worker.busy_s,
                                     lambda: self.worker.consecutive_errors), "watchdog")
@@ -286,4 +292,6 @@ class UavCore:
             vectors_executed=self.gate.executed,
             vectors_rejected=self.gate.rejected,
             recording=self.recorder.status() if self.recorder is not None else {},
+            link_lost=self.link is not None and self.link.lost,
+            vehicle_problem=self.link.vehicle_problem if self.link is not None else "",
         )

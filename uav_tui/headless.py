@@ -53,7 +53,10 @@ def format_status(status: CoreStatus, elapsed_s: float) -> str:
         hb = "-" if status.heartbeat_age_s is None else f"{status.heartbeat_age_s:.1f}s"
         alt = "-" if t.rel_alt_m is None else f"{t.rel_alt_m:.1f}m"
         state = "armed" if t.armed else "disarmed"
-        line += f" | hb {hb} {t.flight_mode or '?'} {state}{' air' if t.in_air else ''} alt {alt}"
+        stale = "LINK LOST, stale: " if status.link_lost else ""
+        line += f" | hb {hb} {stale}{t.flight_mode or '?'} {state}{' air' if t.in_air else ''} alt {alt}"
+        if status.vehicle_problem:
+            line += f" ({status.vehicle_problem})"
     line += f" | auto {'ON' if status.autonomy else 'OFF'}"
     if status.last_decision:
         line += f" ({status.last_decision})"

@@ -31,6 +31,10 @@ class CoreStatus:
     vectors_rejected: int
     recording: dict[str, Any] = field(default_factory=dict)
     """Run folder, frames saved, rows written, drops (empty when recording is off)."""
+    link_lost: bool = False
+    """No heartbeat for ``link_timeout``: the telemetry is stale (as old as ``heartbeat_age_s``)."""
+    vehicle_problem: str = ""
+    """Why the vehicle cannot come back (e.g. the built-in simulator's process was killed), or ""."""
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready form (for ``--json`` and the web page)."""
