@@ -51,6 +51,9 @@ PARAM_TIMEOUT_S = 5.0
 RELEASE_TIMEOUT_S = 2.0
 """close(): how long MAVSDK may take to release its connections before it is abandoned."""
 
+_ABANDONED: list[Mavsdk] = []
+"""MAVSDK instances let go of with calls still blocked in them: kept referenced, never destroyed."""
+
 AUTOPILOT_NAMES = {"px4": "PX4", "ardupilot": "ArduPilot", "unknown": "unknown autopilot"}
 
 
@@ -188,17 +191,21 @@ class MavsdkController:
             await self._link.stop()
         # Telemetry iterators end on _stop; their unsubscribe is a no-op once MAVSDK is destroyed.
         mavsdk, self._mavsdk = self._mavsdk, None
-        if self.unfinished_calls:
-            # Destroying MAVSDK under a call still inside it can crash the process: leave it to the exit.
-            logger.error("MavsdkController closed with MAVSDK calls still blocked (abandoned): %s",
-                         ", ".join(self.unfinished_calls))
-        elif mavsdk is not None:
-            try:
-                async with asyncio.timeout(RELEASE_TIMEOUT_S):
-                    await asyncio.to_thread(mavsdk.destroy)
-            except TimeoutError:
-                logger.error("MavsdkController: MAVSDK did not release within %.0f s; abandoned", RELEASE_TIMEOUT_S)
+        if mavsdk is not None:
+            await self._release(mavsdk)
         logger.info("MavsdkController closed (%s)", self.description)
+
+    async def _release(self, mavsdk: Mavsdk) -> None:
+        """Destroy MAVSDK within RELEASE_TIMEOUT_S, or abandon it (never destroyed under a call still inside it)."""
+        with contextlib.suppress(TimeoutError):
+            async with asyncio.timeout(RELEASE_TIMEOUT_S):
+                while self.unfinished_calls:
+                    await asyncio.sleep(0.05)
+                await asyncio.to_thread(mavsdk.destroy)
+                return
+        _ABANDONED.append(mavsdk)  # the process exit ends it; destroying it under a blocked call can crash
+        logger.error("MavsdkController: MAVSDK not released within %.0f s, abandoned; calls still blocked: %s",
+                     RELEASE_TIMEOUT_S, ", ".join(self.unfinished_calls) or "none")
 
     @property
     def unfinished_calls(self) -> list[str]:

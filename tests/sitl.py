@@ -42,11 +42,11 @@ def _port_free(port: int, kind: int) -> bool:
     return True
 
 
-def _instance(port_of: Callable[[int], int], kind: int) -> int:
-    for instance in random.sample(range(1, 60), 59):
-        if _port_free(port_of(instance), kind):
+def _instance(ports_of: Callable[[int], tuple[int, ...]], kind: int, count: int) -> int:
+    for instance in random.sample(range(count), count):
+        if all(_port_free(port, kind) for port in ports_of(instance)):
             return instance
-    pytest.skip("no free SITL instance port")
+    pytest.skip("no free SITL instance ports")
 
 
 @contextmanager
@@ -68,13 +68,16 @@ def _running(command: list[str], cwd: Path, env: dict[str, str] | None = None) -
 
 
 @contextmanager
-def px4_sitl(work: Path) -> Iterator[str]:
-    """PX4 v1.16 SIH quad in ``work``; yields the MAVSDK address of its offboard link (udpin, 14540 + i)."""
+def px4_sitl(work: Path, params: dict[str, float] | None = None) -> Iterator[str]:
+    """PX4 v1.16 SIH quad in ``work``, with ``params`` set at boot; yields the MAVSDK address of its offboard
+    link (udpin, 14540 + i)."""
     require(PX4_BIN, "PX4_SITL_BIN")
-    instance = _instance(lambda i: 14540 + i, socket.SOCK_DGRAM)
+    # PX4 sends to 14540 + i only for instances 0-9 (px4-rc.mavlink), from 14580 + i.
+    instance = _instance(lambda i: (14540 + i, 14580 + i, 18570 + i), socket.SOCK_DGRAM, 10)
     etc = work / "etc"
     shutil.copytree(PX4_BIN.parent.parent / "etc", etc)
-    env = {"PX4_SIM_MODEL": "sihsim_quadx", "PX4_SIMULATOR": "sihsim", "HEADLESS": "1", "PX4_SYS_AUTOSTART": "10040"}
+    env = {"PX4_SIM_MODEL": "sihsim_quadx", "PX4_SIMULATOR": "sihsim", "HEADLESS": "1", "PX4_SYS_AUTOSTART": "10040",
+           **{f"PX4_PARAM_{name}": str(value) for name, value in (params or {}).items()}}
     with _running([str(PX4_BIN), "-i", str(instance), "-d", str(etc)], work, env):
         yield f"udpin://127.0.0.1:{14540 + instance}"
 
@@ -83,7 +86,7 @@ def px4_sitl(work: Path) -> Iterator[str]:
 def arducopter_sitl(work: Path) -> Iterator[str]:
     """ArduCopter 4.8 SITL quad in ``work``; yields the MAVSDK address of its SERIAL0 (tcpout, 5760 + 10 i)."""
     require(ARDUCOPTER_BIN, "ARDUCOPTER_SITL_BIN")
-    instance = _instance(lambda i: 5760 + 10 * i, socket.SOCK_STREAM)
+    instance = _instance(lambda i: (5760 + 10 * i,), socket.SOCK_STREAM, 60)
     command = [str(ARDUCOPTER_BIN), "--model", "quad", "--speedup", "1", "--defaults", str(ARDUCOPTER_DEFAULTS),
                "--home", "-35.363261,149.165230,584,353", "-I", str(instance), "--wipe", "--serial0", "tcp:0"]
     with _running(command, work):

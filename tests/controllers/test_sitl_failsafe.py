@@ -35,4 +35,12 @@ async def test_px4_defaults_pass(tmp_path: Path) -> None:
     with px4_sitl(tmp_path) as address:
         found, changed, problems = await check(address, tune=False)
     assert problems == [] and changed == {}
-    assert found["COM_OF_LOSS_T"] <= 2.5
+    assert found == {"COM_OF_LOSS_T": 1.0, "COM_OBL_RC_ACT": 0.0}
+
+
+async def test_px4_too_slow_failsafe_is_set(tmp_path: Path) -> None:
+    with px4_sitl(tmp_path, {"COM_OF_LOSS_T": 10, "COM_OBL_RC_ACT": 3}) as address:
+        found, changed, problems = await check(address, tune=True)
+    assert problems == []
+    assert found == {"COM_OF_LOSS_T": 10.0, "COM_OBL_RC_ACT": 3.0}
+    assert changed == {"COM_OF_LOSS_T": (10.0, 1.0), "COM_OBL_RC_ACT": (3.0, 5.0)}
