@@ -10,9 +10,8 @@ from __future__ import annotations
 import pytest
 
 from controllers.mavsdk_controller import MavsdkController
-from controllers.sim.launcher import SimVehicle
+from controllers.sim.launcher import SimVehicle, free_udp_port
 from tests.controllers.fake_autopilot import FakeAutopilot, UdpLink, mavlink
-from tests.controllers.test_ardupilot_dialect import free_udp_port
 
 TOO_SLOW = {"extra_args": ["--offboard-loss-timeout", "10", "--offboard-loss-action", "3"]}
 """PX4 flying a dead client's setpoint for 10 s, then returning home instead of stopping."""
