@@ -75,6 +75,7 @@ def px4_sitl(work: Path, params: dict[str, float] | None = None) -> Iterator[str
     # PX4 sends to 14540 + i only for instances 0-9 (px4-rc.mavlink), from 14580 + i.
     instance = _instance(lambda i: (14540 + i, 14580 + i, 18570 + i), socket.SOCK_DGRAM, 10)
     etc = work / "etc"
+    work.mkdir(parents=True, exist_ok=True)
     shutil.copytree(PX4_BIN.parent.parent / "etc", etc)
     env = {"PX4_SIM_MODEL": "sihsim_quadx", "PX4_SIMULATOR": "sihsim", "HEADLESS": "1", "PX4_SYS_AUTOSTART": "10040",
            **{f"PX4_PARAM_{name}": str(value) for name, value in (params or {}).items()}}
@@ -83,11 +84,15 @@ def px4_sitl(work: Path, params: dict[str, float] | None = None) -> Iterator[str
 
 
 @contextmanager
-def arducopter_sitl(work: Path) -> Iterator[str]:
-    """ArduCopter 4.8 SITL quad in ``work``; yields the MAVSDK address of its SERIAL0 (tcpout, 5760 + 10 i)."""
+def arducopter_sitl(work: Path, params: dict[str, float] | None = None) -> Iterator[str]:
+    """ArduCopter 4.8 SITL quad in ``work``, with ``params`` as extra defaults; yields the MAVSDK address of its
+    SERIAL0 (tcpout, 5760 + 10 i)."""
     require(ARDUCOPTER_BIN, "ARDUCOPTER_SITL_BIN")
     instance = _instance(lambda i: (5760 + 10 * i,), socket.SOCK_STREAM, 60)
-    command = [str(ARDUCOPTER_BIN), "--model", "quad", "--speedup", "1", "--defaults", str(ARDUCOPTER_DEFAULTS),
+    work.mkdir(parents=True, exist_ok=True)
+    extra = work / "extra.parm"
+    extra.write_text("".join(f"{name} {value}\n" for name, value in (params or {}).items()))
+    command = [str(ARDUCOPTER_BIN), "--model", "quad", "--speedup", "1", "--defaults", f"{ARDUCOPTER_DEFAULTS},{extra}",
                "--home", "-35.363261,149.165230,584,353", "-I", str(instance), "--wipe", "--serial0", "tcp:0"]
     with _running(command, work):
         yield f"tcpout://127.0.0.1:{5760 + 10 * instance}"

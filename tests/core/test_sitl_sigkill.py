@@ -1,5 +1,5 @@
-"""Real PX4 SITL (``sitl``, skipped unless built): booted with a failsafe that would fly a dead client's setpoint
-for 10 s and then return home, uav-tui sets it at connect; after SIGKILL mid-vector PX4 holds where it is."""
+"""Real SITLs (``sitl``, skipped unless built): booted with an offboard-loss failsafe that would fly a dead
+client's last velocity far too long, uav-tui sets it at connect; after SIGKILL mid-vector the vehicle stops."""
 
 from __future__ import annotations
 
@@ -16,11 +16,19 @@ import pytest
 
 from controllers.mavsdk_controller import MavsdkController
 from tests.core.flight_helpers import STEERING_PROCESSOR
-from tests.sitl import px4_sitl
+from tests.sitl import arducopter_sitl, px4_sitl
 
 pytestmark = pytest.mark.sitl
 ROOT = Path(__file__).resolve().parents[2]
-SCRIPT = "wait 8\narm\ntakeoff 3\nwait 10\nf 1\nautonomy on\nwait 120\n"
+
+CASES = {
+    # PX4: 10 s of the last setpoint, then RETURN; it should hold after 1 s.
+    "px4": (px4_sitl, {"COM_OF_LOSS_T": 10, "COM_OBL_RC_ACT": 3}, 8,
+            "set COM_OF_LOSS_T 10 -> 1, COM_OBL_RC_ACT 3 -> 5"),
+    # ArduCopter: GUIDED flies a velocity target for GUID_TIMEOUT (5 s here), then stops in GUIDED.
+    # GUIDED arming works only ~40 s after boot.
+    "arducopter": (arducopter_sitl, {"GUID_TIMEOUT": 5}, 45, "set GUID_TIMEOUT 5 -> 1"),
+}
 
 
 def wait_line(process: subprocess.Popen[str], text: str, timeout: float) -> list[str]:
@@ -36,28 +44,31 @@ def wait_line(process: subprocess.Popen[str], text: str, timeout: float) -> list
     raise AssertionError(f"no {text!r} from uav-tui:\n{''.join(seen)}")
 
 
-async def mode_and_speed_after(address: str, killed: float) -> tuple[str, float, float]:
-    """Reconnect as uav-tui would; wait until PX4 left OFFBOARD and slowed down; (mode, speed, seconds since kill)."""
+async def stopped_after(address: str, killed: float, autopilot: str) -> tuple[str, float]:
+    """Reconnect as uav-tui would; wait until the vehicle is slower than 0.3 m/s (and, on PX4, out of
+    OFFBOARD: ArduCopter stays in GUIDED); returns (flight mode, seconds since the kill)."""
     fc = MavsdkController()
     await fc.connect(address, heartbeat_timeout=10.0)
     mode, speed = "", math.inf
     try:
-        async with asyncio.timeout(20):
+        async with asyncio.timeout(30):
             async for update in fc.telemetry():
                 mode = update.get("flight_mode", mode)
-                if "vn_ms" in update and update["vn_ms"] is not None:
+                if update.get("vn_ms") is not None and update.get("ve_ms") is not None:
                     speed = math.hypot(update["vn_ms"], update["ve_ms"])
-                if mode and mode != "OFFBOARD" and speed < 0.3:
-                    return mode, speed, time.monotonic() - killed
+                if mode and speed < 0.3 and (autopilot == "arducopter" or mode != "OFFBOARD"):
+                    return mode, time.monotonic() - killed
     finally:
         await fc.close()
-    raise AssertionError(f"PX4 still in {mode} at {speed:.2f} m/s")
+    raise AssertionError(f"still in {mode} at {speed:.2f} m/s")
 
 
-def test_px4_sigkill_mid_vector_holds(tmp_path: Path) -> None:
+@pytest.mark.parametrize("autopilot", list(CASES))
+def test_sigkill_mid_vector_stops_the_vehicle(tmp_path: Path, autopilot: str) -> None:
+    start_sitl, params, boot_s, tuned = CASES[autopilot]
     (tmp_path / "steering.py").write_text(STEERING_PROCESSOR)
-    (tmp_path / "flight.txt").write_text(SCRIPT)
-    with px4_sitl(tmp_path / "px4", {"COM_OF_LOSS_T": 10, "COM_OBL_RC_ACT": 3}) as address:
+    (tmp_path / "flight.txt").write_text(f"wait {boot_s}\narm\ntakeoff 3\nwait 10\nf 1\nautonomy on\nwait 120\n")
+    with start_sitl(tmp_path / "sitl", params) as address:
         process = subprocess.Popen(
             [sys.executable, "-m", "uav_tui", "--no-ui", "--fc", address, "--source",
              "synthetic:?width=160&height=120", "--processor", "steering.py:Steering", "--script", "flight.txt",
@@ -65,7 +76,7 @@ def test_px4_sigkill_mid_vector_holds(tmp_path: Path) -> None:
             cwd=tmp_path, env={**os.environ, "PYTHONPATH": str(ROOT)}, stdout=subprocess.PIPE,
             stderr=subprocess.STDOUT, text=True)
         try:
-            seen = wait_line(process, "autonomy ON", 90)
+            seen = wait_line(process, "autonomy ON", boot_s + 60)
             seen += wait_line(process, "OFFBOARD", 15)
             time.sleep(1.0)
             process.send_signal(signal.SIGKILL)
@@ -74,7 +85,8 @@ def test_px4_sigkill_mid_vector_holds(tmp_path: Path) -> None:
         finally:
             process.kill()
             process.communicate()
-        mode, _speed, after_s = asyncio.run(mode_and_speed_after(address, killed))
-    assert mode == "HOLD"  # not RETURN_TO_LAUNCH (COM_OBL_RC_ACT 3)
-    assert after_s < 8  # its 10 s COM_OF_LOSS_T would still be flying the vector
-    assert "set COM_OF_LOSS_T 10 -> 1, COM_OBL_RC_ACT 3 -> 5" in "".join(seen)
+        mode, after_s = asyncio.run(stopped_after(address, killed, autopilot))
+    if autopilot == "px4":
+        assert mode == "HOLD"  # not RETURN_TO_LAUNCH (COM_OBL_RC_ACT 3)
+    assert after_s < 4.5  # the booted failsafe would still be flying the vector (reconnecting takes ~1-2 s)
+    assert tuned in "".join(seen)
