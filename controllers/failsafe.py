@@ -14,6 +14,7 @@ from __future__ import annotations
 import logging
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 from controllers.errors import ControllerError
 
@@ -75,23 +76,31 @@ RULES: dict[str, tuple[FailsafeParam, ...]] = {
 """The parameters checked per autopilot (``MavsdkController.autopilot``)."""
 
 
-class ParamAccess:
-    """How :func:`check_failsafe` reads and writes parameters (the controller binds its bounded calls)."""
+Bound = Callable[[str, Callable[[], Awaitable[Any]]], Awaitable[Any]]
+"""``bound(name, call)``: runs one MAVSDK call with a timeout, raising ControllerError."""
 
-    def __init__(
-        self,
-        get_float: Callable[[str], Awaitable[float]],
-        get_int: Callable[[str], Awaitable[int]],
-        set_float: Callable[[str, float], Awaitable[None]],
-        set_int: Callable[[str, int], Awaitable[None]],
-    ) -> None:
-        self.get_float, self.get_int, self.set_float, self.set_int = get_float, get_int, set_float, set_int
+
+class ParamAccess:
+    """Reads and writes parameters through MAVSDK's Param plugin, each call through ``bound``.
+
+    Args:
+        plugin: a ``ParamAsync`` (``get_param_float``, ``get_param_int``, ``set_param_float``, ``set_param_int``).
+        bound: the controller's bounded-call wrapper.
+    """
+
+    def __init__(self, plugin: Any, bound: Bound) -> None:
+        self._plugin = plugin
+        self._bound = bound
 
     async def get(self, param: FailsafeParam) -> float:
-        return float(await self.get_int(param.name)) if param.integer else await self.get_float(param.name)
+        read = self._plugin.get_param_int if param.integer else self._plugin.get_param_float
+        return float(await self._bound(f"read {param.name}", lambda: read(param.name)))
 
     async def set(self, param: FailsafeParam, value: float) -> None:
-        await (self.set_int(param.name, int(value)) if param.integer else self.set_float(param.name, value))
+        if param.integer:
+            await self._bound(f"set {param.name}", lambda: self._plugin.set_param_int(param.name, int(value)))
+        else:
+            await self._bound(f"set {param.name}", lambda: self._plugin.set_param_float(param.name, value))
 
 
 @dataclass(slots=True)

@@ -8,12 +8,14 @@ interpreter exits, so the process could never exit and kept the serial port. Her
 - :func:`use_abandoning_executor` gives the running loop an :class:`AbandoningExecutor`: one daemon
   thread per call, and a shutdown that does not wait for calls still blocked;
 - :func:`bounded` is the one wrapper every MAVSDK call goes through: a timeout, MAVSDK's errors
-  translated to ours, and a log line for each call it abandons.
+  translated to ours, and a log line for each call it abandons;
+- :func:`release` destroys MAVSDK at close, unless a call is still inside it: then it is let go.
 """
 
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import logging
 import threading
 import weakref
@@ -103,3 +105,23 @@ async def bounded(
         except TimeoutError:
             logger.warning("MAVSDK call %s: no answer within %.1f s; abandoned", name, timeout_s)
             raise
+
+
+_abandoned: list[Any] = []
+"""MAVSDK instances let go of with calls still blocked in them: kept referenced, never destroyed."""
+
+
+async def release(mavsdk: Any, executor: AbandoningExecutor, timeout_s: float) -> None:
+    """Destroy a MAVSDK instance within ``timeout_s``, or abandon it to the process exit.
+
+    It is never destroyed while a call is still inside it (that can crash the process).
+    """
+    with contextlib.suppress(TimeoutError):
+        async with asyncio.timeout(timeout_s):
+            while executor.running:
+                await asyncio.sleep(0.05)
+            await asyncio.to_thread(mavsdk.destroy)
+            return
+    _abandoned.append(mavsdk)
+    logger.error("MAVSDK not released within %.0f s, abandoned; calls still blocked: %s", timeout_s,
+                 ", ".join(executor.running) or "none")

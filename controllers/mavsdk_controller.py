@@ -26,7 +26,7 @@ from controllers.connection import (
 from controllers.errors import ControllerError
 from controllers.failsafe import STALE_MARGIN_S, FailsafeReport, ParamAccess, check_failsafe
 from controllers.mavlink_commands import px4_set_mode, send_command, velocity_body_setpoint
-from controllers.mavsdk_calls import AbandoningExecutor, bounded, use_abandoning_executor
+from controllers.mavsdk_calls import AbandoningExecutor, bounded, release, use_abandoning_executor
 from controllers.mavsdk_link import LinkMonitor
 from controllers.mavsdk_log import route_mavsdk_log
 from controllers.mavsdk_telemetry import merged_updates, set_rates
@@ -50,9 +50,6 @@ PARAM_TIMEOUT_S = 5.0
 
 RELEASE_TIMEOUT_S = 2.0
 """close(): how long MAVSDK may take to release its connections before it is abandoned."""
-
-_ABANDONED: list[Mavsdk] = []
-"""MAVSDK instances let go of with calls still blocked in them: kept referenced, never destroyed."""
 
 AUTOPILOT_NAMES = {"px4": "PX4", "ardupilot": "ArduPilot", "unknown": "unknown autopilot"}
 
@@ -191,21 +188,9 @@ class MavsdkController:
             await self._link.stop()
         # Telemetry iterators end on _stop; their unsubscribe is a no-op once MAVSDK is destroyed.
         mavsdk, self._mavsdk = self._mavsdk, None
-        if mavsdk is not None:
-            await self._release(mavsdk)
+        if mavsdk is not None and self._executor is not None:
+            await release(mavsdk, self._executor, RELEASE_TIMEOUT_S)
         logger.info("MavsdkController closed (%s)", self.description)
-
-    async def _release(self, mavsdk: Mavsdk) -> None:
-        """Destroy MAVSDK within RELEASE_TIMEOUT_S, or abandon it (never destroyed under a call still inside it)."""
-        with contextlib.suppress(TimeoutError):
-            async with asyncio.timeout(RELEASE_TIMEOUT_S):
-                while self.unfinished_calls:
-                    await asyncio.sleep(0.05)
-                await asyncio.to_thread(mavsdk.destroy)
-                return
-        _ABANDONED.append(mavsdk)  # the process exit ends it; destroying it under a blocked call can crash
-        logger.error("MavsdkController: MAVSDK not released within %.0f s, abandoned; calls still blocked: %s",
-                     RELEASE_TIMEOUT_S, ", ".join(self.unfinished_calls) or "none")
 
     @property
     def unfinished_calls(self) -> list[str]:
@@ -221,17 +206,7 @@ class MavsdkController:
             max_t: the longest vector; a dead platform's last command may last ``max_t`` + 0.5 s.
             tune: set parameters that allow longer; otherwise only report them.
         """
-        param = self._param
-
-        def timed(name: str, call: Callable[[], Awaitable[T]]) -> Awaitable[T]:
-            return bounded(name, call, PARAM_TIMEOUT_S, self.heartbeat_age_s)
-
-        access = ParamAccess(
-            get_float=lambda name: timed(f"read {name}", lambda: param.get_param_float(name)),
-            get_int=lambda name: timed(f"read {name}", lambda: param.get_param_int(name)),
-            set_float=lambda name, value: timed(f"set {name}", lambda: param.set_param_float(name, value)),
-            set_int=lambda name, value: timed(f"set {name}", lambda: param.set_param_int(name, value)),
-        )
+        access = ParamAccess(self._param, lambda name, call: bounded(name, call, PARAM_TIMEOUT_S, self.heartbeat_age_s))
         return await check_failsafe(self.autopilot, access, max_t + STALE_MARGIN_S, tune=tune)
 
     # ---- commands --------------------------------------------------------------------------------
