@@ -24,8 +24,9 @@ from controllers.connection import (
     parse_connection,
 )
 from controllers.errors import ControllerError
+from controllers.failsafe import STALE_MARGIN_S, FailsafeReport, ParamAccess, check_failsafe
 from controllers.mavlink_commands import px4_set_mode, send_command, velocity_body_setpoint
-from controllers.mavsdk_errors import map_mavsdk_errors
+from controllers.mavsdk_calls import AbandoningExecutor, bounded, release, use_abandoning_executor
 from controllers.mavsdk_link import LinkMonitor
 from controllers.mavsdk_log import route_mavsdk_log
 from controllers.mavsdk_pose import POSE_RATE_HZ, PoseSample, pose_samples, request_pose_rate
@@ -44,6 +45,12 @@ SETUP_TIMEOUT_S = 5.0
 
 CLOSE_HOLD_TIMEOUT_S = 2.0
 """close() during a vector: how long it tries to put the vehicle in hold before letting go."""
+
+PARAM_TIMEOUT_S = 5.0
+"""Upper bound on one parameter read or write (MAVSDK retries PARAM_REQUEST_READ / PARAM_SET itself)."""
+
+RELEASE_TIMEOUT_S = 2.0
+"""close(): how long MAVSDK may take to release its connections before it is abandoned."""
 
 AUTOPILOT_NAMES = {"px4": "PX4", "ardupilot": "ArduPilot", "unknown": "unknown autopilot"}
 
@@ -79,6 +86,7 @@ class MavsdkController:
         self._param: ParamAsync
         self._direct: MavlinkDirectAsync
         self._link: LinkMonitor | None = None
+        self._executor: AbandoningExecutor | None = None
         self._stop = asyncio.Event()
         self._closed = False
         self._vectors = VectorStream(self, rate_hz=vector_rate_hz, name="MavsdkController")
@@ -100,6 +108,7 @@ class MavsdkController:
         if conn.is_serial:
             await asyncio.to_thread(check_serial_device, conn.device or "")
         route_mavsdk_log()
+        self._executor = use_abandoning_executor()
         self.connection = conn
         self._mavsdk = Mavsdk(Configuration.create_with_component_type(ComponentType.GROUND_STATION))
         try:
@@ -113,9 +122,12 @@ class MavsdkController:
     async def _attach(self, conn: Connection, heartbeat_timeout: float) -> None:
         assert self._mavsdk is not None
         try:
-            await self._mavsdk.add_any_connection(conn.url)
+            async with asyncio.timeout(SETUP_TIMEOUT_S):
+                await self._mavsdk.add_any_connection(conn.url)
         except MavsdkConnectionError as exc:
             raise connection_failed(conn, str(exc)) from exc
+        except TimeoutError as exc:
+            raise connection_failed(conn, f"MAVSDK did not open it within {SETUP_TIMEOUT_S:g} s") from exc
         system = None
         with contextlib.suppress(TimeoutError):  # belt and braces over MAVSDK's own timeout
             async with asyncio.timeout(heartbeat_timeout + 2.0):
@@ -136,8 +148,8 @@ class MavsdkController:
 
     async def _ask_for_telemetry(self) -> None:
         if self.autopilot == "ardupilot":
-            with map_mavsdk_errors("request_data_stream", self.heartbeat_age_s):
-                await ardupilot.request_streams(self._direct, self._sysid)
+            await bounded("request_data_stream", lambda: ardupilot.request_streams(self._direct, self._sysid),
+                          SETUP_TIMEOUT_S, self.heartbeat_age_s)
         try:
             async with asyncio.timeout(SETUP_TIMEOUT_S):
                 await set_rates(self._telemetry)
@@ -169,7 +181,8 @@ class MavsdkController:
                 async with asyncio.timeout(CLOSE_HOLD_TIMEOUT_S):
                     await self._vectors.stop_and_hold()
             except (ControllerError, TimeoutError) as exc:
-                logger.error("MavsdkController: could not put the vehicle in hold while closing: %s", exc)
+                logger.error("MavsdkController: could not put the vehicle in hold while closing: %s",
+                             str(exc) or f"no answer within {CLOSE_HOLD_TIMEOUT_S:g} s")
         self._closed = True
         self._stop.set()
         await self._vectors.cancel()
@@ -177,9 +190,26 @@ class MavsdkController:
             await self._link.stop()
         # Telemetry iterators end on _stop; their unsubscribe is a no-op once MAVSDK is destroyed.
         mavsdk, self._mavsdk = self._mavsdk, None
-        if mavsdk is not None:
-            await asyncio.to_thread(mavsdk.destroy)
+        if mavsdk is not None and self._executor is not None:
+            await release(mavsdk, self._executor, RELEASE_TIMEOUT_S)
         logger.info("MavsdkController closed (%s)", self.description)
+
+    @property
+    def unfinished_calls(self) -> list[str]:
+        """MAVSDK calls whose threads are still blocked (abandoned: they do not keep the process alive)."""
+        return self._executor.running if self._executor is not None else []
+
+    # ---- failsafe parameters ---------------------------------------------------------------------
+
+    async def check_failsafe(self, max_t: float, *, tune: bool) -> FailsafeReport:
+        """Check (and with ``tune`` set) the autopilot's offboard-loss parameters, see :mod:`controllers.failsafe`.
+
+        Args:
+            max_t: the longest vector; a dead platform's last command may last ``max_t`` + 0.5 s.
+            tune: set parameters that allow longer; otherwise only report them.
+        """
+        access = ParamAccess(self._param, lambda name, call: bounded(name, call, PARAM_TIMEOUT_S, self.heartbeat_age_s))
+        return await check_failsafe(self.autopilot, access, max_t + STALE_MARGIN_S, tune=tune)
 
     # ---- commands --------------------------------------------------------------------------------
 
@@ -187,9 +217,7 @@ class MavsdkController:
         """Run one MAVSDK call bounded in time, with its errors translated at one boundary."""
         if self._system is None or self._closed:
             raise ControllerError(f"{name}: not connected (call connect() first)")
-        with map_mavsdk_errors(name, self.heartbeat_age_s):
-            async with asyncio.timeout(self._command_timeout_s):
-                return await call()
+        return await bounded(name, call, self._command_timeout_s, self.heartbeat_age_s)
 
     async def _guided(self, command: str) -> None:
         """ArduCopter: switch to GUIDED first (arming, take-off and velocity targets need it)."""

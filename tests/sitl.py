@@ -4,13 +4,13 @@ Binaries (built by ``../shared/tools/build_sitl.sh``, see its header):
 
 - PX4: ``$PX4_SITL_BIN``, else ``$SITL_DIR/px4/build/px4_sitl_default/bin/px4`` (``SITL_DIR`` = ``~/sitl``).
   SIH quad (``sihsim_quadx``): physics inside PX4, no Gazebo. Instance ``-i N`` talks to the
-  offboard API on UDP 14540+N, so the ground side listens on ``udpin://0.0.0.0:14540+N``.
+  offboard API on UDP 14540+N, so the ground side listens on ``udpin://127.0.0.1:14540+N``.
 - ArduCopter: ``$ARDUCOPTER_SITL_BIN``, else ``$SITL_DIR/ardupilot/build/sitl/bin/arducopter``,
   ``--model quad`` (built-in physics). Instance ``-I N`` serves SERIAL0 on TCP 5760+10N:
   ``tcpout://127.0.0.1:5760+10N``.
 
 Each helper picks the first instance number whose ports are free, runs the SITL in a scratch
-folder, and stops it (SIGTERM, then SIGKILL) on exit. A test without the binary is skipped and
+folder with ``params`` set at boot, and stops it (SIGTERM, then SIGKILL) on exit. A test without the binary is skipped and
 says which path it looked for.
 """
 
@@ -67,7 +67,7 @@ def require(binary: Path, what: str) -> Path:
 def port_free(port: int, kind: int) -> bool:
     with socket.socket(socket.AF_INET, kind) as s:
         try:
-            s.bind(("0.0.0.0", port))
+            s.bind(("127.0.0.1", port))
         except OSError:
             return False
     return True
@@ -102,27 +102,29 @@ def running(name: str, command: list[str], cwd: Path, env: dict[str, str], conne
 
 
 @contextlib.contextmanager
-def px4_sih(workdir: Path) -> Iterator[Sitl]:
+def px4_sih(workdir: Path, params: dict[str, float] | None = None) -> Iterator[Sitl]:
     """PX4 SITL with the SIH quad (``sihsim_quadx``), headless; the ground side listens on its UDP port."""
     binary = require(PX4_BIN, "PX4")
     instance = free_instance([(14540, socket.SOCK_DGRAM), (14580, socket.SOCK_DGRAM), (18570, socket.SOCK_DGRAM)],
                              step=1)
     shutil.copytree(binary.parents[1] / "etc", workdir / "etc")
     env = {"PX4_SIM_MODEL": "sihsim_quadx", "PX4_SIMULATOR": "sihsim", "HEADLESS": "1",
-           "PX4_SYS_AUTOSTART": "10040"}
+           "PX4_SYS_AUTOSTART": "10040", **{f"PX4_PARAM_{name}": str(value) for name, value in (params or {}).items()}}
     command = [str(binary), "-i", str(instance), "-d", str(workdir / "etc")]
-    with running("px4", command, workdir, env, f"udpin://0.0.0.0:{14540 + instance}", PX4_READY_S) as sitl:
+    with running("px4", command, workdir, env, f"udpin://127.0.0.1:{14540 + instance}", PX4_READY_S) as sitl:
         yield sitl
 
 
 @contextlib.contextmanager
-def arducopter(workdir: Path) -> Iterator[Sitl]:
+def arducopter(workdir: Path, params: dict[str, float] | None = None) -> Iterator[Sitl]:
     """ArduCopter SITL, ``--model quad``; the ground side connects to its SERIAL0 TCP port."""
     binary = require(ARDUCOPTER_BIN, "ArduCopter")
     instance = free_instance([(5760, socket.SOCK_STREAM), (5762, socket.SOCK_STREAM), (5501, socket.SOCK_DGRAM)],
                              step=10)  # 5501+10N: the SITL's RC input
-    defaults = binary.parents[3] / "Tools/autotest/default_params/copter.parm"
-    command = [str(binary), "--model", "quad", "--speedup", "1", "--defaults", str(defaults),
+    extra = workdir / "extra.parm"
+    extra.write_text("".join(f"{name} {value}\n" for name, value in (params or {}).items()))
+    defaults = f"{binary.parents[3] / 'Tools/autotest/default_params/copter.parm'},{extra}"
+    command = [str(binary), "--model", "quad", "--speedup", "1", "--defaults", defaults,
                "--home", ARDUCOPTER_HOME, "-I", str(instance), "--wipe", "--serial0", "tcp:0", "--serial1", "tcp:2"]
     port = 5760 + 10 * instance
     with running("arducopter", command, workdir, {}, f"tcpout://127.0.0.1:{port}", ARDUCOPTER_READY_S) as sitl:

@@ -77,6 +77,8 @@ class AutonomyGate:
         self.enabled = False
         self.stop_reason = ""
         """Why autonomy last stopped by itself (shown on every interface)."""
+        self.refusal = ""
+        """Why autonomy may not be switched on at all (e.g. an autopilot failsafe that is too slow)."""
         self.executed = 0
         self.rejected = 0
         self.last_vector: Vector | None = None
@@ -92,6 +94,8 @@ class AutonomyGate:
     def enable(self, origin: str) -> None:
         if self.controller is None:
             raise UavError("autonomy needs a flight controller; start with --fc sim or a connection string")
+        if self.refusal:
+            raise UavError(f"autonomy refused: {self.refusal}")
         self.enabled, self.stop_reason, self._flown = True, "", False
         self.events.emit("info", "autonomy", "autonomy ON", origin)
 

@@ -50,6 +50,10 @@ class SafetyConfig:
     max_processor_errors: int = _key("consecutive processor exceptions that stop autonomy", minimum=1,
                                      maximum=1000, default=3)
     takeoff_alt: float = _key("default takeoff altitude, m", minimum=1, maximum=120, default=5.0)
+    tune_autopilot_failsafe: bool = _key("at connect, set the autopilot's offboard-loss failsafe (COM_OF_LOSS_T, "
+                                         "COM_OBL_RC_ACT, GUID_TIMEOUT) when it would fly a dead platform's last "
+                                         "command longer than max_t + 0.5 s; off: refuse autonomy instead",
+                                         default=True)
     max_altitude: float = _key("highest altitude a takeoff command may ask for, m", minimum=1, maximum=10000,
                                default=120.0)
     max_orbit_radius: float = _key("largest orbit radius a command may ask for, m", minimum=1, maximum=10000,

@@ -28,6 +28,7 @@ from uav_tui.commands import VEHICLE_COMMANDS, Command, parse
 from uav_tui.config import Config
 from uav_tui.errors import KNOWN_ERRORS, NoVehicle, SourceError, UavError
 from uav_tui.events import EventLog, Repeats
+from uav_tui.link import LinkWatch
 from uav_tui.operations import Operations
 from uav_tui.process_worker import ProcessWorker
 from uav_tui.recording import Recorder, describe
@@ -94,6 +95,10 @@ class UavCore:
         """The MAVLink camera component when ``camera_mavlink`` is set, else None."""
         self.pose_track: PoseTrack | None = None
         """The vehicle's pose from telemetry, once a ``sim:`` camera asked for it."""
+        self.link: LinkWatch | None = None
+        """Link-loss / recovery events and the dead-simulator report (None without a flight controller)."""
+        self.abandoned_calls: list[str] = []
+        """Flight-controller calls still blocked when the core stopped (the process should exit non-zero)."""
 
     # -- lifecycle -------------------------------------------------------------------------------
 
@@ -121,6 +126,7 @@ class UavCore:
                 commands = recorded_commands(self.controller.run_dir / "events.csv")  # type: ignore[attr-defined]
                 self.replay.before_show = CommandReplay(self, loop, commands).before_show
             self.gate.telemetry, self.gate.controller = self.telemetry, self.controller
+            await self._check_autopilot_failsafe()
             self.worker.bind_telemetry(self.telemetry)
             await camera_ready
             self.source = await self.open_source(self.config.source)
@@ -138,6 +144,9 @@ class UavCore:
         self.worker.attach(self.source.buffer)
         self._spawn(self.worker.run(), "processor")
         self._spawn(self.telemetry.run(), "telemetry")
+        if self.controller is not None:
+            self.link = LinkWatch(self.controller, self.events, self.config.safety.link_timeout)
+            self._spawn(self.link.run(), "link")
         self._spawn(self.gate.run(), "autonomy")
         self._spawn(self.gate.watch(self._newest_frame_age, lambda: self.worker.busy_s,
                                     lambda: self.worker.consecutive_errors), "watchdog")
@@ -167,6 +176,18 @@ class UavCore:
         self.processor_error = reason
         if self.gate.enabled:
             self._spawn(self.gate.disable("watchdog", reason), "processor fault")
+
+    async def _check_autopilot_failsafe(self) -> None:
+        """Read (and set) the autopilot's offboard-loss failsafe; autonomy is refused while it is too slow."""
+        check = getattr(self.controller, "check_failsafe", None)
+        if check is None:
+            return
+        safety = self.config.safety
+        report = await check(safety.max_t, tune=safety.tune_autopilot_failsafe)
+        self.events.emit("info", "autonomy", report.summary())
+        if not report.ok:
+            self.gate.refusal = "; ".join(report.problems)
+            self.events.emit("error", "autonomy", f"autonomy will be refused: {self.gate.refusal}")
 
     async def _start_side_channels(self) -> None:
         """The web page and MAVLink click-to-track, when configured (aiortc is imported only then)."""
@@ -211,6 +232,10 @@ class UavCore:
             await asyncio.get_running_loop().run_in_executor(None, self.source.close)
         if self.controller is not None:
             await self.controller.close()
+            self.abandoned_calls = list(getattr(self.controller, "unfinished_calls", ()))
+            if self.abandoned_calls:
+                self.events.emit("error", "link", "flight controller calls still blocked, abandoned: "
+                                 + ", ".join(self.abandoned_calls))
         if self.recorder is not None:
             self.telemetry.saver = None
             await asyncio.get_running_loop().run_in_executor(None, self.recorder.close)
@@ -346,4 +371,6 @@ class UavCore:
             vectors_rejected=self.gate.rejected,
             recording=self.recorder.status() if self.recorder is not None else {},
             startup_s=self.startup_s,
+            link_lost=self.link is not None and self.link.lost,
+            vehicle_problem=self.link.vehicle_problem if self.link is not None else "",
         )

@@ -21,7 +21,7 @@ from uav_tui.events import Event
 from uav_tui.status import CoreStatus
 from uav_tui.text import escape, safe
 
-EXIT_OK, EXIT_SCRIPT_FAILED, EXIT_START_FAILED, EXIT_UNHANDLED_ERROR = 0, 1, 2, 3
+EXIT_OK, EXIT_SCRIPT_FAILED, EXIT_START_FAILED, EXIT_UNHANDLED_ERROR, EXIT_ABANDONED = 0, 1, 2, 3, 4
 
 
 def load_script(path: Path, safety: SafetyConfig | None = None) -> list[tuple[int, Command]]:
@@ -64,9 +64,12 @@ def format_status(status: CoreStatus, elapsed_s: float) -> str:
         hb = "-" if status.heartbeat_age_s is None else f"{status.heartbeat_age_s:.1f}s"
         alt = "-" if t.rel_alt_m is None else f"{t.rel_alt_m:.1f}m"
         state = "armed" if t.armed else "disarmed"
-        line += f" | hb {hb} {t.flight_mode or '?'} {state}{' air' if t.in_air else ''} alt {alt}"
+        stale = "LINK LOST, stale: " if status.link_lost else ""
+        line += f" | hb {hb} {stale}{t.flight_mode or '?'} {state}{' air' if t.in_air else ''} alt {alt}"
         if t.north_m is not None and t.east_m is not None:
             line += f" N {t.north_m:.1f} E {t.east_m:.1f}m"
+        if status.vehicle_problem:
+            line += f" ({status.vehicle_problem})"
     line += f" | auto {'ON' if status.autonomy else 'OFF'}"
     if status.last_vector is not None:
         vx, vy, vt = status.last_vector
@@ -120,6 +123,7 @@ class HeadlessRunner:
                 loop.add_signal_handler(signum, self._say, "SIGHUP: terminal lost, continuing headless")
             else:
                 loop.add_signal_handler(signum, self.request_stop, name)
+        self.core.events.add_listener(self._print_event)  # before start: what it finds at connect is printed
         try:
             await self.core.start()
         except KNOWN_ERRORS as exc:
@@ -135,11 +139,10 @@ class HeadlessRunner:
         self._say(f"stopped: {self._reason}")
         if note := saved_run_note(self.core):
             self._say(json.dumps({"run_dir": str(self.core.recorder.run_dir)}) if self.json_lines else note)
-        return self.exit_code
+        return EXIT_ABANDONED if self.core.abandoned_calls else self.exit_code
 
     async def _serve(self, loop: asyncio.AbstractEventLoop) -> None:
         """From a started core until something asks to stop; sets the reason and the exit code."""
-        self.core.events.add_listener(self._print_event)
         if self.core.web is not None:
             url = self.core.web.url
             self._say(json.dumps({"web_url": url}) if self.json_lines else f"web page: {url}", redact=False)

@@ -36,6 +36,10 @@ class CoreStatus:
     """Seconds from the process start to the first processed frame (None before it)."""
     processor_state: ProcessorState | None = None
     """Where the processor runs and how it is doing: running, restarting N, crashed: reason; PID, memory."""
+    link_lost: bool = False
+    """No heartbeat for ``link_timeout``: the telemetry is stale (as old as ``heartbeat_age_s``)."""
+    vehicle_problem: str = ""
+    """Why the vehicle cannot come back (e.g. the built-in simulator's process was killed), or ""."""
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready form (for ``--json`` and the web page)."""

@@ -1,7 +1,8 @@
 """Built-in simulated vehicle: a PX4-like quadrotor speaking MAVLink 2 on loopback.
 
 Run it with ``python -m controllers.sim`` (or ``uav-tui sim``); start it from code with
-:class:`controllers.sim.launcher.SimVehicle`; connect MAVSDK with ``udpin://0.0.0.0:MAVLINK_PORT``.
+:class:`controllers.sim.launcher.SimVehicle`; connect MAVSDK with ``udpin://127.0.0.1:MAVLINK_PORT``
+(loopback only: nothing on the network reaches either side).
 
 Ground-truth channel: UDP JSON datagrams on 127.0.0.1:TRUTH_PORT, one JSON object per datagram.
 

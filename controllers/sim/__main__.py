@@ -9,6 +9,7 @@ import sys
 from collections.abc import Sequence
 
 from controllers.sim.geo import Home, parse_wind
+from controllers.sim.guidance import OFFBOARD_LOSS_ACTIONS
 from controllers.sim.physics import PhysicsConfig
 from controllers.sim.vehicle import ServerConfig, SimVehicleServer
 
@@ -33,7 +34,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="uav-tui sim",
         description="Simulated PX4-like quadrotor speaking MAVLink 2 on loopback. "
-        "Connect MAVSDK with udpin://0.0.0.0:MAVLINK_PORT.",
+        "Connect MAVSDK with udpin://127.0.0.1:MAVLINK_PORT.",
     )
     p.add_argument("--mavlink-port", type=int, default=14540, help="ground side's listening UDP port")
     p.add_argument("--truth-port", type=int, default=14600, help="ground-truth JSON channel (0 = any free)")
@@ -47,6 +48,13 @@ def build_parser() -> argparse.ArgumentParser:
         default=1.0,
         metavar="S",
         help="offboard setpoints missing this long -> hold (PX4 COM_OF_LOSS_T)",
+    )
+    p.add_argument(
+        "--offboard-loss-action",
+        type=int,
+        default=0,
+        choices=sorted(OFFBOARD_LOSS_ACTIONS),
+        help="what the offboard-loss failsafe does: 0/5 hold, 3 return, 4 land (PX4 COM_OBL_RC_ACT)",
     )
     p.add_argument(
         "--failsafe-land-after",
@@ -83,6 +91,7 @@ def config_from_args(args: argparse.Namespace) -> ServerConfig:
         seed=args.seed,
         rate_hz=args.rate,
         offboard_loss_timeout_s=args.offboard_loss_timeout,
+        offboard_loss_action=args.offboard_loss_action,
         failsafe_land_after_s=args.failsafe_land_after,
         parent_pid=args.parent_pid,
         physics=physics,

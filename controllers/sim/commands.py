@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 from pymavlink.dialects.v20 import common as mavlink
 
 from controllers.sim import px4_modes
-from controllers.sim.guidance import Mode, Orbit
+from controllers.sim.guidance import OFFBOARD_LOSS_ACTIONS, Mode, Orbit
 from controllers.sim.params import Param, ParamStore, encode_value
 from controllers.sim.physics import CommandRefused
 
@@ -97,12 +97,12 @@ class CommandHandler:
             bind("COM_DISARM_LAND", pc, "land_disarm_delay_s"),
             bind("COM_DISARM_PRFLT", pc, "preflight_disarm_s"),
             bind("COM_OF_LOSS_T", cfg, "offboard_loss_timeout_s"),
+            Param("COM_OBL_RC_ACT", M.MAV_PARAM_TYPE_INT32, lambda: cfg.offboard_loss_action, self._set_loss_action),
             *ParamStore.constants(
                 SYS_AUTOSTART=10016,
                 MAV_SYS_ID=1,
                 MAV_TYPE=2,
                 SYS_HITL=0,
-                COM_OBL_RC_ACT=0,
                 NAV_DLL_ACT=0,
                 CAL_GYRO0_ID=1,
                 CAL_ACC0_ID=1,
@@ -110,6 +110,13 @@ class CommandHandler:
                 COM_ARM_WO_GPS=0,
             ),
         ]
+
+    def _set_loss_action(self, value: float) -> None:
+        if int(value) in OFFBOARD_LOSS_ACTIONS:
+            self.s.cfg.offboard_loss_action = int(value)
+        else:
+            kept = self.s.cfg.offboard_loss_action
+            logger.info("SimVehicle: COM_OBL_RC_ACT %d is not simulated; keeping %d", value, kept)
 
     # ------------------------------------------------------------- commands
     def on_command(self, msg: mavlink.MAVLink_message) -> None:

@@ -57,6 +57,11 @@ class Orbit:
     speed: float
 
 
+OFFBOARD_LOSS_ACTIONS = {0: "hold", 3: "rtl", 4: "land", 5: "hold"}
+"""PX4's COM_OBL_RC_ACT values the simulator honours -> :class:`Guidance` method: 0 Position mode (no
+sticks: it holds, shown as HOLD), 3 Return, 4 Land, 5 Hold. PX4's others (Altitude, Manual, Terminate,
+Disarm) need a pilot's sticks or end in a crash, and are not simulated."""
+
 Demand = tuple[np.ndarray, float | None, float | None]
 """Velocity demand (NED m/s), yaw goal (rad) or None, yaw rate (rad/s) or None."""
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
 import signal
@@ -68,7 +69,7 @@ class SimVehicle:
     @property
     def connection_string(self) -> str:
         """The MAVSDK address that reaches this vehicle."""
-        return f"udpin://0.0.0.0:{self.mavlink_port}"
+        return f"udpin://127.0.0.1:{self.mavlink_port}"
 
     @property
     def pid(self) -> int | None:
@@ -77,6 +78,20 @@ class SimVehicle:
     @property
     def running(self) -> bool:
         return self._proc is not None and self._proc.poll() is None
+
+    def exit_status(self) -> str | None:
+        """How the process ended by itself (``"killed by SIGKILL"``, ``"exited with code 1"``), else None.
+
+        None while it runs and after :meth:`stop` (an exit asked for is not a death).
+        """
+        code = self._proc.poll() if self._proc is not None else None
+        if code is None:
+            return None
+        if code < 0:
+            with contextlib.suppress(ValueError):
+                return f"killed by {signal.Signals(-code).name}"
+            return f"killed by signal {-code}"
+        return f"exited with code {code}"
 
     def command(self) -> list[str]:
         h = self.home

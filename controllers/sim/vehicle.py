@@ -14,7 +14,7 @@ from pymavlink.dialects.v20 import common as mavlink
 
 from controllers.sim.commands import CommandHandler
 from controllers.sim.geo import Home
-from controllers.sim.guidance import Mode, OffboardSetpoint
+from controllers.sim.guidance import OFFBOARD_LOSS_ACTIONS, Mode, OffboardSetpoint
 from controllers.sim.link import MavlinkLink
 from controllers.sim.physics import Multicopter, PhysicsConfig
 from controllers.sim.setpoints import SetpointRecord, parse_local_ned
@@ -35,6 +35,8 @@ class ServerConfig:
     seed: int = 0
     rate_hz: float = 50.0
     offboard_loss_timeout_s: float = 1.0
+    offboard_loss_action: int = 0
+    """PX4's COM_OBL_RC_ACT: what the offboard-loss failsafe does (see :data:`OFFBOARD_LOSS_ACTIONS`)."""
     offboard_stream_window_s: float = 0.5
     failsafe_land_after_s: float = 10.0
     parent_pid: int | None = None
@@ -78,9 +80,10 @@ class SimVehicleServer:
         v = self.vehicle
         if v.mode == Mode.OFFBOARD and v.armed:
             if now_ns - self.setpoint_ns > self.cfg.offboard_loss_timeout_s * 1e9:
-                v.guidance.hold()
-                self.failsafe_since_ns = now_ns
-                self.status_text(mavlink.MAV_SEVERITY_WARNING, "Failsafe: offboard setpoints lost, holding")
+                action = OFFBOARD_LOSS_ACTIONS[self.cfg.offboard_loss_action]
+                getattr(v.guidance, action)()
+                self.failsafe_since_ns = now_ns if action == "hold" else None
+                self.status_text(mavlink.MAV_SEVERITY_WARNING, f"Failsafe: offboard setpoints lost, {action}")
             return
         if self.failsafe_since_ns is None:
             return
@@ -196,6 +199,6 @@ class SimVehicleServer:
         h = self.cfg.home
         return (
             f"sim vehicle ready: mavlink udpout 127.0.0.1:{self.cfg.mavlink_port} "
-            f"(connect with udpin://0.0.0.0:{self.cfg.mavlink_port}), truth udp 127.0.0.1:{self.truth.port}, "
+            f"(connect with udpin://127.0.0.1:{self.cfg.mavlink_port}), truth udp 127.0.0.1:{self.truth.port}, "
             f"home {h.lat_deg:.6f},{h.lon_deg:.6f},{h.alt_m:.1f}, wind {self.cfg.wind}"
         )

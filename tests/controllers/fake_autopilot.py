@@ -74,6 +74,8 @@ class FakeAutopilot:
         self.rx.robust_parsing = True
         self.received: list[Any] = []
         self.mode, self.armed = 0, False
+        self.params: dict[str, float] = {}
+        """REAL32 parameters it serves (PARAM_REQUEST_READ) and stores (PARAM_SET)."""
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name="fake-autopilot", daemon=True)
 
@@ -131,4 +133,11 @@ class FakeAutopilot:
                 self._heartbeat()
         elif kind == "PARAM_SET":
             name = msg.param_id if isinstance(msg.param_id, str) else msg.param_id.decode()
+            if name in self.params:
+                self.params[name] = msg.param_value
             self._send(self.tx.param_value_encode(name.encode(), msg.param_value, msg.param_type, 1, 0))
+        elif kind == "PARAM_REQUEST_READ":
+            name = msg.param_id if isinstance(msg.param_id, str) else msg.param_id.decode()
+            if name in self.params:  # unknown: silent, as autopilots are
+                value, real32 = self.params[name], mavlink.MAV_PARAM_TYPE_REAL32
+                self._send(self.tx.param_value_encode(name.encode(), value, real32, len(self.params), 0))

@@ -191,7 +191,7 @@ async def test_sim_starts_its_own_vehicle_and_stops_it_on_close() -> None:
     assert isinstance(fc, SimController)
     try:
         assert fc.sim.running
-        assert fc.description.startswith("simulated vehicle (PX4 via udpin://0.0.0.0:")
+        assert fc.description.startswith("simulated vehicle (PX4 via udpin://127.0.0.1:")
         truth = fc.sim.truth()  # the platform reaches ground truth this way
         states = [await asyncio.to_thread(truth.wait_latest, 2.0) for _ in range(2)]
         assert any("n" in state for state in states)

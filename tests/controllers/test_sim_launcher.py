@@ -22,7 +22,7 @@ def test_start_stop_is_idempotent_and_exits_cleanly() -> None:
     sim.start()
     pid = sim.pid
     assert pid is not None and sim.running
-    assert sim.connection_string == f"udpin://0.0.0.0:{sim.mavlink_port}"
+    assert sim.connection_string == f"udpin://127.0.0.1:{sim.mavlink_port}"
     assert sim.mavlink_port != sim.truth_port
     assert sim.stop() == 0  # SIGTERM is a clean exit
     assert sim.stop() is None

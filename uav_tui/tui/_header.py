@@ -38,6 +38,10 @@ class VehicleLine(StatusPanel):
         else:
             line.append(self.styled(f"ok {age:.1f}s", "good"))
         line.append("  fc ", label).append(status.fc_description or status.fc).append("\n")
+        if status.vehicle_problem:
+            return line.append(self.styled(status.vehicle_problem, "bad"))
+        if status.link_lost:
+            line.append(self.styled("STALE", "warn")).append(" ")
         line.append(t.flight_mode or MISSING).append("  ")
         line.append(self.styled("ARMED", "warn") if t.armed else Text("disarmed"))
         line.append("  ").append("IN AIR" if t.in_air else "on ground")

@@ -23,7 +23,7 @@ from uav_tui.commands import Command
 from uav_tui.config import Config
 from uav_tui.core import CoreState, UavCore
 from uav_tui.events import EventLog
-from uav_tui.headless import EXIT_SCRIPT_FAILED, run_script, saved_run_note
+from uav_tui.headless import EXIT_ABANDONED, EXIT_SCRIPT_FAILED, run_script, saved_run_note
 from uav_tui.tui._terminal import CHECK_PERIOD_S, TerminalWatch, driver_for
 from uav_tui.tui.app import LOG_ORIGIN, UavApp
 
@@ -92,7 +92,7 @@ class TuiSession:
             self.watch.close()
             for signum in (*handled, signal.SIGHUP):
                 loop.remove_signal_handler(signum)
-        return self.app.return_code or self.exit_code
+        return self.app.return_code or self.exit_code or (EXIT_ABANDONED if self.core.abandoned_calls else 0)
 
     def request_stop(self, reason: str, exit_code: int = 0) -> None:
         """Hold if needed and end the run (dashboard or headless)."""

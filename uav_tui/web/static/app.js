@@ -139,8 +139,10 @@ function showStatus(message) {
   let line = `${message.frame[0]}x${message.frame[1]} cam ${fmt(p.capture_fps, 1, "")} ` +
     `proc ${fmt(p.processed_fps, 1, "")} fps age ${fmt(p.frame_age_ms, 0, "ms")} err ${p.errors ?? "-"}`;
   if (s.fc !== "none") {
-    line += ` | hb ${fmt(s.heartbeat_age_s, 1, "s")} ${t.flight_mode || "?"} ${t.armed ? "ARMED" : "disarmed"}` +
+    line += ` | hb ${fmt(s.heartbeat_age_s, 1, "s")} ${s.link_lost ? "LINK LOST, stale: " : ""}` +
+      `${t.flight_mode || "?"} ${t.armed ? "ARMED" : "disarmed"}` +
       `${t.in_air ? " air" : ""} alt ${fmt(t.rel_alt_m, 1, "m")} bat ${fmt(t.battery_pct, 0, "%")}`;
+    if (s.vehicle_problem) line += ` (${s.vehicle_problem})`;
   }
   if (s.last_decision) line += ` | ${s.last_decision}`;
   const host = s.processor_state;

@@ -1,0 +1,94 @@
+"""The controller checks the autopilot's offboard-loss failsafe at connect and sets what is too slow.
+
+PX4: against the simulated vehicle, which serves COM_OF_LOSS_T / COM_OBL_RC_ACT over the PARAM
+protocol and honours them. ArduCopter: against the recording stand-in serving GUID_TIMEOUT (no
+ArduPilot SITL here; tests marked ``sitl`` in test_sitl_failsafe.py check the real ones).
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from controllers.mavsdk_controller import MavsdkController
+from controllers.sim.launcher import SimVehicle, free_udp_port
+from tests.controllers.fake_autopilot import FakeAutopilot, UdpLink, mavlink
+
+TOO_SLOW = {"extra_args": ["--offboard-loss-timeout", "10", "--offboard-loss-action", "3"]}
+"""PX4 flying a dead client's setpoint for 10 s, then returning home instead of stopping."""
+
+
+async def connected(address: str) -> MavsdkController:
+    fc = MavsdkController()
+    await fc.connect(address, heartbeat_timeout=5.0)
+    return fc
+
+
+@pytest.mark.parametrize("sim_vehicle", [TOO_SLOW], indirect=True)
+async def test_px4_too_slow_failsafe_is_set(sim_vehicle: SimVehicle) -> None:
+    fc = await connected(sim_vehicle.connection_string)
+    try:
+        report = await fc.check_failsafe(2.0, tune=True)
+        assert report.ok, report.problems
+        assert report.found == {"COM_OF_LOSS_T": 10.0, "COM_OBL_RC_ACT": 3.0}
+        assert report.changed == {"COM_OF_LOSS_T": (10.0, 1.0), "COM_OBL_RC_ACT": (3.0, 5.0)}
+        again = await fc.check_failsafe(2.0, tune=True)  # read back from the vehicle: it kept them
+        assert again.found == {"COM_OF_LOSS_T": 1.0, "COM_OBL_RC_ACT": 5.0} and again.changed == {}
+    finally:
+        await fc.close()
+
+
+@pytest.mark.parametrize("sim_vehicle", [TOO_SLOW], indirect=True)
+async def test_px4_without_tuning_names_parameter_and_value(sim_vehicle: SimVehicle) -> None:
+    fc = await connected(sim_vehicle.connection_string)
+    try:
+        report = await fc.check_failsafe(2.0, tune=False)
+        assert not report.ok and report.changed == {}
+        timeout, action = report.problems
+        assert timeout.startswith("COM_OF_LOSS_T = 10 ") and "2.5 s" in timeout
+        assert action.startswith("COM_OBL_RC_ACT = 3 ") and "set COM_OBL_RC_ACT to 5" in action
+        assert (await fc.check_failsafe(2.0, tune=False)).found["COM_OF_LOSS_T"] == 10.0  # left as it was
+    finally:
+        await fc.close()
+
+
+async def test_px4_defaults_are_left_alone(sim_vehicle: SimVehicle) -> None:
+    fc = await connected(sim_vehicle.connection_string)
+    try:
+        report = await fc.check_failsafe(2.0, tune=True)
+        assert report.ok and report.changed == {}
+        assert report.found == {"COM_OF_LOSS_T": 1.0, "COM_OBL_RC_ACT": 0.0}
+    finally:
+        await fc.close()
+
+
+@pytest.mark.parametrize("tune", [True, False], ids=["tune", "report-only"])
+async def test_ardupilot_guid_timeout(tune: bool) -> None:
+    port = free_udp_port()
+    with FakeAutopilot(UdpLink(port), mavlink.MAV_AUTOPILOT_ARDUPILOTMEGA) as fake:
+        fake.params["GUID_TIMEOUT"] = 3.0  # ArduCopter's default: 3.8 s of flight after a SIGKILL
+        fc = await connected(f"udpin://127.0.0.1:{port}")
+        try:
+            report = await fc.check_failsafe(2.0, tune=tune)
+        finally:
+            await fc.close()
+    assert report.found["GUID_TIMEOUT"] == 3.0
+    if tune:
+        assert report.ok and report.changed == {"GUID_TIMEOUT": (3.0, 1.0)}
+        assert fake.params["GUID_TIMEOUT"] == 1.0
+    else:
+        (problem,) = report.problems
+        assert problem.startswith("GUID_TIMEOUT = 3 ") and "tune_autopilot_failsafe is off" in problem
+        assert fake.params["GUID_TIMEOUT"] == 3.0
+
+
+async def test_unreadable_parameter_is_a_problem() -> None:
+    port = free_udp_port()
+    with FakeAutopilot(UdpLink(port), mavlink.MAV_AUTOPILOT_ARDUPILOTMEGA) as fake:  # serves no GUID_TIMEOUT
+        fc = await connected(f"udpin://127.0.0.1:{port}")
+        try:
+            report = await fc.check_failsafe(2.0, tune=True)
+        finally:
+            await fc.close()
+    assert not fake.params
+    (problem,) = report.problems
+    assert problem.startswith("could not read GUID_TIMEOUT")
