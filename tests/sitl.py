@@ -10,8 +10,8 @@ Binaries (built by ``../shared/tools/build_sitl.sh``, see its header):
   ``tcpout://127.0.0.1:5760+10N``.
 
 Each helper picks the first instance number whose ports are free, runs the SITL in a scratch
-folder with ``params`` set at boot, and stops it (SIGTERM, then SIGKILL) on exit. A test without the binary is skipped and
-says which path it looked for.
+folder with ``params`` set at boot, and stops it (SIGTERM, then SIGKILL) on exit. A test without
+the binary is skipped and says which path it looked for.
 """
 
 from __future__ import annotations
