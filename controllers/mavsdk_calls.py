@@ -54,18 +54,23 @@ class AbandoningExecutor(ThreadPoolExecutor):
         name = getattr(fn, "__qualname__", repr(fn))
 
         def run() -> None:
+            if not future.set_running_or_notify_cancel():
+                return
             key = threading.get_ident()
             with self._running_lock:
                 self._running[key] = name
             try:
-                if future.set_running_or_notify_cancel():
-                    try:
-                        future.set_result(fn(*args, **kwargs))
-                    except BaseException as exc:  # noqa: BLE001 - handed to the awaiting side
-                        future.set_exception(exc)
+                result, error = fn(*args, **kwargs), None
+            except BaseException as exc:  # noqa: BLE001 - handed to the awaiting side
+                result, error = None, exc
             finally:
+                # Off the list before the caller wakes: it may ask what is still running at once.
                 with self._running_lock:
                     self._running.pop(key, None)
+            if error is None:
+                future.set_result(result)
+            else:
+                future.set_exception(error)
 
         threading.Thread(target=run, name=f"mavsdk-call-{name}", daemon=True).start()
         return future

@@ -20,6 +20,7 @@ import threading
 import time
 from collections import deque
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
 import numpy as np
@@ -106,6 +107,9 @@ class ProcessWorker:
         self._all_children: list[ChildProcess] = []
         self._closing = False
         self._running = False
+        # Children are started from this one long-lived thread: the child's parent-death signal
+        # (PR_SET_PDEATHSIG) fires when the *thread* that started it ends, not only the process.
+        self._spawner = ThreadPoolExecutor(1, thread_name_prefix="processor-spawner")
         threading.Thread(target=self._feed, name=f"processor-feeder({spec})", daemon=True).start()
 
     @classmethod
@@ -220,12 +224,13 @@ class ProcessWorker:
                 if not call.future.done():
                     call.future.cancel()
         self._ring.close()
+        self._spawner.shutdown(wait=False)
 
     # -- children --------------------------------------------------------------------------------
 
     async def _start_child(self) -> ChildProcess:
         loop = self._loop = asyncio.get_running_loop()
-        child = await loop.run_in_executor(None, spawn, loop.create_future())
+        child = await loop.run_in_executor(self._spawner, spawn, loop.create_future())
         self._all_children.append(child)
         threading.Thread(target=self._read_pipe, args=(child,), name=f"processor-{child.pid}-pipe",
                          daemon=True).start()
