@@ -1,7 +1,8 @@
 """The ``uav-tui`` command: run the platform (TUI or ``--no-ui``) and its tools.
 
 ``uav-tui [options]`` runs; ``uav-tui sim`` starts the simulated vehicle on its own;
-``uav-tui runs`` lists recorded runs; ``uav-tui report RUN`` draws a run's plots.
+``uav-tui runs`` lists recorded runs; ``uav-tui report RUN`` draws a run's plots; ``uav-tui eval DATA``
+scores processors on annotated video.
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ from uav_tui.commands import help_text
 from uav_tui.config import add_config_flags, find_config_file, load_config, overrides_from_args
 from uav_tui.errors import CONFIG_ERRORS
 
-TOOLS = ("sim", "runs", "report")
+TOOLS = ("sim", "runs", "report", "eval")
 """Sub-commands; anything else on the command line configures a run."""
 
 
@@ -24,8 +25,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="uav-tui",
         description="Camera -> your algorithm -> flight controller, with an operator dashboard.",
-        epilog=f"tools: uav-tui sim | runs | report RUN (each has --help)\n\ncommands (keys, --script, web):\n"
-               f"{help_text()}",
+        epilog=f"tools: uav-tui sim | runs | report RUN | eval DATA (each has --help)\n\n"
+               f"commands (keys, --script, web):\n{help_text()}",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("--config", metavar="PATH", help="TOML file (default: $UAV_TUI_CONFIG, ./uav.toml, "
@@ -76,6 +77,10 @@ def _run_tool(name: str, argv: list[str]) -> int:
         from controllers.sim.__main__ import main as sim_main
 
         return sim_main(argv)
+    if name == "eval":
+        from uav_tui import eval_cli
+
+        return eval_cli.main(argv)
     from uav_tui import runs_cli
 
     return runs_cli.main(name, argv)
