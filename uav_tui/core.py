@@ -267,4 +267,5 @@ class UavCore:
             vectors_executed=self.gate.executed,
             vectors_rejected=self.gate.rejected,
             recording=self.recorder.status() if self.recorder is not None else {},
+            box=self.worker.last.box if self.worker.last is not None else None,
         )

@@ -66,7 +66,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str]) -> int:
     args = build_parser().parse_args(argv)
-    console = Console(stderr=False, highlight=False)
+    console = Console(highlight=False, width=None if sys.stdout.isatty() else 160)
     try:
         trackers = [TrackerSpec(spec, parse_processor_args(items)) for spec, items in args.processors]
         if args.workers is not None and args.workers < 1:

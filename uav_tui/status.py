@@ -31,6 +31,8 @@ class CoreStatus:
     vectors_rejected: int
     recording: dict[str, Any] = field(default_factory=dict)
     """Run folder, frames saved, rows written, drops (empty when recording is off)."""
+    box: tuple[int, int, int, int] | None = None
+    """The processor's ``box`` on the newest processed frame (frame pixels), None when it tracks nothing."""
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready form (for ``--json`` and the web page)."""

@@ -58,7 +58,7 @@ def table(results: list[JobResult]) -> Table:
     """Per sequence and overall: success AUC, precision@20, normalised precision, lost, ms/frame, FPS."""
     grid = Table(title="one-pass evaluation", show_lines=False)
     for name in ("sequence", "tracker"):
-        grid.add_column(name, overflow="fold")
+        grid.add_column(name, no_wrap=True)
     for name in ("AUC", f"P@{PRECISION_AT_PX}", "NP", "lost", "ms mean", "p50", "p95", "FPS"):
         grid.add_column(name, justify="right")
     for result in results:
