@@ -57,10 +57,10 @@ def write_json(document: dict[str, Any], path: Path) -> Path:
 def table(results: list[JobResult]) -> Table:
     """Per sequence and overall: success AUC, precision@20, normalised precision, lost, ms/frame, FPS."""
     grid = Table(title="one-pass evaluation", show_lines=False)
-    for name in ("sequence", "tracker"):
-        grid.add_column(name, no_wrap=True)
+    grid.add_column("sequence", no_wrap=True, min_width=max(len(OVERALL), *(len(r.sequence) for r in results)))
+    grid.add_column("tracker", overflow="fold")
     for name in ("AUC", f"P@{PRECISION_AT_PX}", "NP", "lost", "ms mean", "p50", "p95", "FPS"):
-        grid.add_column(name, justify="right")
+        grid.add_column(name, justify="right", no_wrap=True)
     for result in results:
         grid.add_row(escape(result.sequence), escape(result.tracker), *_cells(result.scores))
     grid.add_section()
@@ -78,15 +78,15 @@ def write_plots(results: list[JobResult], folder: Path) -> list[Path]:
         (PLOT_FILES[1], PIXEL_THRESHOLDS, "precision_curve", "precision_20", "location error threshold (px)",
          "Precision plot"),
     ):
-        figure = Figure(figsize=(6, 4.5), layout="constrained")
+        figure = Figure(figsize=(7, 4.5 + 0.2 * len(overall)), layout="constrained")
         axes = figure.add_subplot()
         ranked = sorted(overall.items(), key=lambda item: -getattr(item[1], score))
         for label, scores in ranked:
-            axes.plot(thresholds, getattr(scores, curve), label=f"{label} [{getattr(scores, score):.3f}]")
+            axes.plot(thresholds, getattr(scores, curve), label=f"[{getattr(scores, score):.3f}] {label[:80]}")
         axes.set(xlabel=xlabel, ylabel="fraction of frames", ylim=(0, 1), xlim=(thresholds[0], thresholds[-1]),
                  title=f"{title} of OPE ({len({r.sequence for r in results})} sequences)")
         axes.grid(alpha=0.3)
-        axes.legend(loc="lower left" if curve == "success_curve" else "lower right", fontsize="small")
+        figure.legend(loc="outside lower center", fontsize="small")  # below the plot: labels can be long
         path = folder / name
         figure.savefig(path, dpi=100)
         paths.append(path)
