@@ -15,22 +15,25 @@ from processors.steering import Box, Steering, Vector, draw_target
 logger = logging.getLogger(__name__)
 
 _MODES: dict[str, dict[str, Any]] = {
-    # CSRT with a 100-px template on a frame down-scaled so that the target is about `target_px` wide
-    # (boxes come back in full-frame pixels); SIFT on a 320-px-wide frame, every 5th lost frame
+    # CSRT with a 100-px template and no segmentation (whose colour histograms convert the whole frame
+    # every update) on a frame down-scaled so that the target is about `target_px` across (boxes come
+    # back in full-frame pixels); SIFT on a 320-px-wide frame, every 5th lost frame
     "fast": {
         "target_px": 40,
         "sift_width": 320,
         "sift_features": 1500,
         "sift_every": 5,
-        "csrt": {"template_size": 100, "psr_threshold": 0.0},
+        "csrt": {"template_size": 100, "use_segmentation": False, "psr_threshold": 0.0},
     },
     # the published CSRT (all its defaults, full resolution; as published it never gives up on its
     # own: psr_threshold 0), SIFT at full resolution, unlimited features, every lost frame
     "paper": {"target_px": 0, "sift_width": 0, "sift_features": 0, "sift_every": 1, "csrt": {"psr_threshold": 0.0}},
 }
 
-_QUALITY_HISTORY = 30
-"""Tracked frames whose appearance scores make the target's own baseline (its median)."""
+_QUALITY_HISTORY = 5
+"""Recent tracked frames whose appearance scores make the target's own baseline (their median): short, so
+that a gradual change of appearance (a deforming bird, a turning boat) moves it, and only a sudden drop
+(something in front of the target, the target leaving) counts as evidence."""
 
 _ADAPT_RATE = 0.05
 """Weight of the newest patch in the adaptive appearance, on frames that match well."""
@@ -67,8 +70,8 @@ class CSRTTrackingProcessor:
         mode: "fast" or "paper" (see above and the module's ``_MODES``).
         camera: "down" or "forward".
         gain, dead_band, max_speed, vector_t: steering (see processors.steering.Steering).
-        loss_ratio: appearance score, relative to the target's recent median, below which a frame is
-            evidence of loss.
+        loss_ratio, loss_score: a frame is evidence of loss when its appearance score is below both
+            ``loss_ratio`` x the target's recent median and ``loss_score``.
         max_jump: centre jump in one frame, in box sizes, that is evidence of loss.
         lost_after: frames of evidence in a row that make the target lost.
         accept_ratio: correlation score, relative to the median, that re-acquires the target.
@@ -87,8 +90,9 @@ class CSRTTrackingProcessor:
         max_speed: float = 1.0,
         vector_t: float = 0.5,
         loss_ratio: float = 0.5,
+        loss_score: float = 0.45,
         max_jump: float = 1.0,
-        lost_after: int = 2,
+        lost_after: int = 3,
         accept_ratio: float = 0.75,
         min_inliers: int = 8,
         ratio: float = 0.75,
@@ -105,7 +109,8 @@ class CSRTTrackingProcessor:
         self.tmMgr = None
         self.mode = mode
         self.steering = Steering(camera, gain, dead_band, max_speed, vector_t)
-        self.loss_ratio, self.max_jump, self.lost_after = loss_ratio, max_jump, max(1, int(lost_after))
+        self.loss_ratio, self.loss_score = loss_ratio, loss_score
+        self.max_jump, self.lost_after = max_jump, max(1, int(lost_after))
         self.accept_ratio = accept_ratio
         self.min_inliers = min_inliers
         self.ratio = ratio
@@ -118,7 +123,8 @@ class CSRTTrackingProcessor:
         self._templates: list[np.ndarray] = []  # [at selection, adapted]; work-frame appearance
         self._quality: deque[float] = deque(maxlen=_QUALITY_HISTORY)
         self._ref_height = 0.0
-        self._work_box: Box | None = None  # work-frame pixels: CSRT's box, or the last one kept
+        self._work_box: Box | None = None  # work-frame pixels: the last box accepted as the target
+        self._csrt_box: Box | None = None  # work-frame pixels: where CSRT is now (it keeps running while lost)
         self._tracking = False
         self._evidence = 0  # frames of loss evidence in a row
         self._lost_frames = 0
@@ -135,9 +141,9 @@ class CSRTTrackingProcessor:
             self._pending_roi = None
         elif self._templates:
             work = self._work_frame(frame)
-            if self._tracking:
-                self._update(work)
-            if not self._tracking:
+            was_tracking = self._tracking
+            self._update(work)
+            if not self._tracking and not was_tracking:
                 self._lost_frames += 1
                 self._search_near(work)
             if self._force_search or (not self._tracking and (self._lost_frames - 1) % self._cfg["sift_every"] == 0):
@@ -220,7 +226,7 @@ class CSRTTrackingProcessor:
             setattr(params, key, val)
         self._tracker = cv2.TrackerCSRT_create(params)
         self._tracker.init(work, tuple(int(round(v)) for v in box))
-        self._work_box = box
+        self._work_box = self._csrt_box = box
         self._tracking = True
         self._evidence = 0
         self._lost_frames = 0
@@ -243,7 +249,6 @@ class CSRTTrackingProcessor:
             return
         self._templates = [appearance, appearance.copy()]
         self._quality.clear()
-        self._quality.append(1.0)
         small, sift_scale = self._sift_gray(frame)
         sift_box = tuple(v * sift_scale for v in roi)
         mask = np.zeros(small.shape, np.uint8)
@@ -256,16 +261,29 @@ class CSRTTrackingProcessor:
         logger.info("CSRTTrackingProcessor: target %s selected (tracked at x%.2f), %d SIFT keypoints", roi,
                     self._scale, len(self._ref_feat))
 
+    def _baseline(self, score: float) -> float:
+        """The target's own typical appearance score (median of recent tracked frames)."""
+        return float(np.median(self._quality)) if self._quality else score
+
     def _update(self, work: np.ndarray) -> None:
+        """CSRT on ``work``; judge the evidence; while lost, resume when CSRT is back on the target."""
         ok, found = self._tracker.update(work)
-        previous = self._work_box
+        previous = self._csrt_box
         box = tuple(float(v) for v in found) if ok else previous
+        self._csrt_box = box  # type: ignore[assignment]
         match = self._find(work, box, 0.25, (1.0,))
         self.score = match.score if match is not None else -1.0
-        baseline = float(np.median(self._quality))
+        baseline = self._baseline(self.score)
         jump = np.hypot(box[0] + box[2] / 2 - previous[0] - previous[2] / 2,
                         box[1] + box[3] / 2 - previous[1] - previous[3] / 2) / max(previous[2], previous[3])
-        if not ok or self.score < self.loss_ratio * baseline or jump > self.max_jump:
+        if not self._tracking:
+            if self.score >= self.accept_ratio * baseline and jump <= self.max_jump:
+                logger.info("CSRTTrackingProcessor: back on the target (score %.2f of median %.2f)", self.score,
+                            baseline)
+                self._tracking, self._evidence, self._work_box = True, 0, box  # type: ignore[assignment]
+            return
+        weak = self.score < min(self.loss_ratio * baseline, self.loss_score)
+        if not ok or weak or jump > self.max_jump:
             self._evidence += 1
             if self._evidence >= self.lost_after:
                 logger.info("CSRTTrackingProcessor: target lost (csrt ok=%s, score %.2f of median %.2f, jump %.2f)",
@@ -286,8 +304,8 @@ class CSRTTrackingProcessor:
         """Correlation search around the last position, wider the longer the target is lost (bounded)."""
         radius = min(0.5 + 0.5 * self._lost_frames, 3.0)
         found = self._find(work, self._work_box, radius, (0.8, 1.0, 1.25))
-        baseline = float(np.median(self._quality))
-        if found is not None and found.score >= self.accept_ratio * baseline:
+        baseline = self._baseline(0.0)
+        if found is not None and found.score >= max(self.accept_ratio * baseline, self.score + 0.1):
             self._new_tracker(work, found.box)
             self.score = found.score
             logger.info("CSRTTrackingProcessor: re-acquired nearby (score %.2f of median %.2f)", found.score, baseline)
