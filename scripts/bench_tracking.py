@@ -4,15 +4,14 @@
 
 The summary has each tracker's overall scores (success AUC, precision@20px, normalised precision,
 frames lost, ms/frame) and, for each csrt mode, its AUC and mean ms/frame relative to plain CSRT's
-measured in the same run. The default data folder is ``shared/data/aerial-tracking`` beside the repository
-(or ``$UAV_TUI_DATA_DIR/aerial-tracking``).
+measured in the same run. The default data folder is ``aerial-tracking`` in the shared data folder
+(``$UAV_TUI_DATA_DIR``, else ``shared/data`` beside the repository).
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import os
 import sys
 import tempfile
 from pathlib import Path
@@ -20,6 +19,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from processors.detection import find_data_dir  # noqa: E402
 from uav_tui.evaluation import TrackerSpec, evaluate, find_sequences  # noqa: E402
 from uav_tui.evaluation.report import headline, summary, write_json, write_plots  # noqa: E402
 
@@ -28,14 +28,9 @@ TRACKERS = [TrackerSpec("csrt", {"mode": "fast"}), TrackerSpec("csrt", {"mode": 
 BASELINE = "cv:csrt"
 
 
-def default_data() -> Path:
-    base = Path(os.environ["UAV_TUI_DATA_DIR"]) if "UAV_TUI_DATA_DIR" in os.environ else ROOT.parent / "shared" / "data"
-    return base / "aerial-tracking"
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--data", type=Path, default=default_data())
+    parser.add_argument("--data", type=Path, default=find_data_dir() / "aerial-tracking")
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--out", type=Path, help="also write eval.json and the plots here")
     args = parser.parse_args()
