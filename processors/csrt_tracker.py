@@ -79,6 +79,7 @@ class CSRTTrackingProcessor:
         ratio: Lowe's ratio-test threshold.
         target_px, sift_width, sift_features, sift_every: override the mode's values (0 = full
             resolution / unlimited features).
+        csrt: ``cv2.TrackerCSRT_Params`` fields to change from the mode's.
     """
 
     def __init__(
@@ -100,12 +101,17 @@ class CSRTTrackingProcessor:
         sift_width: int | None = None,
         sift_features: int | None = None,
         sift_every: int | None = None,
+        csrt: dict[str, Any] | None = None,
     ) -> None:
         if mode not in _MODES:
             raise ValueError(f"mode must be one of {sorted(_MODES)}, got {mode!r}")
         overrides = {"target_px": target_px, "sift_width": sift_width, "sift_features": sift_features,
                      "sift_every": sift_every}
         self._cfg = {**_MODES[mode], **{k: v for k, v in overrides.items() if v is not None}}
+        self._cfg["csrt"] = {**self._cfg["csrt"], **(csrt or {})}
+        unknown = sorted(key for key in self._cfg["csrt"] if not hasattr(cv2.TrackerCSRT_Params(), key))
+        if unknown:
+            raise ValueError(f"csrt: TrackerCSRT_Params has no field {', '.join(unknown)}")
         self.tmMgr = None
         self.mode = mode
         self.steering = Steering(camera, gain, dead_band, max_speed, vector_t)
@@ -194,7 +200,7 @@ class CSRTTrackingProcessor:
     def _work_frame(self, frame: np.ndarray) -> np.ndarray:
         if self._scale == 1.0:
             return frame
-        return cv2.resize(frame, None, fx=self._scale, fy=self._scale, interpolation=cv2.INTER_AREA)
+        return cv2.resize(frame, None, fx=self._scale, fy=self._scale, interpolation=cv2.INTER_LINEAR)
 
     def _gray_window(self, work: np.ndarray, box: Box, radius: float) -> tuple[np.ndarray, int, int]:
         """Grayscale of the part of ``work`` that a search ``radius`` around ``box`` can touch, and its origin."""
