@@ -16,10 +16,11 @@ logger = logging.getLogger(__name__)
 
 _MODES: dict[str, dict[str, Any]] = {
     # CSRT with a 100-px template, no segmentation (its colour histograms convert the whole frame every
-    # update) and 2 ADMM iterations instead of 4, on a frame down-scaled so that the target is about
-    # `target_px` across (boxes come back in full-frame pixels); SIFT on a 320-px frame, every 5th lost frame
+    # update) and 2 ADMM iterations instead of 4; a target larger than `target_px` across is tracked on
+    # a frame down-scaled to that size (boxes come back in full-frame pixels; smaller ones lost detail in
+    # the closed-loop flight); SIFT on a 320-px frame, every 5th lost frame
     "fast": {
-        "target_px": 40,
+        "target_px": 96,
         "sift_width": 320,
         "sift_features": 1500,
         "sift_every": 5,
@@ -200,7 +201,7 @@ class CSRTTrackingProcessor:
     def _work_frame(self, frame: np.ndarray) -> np.ndarray:
         if self._scale == 1.0:
             return frame
-        return cv2.resize(frame, None, fx=self._scale, fy=self._scale, interpolation=cv2.INTER_LINEAR)
+        return cv2.resize(frame, None, fx=self._scale, fy=self._scale, interpolation=cv2.INTER_AREA)
 
     def _gray_window(self, work: np.ndarray, box: Box, radius: float) -> tuple[np.ndarray, int, int]:
         """Grayscale of the part of ``work`` that a search ``radius`` around ``box`` can touch, and its origin."""
