@@ -1,73 +1,60 @@
-"""CSRT tracker with SIFT re-acquisition: follows an operator-selected target."""
+"""CSRT tracker that holds real targets: loss judged on evidence, correlation re-acquisition, SIFT as last resort."""
 
 from __future__ import annotations
 
 import logging
+from collections import deque
 from typing import Any
 
 import cv2
 import numpy as np
 
-from processors import sift_match
+from processors import sift_match, target_search
 from processors.steering import Box, Steering, Vector, draw_target
 
 logger = logging.getLogger(__name__)
 
-_PATCH = 32
-"""Side of the grayscale patch used for the appearance check (pixels)."""
-
 _MODES: dict[str, dict[str, Any]] = {
-    # lighter CSRT (no segmentation / colour names, fewer ADMM iterations and scales: the template
-    # size, which decides accuracy, is kept), SIFT on a 320-px-wide frame, capped features,
-    # search every other frame while lost
+    # CSRT with a 100-px template, no segmentation (its colour histograms convert the whole frame every
+    # update) and 2 ADMM iterations instead of 4; a target larger than `target_px` across is tracked on
+    # a frame down-scaled to that size (boxes come back in full-frame pixels; smaller ones lost detail in
+    # the closed-loop flight); SIFT on a 320-px frame, every 5th lost frame
     "fast": {
+        "target_px": 96,
         "sift_width": 320,
         "sift_features": 1500,
-        "reacquire_every": 2,
-        "csrt": {
-            "use_segmentation": False,
-            "use_color_names": False,
-            "admm_iterations": 2,
-            "number_of_scales": 17,
-        },
+        "sift_every": 5,
+        "csrt": {"template_size": 100, "use_segmentation": False, "admm_iterations": 2, "psr_threshold": 0.0},
     },
-    # the paper: default CSRT, SIFT at full resolution, unlimited features, search every frame
-    "paper": {"sift_width": 0, "sift_features": 0, "reacquire_every": 1, "csrt": {}},
+    # the published CSRT (all its defaults, full resolution; as published it never gives up on its
+    # own: psr_threshold 0), SIFT at full resolution, unlimited features, every lost frame
+    "paper": {"target_px": 0, "sift_width": 0, "sift_features": 0, "sift_every": 1, "csrt": {"psr_threshold": 0.0}},
 }
 
+_QUALITY_HISTORY = 5
+"""Recent tracked frames whose appearance scores make the target's own baseline (their median): short, so
+that a gradual change of appearance (a deforming bird, a turning boat) moves it, and only a sudden drop
+(something in front of the target, the target leaving) counts as evidence."""
 
-def _patch(gray: np.ndarray, box: Box) -> np.ndarray | None:
-    x, y, w, h = (int(round(v)) for v in box)
-    x0, y0 = max(x, 0), max(y, 0)
-    x1, y1 = min(x + w, gray.shape[1]), min(y + h, gray.shape[0])
-    if x1 - x0 < 4 or y1 - y0 < 4:
-        return None
-    p = cv2.resize(gray[y0:y1, x0:x1], (_PATCH, _PATCH), interpolation=cv2.INTER_AREA).astype(np.float32)
-    p -= p.mean()
-    n = float(np.linalg.norm(p))
-    return p / n if n > 1e-6 else None
-
-
-def _similarity(a: np.ndarray | None, b: np.ndarray | None) -> float:
-    return float((a * b).sum()) if a is not None and b is not None else 0.0
-
-
-_ADAPT_ABOVE = 0.6
-"""Similarity above which the tracked patch is blended into the adaptive appearance template."""
-
-_ADAPT_RATE = 0.1
-"""Weight of the newest patch in the adaptive template."""
+_ADAPT_RATE = 0.05
+"""Weight of the newest patch in the adaptive appearance, on frames that match well."""
 
 
 class CSRTTrackingProcessor:
-    """Track an operator-selected target with CSRT; re-acquire it with SIFT when it is lost.
+    """Track an operator-selected target with CSRT; judge loss on evidence; re-acquire it when it is back.
 
-    ``catch_cmd(roi)`` starts a CSRT tracker on the region and stores its appearance (SIFT keypoints
-    and a normalised grayscale patch). Each frame updates the tracker; the target counts as lost when
-    CSRT reports failure or the appearance similarity of the tracked box (normalised cross-correlation
-    with the selected patch, or with a slowly adapted copy of it) collapses (occlusion, drift).
-    While lost, SIFT matching against the stored appearance (ratio test + RANSAC homography)
-    searches the frame and re-initialises the tracker on success.
+    ``catch_cmd(roi)`` starts CSRT on the region and stores its appearance (a small grayscale template,
+    plus SIFT keypoints). Each frame CSRT updates the box. The target counts as lost only on evidence
+    that holds for weakly textured targets: the appearance at CSRT's box (normalised correlation with
+    the selected and a slowly adapted template, see :mod:`processors.target_search`) falls below
+    ``loss_ratio`` of the target's own recent median, or the box jumps by more than ``max_jump`` of
+    its size, on ``lost_after`` frames in a row (until then the box is kept). While lost, a correlation
+    search around the last position at three scales (a window that grows with the frames lost, at a
+    bounded size) runs every frame; SIFT matching of the whole frame runs every ``sift_every`` lost
+    frames as the last resort. Either re-initialises CSRT.
+
+    In ``fast`` mode CSRT runs on a frame down-scaled so that the target is about ``target_px`` pixels
+    across (never up-scaled); boxes are always in full-frame pixels.
 
     Vector: body-frame velocity (vx forward, vy right, m/s, clamped to ``max_speed`` <= 1) that
     moves the vehicle so that the target comes to the frame centre (``camera="down"``), or keeps it
@@ -81,15 +68,19 @@ class CSRTTrackingProcessor:
         F4: gain / 1.25.
 
     Args:
-        mode: "fast" (lighter CSRT, SIFT on a downscaled frame with capped features) or "paper"
-            (default CSRT, full-resolution unlimited SIFT, search every frame while lost).
+        mode: "fast" or "paper" (see above and the module's ``_MODES``).
         camera: "down" or "forward".
         gain, dead_band, max_speed, vector_t: steering (see processors.steering.Steering).
-        min_similarity: appearance similarity (-1..1) below which the target counts as lost.
-        min_inliers: RANSAC inliers needed to re-acquire.
+        loss_ratio, loss_score: a frame is evidence of loss when its appearance score is below both
+            ``loss_ratio`` x the target's recent median and ``loss_score``.
+        max_jump: centre jump in one frame, in box sizes, that is evidence of loss.
+        lost_after: frames of evidence in a row that make the target lost.
+        accept_ratio: correlation score, relative to the median, that re-acquires the target.
+        min_inliers: RANSAC inliers needed to re-acquire with SIFT.
         ratio: Lowe's ratio-test threshold.
-        sift_width, sift_features, reacquire_every: override the mode's values (0 = full width /
-            unlimited features).
+        target_px, sift_width, sift_features, sift_every: override the mode's values (0 = full
+            resolution / unlimited features).
+        csrt: ``cv2.TrackerCSRT_Params`` fields to change from the mode's.
     """
 
     def __init__(
@@ -100,59 +91,72 @@ class CSRTTrackingProcessor:
         dead_band: float = 0.05,
         max_speed: float = 1.0,
         vector_t: float = 0.5,
-        min_similarity: float = 0.3,
+        loss_ratio: float = 0.5,
+        loss_score: float = 0.45,
+        max_jump: float = 1.0,
+        lost_after: int = 3,
+        accept_ratio: float = 0.75,
         min_inliers: int = 8,
         ratio: float = 0.75,
+        target_px: int | None = None,
         sift_width: int | None = None,
         sift_features: int | None = None,
-        reacquire_every: int | None = None,
+        sift_every: int | None = None,
+        csrt: dict[str, Any] | None = None,
     ) -> None:
         if mode not in _MODES:
             raise ValueError(f"mode must be one of {sorted(_MODES)}, got {mode!r}")
-        cfg = dict(_MODES[mode])
-        overrides = {"sift_width": sift_width, "sift_features": sift_features}
-        overrides["reacquire_every"] = reacquire_every
-        cfg.update({k: v for k, v in overrides.items() if v is not None})
+        overrides = {"target_px": target_px, "sift_width": sift_width, "sift_features": sift_features,
+                     "sift_every": sift_every}
+        self._cfg = {**_MODES[mode], **{k: v for k, v in overrides.items() if v is not None}}
+        self._cfg["csrt"] = {**self._cfg["csrt"], **(csrt or {})}
+        unknown = sorted(key for key in self._cfg["csrt"] if not hasattr(cv2.TrackerCSRT_Params(), key))
+        if unknown:
+            raise ValueError(f"csrt: TrackerCSRT_Params has no field {', '.join(unknown)}")
         self.tmMgr = None
         self.mode = mode
         self.steering = Steering(camera, gain, dead_band, max_speed, vector_t)
-        self.min_similarity = min_similarity
+        self.loss_ratio, self.loss_score = loss_ratio, loss_score
+        self.max_jump, self.lost_after = max_jump, max(1, int(lost_after))
+        self.accept_ratio = accept_ratio
         self.min_inliers = min_inliers
         self.ratio = ratio
-        self._cfg = cfg
-        self._sift = sift_match.make_sift(cfg["sift_features"])
+        self._sift = sift_match.make_sift(self._cfg["sift_features"])
         self._tracker: cv2.Tracker | None = None
         self._pending_roi: Box | None = None
+        self._scale = 1.0  # work frame = full frame x scale
         self._ref_feat: sift_match.Features | None = None  # SIFT-frame pixels
         self._ref_box: Box | None = None  # SIFT-frame pixels, where the reference features were taken
-        self._ref_patch: np.ndarray | None = None  # appearance at selection
-        self._recent_patch: np.ndarray | None = None  # slowly adapted appearance (pose, light)
+        self._templates: list[np.ndarray] = []  # [at selection, adapted]; work-frame appearance
+        self._quality: deque[float] = deque(maxlen=_QUALITY_HISTORY)
         self._ref_height = 0.0
-        self._box: Box | None = None  # frame pixels; None = lost / no target
-        self._frame_size = (0, 0)
+        self._work_box: Box | None = None  # work-frame pixels: the last box accepted as the target
+        self._csrt_box: Box | None = None  # work-frame pixels: where CSRT is now (it keeps running while lost)
+        self._tracking = False
+        self._evidence = 0  # frames of loss evidence in a row
         self._lost_frames = 0
         self._force_search = False
         self._vector: Vector | None = None
-        self.similarity = 0.0
-        """Appearance similarity of the last tracked box (diagnostics)."""
+        self.score = 0.0
+        """Appearance score of the last tracked box (diagnostics, drawn beside it)."""
 
     # ---- contract -------------------------------------------------------------------------------
     def photo_processing(self, frame: np.ndarray) -> None:
         """Update the tracker on ``frame`` and draw the overlay on it in place."""
-        self._frame_size = (frame.shape[1], frame.shape[0])
-        gray = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
         if self._pending_roi is not None:
-            self._start(frame, gray, self._pending_roi)
+            self._start(frame, self._pending_roi)
             self._pending_roi = None
-        elif self._ref_feat is not None:
-            if self._box is not None:
-                self._update(frame, gray)
-            if self._box is None or self._force_search:
+        elif self._templates:
+            work = self._work_frame(frame)
+            was_tracking = self._tracking
+            self._update(work)
+            if not self._tracking and not was_tracking:
                 self._lost_frames += 1
-                if self._force_search or (self._lost_frames - 1) % max(self._cfg["reacquire_every"], 1) == 0:
-                    self._reacquire(frame, gray)
-        box = self._box
-        self._vector = self.steering.vector(box, self._frame_size, self._ref_height) if box else None
+                self._search_near(work)
+            if self._force_search or (not self._tracking and (self._lost_frames - 1) % self._cfg["sift_every"] == 0):
+                self._reacquire_sift(frame, work)
+        box = self.box
+        self._vector = self.steering.vector(box, (frame.shape[1], frame.shape[0]), self._ref_height) if box else None
         self._draw(frame)
 
     def catch_cmd(self, roi: tuple[int, int, int, int]) -> None:
@@ -166,7 +170,8 @@ class CSRTTrackingProcessor:
     def customize_processing(self, id: int) -> None:  # noqa: A002 - published name
         """F1 drop target, F2 re-acquire now, F3 gain up, F4 gain down."""
         if id == 1:
-            self._tracker, self._ref_feat, self._box, self._vector = None, None, None, None
+            self._tracker, self._templates, self._work_box, self._vector = None, [], None, None
+            self._tracking = False
             logger.info("CSRTTrackingProcessor: target dropped")
         elif id == 2:
             self._force_search = True
@@ -182,72 +187,139 @@ class CSRTTrackingProcessor:
     # ---- state ----------------------------------------------------------------------------------
     @property
     def box(self) -> Box | None:
-        """Tracked box (x, y, w, h) in frame pixels, None when lost or idle."""
-        return self._box
+        """Tracked box (x, y, w, h) in full-frame pixels, None when lost or idle."""
+        if not self._tracking or self._work_box is None:
+            return None
+        return tuple(v / self._scale for v in self._work_box)  # type: ignore[return-value]
 
     @property
     def lost(self) -> bool:
         """True while a target is selected but not currently tracked."""
-        return self._ref_feat is not None and self._box is None
+        return bool(self._templates) and not self._tracking
 
     # ---- internals ------------------------------------------------------------------------------
-    def _sift_gray(self, gray: np.ndarray) -> tuple[np.ndarray, float]:
+    def _work_frame(self, frame: np.ndarray) -> np.ndarray:
+        if self._scale == 1.0:
+            return frame
+        return cv2.resize(frame, None, fx=self._scale, fy=self._scale, interpolation=cv2.INTER_AREA)
+
+    def _gray_window(self, work: np.ndarray, box: Box, radius: float) -> tuple[np.ndarray, int, int]:
+        """Grayscale of the part of ``work`` that a search ``radius`` around ``box`` can touch, and its origin."""
+        x, y, w, h = box
+        reach = radius * max(w, h) * 1.3 + 2
+        x0, y0 = max(int(x - reach), 0), max(int(y - reach), 0)
+        x1, y1 = min(int(x + w + reach) + 1, work.shape[1]), min(int(y + h + reach) + 1, work.shape[0])
+        return cv2.cvtColor(work[y0:y1, x0:x1], cv2.COLOR_BGR2GRAY), x0, y0
+
+    def _find(self, work: np.ndarray, box: Box, radius: float, scales: tuple[float, ...]) -> target_search.Found | None:
+        gray, x0, y0 = self._gray_window(work, box, radius)
+        found = target_search.search(gray, self._templates, (box[0] - x0, box[1] - y0, box[2], box[3]), radius, scales)
+        if found is None:
+            return None
+        x, y, w, h = found.box
+        return target_search.Found((x + x0, y + y0, w, h), found.score)
+
+    def _sift_gray(self, frame: np.ndarray) -> tuple[np.ndarray, float]:
+        gray = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
         sw = self._cfg["sift_width"]
         scale = sw / gray.shape[1] if 0 < sw < gray.shape[1] else 1.0
         if scale == 1.0:
             return gray, 1.0
         return cv2.resize(gray, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA), scale
 
-    def _new_tracker(self, frame: np.ndarray, box: Box) -> None:
+    def _new_tracker(self, work: np.ndarray, box: Box) -> None:
         params = cv2.TrackerCSRT_Params()
         for key, val in self._cfg["csrt"].items():
             setattr(params, key, val)
         self._tracker = cv2.TrackerCSRT_create(params)
-        self._tracker.init(frame, tuple(int(round(v)) for v in box))
-        self._box = box
+        self._tracker.init(work, tuple(int(round(v)) for v in box))
+        self._work_box = self._csrt_box = box
+        self._tracking = True
+        self._evidence = 0
         self._lost_frames = 0
-        self._force_search = False
 
-    def _start(self, frame: np.ndarray, gray: np.ndarray, roi: Box) -> None:
-        fw, fh = self._frame_size
+    def _start(self, frame: np.ndarray, roi: Box) -> None:
+        fh, fw = frame.shape[:2]
         x0, y0 = max(roi[0], 0.0), max(roi[1], 0.0)
         x1, y1 = min(roi[0] + roi[2], float(fw)), min(roi[1] + roi[3], float(fh))
         if x1 - x0 < 4 or y1 - y0 < 4:
             logger.warning("CSRTTrackingProcessor: ROI %s is outside the %dx%d frame, ignored", roi, fw, fh)
             return
         roi = (x0, y0, x1 - x0, y1 - y0)
-        small, scale = self._sift_gray(gray)
-        box = tuple(v * scale for v in roi)
+        target_px = self._cfg["target_px"]
+        self._scale = min(1.0, target_px / float(np.sqrt(roi[2] * roi[3]))) if target_px else 1.0
+        work = self._work_frame(frame)
+        box = tuple(v * self._scale for v in roi)
+        appearance = target_search.template(cv2.cvtColor(work, cv2.COLOR_BGR2GRAY), box)
+        if appearance is None:
+            logger.warning("CSRTTrackingProcessor: ROI %s is too small to track, ignored", roi)
+            return
+        self._templates = [appearance, appearance.copy()]
+        self._quality.clear()
+        small, sift_scale = self._sift_gray(frame)
+        sift_box = tuple(v * sift_scale for v in roi)
         mask = np.zeros(small.shape, np.uint8)
-        x, y, w, h = (int(round(v)) for v in box)
+        x, y, w, h = (int(round(v)) for v in sift_box)
         mask[max(y, 0) : y + h, max(x, 0) : x + w] = 255
         self._ref_feat = sift_match.detect(self._sift, small, mask)
-        self._ref_box = box  # type: ignore[assignment]
-        self._ref_patch = _patch(gray, roi)
-        self._recent_patch = self._ref_patch
+        self._ref_box = sift_box  # type: ignore[assignment]
         self._ref_height = roi[3]
-        self._new_tracker(frame, roi)
-        logger.info("CSRTTrackingProcessor: target %s selected, %d SIFT keypoints", roi, len(self._ref_feat))
-        if len(self._ref_feat) < self.min_inliers:
-            logger.warning("CSRTTrackingProcessor: few keypoints on the target, re-acquisition will be weak")
+        self._new_tracker(work, box)  # type: ignore[arg-type]
+        logger.info("CSRTTrackingProcessor: target %s selected (tracked at x%.2f), %d SIFT keypoints", roi,
+                    self._scale, len(self._ref_feat))
 
-    def _update(self, frame: np.ndarray, gray: np.ndarray) -> None:
-        ok, bb = self._tracker.update(frame)
-        patch = _patch(gray, bb) if ok else None
-        self.similarity = self._appearance(patch)
-        if ok and self.similarity >= self.min_similarity:
-            self._box = tuple(float(v) for v in bb)  # type: ignore[assignment]
-            if self.similarity >= _ADAPT_ABOVE and patch is not None and self._recent_patch is not None:
-                blend = (1 - _ADAPT_RATE) * self._recent_patch + _ADAPT_RATE * patch
-                self._recent_patch = blend / max(float(np.linalg.norm(blend)), 1e-6)
-        else:
-            logger.info("CSRTTrackingProcessor: target lost (csrt ok=%s, similarity %.2f)", ok, self.similarity)
-            self._box = None
-            self._lost_frames = 0
+    def _baseline(self, score: float) -> float:
+        """The target's own typical appearance score (median of recent tracked frames)."""
+        return float(np.median(self._quality)) if self._quality else score
 
-    def _reacquire(self, frame: np.ndarray, gray: np.ndarray) -> None:
+    def _update(self, work: np.ndarray) -> None:
+        """CSRT on ``work``; judge the evidence; while lost, resume when CSRT is back on the target."""
+        ok, found = self._tracker.update(work)
+        previous = self._csrt_box
+        box = tuple(float(v) for v in found) if ok else previous
+        self._csrt_box = box  # type: ignore[assignment]
+        match = self._find(work, box, 0.25, (1.0,))
+        self.score = match.score if match is not None else -1.0
+        baseline = self._baseline(self.score)
+        jump = np.hypot(box[0] + box[2] / 2 - previous[0] - previous[2] / 2,
+                        box[1] + box[3] / 2 - previous[1] - previous[3] / 2) / max(previous[2], previous[3])
+        if not self._tracking:
+            if self.score >= self.accept_ratio * baseline and jump <= self.max_jump:
+                logger.info("CSRTTrackingProcessor: back on the target (score %.2f of median %.2f)", self.score,
+                            baseline)
+                self._tracking, self._evidence, self._work_box = True, 0, box  # type: ignore[assignment]
+            return
+        weak = self.score < min(self.loss_ratio * baseline, self.loss_score)
+        if not ok or weak or jump > self.max_jump:
+            self._evidence += 1
+            if self._evidence >= self.lost_after:
+                logger.info("CSRTTrackingProcessor: target lost (csrt ok=%s, score %.2f of median %.2f, jump %.2f)",
+                            ok, self.score, baseline, jump)
+                self._tracking = False
+                self._lost_frames = 0
+            return  # the last box is kept until the evidence is conclusive
+        self._evidence = 0
+        self._work_box = box  # type: ignore[assignment]
+        self._quality.append(self.score)
+        if self.score >= baseline and match is not None:
+            gray, x0, y0 = self._gray_window(work, box, 0.0)
+            current = target_search.template(gray, (box[0] - x0, box[1] - y0, box[2], box[3]))
+            if current is not None:
+                self._templates[1] = target_search.blend(self._templates[1], current, _ADAPT_RATE)
+
+    def _search_near(self, work: np.ndarray) -> None:
+        """Correlation search around the last position, wider the longer the target is lost (bounded)."""
+        radius = min(0.5 + 0.5 * self._lost_frames, 3.0)
+        found = self._find(work, self._work_box, radius, (0.8, 1.0, 1.25))
+        baseline = self._baseline(0.0)
+        if found is not None and found.score >= max(self.accept_ratio * baseline, self.score + 0.1):
+            self._new_tracker(work, found.box)
+            self.score = found.score
+            logger.info("CSRTTrackingProcessor: re-acquired nearby (score %.2f of median %.2f)", found.score, baseline)
+
+    def _reacquire_sift(self, frame: np.ndarray, work: np.ndarray) -> None:
         self._force_search = False
-        small, scale = self._sift_gray(gray)
+        small, scale = self._sift_gray(frame)
         found = sift_match.match_homography(
             self._ref_feat, sift_match.detect(self._sift, small), self.ratio, self.min_inliers
         )
@@ -258,23 +330,18 @@ class CSRTTrackingProcessor:
             return
         x0, y0 = corners.min(axis=0) / scale
         x1, y1 = corners.max(axis=0) / scale
-        box = (float(x0), float(y0), float(x1 - x0), float(y1 - y0))
-        area_ratio = (box[2] * box[3]) * scale**2 / (self._ref_box[2] * self._ref_box[3])
-        sim = self._appearance(_patch(gray, box))
-        if not 0.25 < area_ratio < 4.0 or sim < self.min_similarity:
+        area_ratio = (x1 - x0) * (y1 - y0) * scale**2 / (self._ref_box[2] * self._ref_box[3])
+        if not 0.25 < area_ratio < 4.0:
             return
-        self._new_tracker(frame, box)
-        self.similarity = sim
-        logger.info("CSRTTrackingProcessor: re-acquired (%d inliers, similarity %.2f)", found.inliers, sim)
+        box = tuple(float(v) * self._scale for v in (x0, y0, x1 - x0, y1 - y0))
+        self._new_tracker(work, box)  # type: ignore[arg-type]
+        logger.info("CSRTTrackingProcessor: re-acquired by SIFT (%d inliers)", found.inliers)
         if self.tmMgr is not None:
-            self.tmMgr.save(frame, event="reacquired", inliers=found.inliers, similarity=round(sim, 3))
-
-    def _appearance(self, patch: np.ndarray | None) -> float:
-        """Similarity of ``patch`` to the target: the better of the selection and the adapted template."""
-        return max(_similarity(patch, self._ref_patch), _similarity(patch, self._recent_patch))
+            self.tmMgr.save(frame, event="reacquired", inliers=found.inliers)
 
     def _draw(self, frame: np.ndarray) -> None:
-        if self._box is not None:
-            draw_target(frame, self._box, self._vector, (0, 255, 0), f"{self.similarity:.2f}")
-        elif self._ref_feat is not None:
+        box = self.box
+        if box is not None:
+            draw_target(frame, box, self._vector, (0, 255, 0), f"{self.score:.2f}")
+        elif self._templates:
             cv2.putText(frame, "LOST - searching", (8, 20), cv2.FONT_HERSHEY_SIMPLEX, 0.6, (0, 0, 255), 2)

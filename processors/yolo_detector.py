@@ -13,7 +13,7 @@ import numpy as np
 
 from processors.detection import Detection, DetectorConfig, load_backend
 from processors.detection.flow import shift_boxes
-from processors.steering import Steering, Vector, draw_target
+from processors.steering import Box, Steering, Vector, draw_target
 
 logger = logging.getLogger(__name__)
 
@@ -164,6 +164,12 @@ class YoloDetector:
     def getPreparedVector(self) -> Vector | None:
         """(vx, vy, t) towards the followed object, None when nothing is followed or it is lost."""
         return self._vector
+
+    @property
+    def box(self) -> Box | None:
+        """The followed detection's box (x, y, w, h, frame pixels); None when nothing is followed or it is
+        missing from the latest keyframe."""
+        return self.followed.box if self.followed is not None and self._missed == 0 else None
 
     # ---- follow ---------------------------------------------------------------------------------
     def _start_following(self, det: Detection) -> None:

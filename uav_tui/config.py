@@ -261,7 +261,7 @@ def overrides_from_args(args: argparse.Namespace) -> dict[str, Any]:
             if value is None or cls is Config and f.name in SECTIONS:
                 continue
             if f.name == "processor_args":
-                result[f.name] = _parse_processor_args(value)
+                result[f.name] = parse_processor_args(value)
             else:
                 result[f.name] = _convert_flag(f.type, value, f.name)
     return result
@@ -319,7 +319,8 @@ def _convert_flag(type_name: str, text: Any, key: str) -> Any:
         raise ConfigError(f"--{_flag(key)} must be {type_name}, got {describe(text)}", key=key) from None
 
 
-def _parse_processor_args(items: list[str]) -> dict[str, Any]:
+def parse_processor_args(items: list[str]) -> dict[str, Any]:
+    """``["gain=0.8", "mode=paper"]`` -> keyword arguments: values are TOML literals, bare words strings."""
     result = {}
     for item in items:
         key, sep, raw = item.partition("=")

@@ -373,4 +373,5 @@ class UavCore:
             startup_s=self.startup_s,
             link_lost=self.link is not None and self.link.lost,
             vehicle_problem=self.link.vehicle_problem if self.link is not None else "",
+            box=self.worker.last.box if self.worker.last is not None else None,
         )

@@ -80,7 +80,7 @@ def _run_on_dask(function: Callable[[Any], R], jobs: Sequence[Any], address: str
         futures = client.map(function, list(jobs), pure=False)
         index_of = {future.key: index for index, future in enumerate(futures)}
         results_by_index: dict[int, R] = {}
-        for future in dask_completed(futures):
+        for future in dask_completed(futures, loop=client.loop):  # the client is not the default one
             results_by_index[index_of[future.key]] = future.result()
             if progress:
                 progress(len(results_by_index), len(jobs))

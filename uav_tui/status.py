@@ -40,6 +40,8 @@ class CoreStatus:
     """No heartbeat for ``link_timeout``: the telemetry is stale (as old as ``heartbeat_age_s``)."""
     vehicle_problem: str = ""
     """Why the vehicle cannot come back (e.g. the built-in simulator's process was killed), or ""."""
+    box: tuple[int, int, int, int] | None = None
+    """The processor's ``box`` on the newest processed frame (frame pixels), None when it tracks nothing."""
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready form (for ``--json`` and the web page)."""

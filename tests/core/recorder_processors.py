@@ -42,3 +42,16 @@ class SavesInCatchCmd:
 
     def catch_cmd(self, roi):
         self.tmMgr.save(self.frame, roi=list(roi))
+
+
+class BoxOnEvenFrames:
+    """Reports a box (x = frame count) on even frames and none on odd ones."""
+
+    def __init__(self):
+        self.tmMgr = None
+        self.count = 0
+        self.box = None
+
+    def photo_processing(self, frame):
+        self.count += 1
+        self.box = (self.count, 2 * self.count, 10.4, 20) if self.count % 2 == 0 else None

@@ -5,6 +5,7 @@ from __future__ import annotations
 import asyncio
 import json
 
+import pandas as pd
 import pytest
 
 from uav_tui import dataset
@@ -99,3 +100,21 @@ async def test_an_unwritable_runs_folder_fails_the_start_with_advice(tmp_path):
     core = UavCore(_config(tmp_path))
     with pytest.raises(UavError, match="--no-record"):
         await core.start()
+
+
+async def test_the_processors_box_is_recorded_per_frame(tmp_path):
+    core = UavCore(_config(tmp_path, processor="tests.core.recorder_processors:BoxOnEvenFrames"))
+    await core.start()
+    await _frames_after(core, 8)
+    await core.stop()
+    run = dataset.load(core.recorder.run_dir)
+    frames = run.frames.reset_index(drop=True)
+    assert len(frames) >= 8
+    for row in frames.itertuples():
+        if row.frame_id % 2 == 0:  # frame ids count the processed frames: the processor's count
+            assert (row.box_x, row.box_y, row.box_w, row.box_h) == (row.frame_id, 2 * row.frame_id, 10, 20)
+        else:
+            assert all(pd.isna(v) for v in (row.box_x, row.box_y, row.box_w, row.box_h))
+    header, first = (run.path / "frames.csv").read_text().splitlines()[:2]
+    columns = dict(zip(header.split(","), first.split(","), strict=False))
+    assert [columns[name] for name in ("box_x", "box_y", "box_w", "box_h")] == ["", "", "", ""]

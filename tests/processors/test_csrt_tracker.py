@@ -110,6 +110,16 @@ def test_bad_arguments_are_refused() -> None:
         CSRTTrackingProcessor(mode="slow")
     with pytest.raises(ValueError, match="camera"):
         CSRTTrackingProcessor(camera="sideways")
+    with pytest.raises(ValueError, match="TrackerCSRT_Params has no field scales"):
+        CSRTTrackingProcessor(csrt={"scales": 3})
+
+
+def test_tracking_on_a_down_scaled_frame_reports_full_frame_boxes(seq: TrackingSequence) -> None:
+    proc = CSRTTrackingProcessor(target_px=20)  # the 48-px target is tracked at about 20 px
+    boxes, _ = _run(proc, seq)
+    assert proc._scale < 0.5
+    visible = [iou(b, t) for b, t in zip(boxes[:seq.full.start], seq.boxes[:seq.full.start], strict=True)]
+    assert np.mean(visible) >= 0.6
 
 
 def test_roi_is_clipped_to_the_frame(seq: TrackingSequence) -> None:

@@ -62,13 +62,14 @@ def test_class_filter_and_overlay_and_save(astronaut: np.ndarray, tm_mgr) -> Non
 def test_catch_cmd_follows_the_selected_detection(astronaut: np.ndarray) -> None:
     det = YoloDetector()
     det.photo_processing(astronaut.copy())
-    assert det.getPreparedVector() is None  # detections, but nothing followed
+    assert det.getPreparedVector() is None and det.box is None  # detections, but nothing followed
     det.catch_cmd((150, 80, 100, 100))  # a box around the face
     # the object sits left of the 512-wide frame's centre and low: fly left and back
     shifted = np.roll(astronaut, -80, axis=1)
     for _ in range(3):
         det.photo_processing(shifted.copy())
     assert det.followed is not None and det.followed.label == "person"
+    assert det.box == det.followed.box  # what it follows is what it reports
     vx, vy, t = det.getPreparedVector()
     cx = det.followed.box[0] + det.followed.box[2] / 2
     assert np.sign(vy) == np.sign(cx - 256) != 0
@@ -84,7 +85,7 @@ def test_follow_by_class_name_and_lost_after_max_lost(chelsea: np.ndarray) -> No
     assert det.followed is not None and det.getPreparedVector() is not None
     blank = np.full_like(chelsea, 90)
     det.photo_processing(blank)
-    assert det.getPreparedVector() is None  # not seen on this keyframe
+    assert det.getPreparedVector() is None and det.box is None  # not seen on this keyframe
     det.follow_class = None
     det.photo_processing(blank)
     assert det.followed is None

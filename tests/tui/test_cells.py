@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from uav_tui.tui._cells import BOX_STYLE, UPPER_HALF, Letterbox, render_cells
+from uav_tui.tui._cells import BOX_STYLE, TRACKED_STYLE, UPPER_HALF, Letterbox, render_cells
 
 
 @pytest.mark.parametrize(("frame", "panel", "expected"), [
@@ -60,3 +60,17 @@ def test_render_fills_the_panel_and_draws_the_selection_outline():
     assert cells[2][10] == cells[2][20] == cells[8][15] == cells[5][10] == BOX_STYLE
     assert cells[5][15] != BOX_STYLE  # inside the box the image shows
     assert cells[5][0] is None  # letterbox bar: panel background
+
+
+def test_the_processors_box_is_outlined_where_it_is_in_the_frame():
+    image = np.full((480, 640, 3), 128, np.uint8)
+    layout = Letterbox.fit(640, 480, 32, 12)  # no bars: 20 px per cell across, 40 px per cell down
+    tracked = layout.cells_of((200, 120, 100, 160))
+    assert tracked == (10, 3, 14, 6)
+    assert layout.cells_of((630, 470, 50, 50)) == (31, 11, 31, 11)  # clamped to the image
+    strips = render_cells(image, layout, selection=(2, 1, 4, 2), tracked=tracked)
+    cells = [[seg.style for seg in strip for _ in seg.text] for strip in strips]
+    col0, row0, col1, row1 = tracked
+    assert cells[row0][col0] == cells[row1][col1] == cells[(row0 + row1) // 2][col0] == TRACKED_STYLE
+    assert cells[(row0 + row1) // 2][(col0 + col1) // 2] != TRACKED_STYLE  # the target itself shows
+    assert cells[1][2] == BOX_STYLE  # the operator's selection is drawn as well

@@ -48,6 +48,7 @@ STATUS = CoreStatus(
     vectors_executed=42,
     vectors_rejected=1,
     recording={"run_dir": "runs/2026-11-22T08-00-00Z", "frames_saved": 57, "dropped": 3},
+    box=(300, 200, 120, 90),
 )
 
 EVENTS = [
@@ -60,13 +61,15 @@ EVENTS = [
 ]
 
 FRAME = SyntheticScene(640, 480, seed=0).render(40)
+TRACKED = STATUS.box
+"""The processor's box on the fixed frame: outlined in the preview, shown in the algorithm panel."""
 
 
 @pytest.fixture
 def dashboard(make_config, monkeypatch):
     monkeypatch.setenv("TZ", "UTC")
     time.tzset()
-    yield UavApp(UavCore(make_config(fc="sim")), status=lambda: STATUS, frames=lambda: (1, FRAME))
+    yield UavApp(UavCore(make_config(fc="sim")), status=lambda: STATUS, frames=lambda: (1, FRAME, TRACKED))
     monkeypatch.delenv("TZ")
     time.tzset()
 

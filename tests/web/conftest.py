@@ -17,13 +17,18 @@ TOKEN = "test-token-0123456789"
 
 
 class RecordingProcessor:
-    """Draws a marker (the overlay) on every frame and records the operator's calls."""
+    """Draws a marker (the overlay) on every frame and records the operator's calls.
+
+    Its ``box`` (what it "tracks") is the last ROI moved 10 px right and down, so a test can tell it
+    from the selection.
+    """
 
     def __init__(self) -> None:
         self.tmMgr = None
         self.rois: list[tuple[int, int, int, int]] = []
         self.buttons: list[int] = []
         self.frames = 0
+        self.box: tuple[int, int, int, int] | None = None
         self._lock = threading.Lock()
 
     def photo_processing(self, frame: Any) -> None:
@@ -34,6 +39,8 @@ class RecordingProcessor:
     def catch_cmd(self, roi: tuple[int, int, int, int]) -> None:
         with self._lock:
             self.rois.append(roi)
+        x, y, w, h = roi
+        self.box = (x + 10, y + 10, w, h)
 
     def customize_processing(self, id: int) -> None:  # noqa: A002 - the published name
         with self._lock:

@@ -61,11 +61,13 @@ async def test_track_rectangle_and_point_reach_catch_cmd(tracking: tuple[UavCore
     ack = await station.receive("COMMAND_ACK", command=mavlink.MAV_CMD_CAMERA_TRACK_RECTANGLE)
     assert ack.result == mavlink.MAV_RESULT_ACCEPTED and ack.target_system == 255
     assert processor.rois == [(160, 144, 192, 192)]
+    # the status reports what the processor tracks (its box: the ROI moved by 10 px), not the selection
     status = await station.receive("CAMERA_TRACKING_IMAGE_STATUS",
-                                   tracking_mode=mavlink.CAMERA_TRACKING_MODE_RECTANGLE)
-    assert status.tracking_status == mavlink.CAMERA_TRACKING_STATUS_FLAGS_ACTIVE
+                                   tracking_status=mavlink.CAMERA_TRACKING_STATUS_FLAGS_ACTIVE)
+    assert status.tracking_mode == mavlink.CAMERA_TRACKING_MODE_RECTANGLE
     assert (status.rec_top_x, status.rec_top_y, status.rec_bottom_x, status.rec_bottom_y) == pytest.approx(
-        (0.25, 0.3, 0.55, 0.7), abs=0.01)
+        (170 / 640, 154 / 480, 362 / 640, 346 / 480), abs=1e-4)
+    assert (status.point_x, status.point_y) == pytest.approx((266 / 640, 250 / 480), abs=1e-4)
 
     await station.command(mavlink.MAV_CMD_CAMERA_TRACK_POINT, 0.5, 0.5, 0.05)
     ack = await station.receive("COMMAND_ACK", command=mavlink.MAV_CMD_CAMERA_TRACK_POINT)
@@ -111,3 +113,41 @@ async def test_announces_itself_as_a_tracking_camera(tracking: tuple[UavCore, Gr
 def test_bad_endpoints_say_what_is_expected(address: str) -> None:
     with pytest.raises(ConfigError, match="udpin:HOST:PORT"):
         parse_endpoint(address)
+
+
+class RaisesAfterSelection:
+    """Tracks the ROI, then raises on every frame once F1 is pressed (a processor in trouble)."""
+
+    def __init__(self) -> None:
+        self.tmMgr = None
+        self.box: tuple[int, int, int, int] | None = None
+        self.failing = False
+
+    def photo_processing(self, frame: Any) -> None:
+        if self.failing:
+            raise RuntimeError("tracker crashed")
+
+    def catch_cmd(self, roi: tuple[int, int, int, int]) -> None:
+        self.box = roi
+
+    def customize_processing(self, id: int) -> None:  # noqa: A002 - the published name
+        self.failing = True
+
+
+async def test_a_failing_processor_is_reported_as_a_tracking_error() -> None:
+    port = free_port(socket.SOCK_DGRAM)
+    core = make_core(web=False, camera_mavlink=f"udpin:127.0.0.1:{port}",
+                     processor="tests.web.test_camera_tracking:RaisesAfterSelection")
+    await core.start()
+    station = GroundStation(port)
+    try:
+        await station.command(mavlink.MAV_CMD_CAMERA_TRACK_POINT, 0.5, 0.5, 0.05)
+        await station.receive("CAMERA_TRACKING_IMAGE_STATUS", tracking_mode=mavlink.CAMERA_TRACKING_MODE_POINT,
+                              tracking_status=mavlink.CAMERA_TRACKING_STATUS_FLAGS_ACTIVE)
+        await core.execute("f 1")
+        status = await station.receive("CAMERA_TRACKING_IMAGE_STATUS",
+                                       tracking_status=mavlink.CAMERA_TRACKING_STATUS_FLAGS_ERROR)
+        assert status.tracking_mode == mavlink.CAMERA_TRACKING_MODE_NONE
+    finally:
+        station.sock.close()
+        await core.stop("test finished")

@@ -91,7 +91,15 @@ async def test_page_streams_video_and_selects_targets(web_core: UavCore, tmp_pat
 
             await page.set_viewport_size({"width": 1000, "height": 640})
             await page.wait_for_function("document.getElementById('status').textContent.includes('watching')")
-            await asyncio.sleep(0.3)
+            # what the processor tracks (its box: the last ROI moved 10 px) is in the status and outlined
+            await page.wait_for_function(
+                "document.getElementById('status').textContent.includes('box 466,106 48x48')", timeout=5000)
+            await asyncio.sleep(0.6)  # a status push after the resize: the outline follows the picture
+            x, y, w, h = await picture_box(page)
+            outline = await page.locator("#tracked").bounding_box()
+            assert outline is not None
+            expected = (x + 466 * w / 640, y + 106 * h / 480, 48 * w / 640, 48 * h / 480)
+            assert close_to(tuple(round(v) for v in outline.values()), tuple(round(v) for v in expected)), outline
             await page.screenshot(path=str(tmp_path / "page.png"))
             shot = Path("/tmp/uav_web_page.png")
             shutil.copy(tmp_path / "page.png", shot)

@@ -27,12 +27,13 @@ EVENT_COLUMNS: tuple[str, ...] = ("t_wall_ns", "t_mono_ns", "level", "kind", "or
 
 FRAME_OWN_COLUMNS: tuple[str, ...] = (
     "frame_id", "seq", "t_wall_ns", "t_mono_ns", "t_start_ns", "t_end_ns", "t_vector_ns", "vx", "vy", "vt",
-    "decision", "error", "saved", "image", "extra", "telemetry",
+    "box_x", "box_y", "box_w", "box_h", "decision", "error", "saved", "image", "extra", "telemetry",
 )
 """frames.csv, the frame's own part: ids, capture times (wall + monotonic ns), processing stage times
-(monotonic ns), the vector, the autonomy decision, the last line of an exception, whether and where
-the image was saved, the ``tmMgr.save`` extras as JSON, and how the telemetry columns were obtained
-(``interpolated``, ``held``, ``before``, ``none``; see :meth:`TelemetryHistory.at`)."""
+(monotonic ns), the vector, the processor's ``box`` (frame pixels, empty when None), the autonomy
+decision, the last line of an exception, whether and where the image was saved, the ``tmMgr.save``
+extras as JSON, and how the telemetry columns were obtained (``interpolated``, ``held``, ``before``,
+``none``; see :meth:`TelemetryHistory.at`)."""
 
 FRAME_COLUMNS: tuple[str, ...] = FRAME_OWN_COLUMNS + FIELDS
 """frames.csv: the frame's own columns, then the telemetry interpolated to the capture time."""
@@ -83,8 +84,9 @@ def frame_record(result: ProcessedFrame, frame_id: int, image: str, extra_json: 
     frame = result.frame
     vx, vy, vt = _vector(result.vector)
     error = shorten(result.error.strip().splitlines()[-1], MAX_ERROR_CHARS) if result.error else ""
+    box = result.box or (None, None, None, None)
     values = [frame_id, frame.seq, frame.t_wall_ns, frame.t_mono_ns, result.t_start_ns, result.t_end_ns,
-              result.t_vector_ns or None, vx, vy, vt, result.decision, error, bool(image), image, extra_json]
+              result.t_vector_ns or None, vx, vy, vt, *box, result.decision, error, bool(image), image, extra_json]
     return FrameRecord(values, frame.t_mono_ns)
 
 

@@ -26,6 +26,9 @@ BOX_CELL = "\u2588"
 BOX_STYLE = Style(color="yellow")
 """The ROI rectangle's colour."""
 
+TRACKED_STYLE = Style(color="green")
+"""The colour of the processor's ``box`` (what it tracks)."""
+
 QUANT_MASK = 0xF8
 """Colours are kept to 5 bits per channel (invisible at preview size), so cells share cached styles."""
 
@@ -86,6 +89,14 @@ class Letterbox:
         y1 = min(self.frame_h, round((row1 - self.y0 + 1) * sy))
         return x0, y0, x1 - x0, y1 - y0
 
+    def cells_of(self, roi: tuple[int, int, int, int]) -> Box:
+        """The cell box covering a frame-pixel ``(x, y, w, h)`` (clamped to the image)."""
+        x, y, w, h = roi
+        sx, sy = self.width / self.frame_w, self.height / self.frame_h
+        col0, row0 = self.clamp_cell(self.x0 + math.floor(x * sx), self.y0 + math.floor(y * sy))
+        col1, row1 = self.clamp_cell(self.x0 + math.ceil((x + w) * sx) - 1, self.y0 + math.ceil((y + h) * sy) - 1)
+        return col0, row0, max(col0, col1), max(row0, row1)
+
     def centre_box(self, fraction: float = 0.25) -> Box:
         """A box in the middle of the image, ``fraction`` of its size: where keyboard ROI starts."""
         w, h = max(2, round(self.width * fraction)), max(1, round(self.height * fraction))
@@ -93,13 +104,15 @@ class Letterbox:
         return col0, row0, col0 + w - 1, row0 + h - 1
 
 
-def render_cells(image: np.ndarray, box: Letterbox, selection: Box | None = None) -> list[Strip]:
+def render_cells(image: np.ndarray, box: Letterbox, selection: Box | None = None,
+                 tracked: Box | None = None) -> list[Strip]:
     """Draw a BGR frame as half-block strips of ``box.cols x box.rows`` cells.
 
     Args:
         image: BGR uint8 frame (H x W x 3), or grey (H x W).
         box: where the image goes (``Letterbox.fit`` of this frame and panel).
         selection: a cell box to draw as a rectangle over the image (the ROI being chosen).
+        tracked: a cell box to draw in :data:`TRACKED_STYLE` (the processor's ``box``), under the selection.
 
     Returns:
         One strip per cell row. Letterbox bars are blank cells in the panel's own background.
@@ -110,7 +123,9 @@ def render_cells(image: np.ndarray, box: Letterbox, selection: Box | None = None
     small = (small & QUANT_MASK) | (~QUANT_MASK & 0xFF) // 2  # 5 bits per channel, centred in its step
     packed = (small[..., 2].astype(np.uint32) << 16) | (small[..., 1].astype(np.uint32) << 8) | small[..., 0]
     top, bottom = packed[0::2].tolist(), packed[1::2].tolist()
-    edges = _box_edges(selection, box) if selection is not None else {}
+    outlines = [(edges, style) for edges, style in ((_box_edges(selection, box) if selection else {}, BOX_STYLE),
+                                                    (_box_edges(tracked, box) if tracked else {}, TRACKED_STYLE))
+                if edges]
     left = Segment(" " * box.x0) if box.x0 else None
     right_width = box.cols - box.x0 - box.width
     right = Segment(" " * right_width) if right_width > 0 else None
@@ -118,10 +133,11 @@ def render_cells(image: np.ndarray, box: Letterbox, selection: Box | None = None
     strips = [blank] * box.y0
     for r in range(box.height):
         segments = [left] if left else []
-        marked = edges.get(box.y0 + r, ())
+        marks = [(edges.get(box.y0 + r, ()), style) for edges, style in outlines]
         for c, (t, b) in enumerate(zip(top[r], bottom[r], strict=True)):
-            if box.x0 + c in marked:
-                segments.append(Segment(BOX_CELL, BOX_STYLE))
+            style = next((style for marked, style in marks if box.x0 + c in marked), None)
+            if style is not None:
+                segments.append(Segment(BOX_CELL, style))
             else:
                 segments.append(Segment(UPPER_HALF, _style(t, b)))
         if right:

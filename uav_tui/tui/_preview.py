@@ -21,8 +21,8 @@ from uav_tui.tui._cells import Box, Letterbox, render_cells
 
 logger = logging.getLogger(__name__)
 
-FrameProvider = Callable[[], "tuple[int, np.ndarray] | None"]
-"""Returns ``(frame id, BGR image)`` of the newest processed frame, or None before the first."""
+FrameProvider = Callable[[], "tuple[int, np.ndarray, tuple[int, int, int, int] | None] | None"]
+"""Returns ``(frame id, BGR image, the processor's box)`` of the newest processed frame, or None before the first."""
 
 PREVIEW_FPS = 4.0
 """How often the preview redraws at most; the terminal, not the camera, sets how much is worth drawing."""
@@ -44,6 +44,8 @@ MOVE_KEYS = Binding.Group("move box, shift+arrows: resize")
 
 class FramePreview(Widget, can_focus=True):
     """Draws the newest processed frame, letterboxed, at :data:`PREVIEW_FPS` while it is on screen.
+
+    The processor's ``box`` for that frame (what it tracks) is outlined in green.
 
     It draws less often when converting a frame costs more than :data:`CPU_BUDGET` of a core, or when
     the machine is saturated (:data:`BUSY_CPU_PERCENT`): the processor comes first.
@@ -112,8 +114,8 @@ class FramePreview(Widget, can_focus=True):
             self._strips = []
             self.refresh()
             return
-        frame_id, image = newest
-        key = (frame_id, cols, rows, self.selection)
+        frame_id, image, tracked = newest
+        key = (frame_id, cols, rows, self.selection, tracked)
         if key == self._drawn:
             return
         now = time.monotonic()
@@ -123,7 +125,7 @@ class FramePreview(Widget, can_focus=True):
         layout = self._layout
         if layout is None or (layout.frame_w, layout.frame_h, layout.cols, layout.rows) != (width, height, cols, rows):
             layout = Letterbox.fit(width, height, cols, rows, MAX_CELLS)
-        self._strips = render_cells(image, layout, self.selection)
+        self._strips = render_cells(image, layout, self.selection, tracked and layout.cells_of(tracked))
         interval = (time.monotonic() - now) / CPU_BUDGET
         if self._machine_busy_percent() >= BUSY_CPU_PERCENT:
             interval = max(interval, 1 / BUSY_FPS)

@@ -202,9 +202,9 @@ class UavApp(App[None]):
         if event.level != "info" and event.origin != LOG_ORIGIN:
             self.notify(event.message, title=event.kind, severity=event.level, timeout=6)
 
-    def _newest_frame(self) -> tuple[int, object] | None:
+    def _newest_frame(self) -> tuple[int, object, tuple[int, int, int, int] | None] | None:
         last = self.core.worker.last if self.core.worker is not None else None
-        return None if last is None else (last.frame.t_mono_ns, last.frame.image)
+        return None if last is None else (last.frame.t_mono_ns, last.frame.image, last.box)
 
     # -- commands --------------------------------------------------------------------------------
 

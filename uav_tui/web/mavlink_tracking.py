@@ -3,8 +3,10 @@
 A ground station sends MAV_CMD_CAMERA_TRACK_RECTANGLE or MAV_CMD_CAMERA_TRACK_POINT with normalized
 image coordinates; they become the same ``roi X Y W H`` command (frame pixels) as a drag on the web
 page, run through ``core.execute(..., origin="mavlink:SYS/COMP")``. Every command gets a COMMAND_ACK,
-and CAMERA_TRACKING_IMAGE_STATUS reports the selected region (once after each command, then once a
-second). The component sends HEARTBEAT (MAV_TYPE_CAMERA) and answers CAMERA_INFORMATION requests with
+and CAMERA_TRACKING_IMAGE_STATUS reports what the processor tracks (its ``box`` on the newest processed
+frame, normalised): active with the rectangle, idle when it tracks nothing (or after
+MAV_CMD_CAMERA_STOP_TRACKING), error when its last frame raised; once after each command, then once a
+second. The component sends HEARTBEAT (MAV_TYPE_CAMERA) and answers CAMERA_INFORMATION requests with
 the tracking capability flags, so a ground station discovers it.
 
 Endpoint (config ``camera_mavlink``): ``udpin:HOST:PORT`` listens and answers whoever spoke last;
@@ -21,6 +23,7 @@ from typing import Any
 
 from pymavlink.dialects.v20 import common as mavlink
 
+from processors.base import Box
 from uav_tui.commands import Command
 from uav_tui.errors import KNOWN_ERRORS, CommandError, ConfigError, UavError
 from uav_tui.web.roi import point_to_roi, rect_to_roi
@@ -81,8 +84,12 @@ class CameraTracking:
         self.mav.robust_parsing = True
         self.transport: asyncio.DatagramTransport | None = None
         self.peer: tuple[str, int] | None = None if self.scheme == "udpin" else (self.host, self.port)
-        self.selection: tuple[int, tuple[float, float, float, float]] | None = None
-        """(CAMERA_TRACKING_MODE_*, normalized (x0, y0, x1, y1)) of the last accepted selection."""
+        self.mode = mavlink.CAMERA_TRACKING_MODE_RECTANGLE
+        """CAMERA_TRACKING_MODE_* of the last accepted track command."""
+        self.reporting = True
+        """False after MAV_CMD_CAMERA_STOP_TRACKING until the next track command: the status says idle."""
+        self.tracked: tuple[Box | None, tuple[int, int], bool] = (None, (0, 0), False)
+        """The newest processed frame's box, its frame size and whether the processor raised on it."""
         self._commands: asyncio.Queue[Any] = asyncio.Queue(maxsize=16)
         self._tasks: list[asyncio.Task[None]] = []
 
@@ -95,12 +102,14 @@ class CameraTracking:
         except OSError as exc:
             raise UavError(f"camera_mavlink {self.address}: {exc.strerror}; is another program using the "
                            "port? pick another one") from exc
+        self.core.add_frame_listener(self._on_frame)
         self._tasks = [asyncio.create_task(self._handle_commands(), name="camera-commands"),
                        asyncio.create_task(self._report(), name="camera-status")]
         logger.info("CameraTracking(%s) started", self.address)
 
     async def stop(self) -> None:
         """Stop answering and close the socket. Idempotent."""
+        self.core.remove_frame_listener(self._on_frame)
         for task in self._tasks:
             task.cancel()
         await asyncio.gather(*self._tasks, return_exceptions=True)
@@ -110,6 +119,11 @@ class CameraTracking:
             self.transport = None
 
     # -- receiving -------------------------------------------------------------------------------
+
+    def _on_frame(self, result: Any) -> None:
+        """Frame listener (on the loop): keep what the processor reported for the newest frame."""
+        height, width = result.frame.image.shape[:2]
+        self.tracked = (result.box, (width, height), result.error is not None)
 
     def received(self, data: bytes, addr: tuple[str, int]) -> None:
         """Datagram from the ground station (on the loop): queue the commands addressed to us."""
@@ -144,7 +158,7 @@ class CameraTracking:
         if command == mavlink.MAV_CMD_CAMERA_TRACK_POINT:
             return await self._select(mavlink.CAMERA_TRACKING_MODE_POINT, params, origin), self._send_status
         if command == mavlink.MAV_CMD_CAMERA_STOP_TRACKING:
-            self.selection = None
+            self.reporting = False
             self.core.events.emit("info", "command", "ground station stopped tracking (the processor keeps its "
                                   "target until the next selection)", origin)
             return mavlink.MAV_RESULT_ACCEPTED, self._send_status
@@ -171,8 +185,7 @@ class CameraTracking:
             await self.core.execute(Command("roi", roi), origin=origin)
         except KNOWN_ERRORS:  # logged as an event by the core
             return mavlink.MAV_RESULT_FAILED
-        x, y, w, h = roi
-        self.selection = (mode, (x / size[0], y / size[1], (x + w) / size[0], (y + h) / size[1]))
+        self.mode, self.reporting = mode, True
         return mavlink.MAV_RESULT_ACCEPTED
 
     # -- sending ---------------------------------------------------------------------------------
@@ -185,15 +198,18 @@ class CameraTracking:
             await asyncio.sleep(STATUS_PERIOD_S)
 
     def _send_status(self) -> None:
-        if self.selection is None:
-            self.mav.camera_tracking_image_status_send(
-                mavlink.CAMERA_TRACKING_STATUS_FLAGS_IDLE, mavlink.CAMERA_TRACKING_MODE_NONE, 0,
-                *([float("nan")] * 7))
+        box, (width, height), failed = self.tracked
+        if failed or box is None or not self.reporting or not width or not height:
+            flag = mavlink.CAMERA_TRACKING_STATUS_FLAGS_ERROR if failed else mavlink.CAMERA_TRACKING_STATUS_FLAGS_IDLE
+            self.mav.camera_tracking_image_status_send(flag, mavlink.CAMERA_TRACKING_MODE_NONE, 0,
+                                                       *([float("nan")] * 7))
             return
-        mode, (x0, y0, x1, y1) = self.selection
+        x, y, w, h = box  # normalised 0..1 (left/top 0), clipped: MAVLink has no room for off-image corners
+        x0, x1 = (min(max(v / width, 0.0), 1.0) for v in (x, x + w))
+        y0, y1 = (min(max(v / height, 0.0), 1.0) for v in (y, y + h))
         point = (x0 + x1) / 2, (y0 + y1) / 2, (x1 - x0) / 2
         self.mav.camera_tracking_image_status_send(
-            mavlink.CAMERA_TRACKING_STATUS_FLAGS_ACTIVE, mode, mavlink.CAMERA_TRACKING_TARGET_DATA_IN_STATUS,
+            mavlink.CAMERA_TRACKING_STATUS_FLAGS_ACTIVE, self.mode, mavlink.CAMERA_TRACKING_TARGET_DATA_IN_STATUS,
             *point, x0, y0, x1, y1)
 
     def _send_information(self) -> None:

@@ -88,6 +88,18 @@ function endDrag(e, cancelled) {
 stage.addEventListener("pointerup", (e) => endDrag(e, false));
 stage.addEventListener("pointercancel", (e) => endDrag(e, true));
 
+// The processor's box (frame pixels of a frame[0] x frame[1] camera) outlined over the picture.
+function showTracked(tracked, frame) {
+  const pic = pictureRect(), outline = $("tracked");
+  if (!tracked || !pic || !frame[0] || !frame[1]) { outline.hidden = true; return; }
+  const s = stage.getBoundingClientRect(), sx = pic.width / frame[0], sy = pic.height / frame[1];
+  Object.assign(outline.style, {
+    left: pic.left - s.left + tracked[0] * sx + "px", top: pic.top - s.top + tracked[1] * sy + "px",
+    width: tracked[2] * sx + "px", height: tracked[3] * sy + "px",
+  });
+  outline.hidden = false;
+}
+
 // -- video -----------------------------------------------------------------------------------------
 
 function setLink(text, bad) {
@@ -144,6 +156,8 @@ function showStatus(message) {
       `${t.in_air ? " air" : ""} alt ${fmt(t.rel_alt_m, 1, "m")} bat ${fmt(t.battery_pct, 0, "%")}`;
     if (s.vehicle_problem) line += ` (${s.vehicle_problem})`;
   }
+  if (s.box) line += ` | box ${s.box[0]},${s.box[1]} ${s.box[2]}x${s.box[3]}`;
+  showTracked(s.box, message.frame);
   if (s.last_decision) line += ` | ${s.last_decision}`;
   const host = s.processor_state;
   if (host) {

@@ -1,0 +1,121 @@
+"""One-pass evaluation metrics (OTB / UAV123 / TrackingNet conventions).
+
+* success: for each IoU threshold t in 0, 0.05, ..., 1 the fraction of frames whose IoU **exceeds**
+  t; its mean is the success AUC (a perfect tracker scores 20/21, as IoU 1 never exceeds 1);
+* precision: fraction of frames whose centre error is at most d px, d = 0..50; reported at 20 px;
+* normalised precision: the centre error divided by the gt box size per axis, thresholds 0..0.5;
+  its mean is reported;
+* frames lost: frames with a gt box where the tracker reported none (no box scores IoU 0 and an
+  infinite centre error).
+
+Frames whose gt is NaN (target not visible) are skipped. Overall scores average the per-sequence
+curves (as the benchmarks' toolkits do) and add up frame counts.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+IOU_THRESHOLDS = np.linspace(0.0, 1.0, 21)
+"""Success-plot thresholds."""
+PIXEL_THRESHOLDS = np.arange(0, 51, dtype=np.float64)
+"""Precision-plot thresholds (centre error, px)."""
+NORMALISED_THRESHOLDS = np.linspace(0.0, 0.5, 51)
+"""Normalised-precision thresholds (centre error / box size)."""
+PRECISION_AT_PX = 20
+
+
+@dataclass(frozen=True)
+class Scores:
+    """Accuracy and speed of one tracker on one sequence (or, from :func:`summarise`, on all of them)."""
+
+    frames: int
+    """Frames processed."""
+    scored: int
+    """Frames with a gt box."""
+    frames_lost: int
+    success_auc: float
+    precision_20: float
+    norm_precision: float
+    ms_mean: float
+    ms_p50: float
+    ms_p95: float
+    fps: float
+    success_curve: list[float]
+    precision_curve: list[float]
+    norm_precision_curve: list[float]
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+def iou(pred: np.ndarray, gt: np.ndarray) -> np.ndarray:
+    """Per-row IoU of ``N x 4`` boxes ``x, y, w, h``; 0 where ``pred`` is NaN (no box)."""
+    x0 = np.maximum(pred[:, 0], gt[:, 0])
+    y0 = np.maximum(pred[:, 1], gt[:, 1])
+    x1 = np.minimum(pred[:, 0] + pred[:, 2], gt[:, 0] + gt[:, 2])
+    y1 = np.minimum(pred[:, 1] + pred[:, 3], gt[:, 1] + gt[:, 3])
+    inter = np.clip(x1 - x0, 0, None) * np.clip(y1 - y0, 0, None)
+    union = pred[:, 2] * pred[:, 3] + gt[:, 2] * gt[:, 3] - inter
+    with np.errstate(invalid="ignore", divide="ignore"):
+        result = inter / union
+    return np.nan_to_num(result, nan=0.0)
+
+
+def centre_error(pred: np.ndarray, gt: np.ndarray, normalised: bool = False) -> np.ndarray:
+    """Per-row distance between box centres (px, or in units of the gt box size); inf where ``pred`` is NaN."""
+    delta = (pred[:, :2] + pred[:, 2:] / 2) - (gt[:, :2] + gt[:, 2:] / 2)
+    if normalised:
+        delta = delta / gt[:, 2:]
+    error = np.hypot(delta[:, 0], delta[:, 1])
+    return np.where(np.isnan(error), np.inf, error)
+
+
+def score_sequence(pred: np.ndarray, gt: np.ndarray, times_ms: np.ndarray) -> Scores:
+    """Scores of predicted boxes ``pred`` (NaN rows = no box) against ``gt`` (NaN rows skipped)."""
+    visible = ~np.isnan(gt).any(axis=1)
+    pred, gt = pred[visible], gt[visible]
+    overlap = iou(pred, gt)
+    error = centre_error(pred, gt)
+    norm_error = centre_error(pred, gt, normalised=True)
+    success = _fractions(overlap, IOU_THRESHOLDS, above=True)
+    precision = _fractions(error, PIXEL_THRESHOLDS, above=False)
+    norm_precision = _fractions(norm_error, NORMALISED_THRESHOLDS, above=False)
+    return Scores(
+        frames=len(times_ms), scored=int(visible.sum()), frames_lost=int(np.isnan(pred).any(axis=1).sum()),
+        success_auc=float(np.mean(success)), precision_20=float(precision[PRECISION_AT_PX]),
+        norm_precision=float(np.mean(norm_precision)), **_timing(times_ms),
+        success_curve=success.tolist(), precision_curve=precision.tolist(),
+        norm_precision_curve=norm_precision.tolist(),
+    )
+
+
+def summarise(per_sequence: list[Scores], times_ms: np.ndarray) -> Scores:
+    """Overall scores: curves averaged over sequences, frame counts added, timing over all frames."""
+    curves = {name: np.mean([getattr(s, name) for s in per_sequence], axis=0)
+              for name in ("success_curve", "precision_curve", "norm_precision_curve")}
+    return Scores(
+        frames=sum(s.frames for s in per_sequence), scored=sum(s.scored for s in per_sequence),
+        frames_lost=sum(s.frames_lost for s in per_sequence),
+        success_auc=float(np.mean(curves["success_curve"])),
+        precision_20=float(curves["precision_curve"][PRECISION_AT_PX]),
+        norm_precision=float(np.mean(curves["norm_precision_curve"])), **_timing(times_ms),
+        **{name: curve.tolist() for name, curve in curves.items()},
+    )
+
+
+def _fractions(values: np.ndarray, thresholds: np.ndarray, *, above: bool) -> np.ndarray:
+    if not len(values):
+        return np.zeros(len(thresholds))
+    hits = values[None, :] > thresholds[:, None] if above else values[None, :] <= thresholds[:, None]
+    return hits.mean(axis=1)
+
+
+def _timing(times_ms: np.ndarray) -> dict[str, float]:
+    if not len(times_ms):
+        return {"ms_mean": 0.0, "ms_p50": 0.0, "ms_p95": 0.0, "fps": 0.0}
+    mean = float(np.mean(times_ms))
+    return {"ms_mean": mean, "ms_p50": float(np.percentile(times_ms, 50)),
+            "ms_p95": float(np.percentile(times_ms, 95)), "fps": 1000.0 / mean if mean > 0 else 0.0}

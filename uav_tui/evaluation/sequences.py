@@ -1,0 +1,164 @@
+"""Annotated sequences on disk: finding them, reading their ground truth, decoding their frames one by one.
+
+Two layouts are read:
+
+* the ``aerial-tracking`` one: ``SEQ/video.mp4`` + ``SEQ/gt.txt``;
+* OTB / UAV123: ``SEQ/img/*.jpg`` + ``SEQ/groundtruth_rect.txt``, or the images in ``SEQ/`` (or
+  ``SEQ/img/``) with ``SEQ.txt`` beside the folder.
+
+Ground truth is one ``x,y,w,h`` line per frame (commas, tabs or spaces), (x, y) the top-left corner in
+pixels; ``NaN`` (or a zero-size box) marks a frame where the target is not visible. Frame 0 must have a box.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from uav_tui.errors import UavError
+
+VIDEO_NAME, VIDEO_GT = "video.mp4", "gt.txt"
+OTB_IMAGES, OTB_GT = "img", "groundtruth_rect.txt"
+IMAGE_SUFFIXES = (".jpg", ".jpeg", ".png", ".bmp")
+
+
+class SequenceError(UavError):
+    """An annotated sequence that cannot be read; the message names the file and what is wrong."""
+
+
+@dataclass(frozen=True)
+class Sequence:
+    """One annotated sequence: where its frames are and the ground-truth box of every frame.
+
+    Small and picklable (paths and a few numbers): jobs carry it to other processes and machines.
+    """
+
+    name: str
+    gt_path: Path
+    gt: np.ndarray
+    """``N x 4`` float array ``x, y, w, h`` per frame; a row of NaN where the target is not visible."""
+    video: Path | None = None
+    images: tuple[Path, ...] = ()
+
+    def __len__(self) -> int:
+        return len(self.gt)
+
+    @property
+    def source(self) -> Path:
+        """The file the frames come from (the video, or the first image)."""
+        return self.video if self.video is not None else self.images[0]
+
+    def frames(self) -> Iterator[np.ndarray]:
+        """Decode the frames one at a time (BGR uint8); at most one is held.
+
+        Raises:
+            SequenceError: a frame cannot be decoded, or there are fewer frames than gt rows.
+        """
+        if self.video is not None:
+            yield from self._video_frames(self.video)
+            return
+        for path in self.images:
+            image = cv2.imread(str(path), cv2.IMREAD_COLOR)
+            if image is None:
+                raise SequenceError(f"{path}: cannot be read as an image")
+            yield image
+
+    def _video_frames(self, path: Path) -> Iterator[np.ndarray]:
+        capture = cv2.VideoCapture(str(path))
+        try:
+            for index in range(len(self.gt)):
+                ok, image = capture.read()
+                if not ok:
+                    raise SequenceError(f"{path}: ends after {index} frames but {self.gt_path} has {len(self.gt)} "
+                                        "rows; give one gt row per frame")
+                yield image
+        finally:
+            capture.release()
+
+
+def find_sequences(paths: list[Path]) -> list[Sequence]:
+    """Every sequence named by ``paths``: each is a sequence folder or a folder of them (sorted by name).
+
+    Raises:
+        SequenceError: a path does not exist, holds no sequence, or a sequence in it is broken.
+    """
+    found: list[Sequence] = []
+    for path in paths:
+        if not path.exists():
+            raise SequenceError(f"{path} does not exist")
+        if _is_sequence(path):
+            found.append(load_sequence(path))
+            continue
+        children = [child for child in sorted(path.iterdir()) if child.is_dir() and _is_sequence(child)]
+        if not children:
+            raise SequenceError(f"{path} is not a sequence ({VIDEO_NAME} + {VIDEO_GT}, or {OTB_IMAGES}/*.jpg + "
+                                f"{OTB_GT}) and holds none")
+        found.extend(load_sequence(child) for child in children)
+    return found
+
+
+def load_sequence(folder: Path) -> Sequence:
+    """Read one sequence folder in either layout (see the module docstring)."""
+    video = folder / VIDEO_NAME
+    if video.is_file():
+        gt_path = folder / VIDEO_GT
+        if not gt_path.is_file():
+            raise SequenceError(f"{gt_path} is missing: a sequence needs one gt row per frame of {video}")
+        gt = read_ground_truth(gt_path)
+        frames = int(cv2.VideoCapture(str(video)).get(cv2.CAP_PROP_FRAME_COUNT))
+        _check_count(gt_path, gt, frames, video)
+        return Sequence(folder.name, gt_path, gt, video=video)
+    image_dir = folder / OTB_IMAGES if (folder / OTB_IMAGES).is_dir() else folder
+    images = tuple(sorted(p for p in image_dir.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES))
+    if not images:
+        raise SequenceError(f"{folder}: no {VIDEO_NAME} and no images in {image_dir}")
+    candidates = [folder / OTB_GT, folder.parent / f"{folder.name}.txt"]
+    gt_path = next((p for p in candidates if p.is_file()), None)
+    if gt_path is None:
+        raise SequenceError(f"{candidates[0]} is missing (nor is there {candidates[1]}): a sequence needs one gt "
+                            "row per image")
+    gt = read_ground_truth(gt_path)
+    _check_count(gt_path, gt, len(images), image_dir)
+    return Sequence(folder.name, gt_path, gt, images=images)
+
+
+def read_ground_truth(path: Path) -> np.ndarray:
+    """``N x 4`` boxes from a gt file; NaN rows (or zero-size boxes) where the target is not visible."""
+    rows = []
+    for number, line in enumerate(path.read_text().splitlines(), start=1):
+        if not line.strip():
+            continue
+        fields = [f for f in re.split(r"[,\s]+", line.strip()) if f]
+        try:
+            values = [float(f) for f in fields]
+        except ValueError:
+            values = []
+        if len(values) != 4:
+            raise SequenceError(f"{path}:{number}: expected x,y,w,h (4 numbers or NaN), got {line.strip()[:80]!r}")
+        if not all(math.isfinite(v) for v in values) or values[2] <= 0 or values[3] <= 0:
+            values = [math.nan] * 4
+        rows.append(values)
+    gt = np.array(rows, dtype=np.float64).reshape(-1, 4)
+    if not len(gt) or np.isnan(gt[0]).any():
+        raise SequenceError(f"{path}: the first row must be the target's box (the tracker starts from it)")
+    return gt
+
+
+def _check_count(gt_path: Path, gt: np.ndarray, frames: int, source: Path) -> None:
+    if frames != len(gt):
+        raise SequenceError(f"{gt_path} has {len(gt)} rows but {source} has {frames} frames; give one gt row "
+                            "per frame")
+
+
+def _is_sequence(folder: Path) -> bool:
+    if (folder / VIDEO_NAME).is_file() or (folder / OTB_GT).is_file() or (folder / OTB_IMAGES).is_dir():
+        return True
+    image_dir = folder / OTB_IMAGES if (folder / OTB_IMAGES).is_dir() else folder
+    sibling_gt = folder.parent / f"{folder.name}.txt"
+    return sibling_gt.is_file() and any(p.suffix.lower() in IMAGE_SUFFIXES for p in image_dir.iterdir())
