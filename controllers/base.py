@@ -4,7 +4,17 @@ from __future__ import annotations
 
 from collections.abc import AsyncIterator
 from dataclasses import dataclass, fields
-from typing import Any, Protocol, runtime_checkable
+from typing import Any, Literal, Protocol, runtime_checkable
+
+
+@dataclass(frozen=True, slots=True)
+class PoseSample:
+    """One position (``north_m, east_m, down_m``) or attitude (``roll, pitch, yaw`` degrees) sample."""
+
+    kind: Literal["position", "attitude"]
+    t_mono_ns: int
+    """When the autopilot measured it, on this computer's ``time.monotonic_ns()`` clock."""
+    values: tuple[float, float, float]
 
 
 @dataclass(frozen=True, slots=True)

@@ -16,6 +16,7 @@ from mavsdk.asyncio.plugins.param import ParamAsync
 from mavsdk.asyncio.plugins.telemetry import TelemetryAsync
 
 from controllers import ardupilot
+from controllers.base import PoseSample
 from controllers.connection import (
     Connection,
     check_serial_device,
@@ -29,7 +30,7 @@ from controllers.mavlink_commands import px4_set_mode, send_command, velocity_bo
 from controllers.mavsdk_calls import AbandoningExecutor, bounded, release, use_abandoning_executor
 from controllers.mavsdk_link import LinkMonitor
 from controllers.mavsdk_log import route_mavsdk_log
-from controllers.mavsdk_pose import POSE_RATE_HZ, PoseSample, pose_samples, request_pose_rate
+from controllers.mavsdk_pose import POSE_RATE_HZ, pose_samples, request_pose_rate
 from controllers.mavsdk_telemetry import merged_updates, set_rates
 from controllers.vector_stream import DEFAULT_RATE_HZ, VectorStream
 

@@ -16,11 +16,11 @@ import logging
 import math
 import time
 from collections.abc import AsyncIterator
-from dataclasses import dataclass
 from typing import Literal
 
 from mavsdk.asyncio.plugins.mavlink_direct import MavlinkDirectAsync, MavlinkMessage
 
+from controllers.base import PoseSample
 from controllers.mavlink_commands import command_long, send_command
 
 logger = logging.getLogger(__name__)
@@ -37,16 +37,6 @@ CLOCK_WINDOW_S = 10.0
 
 CLOCK_RESET_S = 1.0
 """An offset this much above the estimate means the autopilot's clock restarted: estimate afresh."""
-
-
-@dataclass(frozen=True, slots=True)
-class PoseSample:
-    """One position (``north_m, east_m, down_m``) or attitude (``roll, pitch, yaw`` degrees) sample."""
-
-    kind: Literal["position", "attitude"]
-    t_mono_ns: int
-    """When the autopilot measured it, on this computer's ``time.monotonic_ns()`` clock."""
-    values: tuple[float, float, float]
 
 
 class BootClock:

@@ -6,7 +6,7 @@ import asyncio
 import time
 from collections.abc import AsyncIterator
 
-from controllers.mavsdk_pose import PoseSample
+from controllers.base import PoseSample
 from sources.pose import PoseTrack
 
 FIRST_POSE_TIMEOUT_S = 5.0
