@@ -50,7 +50,7 @@ async def test_page_streams_video_and_selects_targets(web_core: UavCore, tmp_pat
             response = await page.goto(web_core.web.url)
             assert response is not None and response.status == 200
             frames = "document.getElementById('video').getVideoPlaybackQuality().totalVideoFrames"
-            await page.wait_for_function(f"{frames} > 10", timeout=60000)  # ICE + first keyframe: slow on a loaded machine
+            await page.wait_for_function(f"{frames} > 10", timeout=60000)  # ICE + first keyframe: slow when loaded
             first = await page.evaluate(frames)
             await page.wait_for_function(f"{frames} > {first + 5}", timeout=10000)
             assert web_core.web.video.viewers == 1
