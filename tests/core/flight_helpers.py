@@ -60,6 +60,15 @@ def speed(truth: dict[str, Any]) -> float:
     return math.hypot(truth["vn"], truth["ve"])
 
 
+def wait_for(condition: Callable[[], Any], timeout: float, what: str) -> None:
+    """Blocking twin of :func:`wait_until`, for tests that drive uav-tui as a subprocess."""
+    deadline = time.monotonic() + timeout
+    while not condition():
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out after {timeout} s waiting for {what}")
+        time.sleep(0.02)
+
+
 async def wait_until(condition: Callable[[], Any], timeout: float, what: str) -> float:
     """Poll ``condition`` every 50 ms; returns the seconds it took, fails the test on timeout."""
     start = time.monotonic()

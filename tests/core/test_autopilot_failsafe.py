@@ -16,7 +16,7 @@ from pathlib import Path
 import pytest
 
 from controllers.sim.launcher import SimVehicle
-from tests.core.flight_helpers import STEERING_PROCESSOR, speed
+from tests.core.flight_helpers import STEERING_PROCESSOR, speed, wait_for
 from uav_tui.config import load_config
 from uav_tui.core import UavCore
 from uav_tui.errors import UavError
@@ -42,14 +42,6 @@ async def test_without_tuning_autonomy_is_refused_naming_the_parameter(sim_vehic
         assert "autopilot failsafe: found COM_OF_LOSS_T=10, COM_OBL_RC_ACT=3" in messages
     finally:
         await core.stop()
-
-
-def wait_for(condition, timeout: float, what: str) -> None:
-    deadline = time.monotonic() + timeout
-    while not condition():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out after {timeout} s waiting for {what}")
-        time.sleep(0.01)
 
 
 @pytest.mark.parametrize("sim_vehicle", [TOO_SLOW], indirect=True)

@@ -23,6 +23,7 @@ from tests.core.flight_helpers import (
     speed,
     steering_config,
     take_off,
+    wait_for,
     wait_until,
 )
 from uav_tui.core import CoreState
@@ -31,14 +32,6 @@ from uav_tui.worker import ProcessedFrame
 
 ROOT = Path(__file__).resolve().parents[2]
 SCRIPT = "arm\ntakeoff 3\nwait 6\nf 1\nautonomy on\nwait 120\n"
-
-
-def wait_for(condition, timeout: float, what: str) -> None:
-    deadline = time.monotonic() + timeout
-    while not condition():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out after {timeout} s waiting for {what}")
-        time.sleep(0.05)
 
 
 @pytest.fixture
