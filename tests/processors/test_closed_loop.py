@@ -49,7 +49,21 @@ async def test_position_hold_brings_the_vehicle_back_and_holds_it_against_wind(t
         assert core.gate.executed > 5 and core.gate.enabled
 
 
+def box_holds(box: tuple[float, float, float, float] | None, pixel: tuple[float, float] | None, slack: float) -> bool:
+    """True if ``pixel`` lies in ``box`` grown by ``slack`` pixels on every side."""
+    if box is None or pixel is None:
+        return False
+    x, y, w, h = box
+    return x - slack <= pixel[0] <= x + w + slack and y - slack <= pixel[1] <= y + h + slack
+
+
 async def test_tracker_follows_a_target_driving_on_the_ground(tmp_path: Path, sim_vehicle: SimVehicle) -> None:
+    """The box stays on the car and the vehicle keeps it in view while it drives away.
+
+    How far behind the vehicle trails is the proportional steering's business (gain 2 at 0.6 m/s on a
+    6 m circle settles about 2-2.5 m behind, more when a loaded machine delivers fewer vectors), so the
+    distance is bounded by what keeps the car in the frame, not by that lag.
+    """
     async with flying_core(tmp_path, altitude=12, processor="csrt", processor_args={"gain": 2.0, "max_speed": 1.5},
                            source="sim:?width=480&height=360&targets=1&target_speed=0.6", max_speed=1.5,
                            vehicle=sim_vehicle) as core:
@@ -66,13 +80,18 @@ async def test_tracker_follows_a_target_driving_on_the_ground(tmp_path: Path, si
         assert 60 < u < 420 and 60 < v < 300, f"target not in view at {pixel}"
         await core.execute(f"roi {int(u - 45)} {int(v - 45)} 90 90")
         await core.execute("autonomy on")
-        start, first = time.monotonic(), source.get_properties()["targets"][0]
-        distances = []
+        start, first, start_pose = time.monotonic(), source.get_properties()["targets"][0], truth.latest()
+        distances, on_target = [], []
         while time.monotonic() - start < 20:
-            t = source.get_properties()["targets"][0]
-            distances.append(horizontal_distance(truth.latest(), t["n"], t["e"]))
+            t, pose = source.get_properties()["targets"][0], truth.latest()
+            distances.append(horizontal_distance(pose, t["n"], t["e"]))
+            seen = project_ground_point(t["n"], t["e"], Pose.from_mapping(pose), source.camera)
+            on_target.append(box_holds(core.worker.last.box, seen, slack=20))  # 20 px: frame vs truth latency
             await asyncio.sleep(0.2)
         moved = math.hypot(t["n"] - first["n"], t["e"] - first["e"])
         assert moved > 6  # the target drove well away from where tracking started ...
-        assert max(distances[-50:]) < 2.5, f"lost the target: distances {distances[-10:]}"  # ... and was followed
+        assert horizontal_distance(pose, start_pose["n"], start_pose["e"]) > 4  # ... the vehicle went with it ...
+        assert on_target.count(True) >= 0.9 * len(on_target), f"box off the car in {on_target.count(False)} samples"
+        in_view = 12 * math.tan(math.radians(62 / 2)) * 360 / 480  # ground covered by half the frame's height, m
+        assert max(distances) < in_view, f"the car left the frame: distances {distances[-10:]}"  # ... in view
         assert core.gate.executed > 10 and core.worker.last.box is not None  # still tracking
