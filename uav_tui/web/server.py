@@ -35,6 +35,7 @@ from uav_tui.core import CoreState
 from uav_tui.errors import KNOWN_ERRORS, CommandError, UavError
 from uav_tui.events import Event
 from uav_tui.text import describe, shorten
+from uav_tui.web.mdns import adopt_mdns_resolver
 from uav_tui.web.roi import roi_from_message
 from uav_tui.web.throttle import AuthThrottle
 from uav_tui.web.tracks import VideoHub
@@ -83,6 +84,7 @@ class WebServer:
         return f"http://{host}:{self.port}/?token={self.token}"
 
     async def start(self) -> None:
+        adopt_mdns_resolver()
         app = web.Application(middlewares=[self._auth], client_max_size=256 * 1024)
         app.router.add_get("/", self._page)
         app.router.add_static("/static/", STATIC)
