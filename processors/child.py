@@ -1,24 +1,27 @@
-"""The processor's own process: ``python -m processors.child FD`` runs one processor behind a pipe.
+"""The processor's own process: ``python -m processors.child FD MAILBOX`` runs one processor behind a pipe.
 
 The platform (``uav_tui.process_worker``) starts this module in a fresh interpreter and talks to it
-over the :class:`~multiprocessing.connection.Connection` on file descriptor ``FD``. It imports only
+over the :class:`~multiprocessing.connection.Connection` on file descriptor ``FD``; frames come through
+the :class:`~processors.frame_mailbox.FrameMailbox` at ``MAILBOX`` (its address: three words). It imports only
 this level (``processors``), NumPy and the researcher's code: a GIL-bound loop, a hang, ``os._exit``,
 a segfault or a leak here cannot freeze or kill the flight path.
 
 Messages, platform -> child (pickled tuples)::
 
     ("load", spec, kwargs, memory_mb)        first message: cap memory, construct the processor
-    ("frame", slot, shape, seq, t_mono_ns, t_wall_ns, telemetry)
-                                             process the image in shared-memory ``slot`` (read and
-                                             drawn in place), with the telemetry attached to it
     ("call", call_id, method, args)          catch_cmd / customize_processing
     ("forget", [slot, ...])                  the platform freed these slots: unmap them
 
 child -> platform::
 
     ("ready", ProcessorInfo) | ("load_error", message, path, class_name, missing)
-    ("result", seq, t_start_ns, t_end_ns, t_vector_ns, vector, box, error, saves, released)
+    ("claimed", gen)                         the offer ``gen`` was taken (a replay's next frame may come)
+    ("result", gen, t_start_ns, t_end_ns, t_vector_ns, vector, box, error, saves, released)
     ("reply", call_id, ok, value_or_error, saves, released)
+
+Frames are not messages: whenever it is free (no call waiting), this process claims the frame on offer
+in the mailbox (the image in a shared-memory slot, read and drawn in place, and the pickled telemetry
+attached to it) and answers with a ``result`` for that offer's ``gen``.
 
 ``saves`` are the ``tmMgr.save(frame, **extra)`` calls made meanwhile: ``(image, extra)``, the image
 copied at the call (what is drawn afterwards must not reach the dataset), so it is pickled.
@@ -29,7 +32,8 @@ prints is forwarded line by line, escaped.
 ``released`` names the slots this process no longer references: a processor may keep a frame (the
 previous one, for optical flow) and the platform must not reuse that slot until it lets go.
 
-Calls run one at a time in this process's main thread, so a researcher never needs a lock.
+Calls and frames run one at a time in this process's main thread (calls first), so a researcher never
+needs a lock.
 A ``MemoryError`` (``processor_memory_mb`` reached) ends the process with :data:`MEMORY_EXIT_CODE`.
 """
 
@@ -48,8 +52,7 @@ import sys
 import time
 import traceback
 import weakref
-from multiprocessing import resource_tracker
-from multiprocessing.connection import Connection
+from multiprocessing.connection import Connection, wait
 from multiprocessing.shared_memory import SharedMemory
 from types import SimpleNamespace
 from typing import Any
@@ -59,6 +62,7 @@ import numpy as np
 from processors import load_processor
 from processors.base import read_box
 from processors.errors import ProcessorLoadError
+from processors.frame_mailbox import FrameMailbox, Offer, attach_untracked
 
 LOG_LEVEL_ENV = "UAV_TUI_PROCESSOR_LOG_LEVEL"
 """The platform's log level, for the child's root logger."""
@@ -151,14 +155,7 @@ class Slots:
                 shm.close()
 
     def _attach(self, name: str) -> SharedMemory:
-        try:
-            shm = SharedMemory(name, track=False)  # type: ignore[call-arg]  # Python >= 3.13
-        except TypeError:
-            # Before 3.13 attaching registers the slot with a resource tracker that would unlink it when
-            # this process exits; the platform owns every slot and unlinks it itself.
-            shm = SharedMemory(name)
-            resource_tracker.unregister(shm._name, "shared_memory")  # type: ignore[attr-defined]
-        self._mapped[name] = shm
+        shm = self._mapped[name] = attach_untracked(name)
         return shm
 
 
@@ -186,8 +183,9 @@ def _die_with_parent() -> None:
 class ChildRunner:
     """Serves one processor: frames and calls in arrival order, one at a time."""
 
-    def __init__(self, conn: Connection, loaded: Any) -> None:
+    def __init__(self, conn: Connection, mailbox: FrameMailbox, loaded: Any) -> None:
         self.conn = conn
+        self.mailbox = mailbox
         self.loaded = loaded
         self.instance = loaded.instance
         self.telemetry = FrameTelemetry()
@@ -196,23 +194,31 @@ class ChildRunner:
         self.has_vector = "getPreparedVector" in loaded.info.capabilities
 
     def serve(self) -> None:
+        """Calls and notices first, then the frame on offer; sleep when there is neither. Returns at EOF."""
         while True:
             try:
-                message = self.conn.recv()
+                while self.conn.poll():
+                    self.handle(self.conn.recv())
             except (EOFError, OSError):
                 return
-            kind = message[0]
-            if kind == "frame":
-                self.conn.send(self.process(*message[1:]))
-            elif kind == "call":
-                self.conn.send(self.call(*message[1:]))
-            elif kind == "forget":
-                self.slots.forget(message[1])
+            self.mailbox.clear_wake()  # an offer made after this wakes the wait below
+            offer = self.mailbox.claim()
+            if offer is not None:
+                self.conn.send(("claimed", offer.gen))
+                self.conn.send(self.process(offer))
+            else:
+                wait([self.conn, self.mailbox])
 
-    def process(self, slot: str, shape: tuple[int, ...], seq: int, t_mono_ns: int, t_wall_ns: int,
-                telemetry: dict[str, Any]) -> tuple[Any, ...]:
-        self.telemetry.current = SimpleNamespace(**telemetry)
-        image = self.slots.view(slot, shape)
+    def handle(self, message: tuple[Any, ...]) -> None:
+        kind = message[0]
+        if kind == "call":
+            self.conn.send(self.call(*message[1:]))
+        elif kind == "forget":
+            self.slots.forget(message[1])
+
+    def process(self, offer: Offer) -> tuple[Any, ...]:
+        self.telemetry.current = SimpleNamespace(**(pickle.loads(offer.telemetry) if offer.telemetry else {}))
+        image = self.slots.view(offer.slot, offer.shape)
         vector, box, error, t_vector = None, None, None, 0
         start = time.monotonic_ns()
         try:
@@ -228,7 +234,7 @@ class ChildRunner:
             end = time.monotonic_ns()
             error = traceback.format_exc()
         del image
-        return ("result", seq, start, end, t_vector, vector, box, error, self.telemetry.take_saves(),
+        return ("result", offer.gen, start, end, t_vector, vector, box, error, self.telemetry.take_saves(),
                 self.slots.released())
 
     def call(self, call_id: int, method: str, args: tuple[Any, ...]) -> tuple[Any, ...]:
@@ -241,12 +247,14 @@ class ChildRunner:
         return ("reply", call_id, ok, value, self.telemetry.take_saves(), self.slots.released())
 
 
-def main(fd: int) -> int:
+def main(fd: int, mailbox_address: list[str]) -> int:
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C reaches the whole process group: the platform decides
     faulthandler.enable()  # a segfault in native code leaves a Python traceback on stderr
     logging.basicConfig(level=os.environ.get(LOG_LEVEL_ENV, "WARNING"), handlers=[TaggedLogHandler()])
     _die_with_parent()
     conn = Connection(fd)
+    name, lock_fd, wake_fd = mailbox_address
+    mailbox = FrameMailbox.attach(name, int(lock_fd), int(wake_fd))
     _, spec, kwargs, memory_mb = conn.recv()
     try:
         _limit_memory(memory_mb)
@@ -256,7 +264,7 @@ def main(fd: int) -> int:
             conn.send(("load_error", str(exc), exc.path, exc.class_name, exc.missing))
             return 0
         conn.send(("ready", loaded.info))
-        ChildRunner(conn, loaded).serve()
+        ChildRunner(conn, mailbox, loaded).serve()
     except MemoryError:
         traceback.print_exc()
         print(f"processor_memory_mb = {memory_mb:g} MB reached", file=sys.stderr, flush=True)
@@ -265,4 +273,4 @@ def main(fd: int) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main(int(sys.argv[1])))
+    sys.exit(main(int(sys.argv[1]), sys.argv[2:5]))

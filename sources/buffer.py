@@ -98,6 +98,13 @@ class FrameBuffer:
                 self._cond.notify_all()
             return self._frame
 
+    def mark_read(self, seq: int) -> None:
+        """Frames up to ``seq`` were taken by a reader that got them with :meth:`peek` (another process)."""
+        with self._cond:
+            if seq > self._read_seq:
+                self._read_seq = seq
+                self._cond.notify_all()
+
     def wait_newer(self, seq: int, timeout: float) -> Frame | None:
         """Block up to ``timeout`` s for a frame newer than ``seq``; None if none came."""
         with self._cond:

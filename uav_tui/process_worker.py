@@ -1,13 +1,15 @@
 """The processor in its own process: same surface as :class:`~uav_tui.worker.ProcessorWorker`, nothing shared.
 
-Frames go to the child through :class:`~uav_tui.frame_ring.FrameRing` (copied once into a shared-memory
-slot by the capture thread when the child is idle, newest frame first; never pickled); results, calls
-and ``tmMgr.save`` requests over a pipe (protocol in :mod:`processors.child`). A reader thread per
-child takes results off the pipe and hands the next frame over at once, so the event loop only gets
-finished results. The watchdog (``run``, on the loop) kills a child that stays silent longer than
-``processor_timeout``; a child that dies for any reason is reported (exit code or signal, last lines of
-its output), ``on_fault`` stops autonomy, and a fresh child with the same arguments is started after
-1, 2, 4 ... s, at most :data:`MAX_RESTARTS` times a minute.
+Frames live in :class:`~uav_tui.frame_ring.FrameRing`'s shared-memory slots (decoded there by cameras
+that can; copied in once, off the capture thread, for those that cannot; never pickled). Every new frame
+is *offered* in the child's :class:`~processors.frame_mailbox.FrameMailbox`, replacing the previous offer,
+and the child claims the newest whenever it is free: the hand-off waits for nothing in this process.
+Results, calls and ``tmMgr.save`` requests come over a pipe (protocol in :mod:`processors.child`); a
+reader thread per child takes them off, so the event loop only gets finished results. The watchdog
+(``run``, on the loop) kills a child that stays silent longer than ``processor_timeout``; a child that
+dies for any reason is reported (exit code or signal, last lines of its output), ``on_fault`` stops
+autonomy, and a fresh child with the same arguments is started after 1, 2, 4 ... s, at most
+:data:`MAX_RESTARTS` times a minute.
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ from __future__ import annotations
 import asyncio
 import itertools
 import logging
+import pickle
 import subprocess
 import threading
 import time
@@ -29,11 +32,12 @@ from controllers.base import TELEMETRY_FIELDS
 from processors import LoadedProcessor
 from processors.base import ProcessorInfo
 from processors.errors import ProcessorLoadError
+from processors.frame_mailbox import MailboxGone, Offer
 from sources.buffer import Frame, FrameBuffer
 from uav_tui.errors import UavError
 from uav_tui.events import EventLog
 from uav_tui.frame_ring import FrameRing
-from uav_tui.processor_process import ChildProcess, InFlight, PendingCall, describe_exit, rss_mb, spawn
+from uav_tui.processor_process import ChildProcess, Offered, PendingCall, describe_exit, rss_mb, spawn
 from uav_tui.stats import PipelineStats, RollingStats
 from uav_tui.telemetry import TelemetryManager
 from uav_tui.worker import ProcessedFrame, ProcessorState
@@ -95,13 +99,19 @@ class ProcessWorker:
         self._send_lock = threading.Lock()
         self._wake = threading.Condition(self._lock)
         self._nudged = False
-        self._ring = FrameRing(on_free=self._nudge, on_unlink=self._forget)
+        self._starved = False
+        """A frame found every slot held: the next slot freed nudges the feeder."""
+        self._ring = FrameRing(on_free=self._on_slot_free, on_unlink=self._forget)
         self._to_forget: list[str] = []
         self._child: ChildProcess | None = None
         self._buffer: FrameBuffer | None = None
-        self._sent: tuple[FrameBuffer | None, int] = (None, 0)
+        self._picked: tuple[FrameBuffer | None, int] = (None, 0)
+        """The newest frame taken for an offer (each frame is offered once)."""
+        self._offered: tuple[FrameBuffer | None, int] = (None, 0)
+        """The newest frame put in the mailbox (an older one is never put after it)."""
         self._loop: asyncio.AbstractEventLoop | None = None
         self._call_ids = itertools.count(1)
+        self._gens = itertools.count(1)
         self._restarts: deque[float] = deque()
         self._restart_task: asyncio.Task[None] | None = None
         self._all_children: list[ChildProcess] = []
@@ -223,6 +233,9 @@ class ProcessWorker:
             for call in child.calls.values():
                 if not call.future.done():
                     call.future.cancel()
+        with self._lock:  # no offer is being made: they check _closing under this lock
+            for child in self._all_children:
+                child.mailbox.close()
         self._ring.close()
         self._spawner.shutdown(wait=False)
 
@@ -251,7 +264,7 @@ class ProcessWorker:
         self.processor = LoadedProcessor(instance=None, info=info, spec=self.spec, kwargs=self.kwargs)
         with self._lock:
             self._child = child
-            self._sent = (None, 0)
+            self._picked = self._offered = (None, 0)
         self.state_text = "running"
         self._nudge()
 
@@ -270,16 +283,22 @@ class ProcessWorker:
     # -- frames (the feeder thread; anyone may nudge it) -----------------------------------------
 
     def _on_frame(self, frame: Frame) -> None:
-        self._try_hand_over(may_copy=False)  # capture thread: a frame captured into a slot goes at once
+        self._try_offer(may_copy=False)  # capture thread: a frame captured into a slot is offered at once
 
     def _nudge(self) -> None:
-        """Wake the feeder: a frame arrived, the child finished one, a slot was freed, a child started."""
+        """Wake the feeder: a frame to copy arrived, a starved frame found a free slot, a child started."""
         with self._wake:
             self._nudged = True
             self._wake.notify()
 
+    def _on_slot_free(self) -> None:
+        with self._lock:
+            starved, self._starved = self._starved, False
+        if starved:
+            self._nudge()
+
     def _feed(self) -> None:
-        """The feeder thread: copies the newest frame into a slot and sends it whenever the child is idle.
+        """The feeder thread: copies the newest frame into a slot (when it was not captured into one) and offers it.
 
         The copy runs here, not on the capture thread, so the camera decodes its next frame meanwhile.
         """
@@ -289,30 +308,28 @@ class ProcessWorker:
                 if self._closing:
                     return
                 self._nudged = False
-            self._try_hand_over(may_copy=True)
+            self._try_offer(may_copy=True)
 
-    def _try_hand_over(self, *, may_copy: bool) -> None:
+    def _try_offer(self, *, may_copy: bool) -> None:
         try:
-            self._hand_over(may_copy=may_copy)
+            self._offer_newest(may_copy=may_copy)
         except Exception as exc:  # a bug here must not stop the camera: say so once, go on
             self.hand_over_failures += 1
             if self.hand_over_failures == 1:
                 logger.exception("ProcessWorker(%s): handing a frame over failed (logged once)", self.spec)
                 self.events.emit("error", "processor", f"frames cannot be handed to the processor: {exc!r}")
 
-    def _hand_over(self, *, may_copy: bool) -> None:
-        """Hand the newest frame to the child if it is idle and has not seen it.
+    def _offer_newest(self, *, may_copy: bool) -> None:
+        """Offer the newest frame to the child, replacing the previous offer, if it was not offered yet.
 
-        A frame captured into a slot goes from whichever thread noticed (no copy, no thread switch);
+        A frame captured into a slot is offered from whichever thread noticed (no copy, no thread switch);
         one that must be copied is left to the feeder thread (``may_copy``), off the capture thread.
         """
         with self._lock:
             child, buffer = self._child, self._buffer
-            if self._closing or child is None or buffer is None or child.in_flight is not None:
+            if self._closing or child is None or buffer is None or self._picked == (buffer, buffer.newest_seq):
                 return
-            if self._sent == (buffer, buffer.newest_seq):
-                return
-            frame = buffer.latest()
+            frame = buffer.peek()  # read once the child claims it (a replay then decodes the next)
             if frame is None:
                 return
             slot = self._ring.take_for_child(frame.image)
@@ -321,20 +338,44 @@ class ProcessWorker:
                 self._nudged = True
                 self._wake.notify()
                 return
-            self._sent = (buffer, frame.seq)
+            self._picked = (buffer, frame.seq)
             slot = slot or self._ring.acquire(frame.image.shape)
             if slot is None:
-                return  # every slot held: this frame is skipped, a newer one or a freed slot nudges again
-            child.held[slot.name] = slot
-            child.in_flight = InFlight(frame, slot, copied, time.monotonic_ns())
+                self._starved = True  # every slot held: skipped; a newer frame or a freed slot tries again
+                return
             forget, self._to_forget = self._to_forget, []
         if copied:
-            np.copyto(slot.array(), frame.image)  # the slot is ours alone until it is sent
-        snapshot = self.telemetry.snapshot() if self.telemetry is not None else None
-        telemetry = {name: getattr(snapshot, name) for name in TELEMETRY_FIELDS} if snapshot is not None else {}
+            np.copyto(slot.array(), frame.image)  # the slot is ours alone until it is offered
         if forget:
             self._send(child, ("forget", forget))
-        self._send(child, ("frame", slot.name, slot.shape, frame.seq, frame.t_mono_ns, frame.t_wall_ns, telemetry))
+        offer = Offer(next(self._gens), slot.name, slot.shape, frame.seq, frame.t_mono_ns, frame.t_wall_ns,
+                      self._telemetry_bytes())
+        with self._lock:
+            current = child is self._child and not self._closing
+            if current and self._offered[0] is buffer and self._offered[1] >= frame.seq:
+                current = False  # a newer frame was offered while this one was copied
+            if current:
+                try:
+                    previous, taken = child.mailbox.offer(offer)
+                except MailboxGone:
+                    current = False  # the child is gone: its exit is being reported
+            if not current:
+                unused = [slot]
+            else:
+                self._offered = (buffer, frame.seq)
+                child.offered[offer.gen] = Offered(buffer, frame, slot, copied)
+                child.held[slot.name] = slot
+                replaced = None if taken else child.offered.pop(previous, None)
+                unused = [child.held.pop(replaced.slot.name)] if replaced is not None else []
+        for stale in unused:
+            self._ring.release_child(stale)
+
+    def _telemetry_bytes(self) -> bytes:
+        """The telemetry attached to a frame as it is offered, pickled (empty without a telemetry manager)."""
+        snapshot = self.telemetry.snapshot() if self.telemetry is not None else None
+        if snapshot is None:
+            return b""
+        return pickle.dumps({name: getattr(snapshot, name) for name in TELEMETRY_FIELDS})
 
     def _send(self, child: ChildProcess, message: tuple[Any, ...]) -> bool:
         """Send one message to ``child``; False when it is gone (its pipe reader reports that)."""
@@ -367,7 +408,9 @@ class ProcessWorker:
             except Exception:  # noqa: BLE001 - an unpicklable message: say so, keep reading
                 logger.exception("ProcessWorker(%s): unreadable message from pid %s", self.spec, child.pid)
                 continue
-            if message[0] == "result":
+            if message[0] == "claimed":
+                self._take_claim(child, message[1])
+            elif message[0] == "result":
                 self._take_result(child, message)
             elif not loop.is_closed():
                 loop.call_soon_threadsafe(self._on_message, child, message)
@@ -378,20 +421,26 @@ class ProcessWorker:
         if not loop.is_closed():
             loop.call_soon_threadsafe(self._on_exit, child, returncode)
 
-    def _take_result(self, child: ChildProcess, message: tuple[Any, ...]) -> None:
-        _, seq, start, end, t_vector, vector, box, error, saves, released = message
+    def _take_claim(self, child: ChildProcess, gen: int) -> None:
         with self._lock:
-            flight, child.in_flight = child.in_flight, None
-            ours = flight is not None and flight.frame.seq == seq
+            offered = child.offered.get(gen)
+        if offered is not None:
+            offered.buffer.mark_read(offered.frame.seq)
+        child.claimed = (gen, time.monotonic_ns())  # the watchdog's clock starts
+
+    def _take_result(self, child: ChildProcess, message: tuple[Any, ...]) -> None:
+        _, gen, start, end, t_vector, vector, box, error, saves, released = message
+        with self._lock:
+            offered = child.offered.pop(gen, None)
+            child.claimed = None
             # A copied-in frame's overlay is in the slot: lend it before the child's hold goes.
-            slot_view = self._ring.lend(flight.slot) if ours and flight.copied else None
+            slot_view = self._ring.lend(offered.slot) if offered is not None and offered.copied else None
         self._release(child, released)
-        self._try_hand_over(may_copy=False)
-        if not ours or self._loop is None or self._loop.is_closed():
+        if offered is None or self._loop is None or self._loop.is_closed():
             return
-        frame = flight.frame
+        frame = offered.frame
         if slot_view is not None:
-            frame = Frame(slot_view, seq, frame.t_mono_ns, frame.t_wall_ns)
+            frame = Frame(slot_view, frame.seq, frame.t_mono_ns, frame.t_wall_ns)
         result = ProcessedFrame(frame=frame, t_start_ns=start, t_end_ns=end, t_vector_ns=t_vector, vector=vector,
                                 error=error, box=box)
         self._loop.call_soon_threadsafe(self._deliver, child, result, saves)
@@ -455,7 +504,9 @@ class ProcessWorker:
     def _on_exit(self, child: ChildProcess, returncode: int) -> None:
         reason = self._reason(child, returncode)
         with self._lock:
-            child.in_flight = None
+            child.offered.clear()
+            child.claimed = None
+            child.mailbox.close()
         self._release(child, list(child.held))
         tail = "\n".join(child.tail)
         if not child.ready.done():

@@ -1,7 +1,7 @@
 """One processor process as the platform sees it: how it is started, what it printed, how it ended.
 
 :class:`ChildProcess` is the handle :class:`~uav_tui.process_worker.ProcessWorker` keeps per child:
-the process, its pipe, the frame and calls it has been given, the slots it may still reference, and
+the process, its pipe and frame mailbox, the frames and calls it has been offered, the slots it may still reference, and
 the last lines of its output (stdout and stderr together, forwarded escaped to the platform's stdout
 the way ``print()`` reaches it with thread isolation, and kept for the crash report). Its log records
 are logged by the platform, through the platform's own (escaping) handlers.
@@ -25,7 +25,8 @@ from typing import Any
 
 from processors.base import ProcessorInfo
 from processors.child import LOG_LEVEL_ENV, MEMORY_EXIT_CODE, parse_log_line
-from sources.buffer import Frame
+from processors.frame_mailbox import FrameMailbox
+from sources.buffer import Frame, FrameBuffer
 from uav_tui.frame_ring import Slot
 from uav_tui.text import safe, shorten
 
@@ -35,14 +36,14 @@ LINE_CHARS = 300
 
 
 @dataclass(slots=True)
-class InFlight:
-    """The frame the child is processing."""
+class Offered:
+    """A frame put in the child's mailbox, until it is replaced untaken or its result is back."""
 
+    buffer: FrameBuffer
     frame: Frame
     slot: Slot
     copied: bool
     """The frame was copied into ``slot`` (False: it was captured there)."""
-    sent_ns: int
 
 
 @dataclass(slots=True)
@@ -60,9 +61,13 @@ class ChildProcess:
 
     proc: subprocess.Popen[bytes]
     conn: Connection
+    mailbox: FrameMailbox
     ready: asyncio.Future[ProcessorInfo]
     tail: deque[str] = field(default_factory=lambda: deque(maxlen=TAIL_LINES))
-    in_flight: InFlight | None = None
+    offered: dict[int, Offered] = field(default_factory=dict)
+    """By offer gen: the frame on offer, and those the child claimed whose result is not back."""
+    claimed: tuple[int, int] | None = None
+    """(gen, when its claim arrived) of the frame the child is processing."""
     calls: dict[int, PendingCall] = field(default_factory=dict)
     held: dict[str, Slot] = field(default_factory=dict)
     """Slots the child may still reference."""
@@ -77,8 +82,8 @@ class ChildProcess:
     def busy_since_ns(self) -> int | None:
         """When the oldest frame or call still unanswered was sent (None when idle)."""
         starts = [c.sent_ns for c in self.calls.values()]
-        if self.in_flight is not None:
-            starts.append(self.in_flight.sent_ns)
+        if self.claimed is not None:
+            starts.append(self.claimed[1])
         return min(starts, default=None)
 
     def kill(self, reason: str) -> None:
@@ -89,17 +94,22 @@ class ChildProcess:
 
 
 def spawn(ready: asyncio.Future[ProcessorInfo]) -> ChildProcess:
-    """Start ``python -m processors.child`` with a pipe to it; its output is read on a thread. Blocks briefly."""
+    """Start ``python -m processors.child`` with a pipe and a frame mailbox; its output is read on a thread."""
     ours, theirs = multiprocessing.Pipe()
+    mailbox = FrameMailbox.create()
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in sys.path if p),  # what this process imports
            LOG_LEVEL_ENV: logging.getLevelName(logging.getLogger().getEffectiveLevel())}
     try:
-        proc = subprocess.Popen([sys.executable, "-m", "processors.child", str(theirs.fileno())],
-                                pass_fds=(theirs.fileno(),), stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
-                                stderr=subprocess.STDOUT, env=env)
+        proc = subprocess.Popen([sys.executable, "-m", "processors.child", str(theirs.fileno()),
+                                 *mailbox.address.split()],
+                                pass_fds=(theirs.fileno(), mailbox.lock_fd, mailbox.wake_fd), stdin=subprocess.DEVNULL,
+                                stdout=subprocess.PIPE, stderr=subprocess.STDOUT, env=env)
+    except BaseException:
+        mailbox.close()
+        raise
     finally:
         theirs.close()
-    child = ChildProcess(proc, ours, ready)
+    child = ChildProcess(proc, ours, mailbox, ready)
     threading.Thread(target=_read_output, args=(child,), name=f"processor-{proc.pid}-output", daemon=True).start()
     return child
 

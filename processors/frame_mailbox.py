@@ -1,0 +1,168 @@
+"""The newest frame, offered by the platform and claimed by the processor's process, in shared memory.
+
+The platform *offers* every new frame (the name of the shared-memory slot it is in, its shape, capture
+times and the telemetry attached to it) by overwriting the mailbox; the processor's process *claims* the
+offer whenever it is ready for a frame. The hand-off needs no message and no help from the platform: a
+busy processor finds the newest frame waiting the moment it is done, an idle one is woken by an eventfd.
+
+Offer and claim are atomic under one lock (a Linux eventfd used as a semaphore, shared by both
+processes), so when the platform replaces an offer it knows whether the processor took it (the slot is
+then the processor's until it reports releasing it) or not (the platform lets the slot go at once).
+Both eventfds and the shared memory are created by the platform, one set per process.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import select
+import struct
+import time
+from dataclasses import dataclass
+from multiprocessing import resource_tracker
+from multiprocessing.shared_memory import SharedMemory
+from typing import Any
+
+TELEMETRY_BYTES = 16 * 1024
+"""Room for the pickled telemetry of one frame (a few hundred bytes in practice)."""
+
+_CLAIM = struct.Struct("=q")
+"""Written by the processor: the gen it claimed last."""
+_OFFER = struct.Struct("=qqqq iii 64s I")
+"""Written by the platform: gen, seq, t_mono_ns, t_wall_ns, shape (0 for no third axis), slot name, telemetry length."""
+_OFFER_AT = _CLAIM.size
+_TELEMETRY_AT = _OFFER_AT + _OFFER.size
+SIZE = _TELEMETRY_AT + TELEMETRY_BYTES
+LOCK_TIMEOUT_S = 0.2
+"""Longest wait for the lock: it is held for microseconds, so only a process killed holding it makes this run out."""
+
+
+@dataclass(frozen=True, slots=True)
+class Offer:
+    """One frame as the mailbox carries it."""
+
+    gen: int
+    """Offer number, from 1, increasing."""
+    slot: str
+    shape: tuple[int, ...]
+    seq: int
+    t_mono_ns: int
+    t_wall_ns: int
+    telemetry: bytes
+
+
+class MailboxGone(Exception):
+    """The mailbox was closed, or its lock not released in time (the other process died holding it)."""
+
+
+class FrameMailbox:
+    """One side of the mailbox: the platform creates it (:meth:`create`), the processor attaches (:meth:`attach`)."""
+
+    def __init__(self, shm: SharedMemory, lock_fd: int, wake_fd: int, owner: bool) -> None:
+        self._shm, self.lock_fd, self.wake_fd, self._owner = shm, lock_fd, wake_fd, owner
+
+    @classmethod
+    def create(cls) -> FrameMailbox:
+        shm = SharedMemory(create=True, size=SIZE)
+        shm.buf[:_TELEMETRY_AT] = bytes(_TELEMETRY_AT)
+        lock = os.eventfd(1, os.EFD_SEMAPHORE | os.EFD_NONBLOCK | os.EFD_CLOEXEC)
+        wake = os.eventfd(0, os.EFD_NONBLOCK | os.EFD_CLOEXEC)
+        return cls(shm, lock, wake, owner=True)
+
+    @classmethod
+    def attach(cls, name: str, lock_fd: int, wake_fd: int) -> FrameMailbox:
+        """The processor's side, from what :attr:`address` said (the descriptors are inherited)."""
+        return cls(attach_untracked(name), lock_fd, wake_fd, owner=False)
+
+    @property
+    def address(self) -> str:
+        """``"name lock_fd wake_fd"``: what the processor's process needs to attach."""
+        return f"{self._shm.name} {self.lock_fd} {self.wake_fd}"
+
+    def fileno(self) -> int:
+        """Readable when a frame was offered since :meth:`clear_wake` (for ``multiprocessing.connection.wait``)."""
+        return self.wake_fd
+
+    # -- the platform -----------------------------------------------------------------------------
+
+    def offer(self, offer: Offer) -> tuple[int, bool]:
+        """Replace the offer with ``offer``; returns the previous one's ``(gen, claimed)`` (gen 0: none).
+
+        Raises MailboxGone when it was closed or the lock cannot be had (the processor died holding it),
+        ValueError when the telemetry does not fit.
+        """
+        if len(offer.telemetry) > TELEMETRY_BYTES:
+            raise ValueError(f"telemetry of {len(offer.telemetry)} bytes does not fit in {TELEMETRY_BYTES}")
+        shape = (*offer.shape, 0)[:3]
+        with self._locked():
+            claimed = _CLAIM.unpack_from(self._shm.buf)[0]
+            gen = _OFFER.unpack_from(self._shm.buf, _OFFER_AT)[0]
+            _OFFER.pack_into(self._shm.buf, _OFFER_AT, offer.gen, offer.seq, offer.t_mono_ns, offer.t_wall_ns,
+                             *shape, offer.slot.encode(), len(offer.telemetry))
+            self._shm.buf[_TELEMETRY_AT:_TELEMETRY_AT + len(offer.telemetry)] = offer.telemetry
+        os.eventfd_write(self.wake_fd, 1)
+        return gen, gen != 0 and claimed == gen
+
+    # -- the processor ----------------------------------------------------------------------------
+
+    def clear_wake(self) -> None:
+        with contextlib.suppress(BlockingIOError):
+            os.eventfd_read(self.wake_fd)
+
+    def claim(self) -> Offer | None:
+        """Take the frame on offer, if there is one not taken yet."""
+        with self._locked():
+            claimed = _CLAIM.unpack_from(self._shm.buf)[0]
+            gen, seq, t_mono, t_wall, h, w, c, name, tel_len = _OFFER.unpack_from(self._shm.buf, _OFFER_AT)
+            if gen == 0 or claimed == gen:
+                return None
+            _CLAIM.pack_into(self._shm.buf, 0, gen)
+            telemetry = bytes(self._shm.buf[_TELEMETRY_AT:_TELEMETRY_AT + tel_len])
+        shape = (h, w, c) if c else (h, w)
+        return Offer(gen, name.rstrip(b"\0").decode(), shape, seq, t_mono, t_wall, telemetry)
+
+    # -- both -------------------------------------------------------------------------------------
+
+    def close(self) -> None:
+        """Unmap (and, on the platform's side, unlink and close the descriptors). Idempotent."""
+        if self._shm.buf is None:
+            return
+        self._shm.close()
+        if self._owner:
+            with contextlib.suppress(FileNotFoundError):
+                self._shm.unlink()
+            os.close(self.lock_fd)
+            os.close(self.wake_fd)
+
+    @contextlib.contextmanager
+    def _locked(self) -> Any:
+        if self._shm.buf is None:
+            raise MailboxGone("the frame mailbox is closed")
+        deadline = time.monotonic() + LOCK_TIMEOUT_S
+        while True:
+            try:
+                os.eventfd_read(self.lock_fd)
+                break
+            except BlockingIOError:
+                remaining = deadline - time.monotonic()
+                if remaining <= 0:
+                    raise MailboxGone("the frame mailbox stayed locked: the other process died holding it") from None
+                select.select([self.lock_fd], [], [], remaining)
+        try:
+            yield
+        finally:
+            os.eventfd_write(self.lock_fd, 1)
+
+
+def attach_untracked(name: str) -> SharedMemory:
+    """Map the platform's segment ``name`` without registering it with a resource tracker.
+
+    Before Python 3.13 attaching registers the segment with a tracker that would unlink it when this
+    process exits; the platform owns every segment and unlinks it itself.
+    """
+    try:
+        return SharedMemory(name, track=False)  # type: ignore[call-arg]  # Python >= 3.13
+    except TypeError:
+        shm = SharedMemory(name)
+        resource_tracker.unregister(shm._name, "shared_memory")  # type: ignore[attr-defined]
+        return shm

@@ -1,0 +1,79 @@
+"""The frame mailbox: the newest offer wins, the platform learns whether the one it replaced was taken.
+
+The processor's side runs in a real second process (spawned, attaching by the address as the child does).
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import textwrap
+from multiprocessing.connection import wait
+
+import pytest
+
+from processors.frame_mailbox import FrameMailbox, MailboxGone, Offer
+
+
+def offer(gen: int, seq: int | None = None, telemetry: bytes = b"") -> Offer:
+    return Offer(gen, f"slot{gen}", (480, 640, 3), seq or gen, 10 * gen, 20 * gen, telemetry)
+
+
+@pytest.fixture
+def mailbox() -> FrameMailbox:
+    box = FrameMailbox.create()
+    yield box
+    box.close()
+
+
+def claim_in_another_process(box: FrameMailbox) -> str:
+    """Claim once from a fresh interpreter attached by address; what it got, as text."""
+    code = textwrap.dedent(f"""
+        from processors.frame_mailbox import FrameMailbox
+        name, lock_fd, wake_fd = "{box.address}".split()
+        box = FrameMailbox.attach(name, int(lock_fd), int(wake_fd))
+        got = box.claim()
+        print(None if got is None else (got.gen, got.slot, got.shape, got.seq, got.t_mono_ns, got.telemetry))
+        box.close()
+    """)
+    return subprocess.run([sys.executable, "-c", code], pass_fds=(box.lock_fd, box.wake_fd), capture_output=True,
+                          text=True, check=True, timeout=60).stdout.strip()
+
+
+def test_the_newest_offer_is_claimed_and_the_replaced_one_reported_untaken(mailbox: FrameMailbox) -> None:
+    assert mailbox.offer(offer(1)) == (0, False)  # nothing was on offer
+    assert mailbox.offer(offer(2, telemetry=b"tm")) == (1, False)  # 1 replaced before anyone took it
+    assert claim_in_another_process(mailbox) == "(2, 'slot2', (480, 640, 3), 2, 20, b'tm')"
+    assert claim_in_another_process(mailbox) == "None"  # taken already: a claim gets each offer once
+    assert mailbox.offer(offer(3)) == (2, True)  # the platform learns 2 went to the processor
+
+
+def test_an_offer_wakes_a_waiting_processor_and_clear_wake_rearms_it(mailbox: FrameMailbox) -> None:
+    mailbox.clear_wake()
+    assert wait([mailbox], timeout=0) == []
+    mailbox.offer(offer(1))
+    assert wait([mailbox], timeout=0) == [mailbox]
+    mailbox.clear_wake()
+    assert wait([mailbox], timeout=0) == []
+
+
+def test_a_two_axis_frame_keeps_its_shape(mailbox: FrameMailbox) -> None:
+    mailbox.offer(Offer(1, "grey", (120, 160), 1, 0, 0, b""))
+    assert mailbox.claim().shape == (120, 160)
+
+
+def test_a_lock_never_released_and_a_closed_mailbox_are_errors_not_hangs(mailbox: FrameMailbox) -> None:
+    os.eventfd_read(mailbox.lock_fd)  # as if the processor died inside claim(), holding the lock
+    with pytest.raises(MailboxGone, match="died holding it"):
+        mailbox.offer(offer(1))
+    os.eventfd_write(mailbox.lock_fd, 1)
+    mailbox.close()
+    with pytest.raises(MailboxGone, match="closed"):
+        mailbox.offer(offer(2))
+    mailbox.close()  # idempotent
+
+
+def test_telemetry_too_large_for_the_mailbox_is_refused(mailbox: FrameMailbox) -> None:
+    with pytest.raises(ValueError, match="does not fit"):
+        mailbox.offer(offer(1, telemetry=bytes(64 * 1024)))
