@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import asyncio
 import math
+import os
+import subprocess
+import sys
 import time
 from collections.abc import AsyncIterator, Callable
 from contextlib import asynccontextmanager
@@ -54,6 +57,17 @@ class Steering:
 NO_FAILSAFE: dict[str, Any] = {"extra_args": ["--offboard-loss-timeout", "600"]}
 """``SimVehicle`` arguments that keep the autopilot's offboard-loss failsafe out of a test: any hold is uav-tui's.
 Use as ``@pytest.mark.parametrize("sim_vehicle", [NO_FAILSAFE], indirect=True)``."""
+
+
+def start_steering_flight(tmp_path: Path, fc: str, script: str, *options: str) -> subprocess.Popen[str]:
+    """``uav-tui --no-ui`` flying ``script`` on ``fc`` with the steering processor (text output on stdout)."""
+    (tmp_path / "steering.py").write_text(STEERING_PROCESSOR)
+    (tmp_path / "flight.txt").write_text(script)
+    return subprocess.Popen(
+        [sys.executable, "-m", "uav_tui", "--no-ui", "--fc", fc, "--source", "synthetic:?width=160&height=120",
+         "--processor", "steering.py:Steering", "--script", "flight.txt", "--no-record", *options],
+        cwd=tmp_path, env={**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])},
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
 
 
 def speed(truth: dict[str, Any]) -> float:

@@ -6,22 +6,18 @@ then a return home): uav-tui sets it, or refuses autonomy when told not to touch
 
 from __future__ import annotations
 
-import os
 import signal
-import subprocess
-import sys
 import time
 from pathlib import Path
 
 import pytest
 
 from controllers.sim.launcher import SimVehicle
-from tests.core.flight_helpers import STEERING_PROCESSOR, speed, wait_for
+from tests.core.flight_helpers import speed, start_steering_flight, wait_for
 from uav_tui.config import load_config
 from uav_tui.core import UavCore
 from uav_tui.errors import UavError
 
-ROOT = Path(__file__).resolve().parents[2]
 TOO_SLOW = {"extra_args": ["--offboard-loss-timeout", "10", "--offboard-loss-action", "3"]}
 MAX_T = 2.0
 STALE_LIMIT_S = MAX_T + 0.5
@@ -46,14 +42,8 @@ async def test_without_tuning_autonomy_is_refused_naming_the_parameter(sim_vehic
 
 @pytest.mark.parametrize("sim_vehicle", [TOO_SLOW], indirect=True)
 def test_after_sigkill_the_vehicle_stops_within_max_t_plus_margin(tmp_path: Path, sim_vehicle: SimVehicle) -> None:
-    (tmp_path / "steering.py").write_text(STEERING_PROCESSOR)
-    (tmp_path / "flight.txt").write_text("arm\ntakeoff 3\nwait 6\nf 1\nautonomy on\nwait 120\n")
-    process = subprocess.Popen(
-        [sys.executable, "-m", "uav_tui", "--no-ui", "--fc", sim_vehicle.connection_string, "--source",
-         "synthetic:?width=160&height=120", "--processor", "steering.py:Steering", "--script", "flight.txt",
-         "--no-record", "--max-t", str(MAX_T)],
-        cwd=tmp_path, env={**os.environ, "PYTHONPATH": str(ROOT)}, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-        text=True)
+    process = start_steering_flight(tmp_path, sim_vehicle.connection_string,
+                                    "arm\ntakeoff 3\nwait 6\nf 1\nautonomy on\nwait 120\n", "--max-t", str(MAX_T))
     truth = sim_vehicle.truth()
     try:
         wait_for(lambda: (s := truth.latest()) is not None and s["mode"] == "OFFBOARD" and speed(s) > 0.3, 40,

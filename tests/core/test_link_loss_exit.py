@@ -10,19 +10,16 @@ from __future__ import annotations
 import os
 import queue
 import signal
-import subprocess
-import sys
 import threading
 from pathlib import Path
 
 import pytest
 
 from controllers.sim.launcher import SimVehicle
-from tests.core.flight_helpers import STEERING_PROCESSOR, speed
+from tests.core.flight_helpers import speed, start_steering_flight
 from tests.core.test_autopilot_failsafe import wait_for
 from uav_tui.headless import EXIT_ABANDONED
 
-ROOT = Path(__file__).resolve().parents[2]
 SCRIPT = "arm\ntakeoff 3\nwait 6\nf 1\nautonomy on\nwait 4\nhold\nwait 120\n"
 
 
@@ -45,14 +42,7 @@ def wait_line(lines: queue.Queue[str], text: str, seen: list[str], timeout: floa
 @pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGINT], ids=["SIGTERM", "SIGINT"])
 def test_frozen_autopilot_during_hold_does_not_keep_uav_tui_alive(tmp_path: Path, sim_vehicle: SimVehicle,
                                                                    signum: int) -> None:
-    (tmp_path / "steering.py").write_text(STEERING_PROCESSOR)
-    (tmp_path / "flight.txt").write_text(SCRIPT)
-    process = subprocess.Popen(
-        [sys.executable, "-m", "uav_tui", "--no-ui", "--fc", sim_vehicle.connection_string, "--source",
-         "synthetic:?width=160&height=120", "--processor", "steering.py:Steering", "--script", "flight.txt",
-         "--no-record"],
-        cwd=tmp_path, env={**os.environ, "PYTHONPATH": str(ROOT)}, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-        text=True)
+    process = start_steering_flight(tmp_path, sim_vehicle.connection_string, SCRIPT)
     lines: queue.Queue[str] = queue.Queue()
     reader = threading.Thread(target=read_lines, args=(process.stdout, lines), daemon=True)
     reader.start()

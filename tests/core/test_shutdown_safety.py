@@ -5,10 +5,7 @@ from __future__ import annotations
 
 import asyncio
 import io
-import os
 import signal
-import subprocess
-import sys
 import time
 from pathlib import Path
 
@@ -17,10 +14,10 @@ import pytest
 from controllers.sim.launcher import SimVehicle
 from tests.core.flight_helpers import (
     NO_FAILSAFE,
-    STEERING_PROCESSOR,
     fly_under_autonomy,
     setpoints_since,
     speed,
+    start_steering_flight,
     steering_config,
     take_off,
     wait_for,
@@ -30,21 +27,13 @@ from uav_tui.core import CoreState
 from uav_tui.headless import EXIT_UNHANDLED_ERROR, HeadlessRunner
 from uav_tui.worker import ProcessedFrame
 
-ROOT = Path(__file__).resolve().parents[2]
 SCRIPT = "arm\ntakeoff 3\nwait 6\nf 1\nautonomy on\nwait 120\n"
 
 
 @pytest.fixture
 def flying_uav(tmp_path: Path, sim_vehicle: SimVehicle):
     """uav-tui flying the simulator under autonomy (the test processor streams forward vectors)."""
-    (tmp_path / "steering.py").write_text(STEERING_PROCESSOR)
-    (tmp_path / "flight.txt").write_text(SCRIPT)
-    process = subprocess.Popen(
-        [sys.executable, "-m", "uav_tui", "--no-ui", "--fc", sim_vehicle.connection_string, "--source",
-         "synthetic:?width=160&height=120", "--processor", "steering.py:Steering", "--script", "flight.txt",
-         "--no-record"],
-        cwd=tmp_path, env={**os.environ, "PYTHONPATH": str(ROOT)}, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-        text=True)
+    process = start_steering_flight(tmp_path, sim_vehicle.connection_string, SCRIPT)
     truth = sim_vehicle.truth()
     try:
         wait_for(lambda: (s := truth.latest()) is not None and s["mode"] == "OFFBOARD" and speed(s) > 0.3, 40,

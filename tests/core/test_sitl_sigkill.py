@@ -5,21 +5,18 @@ from __future__ import annotations
 
 import asyncio
 import math
-import os
 import signal
 import subprocess
-import sys
 import time
 from pathlib import Path
 
 import pytest
 
 from controllers.mavsdk_controller import MavsdkController
-from tests.core.flight_helpers import STEERING_PROCESSOR
+from tests.core.flight_helpers import start_steering_flight
 from tests.sitl import arducopter, px4_sih
 
 pytestmark = pytest.mark.sitl
-ROOT = Path(__file__).resolve().parents[2]
 
 CASES = {
     # PX4: 10 s of the last setpoint, then RETURN; it should hold after 1 s.
@@ -66,18 +63,12 @@ async def stopped_after(address: str, killed: float, autopilot: str) -> tuple[st
 @pytest.mark.parametrize("autopilot", list(CASES))
 def test_sigkill_mid_vector_stops_the_vehicle(tmp_path: Path, autopilot: str) -> None:
     start_sitl, params, boot_s, tuned = CASES[autopilot]
-    (tmp_path / "steering.py").write_text(STEERING_PROCESSOR)
-    (tmp_path / "flight.txt").write_text(f"wait {boot_s}\narm\ntakeoff 3\nwait 10\nf 1\nautonomy on\nwait 120\n")
+    script = f"wait {boot_s}\narm\ntakeoff 3\nwait 10\nf 1\nautonomy on\nwait 120\n"
     workdir = tmp_path / "sitl"
     workdir.mkdir()
     with start_sitl(workdir, params) as sitl:
         address = sitl.connection_string
-        process = subprocess.Popen(
-            [sys.executable, "-m", "uav_tui", "--no-ui", "--fc", address, "--source",
-             "synthetic:?width=160&height=120", "--processor", "steering.py:Steering", "--script", "flight.txt",
-             "--no-record"],
-            cwd=tmp_path, env={**os.environ, "PYTHONPATH": str(ROOT)}, stdout=subprocess.PIPE,
-            stderr=subprocess.STDOUT, text=True)
+        process = start_steering_flight(tmp_path, address, script)
         try:
             seen = wait_line(process, "autonomy ON", boot_s + 60)
             seen += wait_line(process, "s (executed)", 15)  # a vector flies (status: "auto ON vec ... 2.0s (executed)")
