@@ -124,7 +124,7 @@ class CSRTTrackingProcessor:
         self._sift = sift_match.make_sift(self._cfg["sift_features"])
         self._tracker: cv2.Tracker | None = None
         self._pending_roi: Box | None = None
-        self._scale = 1.0  # work frame = full frame x scale
+        self._shrink = 1  # work frame = full frame / shrink (a whole factor)
         self._ref_feat: sift_match.Features | None = None  # SIFT-frame pixels
         self._ref_box: Box | None = None  # SIFT-frame pixels, where the reference features were taken
         self._templates: list[np.ndarray] = []  # [at selection, adapted]; work-frame appearance
@@ -190,7 +190,7 @@ class CSRTTrackingProcessor:
         """Tracked box (x, y, w, h) in full-frame pixels, None when lost or idle."""
         if not self._tracking or self._work_box is None:
             return None
-        return tuple(v / self._scale for v in self._work_box)  # type: ignore[return-value]
+        return tuple(v * self._shrink for v in self._work_box)  # type: ignore[return-value]
 
     @property
     def lost(self) -> bool:
@@ -199,9 +199,11 @@ class CSRTTrackingProcessor:
 
     # ---- internals ------------------------------------------------------------------------------
     def _work_frame(self, frame: np.ndarray) -> np.ndarray:
-        if self._scale == 1.0:
+        k = self._shrink
+        if k == 1:
             return frame
-        return cv2.resize(frame, None, fx=self._scale, fy=self._scale, interpolation=cv2.INTER_AREA)
+        h, w = frame.shape[0] // k, frame.shape[1] // k  # whole blocks of k x k: INTER_AREA's fast path
+        return cv2.resize(frame[: h * k, : w * k], (w, h), interpolation=cv2.INTER_AREA)
 
     def _gray_window(self, work: np.ndarray, box: Box, radius: float) -> tuple[np.ndarray, int, int]:
         """Grayscale of the part of ``work`` that a search ``radius`` around ``box`` can touch, and its origin."""
@@ -247,9 +249,9 @@ class CSRTTrackingProcessor:
             return
         roi = (x0, y0, x1 - x0, y1 - y0)
         target_px = self._cfg["target_px"]
-        self._scale = min(1.0, target_px / float(np.sqrt(roi[2] * roi[3]))) if target_px else 1.0
+        self._shrink = max(1, int(np.ceil(np.sqrt(roi[2] * roi[3]) / target_px))) if target_px else 1
         work = self._work_frame(frame)
-        box = tuple(v * self._scale for v in roi)
+        box = tuple(v / self._shrink for v in roi)
         appearance = target_search.template(cv2.cvtColor(work, cv2.COLOR_BGR2GRAY), box)
         if appearance is None:
             logger.warning("CSRTTrackingProcessor: ROI %s is too small to track, ignored", roi)
@@ -265,8 +267,8 @@ class CSRTTrackingProcessor:
         self._ref_box = sift_box  # type: ignore[assignment]
         self._ref_height = roi[3]
         self._new_tracker(work, box)  # type: ignore[arg-type]
-        logger.info("CSRTTrackingProcessor: target %s selected (tracked at x%.2f), %d SIFT keypoints", roi,
-                    self._scale, len(self._ref_feat))
+        logger.info("CSRTTrackingProcessor: target %s selected (tracked at 1/%d), %d SIFT keypoints", roi,
+                    self._shrink, len(self._ref_feat))
 
     def _baseline(self, score: float) -> float:
         """The target's own typical appearance score (median of recent tracked frames)."""
@@ -333,7 +335,7 @@ class CSRTTrackingProcessor:
         area_ratio = (x1 - x0) * (y1 - y0) * scale**2 / (self._ref_box[2] * self._ref_box[3])
         if not 0.25 < area_ratio < 4.0:
             return
-        box = tuple(float(v) * self._scale for v in (x0, y0, x1 - x0, y1 - y0))
+        box = tuple(float(v) / self._shrink for v in (x0, y0, x1 - x0, y1 - y0))
         self._new_tracker(work, box)  # type: ignore[arg-type]
         logger.info("CSRTTrackingProcessor: re-acquired by SIFT (%d inliers)", found.inliers)
         if self.tmMgr is not None:
