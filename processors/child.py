@@ -15,7 +15,8 @@ Messages, platform -> child (pickled tuples)::
 child -> platform::
 
     ("ready", ProcessorInfo) | ("load_error", message, path, class_name, missing)
-    ("claimed", gen)                         the offer ``gen`` was taken (a replay's next frame may come)
+    ("claimed", gen, result | None)          the offer ``gen`` was taken (a replay's next frame may come),
+                                             with the previous frame's result if it was not sent yet
     ("result", gen, t_start_ns, t_end_ns, t_vector_ns, vector, box, error, saves, released)
     ("reply", call_id, ok, value_or_error, saves, released)
 
@@ -194,20 +195,34 @@ class ChildRunner:
         self.has_vector = "getPreparedVector" in loaded.info.capabilities
 
     def serve(self) -> None:
-        """Calls and notices first, then the frame on offer; sleep when there is neither. Returns at EOF."""
+        """Calls and notices first, then the frame on offer; sleep when there is neither. Returns at EOF.
+
+        A frame's result goes out with the claim of the next frame (one message, one wake-up of the
+        platform per frame), or on its own before this process handles a call or waits.
+        """
+        result: tuple[Any, ...] | None = None
         while True:
             try:
-                while self.conn.poll():
-                    self.handle(self.conn.recv())
+                if self.conn.poll():
+                    result = self._flush(result)
+                    while self.conn.poll():
+                        self.handle(self.conn.recv())
             except (EOFError, OSError):
                 return
-            self.mailbox.clear_wake()  # an offer made after this wakes the wait below
             offer = self.mailbox.claim()
-            if offer is not None:
-                self.conn.send(("claimed", offer.gen))
-                self.conn.send(self.process(offer))
-            else:
+            if offer is None:
+                self.mailbox.clear_wake()  # an offer made after this wakes the wait below
+                offer = self.mailbox.claim()
+            if offer is None:
+                result = self._flush(result)
                 wait([self.conn, self.mailbox])
+                continue
+            self.conn.send(("claimed", offer.gen, result))
+            result = self.process(offer)
+
+    def _flush(self, result: tuple[Any, ...] | None) -> None:
+        if result is not None:
+            self.conn.send(result)
 
     def handle(self, message: tuple[Any, ...]) -> None:
         kind = message[0]

@@ -31,7 +31,8 @@ BASELINE = "cv:csrt"
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", type=Path, default=find_data_dir() / "aerial-tracking")
-    parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--workers", type=int, default=1,
+                        help="jobs at once (default 1: a tracker's ms/frame is not measured beside another's)")
     parser.add_argument("--out", type=Path, help="also write eval.json and the plots here")
     args = parser.parse_args()
     sequences = find_sequences([args.data])

@@ -409,7 +409,10 @@ class ProcessWorker:
                 logger.exception("ProcessWorker(%s): unreadable message from pid %s", self.spec, child.pid)
                 continue
             if message[0] == "claimed":
-                self._take_claim(child, message[1])
+                _, gen, result = message
+                if result is not None:
+                    self._take_result(child, result)
+                self._take_claim(child, gen)
             elif message[0] == "result":
                 self._take_result(child, message)
             elif not loop.is_closed():
