@@ -48,12 +48,13 @@ import logging
 import os
 import pickle
 import resource
+import select
 import signal
 import sys
 import time
 import traceback
 import weakref
-from multiprocessing.connection import Connection, wait
+from multiprocessing.connection import Connection
 from multiprocessing.shared_memory import SharedMemory
 from types import SimpleNamespace
 from typing import Any
@@ -193,6 +194,9 @@ class ChildRunner:
         self.instance.tmMgr = self.telemetry
         self.slots = Slots()
         self.has_vector = "getPreparedVector" in loaded.info.capabilities
+        self._idle = select.poll()
+        for fd in (conn.fileno(), mailbox.fileno()):
+            self._idle.register(fd, select.POLLIN)
 
     def serve(self) -> None:
         """Calls and notices first, then the frame on offer; sleep when there is neither. Returns at EOF.
@@ -215,7 +219,7 @@ class ChildRunner:
                 offer = self.mailbox.claim()
             if offer is None:
                 result = self._flush(result)
-                wait([self.conn, self.mailbox])
+                self._idle.poll()  # a call, a notice, EOF or an offer
                 continue
             self.conn.send(("claimed", offer.gen, result))
             result = self.process(offer)
