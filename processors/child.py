@@ -225,6 +225,7 @@ class ChildRunner:
             result = self.process(offer)
 
     def _flush(self, result: tuple[Any, ...] | None) -> None:
+        """Send a result still held back (there is none pending afterwards: returns None)."""
         if result is not None:
             self.conn.send(result)
 
