@@ -44,8 +44,10 @@ class Tmux:
         command = [sys.executable, "-m", "uav_tui", "--source", "synthetic:?fps=30", "--processor",
                    f"{ROOT / 'tests/tui/procs.py'}:RecordingProcessor", "--no-record", "--runs-dir",
                    str(tmp_path / "runs"), *flags]
-        # The shell ignores SIGHUP so that it can write the exit status after a hang-up.
-        script = f"trap '' HUP; cd {shlex.quote(str(tmp_path))}; {shlex.join(command)}; echo $? > {self.status}"
+        # The shell ignores SIGHUP so that it can write the exit status after a hang-up; it writes it whole
+        # or not at all (renamed into place), so a test that sees the file never reads it half-written.
+        script = (f"trap '' HUP; cd {shlex.quote(str(tmp_path))}; {shlex.join(command)}; "
+                  f"echo $? > {self.status}.part; mv {self.status}.part {self.status}")
         env = f"env -u COLORTERM PYTHONPATH={shlex.quote(str(ROOT))} TERM=xterm-256color"
         if colorterm:
             env += f" COLORTERM={colorterm}"
