@@ -18,17 +18,18 @@ import os
 import select
 import struct
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass
 from multiprocessing import resource_tracker
 from multiprocessing.shared_memory import SharedMemory
-from typing import Any
 
 TELEMETRY_BYTES = 16 * 1024
 """Room for the pickled telemetry of one frame (a few hundred bytes in practice)."""
 
 _CLAIM = struct.Struct("=q")
 """Written by the processor: the gen it claimed last."""
-_OFFER = struct.Struct("=qqqq iii 64s I")
+_NAME_BYTES = 64
+_OFFER = struct.Struct(f"=qqqq iii {_NAME_BYTES}s I")
 """Written by the platform: gen, seq, t_mono_ns, t_wall_ns, shape (0 for no third axis), slot name, telemetry length."""
 _OFFER_AT = _CLAIM.size
 _TELEMETRY_AT = _OFFER_AT + _OFFER.size
@@ -80,7 +81,7 @@ class FrameMailbox:
         return f"{self._shm.name} {self.lock_fd} {self.wake_fd}"
 
     def fileno(self) -> int:
-        """Readable when a frame was offered since :meth:`clear_wake` (for ``multiprocessing.connection.wait``)."""
+        """Readable when a frame was offered since :meth:`clear_wake` (for ``select``/``poll``)."""
         return self.wake_fd
 
     # -- the platform -----------------------------------------------------------------------------
@@ -89,16 +90,18 @@ class FrameMailbox:
         """Replace the offer with ``offer``; returns the previous one's ``(gen, claimed)`` (gen 0: none).
 
         Raises MailboxGone when it was closed or the lock cannot be had (the processor died holding it),
-        ValueError when the telemetry does not fit.
+        ValueError when the telemetry or the slot name does not fit.
         """
-        if len(offer.telemetry) > TELEMETRY_BYTES:
-            raise ValueError(f"telemetry of {len(offer.telemetry)} bytes does not fit in {TELEMETRY_BYTES}")
+        name = offer.slot.encode()
+        if len(offer.telemetry) > TELEMETRY_BYTES or len(name) > _NAME_BYTES:
+            raise ValueError(f"offer does not fit: telemetry {len(offer.telemetry)} bytes (at most {TELEMETRY_BYTES}), "
+                             f"slot name {len(name)} bytes (at most {_NAME_BYTES})")
         shape = (*offer.shape, 0)[:3]
         with self._locked():
             claimed = _CLAIM.unpack_from(self._shm.buf)[0]
             gen = _OFFER.unpack_from(self._shm.buf, _OFFER_AT)[0]
             _OFFER.pack_into(self._shm.buf, _OFFER_AT, offer.gen, offer.seq, offer.t_mono_ns, offer.t_wall_ns,
-                             *shape, offer.slot.encode(), len(offer.telemetry))
+                             *shape, name, len(offer.telemetry))
             self._shm.buf[_TELEMETRY_AT:_TELEMETRY_AT + len(offer.telemetry)] = offer.telemetry
         os.eventfd_write(self.wake_fd, 1)
         return gen, gen != 0 and claimed == gen
@@ -135,7 +138,7 @@ class FrameMailbox:
             os.close(self.wake_fd)
 
     @contextlib.contextmanager
-    def _locked(self) -> Any:
+    def _locked(self) -> Iterator[None]:
         if self._shm.buf is None:
             raise MailboxGone("the frame mailbox is closed")
         deadline = time.monotonic() + LOCK_TIMEOUT_S

@@ -32,7 +32,7 @@ from controllers.base import TELEMETRY_FIELDS
 from processors import LoadedProcessor
 from processors.base import ProcessorInfo
 from processors.errors import ProcessorLoadError
-from processors.frame_mailbox import MailboxGone, Offer
+from processors.frame_mailbox import TELEMETRY_BYTES, MailboxGone, Offer
 from sources.buffer import Frame, FrameBuffer
 from uav_tui.errors import UavError
 from uav_tui.events import EventLog
@@ -375,7 +375,12 @@ class ProcessWorker:
         snapshot = self.telemetry.snapshot() if self.telemetry is not None else None
         if snapshot is None:
             return b""
-        return pickle.dumps({name: getattr(snapshot, name) for name in TELEMETRY_FIELDS})
+        data = pickle.dumps({name: getattr(snapshot, name) for name in TELEMETRY_FIELDS})
+        if len(data) > TELEMETRY_BYTES:  # never seen: the fields are numbers and short names
+            logger.warning("ProcessWorker: telemetry of %d bytes does not fit the frame mailbox; not attached",
+                           len(data))
+            return b""
+        return data
 
     def _send(self, child: ChildProcess, message: tuple[Any, ...]) -> bool:
         """Send one message to ``child``; False when it is gone (its pipe reader reports that)."""

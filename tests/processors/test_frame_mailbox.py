@@ -74,6 +74,8 @@ def test_a_lock_never_released_and_a_closed_mailbox_are_errors_not_hangs(mailbox
     mailbox.close()  # idempotent
 
 
-def test_telemetry_too_large_for_the_mailbox_is_refused(mailbox: FrameMailbox) -> None:
-    with pytest.raises(ValueError, match="does not fit"):
+def test_an_offer_that_does_not_fit_is_refused(mailbox: FrameMailbox) -> None:
+    with pytest.raises(ValueError, match="telemetry 65536 bytes"):
         mailbox.offer(offer(1, telemetry=bytes(64 * 1024)))
+    with pytest.raises(ValueError, match="slot name 65 bytes"):
+        mailbox.offer(Offer(1, "s" * 65, (2, 2, 3), 1, 0, 0, b""))
