@@ -83,10 +83,13 @@ async def test_tracker_follows_a_target_driving_on_the_ground(tmp_path: Path, si
         start, first, start_pose = time.monotonic(), source.get_properties()["targets"][0], truth.latest()
         distances, on_target = [], []
         while time.monotonic() - start < 20:
-            t, pose = source.get_properties()["targets"][0], truth.latest()
+            props, pose = source.get_properties(), truth.latest()
+            t = props["targets"][0]
             distances.append(horizontal_distance(pose, t["n"], t["e"]))
-            seen = project_ground_point(t["n"], t["e"], Pose.from_mapping(pose), source.camera)
-            on_target.append(box_holds(core.worker.last.box, seen, slack=20))  # 20 px: frame vs truth latency
+            # where the car is in the newest frame (the pose and instant it was drawn with); the box is from
+            # the newest processed frame, at most a frame or two older: 20 px of slack
+            seen = project_ground_point(t["n"], t["e"], Pose.from_mapping(props["pose"]), source.camera)
+            on_target.append(box_holds(core.worker.last.box, seen, slack=20))
             await asyncio.sleep(0.2)
         moved = math.hypot(t["n"] - first["n"], t["e"] - first["e"])
         assert moved > 6  # the target drove well away from where tracking started ...
