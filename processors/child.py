@@ -183,7 +183,7 @@ def _die_with_parent() -> None:
 
 
 class ChildRunner:
-    """Serves one processor: frames and calls in arrival order, one at a time."""
+    """Serves one processor: calls as they arrive, the newest frame whenever no call waits; one at a time."""
 
     def __init__(self, conn: Connection, mailbox: FrameMailbox, loaded: Any) -> None:
         self.conn = conn
@@ -194,6 +194,8 @@ class ChildRunner:
         self.instance.tmMgr = self.telemetry
         self.slots = Slots()
         self.has_vector = "getPreparedVector" in loaded.info.capabilities
+        self._unsent: tuple[Any, ...] | None = None
+        """The last frame's result, held back to go out with the next claim."""
         self._idle = select.poll()
         for fd in (conn.fileno(), mailbox.fileno()):
             self._idle.register(fd, select.POLLIN)
@@ -204,11 +206,10 @@ class ChildRunner:
         A frame's result goes out with the claim of the next frame (one message, one wake-up of the
         platform per frame), or on its own before this process handles a call or waits.
         """
-        result: tuple[Any, ...] | None = None
         while True:
             try:
                 if self.conn.poll():
-                    result = self._flush(result)
+                    self._flush()
                     while self.conn.poll():
                         self.handle(self.conn.recv())
             except (EOFError, OSError):
@@ -218,16 +219,17 @@ class ChildRunner:
                 self.mailbox.clear_wake()  # an offer made after this wakes the wait below
                 offer = self.mailbox.claim()
             if offer is None:
-                result = self._flush(result)
+                self._flush()
                 self._idle.poll()  # a call, a notice, EOF or an offer
                 continue
-            self.conn.send(("claimed", offer.gen, result))
-            result = self.process(offer)
+            self.conn.send(("claimed", offer.gen, self._unsent))
+            self._unsent = self.process(offer)
 
-    def _flush(self, result: tuple[Any, ...] | None) -> None:
-        """Send a result still held back (there is none pending afterwards: returns None)."""
-        if result is not None:
-            self.conn.send(result)
+    def _flush(self) -> None:
+        """Send the result held back, if there is one."""
+        if self._unsent is not None:
+            self.conn.send(self._unsent)
+            self._unsent = None
 
     def handle(self, message: tuple[Any, ...]) -> None:
         kind = message[0]
