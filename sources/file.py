@@ -63,13 +63,13 @@ class FileSource(VideoCaptureSource):
 
     def _grab(self) -> np.ndarray | None:
         assert self._pacer is not None
-        if not self.realtime:
-            while not self.buffer.wait_read(timeout=0.1):
-                if self._stop.is_set():
-                    return None
-        elif not self._pacer.wait():
-            return None
-        return super()._grab()
+        if self.realtime:
+            return super()._grab() if self._pacer.wait() else None
+        image = super()._grab()  # decoded while the reader still has the previous frame
+        while not self.buffer.wait_read(timeout=0.1):
+            if self._stop.is_set():
+                return None
+        return image
 
     def _read_frame(self) -> np.ndarray | None:
         assert self._capture is not None
