@@ -28,7 +28,7 @@ import sys
 import threading
 import weakref
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from multiprocessing import resource_tracker
 from multiprocessing.shared_memory import SharedMemory
 
@@ -45,15 +45,15 @@ class Slot:
     shm: SharedMemory
     shape: tuple[int, ...]
     holds: int = 0
+    address: int = field(init=False)
+    """Where the slot's pixels are mapped in this process."""
+
+    def __post_init__(self) -> None:
+        self.address = self.array().__array_interface__["data"][0]
 
     @property
     def name(self) -> str:
         return self.shm.name
-
-    @property
-    def address(self) -> int:
-        """Where the slot's pixels are mapped in this process."""
-        return self.array().__array_interface__["data"][0]
 
     def array(self) -> np.ndarray:
         return np.ndarray(self.shape, dtype=np.uint8, buffer=self.shm.buf)
