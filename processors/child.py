@@ -194,6 +194,8 @@ class ChildRunner:
         self.instance.tmMgr = self.telemetry
         self.slots = Slots()
         self.has_vector = "getPreparedVector" in loaded.info.capabilities
+        self._telemetry: tuple[bytes, dict[str, Any]] = (b"", {})
+        """The last frame's pickled telemetry and its fields (telemetry changes slower than frames)."""
         self._unsent: tuple[Any, ...] | None = None
         """The last frame's result, held back to go out with the next claim."""
         self._idle = select.poll()
@@ -239,7 +241,9 @@ class ChildRunner:
             self.slots.forget(message[1])
 
     def process(self, offer: Offer) -> tuple[Any, ...]:
-        self.telemetry.current = SimpleNamespace(**(pickle.loads(offer.telemetry) if offer.telemetry else {}))
+        if offer.telemetry != self._telemetry[0]:
+            self._telemetry = (offer.telemetry, pickle.loads(offer.telemetry) if offer.telemetry else {})
+        self.telemetry.current = SimpleNamespace(**self._telemetry[1], heartbeat_age_s=offer.heartbeat_age_s)
         image = self.slots.view(offer.slot, offer.shape)
         vector, box, error, t_vector = None, None, None, 0
         start = time.monotonic_ns()

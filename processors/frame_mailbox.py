@@ -14,6 +14,7 @@ Both eventfds and the shared memory are created by the platform, one set per pro
 from __future__ import annotations
 
 import contextlib
+import math
 import os
 import select
 import struct
@@ -29,8 +30,9 @@ TELEMETRY_BYTES = 16 * 1024
 _CLAIM = struct.Struct("=q")
 """Written by the processor: the gen it claimed last."""
 _NAME_BYTES = 64
-_OFFER = struct.Struct(f"=qqqq iii {_NAME_BYTES}s I")
-"""Written by the platform: gen, seq, t_mono_ns, t_wall_ns, shape (0 for no third axis), slot name, telemetry length."""
+_OFFER = struct.Struct(f"=qqqq iii {_NAME_BYTES}s d I")
+"""Written by the platform: gen, seq, t_mono_ns, t_wall_ns, shape (0 for no third axis), slot name, heartbeat
+age (NaN for none), telemetry length."""
 _OFFER_AT = _CLAIM.size
 _TELEMETRY_AT = _OFFER_AT + _OFFER.size
 SIZE = _TELEMETRY_AT + TELEMETRY_BYTES
@@ -50,6 +52,9 @@ class Offer:
     t_mono_ns: int
     t_wall_ns: int
     telemetry: bytes
+    """The telemetry attached to the frame, pickled (the same bytes until the telemetry changes)."""
+    heartbeat_age_s: float | None = None
+    """The autopilot heartbeat's age at the offer (kept out of ``telemetry``: it changes every frame)."""
 
 
 class MailboxGone(Exception):
@@ -101,7 +106,8 @@ class FrameMailbox:
             claimed = _CLAIM.unpack_from(self._shm.buf)[0]
             gen = _OFFER.unpack_from(self._shm.buf, _OFFER_AT)[0]
             _OFFER.pack_into(self._shm.buf, _OFFER_AT, offer.gen, offer.seq, offer.t_mono_ns, offer.t_wall_ns,
-                             *shape, name, len(offer.telemetry))
+                             *shape, name, math.nan if offer.heartbeat_age_s is None else offer.heartbeat_age_s,
+                             len(offer.telemetry))
             self._shm.buf[_TELEMETRY_AT:_TELEMETRY_AT + len(offer.telemetry)] = offer.telemetry
         os.eventfd_write(self.wake_fd, 1)
         return gen, gen != 0 and claimed == gen
@@ -116,13 +122,14 @@ class FrameMailbox:
         """Take the frame on offer, if there is one not taken yet."""
         with self._locked():
             claimed = _CLAIM.unpack_from(self._shm.buf)[0]
-            gen, seq, t_mono, t_wall, h, w, c, name, tel_len = _OFFER.unpack_from(self._shm.buf, _OFFER_AT)
+            gen, seq, t_mono, t_wall, h, w, c, name, age, tel_len = _OFFER.unpack_from(self._shm.buf, _OFFER_AT)
             if gen == 0 or claimed == gen:
                 return None
             _CLAIM.pack_into(self._shm.buf, 0, gen)
             telemetry = bytes(self._shm.buf[_TELEMETRY_AT:_TELEMETRY_AT + tel_len])
         shape = (h, w, c) if c else (h, w)
-        return Offer(gen, name.rstrip(b"\0").decode(), shape, seq, t_mono, t_wall, telemetry)
+        return Offer(gen, name.rstrip(b"\0").decode(), shape, seq, t_mono, t_wall, telemetry,
+                     None if math.isnan(age) else age)
 
     # -- both -------------------------------------------------------------------------------------
 

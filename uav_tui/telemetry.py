@@ -97,9 +97,17 @@ class TelemetryManager:
 
     def snapshot(self) -> Telemetry:
         """The newest values, with the heartbeat age as of now. Thread-safe."""
+        latest, heartbeat_age = self.newest()
+        return dataclasses.replace(latest, heartbeat_age_s=heartbeat_age)
+
+    def newest(self) -> tuple[Telemetry, float | None]:
+        """The newest update as stored (the same object until the next update) and the heartbeat age as of now.
+
+        For readers that convert the telemetry once per update instead of once per frame. Thread-safe.
+        """
         with self._lock:
             latest = self._latest
-        return dataclasses.replace(latest, heartbeat_age_s=self._heartbeat_age())
+        return latest, self._heartbeat_age()
 
     def add_listener(self, callback: Listener) -> None:
         """Call ``callback(telemetry)`` on the event loop for every update (the recorder writes a row)."""

@@ -48,7 +48,7 @@ class Faulty:
     def photo_processing(self, frame):
         self.frames += 1
         if self.mode == "fly":
-            self.tmMgr.save(frame, n=self.frames, alt=self.tmMgr.snapshot().rel_alt_m)
+            self.tmMgr.save(frame, n=self.frames, alt=self.tmMgr.snapshot().rel_alt_m, alive=self.tmMgr.link_alive())
         elif self.mode == "hog":
             sum(range(10**10))  # pure Python: holds the GIL for minutes
         elif self.mode == "crash":
@@ -179,6 +179,7 @@ async def test_a_dying_processor_is_reported_the_vehicle_holds_and_it_restarts(
     assert sorted(kept.frame_id) == list(range(1, frames_before + 1))  # every row from before the fault
     flown = frames[frames.n.notna()]
     assert len(flown) > 5 and (flown.alt - 3.0).abs().max() < 0.6  # tmMgr.snapshot(): the frame's telemetry
+    assert flown.alive.astype(bool).all()  # and the heartbeat's age at the hand-over
 
 
 async def test_a_constructor_that_fails_on_restart_is_reported_and_retried(tmp_path: Path) -> None:

@@ -16,8 +16,8 @@ import pytest
 from processors.frame_mailbox import FrameMailbox, MailboxGone, Offer
 
 
-def offer(gen: int, seq: int | None = None, telemetry: bytes = b"") -> Offer:
-    return Offer(gen, f"slot{gen}", (480, 640, 3), seq or gen, 10 * gen, 20 * gen, telemetry)
+def offer(gen: int, seq: int | None = None, telemetry: bytes = b"", heartbeat_age_s: float | None = None) -> Offer:
+    return Offer(gen, f"slot{gen}", (480, 640, 3), seq or gen, 10 * gen, 20 * gen, telemetry, heartbeat_age_s)
 
 
 @pytest.fixture
@@ -34,7 +34,8 @@ def claim_in_another_process(box: FrameMailbox) -> str:
         name, lock_fd, wake_fd = "{box.address}".split()
         box = FrameMailbox.attach(name, int(lock_fd), int(wake_fd))
         got = box.claim()
-        print(None if got is None else (got.gen, got.slot, got.shape, got.seq, got.t_mono_ns, got.telemetry))
+        print(None if got is None else
+              (got.gen, got.slot, got.shape, got.seq, got.t_mono_ns, got.telemetry, got.heartbeat_age_s))
         box.close()
     """)
     return subprocess.run([sys.executable, "-c", code], pass_fds=(box.lock_fd, box.wake_fd), capture_output=True,
@@ -43,10 +44,11 @@ def claim_in_another_process(box: FrameMailbox) -> str:
 
 def test_the_newest_offer_is_claimed_and_the_replaced_one_reported_untaken(mailbox: FrameMailbox) -> None:
     assert mailbox.offer(offer(1)) == (0, False)  # nothing was on offer
-    assert mailbox.offer(offer(2, telemetry=b"tm")) == (1, False)  # 1 replaced before anyone took it
-    assert claim_in_another_process(mailbox) == "(2, 'slot2', (480, 640, 3), 2, 20, b'tm')"
+    assert mailbox.offer(offer(2, telemetry=b"tm", heartbeat_age_s=0.25)) == (1, False)  # 1 replaced, not taken
+    assert claim_in_another_process(mailbox) == "(2, 'slot2', (480, 640, 3), 2, 20, b'tm', 0.25)"
     assert claim_in_another_process(mailbox) == "None"  # taken already: a claim gets each offer once
     assert mailbox.offer(offer(3)) == (2, True)  # the platform learns 2 went to the processor
+    assert claim_in_another_process(mailbox) == "(3, 'slot3', (480, 640, 3), 3, 30, b'', None)"  # no heartbeat
 
 
 def test_an_offer_wakes_a_waiting_processor_and_clear_wake_rearms_it(mailbox: FrameMailbox) -> None:
