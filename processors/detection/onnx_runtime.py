@@ -46,7 +46,10 @@ class OnnxBackend:
             import onnxruntime as ort
         except ImportError as exc:
             raise ImportError("the .onnx backend needs onnxruntime: pip install 'uav-tui[onnx]'") from exc
-        self.session = ort.InferenceSession(str(path), providers=["CPUExecutionProvider"])
+        options = ort.SessionOptions()
+        # Its threads sleep between runs instead of spinning: the camera decodes on the same cores meanwhile.
+        options.add_session_config_entry("session.intra_op.allow_spinning", "0")
+        self.session = ort.InferenceSession(str(path), options, providers=["CPUExecutionProvider"])
         inp = self.session.get_inputs()[0]
         self.input_name = inp.name
         h, w = inp.shape[2:4]
