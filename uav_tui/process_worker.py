@@ -4,8 +4,8 @@ Frames live in :class:`~uav_tui.frame_ring.FrameRing`'s shared-memory slots (dec
 that can; copied in once, off the capture thread, for those that cannot; never pickled). Every new frame
 is *offered* in the child's :class:`~processors.frame_mailbox.FrameMailbox`, replacing the previous offer,
 and the child claims the newest whenever it is free: the hand-off waits for nothing in this process.
-Results, calls and ``tmMgr.save`` requests come over a pipe (protocol in :mod:`processors.child`); a
-reader thread per child takes them off, so the event loop only gets finished results. The watchdog
+Results, calls and ``tmMgr.save`` requests come over a pipe (protocol in :mod:`processors.child`), read
+by the event loop itself whenever the pipe is readable, never blocking it. The watchdog
 (``run``, on the loop) kills a child that stays silent longer than ``processor_timeout``; a child that
 dies for any reason is reported (exit code or signal, last lines of its output), ``on_fault`` stops
 autonomy, and a fresh child with the same arguments is started after 1, 2, 4 ... s, at most
@@ -109,6 +109,8 @@ class ProcessWorker:
         """The newest frame taken for an offer (each frame is offered once)."""
         self._offered: tuple[FrameBuffer | None, int] = (None, 0)
         """The newest frame put in the mailbox (an older one is never put after it)."""
+        self._pickled_telemetry: tuple[object, bytes] = (None, b"")
+        """The newest telemetry update and its pickled fields."""
         self._loop: asyncio.AbstractEventLoop | None = None
         self._call_ids = itertools.count(1)
         self._gens = itertools.count(1)
@@ -230,6 +232,9 @@ class ProcessWorker:
             self._restart_task.cancel()
         for child in self._all_children:
             child.kill("stopped")
+            self._stop_reading(child)
+            if child.exit_watch is None and self._loop is not None and not self._loop.is_closed():
+                self._loop.run_in_executor(None, child.proc.wait)  # reap it (``run`` waits for that too)
             for call in child.calls.values():
                 if not call.future.done():
                     call.future.cancel()
@@ -245,8 +250,7 @@ class ProcessWorker:
         loop = self._loop = asyncio.get_running_loop()
         child = await loop.run_in_executor(self._spawner, spawn, loop.create_future())
         self._all_children.append(child)
-        threading.Thread(target=self._read_pipe, args=(child,), name=f"processor-{child.pid}-pipe",
-                         daemon=True).start()
+        loop.add_reader(child.inbox.fileno(), self._on_readable, child)
         self._send(child, ("load", self.spec, self.kwargs, self.memory_mb))
         try:
             await asyncio.wait_for(asyncio.shield(child.ready), LOAD_TIMEOUT_S)
@@ -349,7 +353,7 @@ class ProcessWorker:
         if forget:
             self._send(child, ("forget", forget))
         offer = Offer(next(self._gens), slot.name, slot.shape, frame.seq, frame.t_mono_ns, frame.t_wall_ns,
-                      self._telemetry_bytes())
+                      *self._telemetry_now())
         with self._lock:
             current = child is self._child and not self._closing
             if current and self._offered[0] is buffer and self._offered[1] >= frame.seq:
@@ -370,17 +374,24 @@ class ProcessWorker:
         for stale in unused:
             self._ring.release_child(stale)
 
-    def _telemetry_bytes(self) -> bytes:
-        """The telemetry attached to a frame as it is offered, pickled (empty without a telemetry manager)."""
-        snapshot = self.telemetry.snapshot() if self.telemetry is not None else None
-        if snapshot is None:
-            return b""
-        data = pickle.dumps({name: getattr(snapshot, name) for name in TELEMETRY_FIELDS})
-        if len(data) > TELEMETRY_BYTES:  # never seen: the fields are numbers and short names
-            logger.warning("ProcessWorker: telemetry of %d bytes does not fit the frame mailbox; not attached",
-                           len(data))
-            return b""
-        return data
+    def _telemetry_now(self) -> tuple[bytes, float | None]:
+        """The telemetry attached to a frame as it is offered: the newest update pickled, and the heartbeat age.
+
+        The update is pickled once, when it arrives; frames come faster than telemetry. Empty without a
+        telemetry manager.
+        """
+        if self.telemetry is None:
+            return b"", None
+        latest, heartbeat_age = self.telemetry.newest()
+        if latest is not self._pickled_telemetry[0]:
+            data = pickle.dumps({name: getattr(latest, name) for name in TELEMETRY_FIELDS
+                                 if name != "heartbeat_age_s"})
+            if len(data) > TELEMETRY_BYTES:  # never seen: the fields are numbers and short names
+                logger.warning("ProcessWorker: telemetry of %d bytes does not fit the frame mailbox; not attached",
+                               len(data))
+                data = b""
+            self._pickled_telemetry = (latest, data)
+        return self._pickled_telemetry[1], heartbeat_age
 
     def _send(self, child: ChildProcess, message: tuple[Any, ...]) -> bool:
         """Send one message to ``child``; False when it is gone (its pipe reader reports that)."""
@@ -400,17 +411,18 @@ class ProcessWorker:
         for slot in slots:
             self._ring.release_child(slot)
 
-    # -- the child's output (reader threads) ------------------------------------------------------
+    # -- the child's messages (on the loop, when its pipe is readable) -----------------------------
 
-    def _read_pipe(self, child: ChildProcess) -> None:
-        loop = self._loop
-        assert loop is not None
-        while True:
+    def _on_readable(self, child: ChildProcess) -> None:
+        messages = child.inbox.read()
+        if messages is None:
+            self._stop_reading(child)
+            child.exit_watch = asyncio.create_task(self._watch_exit(child), name=f"processor {child.pid} exit")
+            return
+        for data in messages:
             try:
-                message = child.conn.recv()
-            except (EOFError, OSError):
-                break
-            except Exception:  # noqa: BLE001 - an unpicklable message: say so, keep reading
+                message = pickle.loads(data)
+            except Exception:  # noqa: BLE001 - a value that cannot be unpickled here: say so, go on
                 logger.exception("ProcessWorker(%s): unreadable message from pid %s", self.spec, child.pid)
                 continue
             if message[0] == "claimed":
@@ -420,14 +432,24 @@ class ProcessWorker:
                 self._take_claim(child, gen)
             elif message[0] == "result":
                 self._take_result(child, message)
-            elif not loop.is_closed():
-                loop.call_soon_threadsafe(self._on_message, child, message)
-        returncode = child.proc.wait()
-        if not loop.is_closed():  # stop autonomy first; the report waits for the last lines of output
-            loop.call_soon_threadsafe(self._on_death, child, returncode)
-        child.output_done.wait(0.5)
-        if not loop.is_closed():
-            loop.call_soon_threadsafe(self._on_exit, child, returncode)
+            else:
+                self._on_message(child, message)
+
+    def _stop_reading(self, child: ChildProcess) -> None:
+        loop = self._loop
+        if child.inbox.closed:
+            return
+        if loop is not None and not loop.is_closed():
+            loop.remove_reader(child.inbox.fileno())
+        child.inbox.close()
+
+    async def _watch_exit(self, child: ChildProcess) -> None:
+        """The pipe ended: stop autonomy as soon as the exit is known, report once the last output is in."""
+        loop = asyncio.get_running_loop()
+        returncode = await loop.run_in_executor(None, child.proc.wait)
+        self._on_death(child, returncode)
+        await loop.run_in_executor(None, child.output_done.wait, 0.5)
+        self._on_exit(child, returncode)
 
     def _take_claim(self, child: ChildProcess, gen: int) -> None:
         with self._lock:
@@ -444,20 +466,13 @@ class ProcessWorker:
             # A copied-in frame's overlay is in the slot: lend it before the child's hold goes.
             slot_view = self._ring.lend(offered.slot) if offered is not None and offered.copied else None
         self._release(child, released)
-        if offered is None or self._loop is None or self._loop.is_closed():
+        if offered is None or child is not self._child or self._closing:
             return
         frame = offered.frame
         if slot_view is not None:
             frame = Frame(slot_view, frame.seq, frame.t_mono_ns, frame.t_wall_ns)
         result = ProcessedFrame(frame=frame, t_start_ns=start, t_end_ns=end, t_vector_ns=t_vector, vector=vector,
                                 error=error, box=box)
-        self._loop.call_soon_threadsafe(self._deliver, child, result, saves)
-
-    # -- on the loop -----------------------------------------------------------------------------
-
-    def _deliver(self, child: ChildProcess, result: ProcessedFrame, saves: list[tuple[Any, dict[str, Any]]]) -> None:
-        if child is not self._child or self._closing:
-            return
         self._store(saves, result)
         if result.error:
             self.stats.errors += 1
