@@ -15,8 +15,6 @@ Messages, platform -> child (pickled tuples)::
 child -> platform::
 
     ("ready", ProcessorInfo) | ("load_error", message, path, class_name, missing)
-    ("claimed", gen, result | None)          the offer ``gen`` was taken (a replay's next frame may come),
-                                             with the previous frame's result if it was not sent yet
     ("result", gen, t_start_ns, t_end_ns, t_vector_ns, vector, box, error, saves, released)
     ("reply", call_id, ok, value_or_error, saves, released)
 
@@ -196,8 +194,6 @@ class ChildRunner:
         self.has_vector = "getPreparedVector" in loaded.info.capabilities
         self._telemetry: tuple[bytes, dict[str, Any]] = (b"", {})
         """The last frame's pickled telemetry and its fields (telemetry changes slower than frames)."""
-        self._unsent: tuple[Any, ...] | None = None
-        """The last frame's result, held back to go out with the next claim."""
         self._idle = select.poll()
         for fd in (conn.fileno(), mailbox.fileno()):
             self._idle.register(fd, select.POLLIN)
@@ -205,15 +201,12 @@ class ChildRunner:
     def serve(self) -> None:
         """Calls and notices first, then the frame on offer; sleep when there is neither. Returns at EOF.
 
-        A frame's result goes out with the claim of the next frame (one message, one wake-up of the
-        platform per frame), or on its own before this process handles a call or waits.
+        One message a frame, its result; the claim itself is in the mailbox (the platform's watchdog reads it there).
         """
         while True:
             try:
-                if self.conn.poll():
-                    self._flush()
-                    while self.conn.poll():
-                        self.handle(self.conn.recv())
+                while self.conn.poll():
+                    self.handle(self.conn.recv())
             except (EOFError, OSError):
                 return
             offer = self.mailbox.claim()
@@ -221,17 +214,9 @@ class ChildRunner:
                 self.mailbox.clear_wake()  # an offer made after this wakes the wait below
                 offer = self.mailbox.claim()
             if offer is None:
-                self._flush()
                 self._idle.poll()  # a call, a notice, EOF or an offer
                 continue
-            self.conn.send(("claimed", offer.gen, self._unsent))
-            self._unsent = self.process(offer)
-
-    def _flush(self) -> None:
-        """Send the result held back, if there is one."""
-        if self._unsent is not None:
-            self.conn.send(self._unsent)
-            self._unsent = None
+            self.conn.send(self.process(offer))
 
     def handle(self, message: tuple[Any, ...]) -> None:
         kind = message[0]

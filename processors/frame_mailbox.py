@@ -27,8 +27,9 @@ from multiprocessing.shared_memory import SharedMemory
 TELEMETRY_BYTES = 16 * 1024
 """Room for the pickled telemetry of one frame (a few hundred bytes in practice)."""
 
-_CLAIM = struct.Struct("=q")
-"""Written by the processor: the gen it claimed last."""
+_CLAIM = struct.Struct("=qq")
+"""Written by the processor: the gen it claimed last, and when (``time.monotonic_ns``, the same clock in both
+processes)."""
 _NAME_BYTES = 64
 _OFFER = struct.Struct(f"=qqqq iii {_NAME_BYTES}s d I")
 """Written by the platform: gen, seq, t_mono_ns, t_wall_ns, shape (0 for no third axis), slot name, heartbeat
@@ -112,6 +113,23 @@ class FrameMailbox:
         os.eventfd_write(self.wake_fd, 1)
         return gen, gen != 0 and claimed == gen
 
+    def last_claim(self) -> tuple[int, int] | None:
+        """``(gen, monotonic ns)`` of the processor's newest claim ((0, 0) before the first).
+
+        Never waits: None when the lock is taken at this instant (or the mailbox is closed); ask again later.
+        """
+        if self._shm.buf is None:
+            return None
+        try:
+            os.eventfd_read(self.lock_fd)
+        except BlockingIOError:
+            return None
+        try:
+            gen, when = _CLAIM.unpack_from(self._shm.buf)
+        finally:
+            os.eventfd_write(self.lock_fd, 1)
+        return gen, when
+
     # -- the processor ----------------------------------------------------------------------------
 
     def clear_wake(self) -> None:
@@ -125,7 +143,7 @@ class FrameMailbox:
             gen, seq, t_mono, t_wall, h, w, c, name, age, tel_len = _OFFER.unpack_from(self._shm.buf, _OFFER_AT)
             if gen == 0 or claimed == gen:
                 return None
-            _CLAIM.pack_into(self._shm.buf, 0, gen)
+            _CLAIM.pack_into(self._shm.buf, 0, gen, time.monotonic_ns())
             telemetry = bytes(self._shm.buf[_TELEMETRY_AT:_TELEMETRY_AT + tel_len])
         shape = (h, w, c) if c else (h, w)
         return Offer(gen, name.rstrip(b"\0").decode(), shape, seq, t_mono, t_wall, telemetry,

@@ -47,8 +47,7 @@ class FrameBuffer:
         self._listeners: list[Callable[[Frame], None]] = []
         self.captured = 0
         """Frames put since creation."""
-        self.overwritten = 0
-        """Frames replaced before any reader took them."""
+        self._taken = 0
         self._allocator: Callable[[tuple[int, ...]], np.ndarray | None] | None = None
 
     def put(self, image: np.ndarray, t_mono_ns: int | None = None, t_wall_ns: int | None = None) -> Frame:
@@ -61,8 +60,6 @@ class FrameBuffer:
         if t_mono_ns is not None:
             t_mono, t_wall = t_mono_ns, t_wall_ns or t_wall - (t_mono - t_mono_ns)
         with self._cond:
-            if self._frame is not None and self._frame.seq > self._read_seq:
-                self.overwritten += 1
             self.captured += 1
             frame = Frame(image, self.captured, t_mono, t_wall)
             self._frame = frame
@@ -71,6 +68,17 @@ class FrameBuffer:
         for listener in listeners:
             listener(frame)
         return frame
+
+    @property
+    def overwritten(self) -> int:
+        """Frames replaced before any reader took them.
+
+        A reader in another process may say it took a frame after a newer one came (:meth:`mark_read`);
+        the count is right from then on.
+        """
+        with self._cond:
+            newest_unread = self._frame is not None and self._frame.seq > self._read_seq
+            return self.captured - newest_unread - self._taken
 
     @property
     def newest_seq(self) -> int:
@@ -93,17 +101,14 @@ class FrameBuffer:
     def latest(self) -> Frame | None:
         """The newest frame, or None before the first capture. Marks it as read."""
         with self._cond:
-            if self._frame is not None and self._frame.seq > self._read_seq:
-                self._read_seq = self._frame.seq
-                self._cond.notify_all()
+            if self._frame is not None:
+                self._take(self._frame.seq)
             return self._frame
 
     def mark_read(self, seq: int) -> None:
-        """Frames up to ``seq`` were taken by a reader that got them with :meth:`peek` (another process)."""
+        """Frame ``seq`` was taken by a reader that got it with :meth:`peek` (another process), maybe late."""
         with self._cond:
-            if seq > self._read_seq:
-                self._read_seq = seq
-                self._cond.notify_all()
+            self._take(seq)
 
     def wait_newer(self, seq: int, timeout: float) -> Frame | None:
         """Block up to ``timeout`` s for a frame newer than ``seq``; None if none came."""
@@ -111,10 +116,15 @@ class FrameBuffer:
             if not self._cond.wait_for(lambda: self._frame is not None and self._frame.seq > seq, timeout):
                 return None
             assert self._frame is not None
-            if self._frame.seq > self._read_seq:
-                self._read_seq = self._frame.seq
-                self._cond.notify_all()
+            self._take(self._frame.seq)
             return self._frame
+
+    def _take(self, seq: int) -> None:
+        """Frame ``seq`` was taken by a reader (called holding the lock)."""
+        if seq > self._read_seq:
+            self._read_seq = seq
+            self._taken += 1
+            self._cond.notify_all()
 
     def set_allocator(self, allocator: Callable[[tuple[int, ...]], np.ndarray | None] | None) -> None:
         """Let the reader provide the arrays frames are captured into (shared memory, say); None: the source's own."""

@@ -333,7 +333,7 @@ class ProcessWorker:
             child, buffer = self._child, self._buffer
             if self._closing or child is None or buffer is None or self._picked == (buffer, buffer.newest_seq):
                 return
-            frame = buffer.peek()  # read once the child claims it (a replay then decodes the next)
+            frame = buffer.peek()  # read once its result is back (a replay then puts the next)
             if frame is None:
                 return
             slot = self._ring.take_for_child(frame.image)
@@ -425,12 +425,7 @@ class ProcessWorker:
             except Exception:  # noqa: BLE001 - a value that cannot be unpickled here: say so, go on
                 logger.exception("ProcessWorker(%s): unreadable message from pid %s", self.spec, child.pid)
                 continue
-            if message[0] == "claimed":
-                _, gen, result = message
-                if result is not None:
-                    self._take_result(child, result)
-                self._take_claim(child, gen)
-            elif message[0] == "result":
+            if message[0] == "result":
                 self._take_result(child, message)
             else:
                 self._on_message(child, message)
@@ -451,20 +446,14 @@ class ProcessWorker:
         await loop.run_in_executor(None, child.output_done.wait, 0.5)
         self._on_exit(child, returncode)
 
-    def _take_claim(self, child: ChildProcess, gen: int) -> None:
-        with self._lock:
-            offered = child.offered.get(gen)
-        if offered is not None:
-            offered.buffer.mark_read(offered.frame.seq)
-        child.claimed = (gen, time.monotonic_ns())  # the watchdog's clock starts
-
     def _take_result(self, child: ChildProcess, message: tuple[Any, ...]) -> None:
         _, gen, start, end, t_vector, vector, box, error, saves, released = message
         with self._lock:
             offered = child.offered.pop(gen, None)
-            child.claimed = None
             # A copied-in frame's overlay is in the slot: lend it before the child's hold goes.
             slot_view = self._ring.lend(offered.slot) if offered is not None and offered.copied else None
+        if offered is not None:
+            offered.buffer.mark_read(offered.frame.seq)  # a replay puts its next frame (decoded meanwhile)
         self._release(child, released)
         if offered is None or child is not self._child or self._closing:
             return
@@ -528,7 +517,6 @@ class ProcessWorker:
         reason = self._reason(child, returncode)
         with self._lock:
             child.offered.clear()
-            child.claimed = None
             child.mailbox.close()
         self._release(child, list(child.held))
         tail = "\n".join(child.tail)

@@ -68,8 +68,8 @@ class ChildProcess:
     tail: deque[str] = field(default_factory=lambda: deque(maxlen=TAIL_LINES))
     offered: dict[int, Offered] = field(default_factory=dict)
     """By offer gen: the frame on offer, and those the child claimed whose result is not back."""
-    claimed: tuple[int, int] | None = None
-    """(gen, when its claim arrived) of the frame the child is processing."""
+    last_claim: tuple[int, int] = (0, 0)
+    """(gen, monotonic ns) of the child's newest claim, as last read from its mailbox."""
     calls: dict[int, PendingCall] = field(default_factory=dict)
     held: dict[str, Slot] = field(default_factory=dict)
     """Slots the child may still reference."""
@@ -90,8 +90,10 @@ class ChildProcess:
     def busy_since_ns(self) -> int | None:
         """When the oldest frame or call still unanswered was sent (None when idle)."""
         starts = [c.sent_ns for c in self.calls.values()]
-        if self.claimed is not None:
-            starts.append(self.claimed[1])
+        self.last_claim = self.mailbox.last_claim() or self.last_claim
+        gen, claimed_ns = self.last_claim
+        if gen in self.offered:  # claimed, its result not back yet
+            starts.append(claimed_ns)
         return min(starts, default=None)
 
     def kill(self, reason: str) -> None:

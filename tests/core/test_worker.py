@@ -213,6 +213,20 @@ def test_frame_buffer_counts_overwrites_and_stamps() -> None:
     assert buffer.wait_newer(3, timeout=0.01).seq == 4
 
 
+def test_a_frame_marked_read_after_newer_ones_came_is_not_counted_overwritten() -> None:
+    buffer = FrameBuffer()
+    image = np.zeros((2, 2, 3), np.uint8)
+    buffer.put(image)  # taken by another process (peek), which says so only once it is done with it
+    buffer.put(image)
+    buffer.put(image)
+    assert buffer.overwritten == 2  # as far as anyone knows yet
+    buffer.mark_read(1)
+    assert buffer.overwritten == 1  # only frame 2 was never taken
+    assert not buffer.wait_read(timeout=0.01)  # the newest, 3, is still unread
+    buffer.mark_read(3)
+    assert buffer.overwritten == 1 and buffer.wait_read(timeout=0.01)
+
+
 DRAWING = '''
 class Drawing:
     def __init__(self):
