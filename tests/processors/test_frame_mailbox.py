@@ -9,6 +9,7 @@ import os
 import subprocess
 import sys
 import textwrap
+import time
 from multiprocessing.connection import wait
 
 import pytest
@@ -81,3 +82,17 @@ def test_an_offer_that_does_not_fit_is_refused(mailbox: FrameMailbox) -> None:
         mailbox.offer(offer(1, telemetry=bytes(64 * 1024)))
     with pytest.raises(ValueError, match="slot name 65 bytes"):
         mailbox.offer(Offer(1, "s" * 65, (2, 2, 3), 1, 0, 0, b""))
+
+
+def test_the_last_claim_and_its_time_are_read_without_waiting(mailbox: FrameMailbox) -> None:
+    assert mailbox.last_claim() == (0, 0)  # nothing claimed yet
+    mailbox.offer(offer(1))
+    before = time.monotonic_ns()
+    claim_in_another_process(mailbox)
+    gen, claimed_ns = mailbox.last_claim()
+    assert gen == 1 and before <= claimed_ns <= time.monotonic_ns()  # one clock for both processes
+    os.eventfd_read(mailbox.lock_fd)  # the processor is claiming at this instant
+    assert mailbox.last_claim() is None  # no wait: the watchdog asks again later
+    os.eventfd_write(mailbox.lock_fd, 1)
+    mailbox.close()
+    assert mailbox.last_claim() is None
