@@ -394,7 +394,7 @@ class ProcessWorker:
         return self._pickled_telemetry[1], heartbeat_age
 
     def _send(self, child: ChildProcess, message: tuple[Any, ...]) -> bool:
-        """Send one message to ``child``; False when it is gone (its pipe reader reports that)."""
+        """Send one message to ``child``; False when it is gone (the end of its pipe reports that)."""
         try:
             with self._send_lock:
                 child.conn.send(message)
