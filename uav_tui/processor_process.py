@@ -117,7 +117,8 @@ class Inbox:
     The pipe is a socket (``multiprocessing.Pipe``); this reads a duplicate of it with ``MSG_DONTWAIT``
     (the platform's own sends stay blocking) and splits the bytes the way
     :class:`~multiprocessing.connection.Connection` framed them: a 4-byte big-endian length, or -1 and
-    an 8-byte one for 2 GiB and more, then the pickle.
+    an 8-byte one for 2 GiB and more, then the pickle. A message longer than one read (an image from
+    ``tmMgr.save``) is read straight into a buffer of its own size.
     """
 
     CHUNK = 256 * 1024
@@ -126,32 +127,59 @@ class Inbox:
         self._sock = socket.socket(fileno=os.dup(conn.fileno()))
         self._chunk = bytearray(self.CHUNK)
         self._pending = bytearray()
+        self._long: memoryview | None = None
+        """The long message being read, and how much of it has arrived (``_long_at``)."""
+        self._long_at = 0
 
     def fileno(self) -> int:
         return self._sock.fileno()
 
-    def read(self) -> list[bytes] | None:
+    def read(self) -> list[bytes | bytearray] | None:
         """The messages (pickled) completed by what has arrived, maybe none; None at the end of the pipe."""
-        try:
-            size = self._sock.recv_into(self._chunk, self.CHUNK, socket.MSG_DONTWAIT)
-        except (BlockingIOError, InterruptedError):
-            return []
-        except OSError:
-            return None
-        if size == 0:
+        if self._long is not None:
+            size = self._receive(self._long[self._long_at:])
+            if size is None:
+                return None
+            self._long_at += size
+            if self._long_at < len(self._long):
+                return []
+            message, self._long = self._long.obj, None
+            return [message]
+        size = self._receive(memoryview(self._chunk))
+        if size is None:
             return None
         self._pending += memoryview(self._chunk)[:size]
-        messages = []
-        while len(self._pending) >= 4:
-            (length,), start = struct.unpack_from("!i", self._pending), 4
+        return self._split()
+
+    def _receive(self, into: memoryview) -> int | None:
+        """Bytes read into ``into`` now (0 when none are there); None at the end of the pipe."""
+        try:
+            size = self._sock.recv_into(into, len(into), socket.MSG_DONTWAIT)
+        except (BlockingIOError, InterruptedError):
+            return 0
+        except OSError:
+            return None
+        return size or None
+
+    def _split(self) -> list[bytes | bytearray]:
+        messages: list[bytes | bytearray] = []
+        pending, at = self._pending, 0
+        while len(pending) - at >= 4:
+            (length,), start = struct.unpack_from("!i", pending, at), at + 4
             if length == -1:
-                if len(self._pending) < 12:
+                if len(pending) - at < 12:
                     break
-                (length,), start = struct.unpack_from("!Q", self._pending, 4), 12
-            if len(self._pending) < start + length:
+                (length,), start = struct.unpack_from("!Q", pending, at + 4), at + 12
+            if start + length > len(pending):
+                if length > self.CHUNK:  # the rest goes straight into its own buffer
+                    have = len(pending) - start
+                    self._long = memoryview(bytearray(length))
+                    self._long[:have] = pending[start:]
+                    self._long_at, at = have, len(pending)
                 break
-            messages.append(bytes(self._pending[start:start + length]))
-            del self._pending[:start + length]
+            messages.append(bytes(pending[start:start + length]))
+            at = start + length
+        del pending[:at]
         return messages
 
     @property
