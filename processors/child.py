@@ -6,13 +6,13 @@ the :class:`~processors.frame_mailbox.FrameMailbox` at ``MAILBOX`` (its address:
 this level (``processors``), NumPy and the researcher's code: a GIL-bound loop, a hang, ``os._exit``,
 a segfault or a leak here cannot freeze or kill the flight path.
 
-Messages, platform -> child (pickled tuples)::
+Messages, platform -> child (pickled tuples, ``Connection.send``)::
 
     ("load", spec, kwargs, memory_mb)        first message: cap memory, construct the processor
     ("call", call_id, method, args)          catch_cmd / customize_processing
     ("forget", [slot, ...])                  the platform freed these slots: unmap them
 
-child -> platform::
+child -> platform (:func:`send_message`: pickle protocol 5, arrays out of band)::
 
     ("ready", ProcessorInfo) | ("load_error", message, path, class_name, missing)
     ("result", gen, t_start_ns, t_end_ns, t_vector_ns, vector, box, error, saves, released)
@@ -48,6 +48,7 @@ import pickle
 import resource
 import select
 import signal
+import struct
 import sys
 import time
 import traceback
@@ -72,6 +73,9 @@ MEMORY_EXIT_CODE = 86
 
 LOG_TAG = "\x00uav-tui-log\t"
 """Starts a stderr line that carries one log record: ``LOG_TAG + f"{levelno}\\t{name}\\t{json text}"``."""
+
+BUFFER_COUNT = struct.Struct("!I")
+"""Leads every frame that carries a pickle (:func:`send_message`): how many out-of-band frames follow it."""
 
 _PR_SET_PDEATHSIG = 1
 
@@ -159,6 +163,19 @@ class Slots:
         return shm
 
 
+def send_message(conn: Connection, message: tuple[Any, ...]) -> None:
+    """Send ``message`` as one frame ``count + pickle`` then ``count`` frames with its arrays' bytes.
+
+    Arrays (``tmMgr.save`` images) go out of band: written to the pipe straight from their memory, and
+    the platform unpickles them into the buffers it read, without copying them again.
+    """
+    buffers: list[pickle.PickleBuffer] = []
+    data = pickle.dumps(message, protocol=5, buffer_callback=buffers.append)
+    conn.send_bytes(BUFFER_COUNT.pack(len(buffers)) + data)
+    for buffer in buffers:
+        conn.send_bytes(buffer.raw())
+
+
 def _picklable(value: Any) -> Any:
     try:
         pickle.dumps(value)
@@ -216,12 +233,12 @@ class ChildRunner:
             if offer is None:
                 self._idle.poll()  # a call, a notice, EOF or an offer
                 continue
-            self.conn.send(self.process(offer))
+            send_message(self.conn, self.process(offer))
 
     def handle(self, message: tuple[Any, ...]) -> None:
         kind = message[0]
         if kind == "call":
-            self.conn.send(self.call(*message[1:]))
+            send_message(self.conn, self.call(*message[1:]))
         elif kind == "forget":
             self.slots.forget(message[1])
 
@@ -272,9 +289,9 @@ def main(fd: int, mailbox_address: list[str]) -> int:
         try:
             loaded = load_processor(spec, kwargs)
         except ProcessorLoadError as exc:
-            conn.send(("load_error", str(exc), exc.path, exc.class_name, exc.missing))
+            send_message(conn, ("load_error", str(exc), exc.path, exc.class_name, exc.missing))
             return 0
-        conn.send(("ready", loaded.info))
+        send_message(conn, ("ready", loaded.info))
         ChildRunner(conn, mailbox, loaded).serve()
     except MemoryError:
         traceback.print_exc()

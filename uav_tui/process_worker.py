@@ -419,9 +419,9 @@ class ProcessWorker:
             self._stop_reading(child)
             child.exit_watch = asyncio.create_task(self._watch_exit(child), name=f"processor {child.pid} exit")
             return
-        for data in messages:
+        for data, buffers in messages:
             try:
-                message = pickle.loads(data)
+                message = pickle.loads(data, buffers=buffers)
             except Exception:  # noqa: BLE001 - a value that cannot be unpickled here: say so, go on
                 logger.exception("ProcessWorker(%s): unreadable message from pid %s", self.spec, child.pid)
                 continue

@@ -26,7 +26,7 @@ from multiprocessing.connection import Connection
 from typing import Any
 
 from processors.base import ProcessorInfo
-from processors.child import LOG_LEVEL_ENV, MEMORY_EXIT_CODE, parse_log_line
+from processors.child import BUFFER_COUNT, LOG_LEVEL_ENV, MEMORY_EXIT_CODE, parse_log_line
 from processors.frame_mailbox import FrameMailbox
 from sources.buffer import Frame, FrameBuffer
 from uav_tui.frame_ring import Slot
@@ -117,8 +117,9 @@ class Inbox:
     The pipe is a socket (``multiprocessing.Pipe``); this reads a duplicate of it with ``MSG_DONTWAIT``
     (the platform's own sends stay blocking) and splits the bytes the way
     :class:`~multiprocessing.connection.Connection` framed them: a 4-byte big-endian length, or -1 and
-    an 8-byte one for 2 GiB and more, then the pickle. A message longer than one read (an image from
-    ``tmMgr.save``) is read straight into a buffer of its own size.
+    an 8-byte one for 2 GiB and more, then the bytes. A message is a frame with a pickle and the frames
+    of its out-of-band buffers (:func:`processors.child.send_message`); a frame longer than one read (an
+    image from ``tmMgr.save``) is read straight into a buffer of its own size.
     """
 
     CHUNK = 256 * 1024
@@ -130,12 +131,36 @@ class Inbox:
         self._long: memoryview | None = None
         """The long message being read, and how much of it has arrived (``_long_at``)."""
         self._long_at = 0
+        self._message: tuple[memoryview, list[bytearray], int] | None = None
+        """A pickle waiting for its out-of-band buffers: (pickle, buffers so far, how many)."""
 
     def fileno(self) -> int:
         return self._sock.fileno()
 
-    def read(self) -> list[bytes | bytearray] | None:
-        """The messages (pickled) completed by what has arrived, maybe none; None at the end of the pipe."""
+    def read(self) -> list[tuple[memoryview, list[bytearray]]] | None:
+        """The messages completed by what has arrived, maybe none, as ``pickle.loads(data, buffers=buffers)``
+        takes them; None at the end of the pipe."""
+        frames = self._frames()
+        if frames is None:
+            return None
+        messages = []
+        for frame in frames:
+            if self._message is None:
+                (count,), data = BUFFER_COUNT.unpack_from(frame), memoryview(frame)[BUFFER_COUNT.size:]
+                if count == 0:
+                    messages.append((data, []))
+                else:
+                    self._message = (data, [], count)
+                continue
+            data, buffers, count = self._message
+            buffers.append(frame)
+            if len(buffers) == count:
+                messages.append((data, buffers))
+                self._message = None
+        return messages
+
+    def _frames(self) -> list[bytearray] | None:
+        """The frames completed by what has arrived; None at the end of the pipe."""
         if self._long is not None:
             size = self._receive(self._long[self._long_at:])
             if size is None:
@@ -143,8 +168,8 @@ class Inbox:
             self._long_at += size
             if self._long_at < len(self._long):
                 return []
-            message, self._long = self._long.obj, None
-            return [message]
+            frame, self._long = self._long.obj, None
+            return [frame]
         size = self._receive(memoryview(self._chunk))
         if size is None:
             return None
@@ -161,8 +186,8 @@ class Inbox:
             return None
         return size or None
 
-    def _split(self) -> list[bytes | bytearray]:
-        messages: list[bytes | bytearray] = []
+    def _split(self) -> list[bytearray]:
+        frames: list[bytearray] = []
         pending, at = self._pending, 0
         while len(pending) - at >= 4:
             (length,), start = struct.unpack_from("!i", pending, at), at + 4
@@ -177,10 +202,10 @@ class Inbox:
                     self._long[:have] = pending[start:]
                     self._long_at, at = have, len(pending)
                 break
-            messages.append(bytes(pending[start:start + length]))
+            frames.append(pending[start:start + length])
             at = start + length
         del pending[:at]
-        return messages
+        return frames
 
     @property
     def closed(self) -> bool:

@@ -7,6 +7,9 @@ import pickle
 import threading
 from multiprocessing.connection import wait
 
+import numpy as np
+
+from processors.child import send_message
 from uav_tui.processor_process import Inbox
 
 
@@ -14,7 +17,7 @@ def read_all(inbox: Inbox, count: int) -> list[object]:
     messages: list[object] = []
     while len(messages) < count:
         assert wait([inbox], timeout=10), "no data within 10 s"
-        messages += [pickle.loads(data) for data in inbox.read()]
+        messages += [pickle.loads(data, buffers=buffers) for data, buffers in inbox.read()]
     return messages
 
 
@@ -22,11 +25,17 @@ def test_messages_split_over_reads_or_sharing_one_come_out_whole_and_in_order() 
     ours, theirs = multiprocessing.Pipe()
     inbox = Inbox(ours)
     assert inbox.read() == []  # nothing sent yet: an empty answer, not a wait
-    big = bytes(range(256)) * 4000  # 1 MB: more than one read's worth
-    sender = threading.Thread(target=lambda: [theirs.send(m) for m in (("claimed", 1, None), ("big", big), ("x",))])
+    image = np.arange(720 * 1280 * 3, dtype=np.uint32).astype(np.uint8).reshape(720, 1280, 3)  # 2.7 MB
+    small = np.full((10, 10), 7, np.uint8)
+    sent = [("result", 1, None), ("saves", [(image, {"n": 1}), (small, {"n": 2})]), ("x", b"bytes stay in band")]
+    sender = threading.Thread(target=lambda: [send_message(theirs, m) for m in sent])
     sender.start()
-    assert read_all(inbox, 3) == [("claimed", 1, None), ("big", big), ("x",)]
+    got = read_all(inbox, 3)
     sender.join()
+    assert got[0] == sent[0] and got[2] == sent[2]
+    (image_back, extra), (small_back, _) = got[1][1]
+    assert extra == {"n": 1} and np.array_equal(image_back, image) and np.array_equal(small_back, small)
+    image_back[0, 0] = 1  # arrays arrive writable, in buffers of their own
     ours.send(("call", 7))  # the platform's own sends still go out (the socket itself stays blocking)
     assert theirs.recv() == ("call", 7)
     theirs.close()
