@@ -73,7 +73,6 @@ class Faulty:
 '''
 
 MODULES = '''
-import os
 import sys
 
 class Modules:
@@ -81,8 +80,6 @@ class Modules:
         pass
 
     def customize_processing(self, id):
-        if id == 2:
-            return {name: value for name, value in os.environ.items() if name.startswith("OPENCV_THREAD_POOL")}
         return sorted(sys.modules)
 '''
 
@@ -113,19 +110,6 @@ async def test_the_processor_process_loads_no_platform_module(tmp_path: Path) ->
     assert "processors.loading" in loaded and "numpy" in loaded  # it is the processor's process ...
     platform = [name for name in loaded if name.split(".")[0] in ("uav_tui", "sources", "controllers")]
     assert platform == []  # ... and the platform's modules never came in
-
-
-async def test_the_processor_process_thread_pools_sleep_unless_the_environment_says_otherwise(
-        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setenv("OPENCV_THREAD_POOL_ACTIVE_WAIT_MAIN", "500")
-    (tmp_path / "modules.py").write_text(MODULES)
-    worker = await ProcessWorker.start(f"{tmp_path}/modules.py:Modules", {}, print, events=EventLog(),
-                                       on_fault=print)
-    try:
-        environment = await worker.call("customize_processing", 2)
-    finally:
-        worker.close()
-    assert environment == {"OPENCV_THREAD_POOL_ACTIVE_WAIT_WORKER": "0", "OPENCV_THREAD_POOL_ACTIVE_WAIT_MAIN": "500"}
 
 
 async def test_a_gil_hog_cannot_freeze_the_platform(tmp_path: Path) -> None:
