@@ -118,16 +118,11 @@ class FrameMailbox:
 
         Never waits: None when the lock is taken at this instant (or the mailbox is closed); ask again later.
         """
-        if self._shm.buf is None:
-            return None
         try:
-            os.eventfd_read(self.lock_fd)
-        except BlockingIOError:
+            with self._locked(timeout_s=0):
+                gen, when = _CLAIM.unpack_from(self._shm.buf)
+        except MailboxGone:
             return None
-        try:
-            gen, when = _CLAIM.unpack_from(self._shm.buf)
-        finally:
-            os.eventfd_write(self.lock_fd, 1)
         return gen, when
 
     # -- the processor ----------------------------------------------------------------------------
@@ -163,10 +158,10 @@ class FrameMailbox:
             os.close(self.wake_fd)
 
     @contextlib.contextmanager
-    def _locked(self) -> Iterator[None]:
+    def _locked(self, timeout_s: float = LOCK_TIMEOUT_S) -> Iterator[None]:
         if self._shm.buf is None:
             raise MailboxGone("the frame mailbox is closed")
-        deadline = time.monotonic() + LOCK_TIMEOUT_S
+        deadline = time.monotonic() + timeout_s
         while True:
             try:
                 os.eventfd_read(self.lock_fd)

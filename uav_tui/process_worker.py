@@ -431,9 +431,9 @@ class ProcessWorker:
                 self._on_message(child, message)
 
     def _stop_reading(self, child: ChildProcess) -> None:
-        loop = self._loop
         if child.inbox.closed:
             return
+        loop = self._loop
         if loop is not None and not loop.is_closed():
             loop.remove_reader(child.inbox.fileno())
         child.inbox.close()
