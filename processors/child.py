@@ -2,7 +2,7 @@
 
 The platform (``uav_tui.process_worker``) starts this module in a fresh interpreter and talks to it
 over the :class:`~multiprocessing.connection.Connection` on file descriptor ``FD``; frames come through
-the :class:`~processors.frame_mailbox.FrameMailbox` at ``MAILBOX`` (its address: three words). It imports only
+the :class:`~processors.frame_mailbox.FrameMailbox` at ``MAILBOX`` (its address, one argument). It imports only
 this level (``processors``), NumPy and the researcher's code: a GIL-bound loop, a hang, ``os._exit``,
 a segfault or a leak here cannot freeze or kill the flight path.
 
@@ -275,14 +275,13 @@ class ChildRunner:
         return ("reply", call_id, ok, value, self.telemetry.take_saves(), self.slots.released())
 
 
-def main(fd: int, mailbox_address: list[str]) -> int:
+def main(fd: int, mailbox_address: str) -> int:
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C reaches the whole process group: the platform decides
     faulthandler.enable()  # a segfault in native code leaves a Python traceback on stderr
     logging.basicConfig(level=os.environ.get(LOG_LEVEL_ENV, "WARNING"), handlers=[TaggedLogHandler()])
     _die_with_parent()
     conn = Connection(fd)
-    name, lock_fd, wake_fd = mailbox_address
-    mailbox = FrameMailbox.attach(name, int(lock_fd), int(wake_fd))
+    mailbox = FrameMailbox.attach(mailbox_address)
     _, spec, kwargs, memory_mb = conn.recv()
     try:
         _limit_memory(memory_mb)
@@ -301,4 +300,4 @@ def main(fd: int, mailbox_address: list[str]) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main(int(sys.argv[1]), sys.argv[2:5]))
+    sys.exit(main(int(sys.argv[1]), sys.argv[2]))

@@ -8,7 +8,9 @@ busy processor finds the newest frame waiting the moment it is done, an idle one
 Offer and claim are atomic under one lock (a Linux eventfd used as a semaphore, shared by both
 processes), so when the platform replaces an offer it knows whether the processor took it (the slot is
 then the processor's until it reports releasing it) or not (the platform lets the slot go at once).
-Both eventfds and the shared memory are created by the platform, one set per process.
+A reader-paced replay waits for each claim (:meth:`FrameMailbox.wait_claimed`) to put its next frame while
+the processor still works on this one; only then does the processor signal its claims (a third eventfd).
+The eventfds and the shared memory are created by the platform, one set per process.
 """
 
 from __future__ import annotations
@@ -30,11 +32,14 @@ TELEMETRY_BYTES = 16 * 1024
 _CLAIM = struct.Struct("=qq")
 """Written by the processor: the gen it claimed last, and when (``time.monotonic_ns``, the same clock in both
 processes)."""
+_WATCH = struct.Struct("=q")
+"""Written by the platform: the gen whose claim it waits for (0: none), so the processor signals it."""
+_WATCH_AT = _CLAIM.size
 _NAME_BYTES = 64
 _OFFER = struct.Struct(f"=qqqq iii {_NAME_BYTES}s d I")
 """Written by the platform: gen, seq, t_mono_ns, t_wall_ns, shape (0 for no third axis), slot name, heartbeat
 age (NaN for none), telemetry length."""
-_OFFER_AT = _CLAIM.size
+_OFFER_AT = _WATCH_AT + _WATCH.size
 _TELEMETRY_AT = _OFFER_AT + _OFFER.size
 SIZE = _TELEMETRY_AT + TELEMETRY_BYTES
 LOCK_TIMEOUT_S = 0.2
@@ -65,26 +70,33 @@ class MailboxGone(Exception):
 class FrameMailbox:
     """One side of the mailbox: the platform creates it (:meth:`create`), the processor attaches (:meth:`attach`)."""
 
-    def __init__(self, shm: SharedMemory, lock_fd: int, wake_fd: int, owner: bool) -> None:
-        self._shm, self.lock_fd, self.wake_fd, self._owner = shm, lock_fd, wake_fd, owner
+    def __init__(self, shm: SharedMemory, lock_fd: int, wake_fd: int, claimed_fd: int, owner: bool) -> None:
+        self._shm, self._owner = shm, owner
+        self.lock_fd, self.wake_fd, self.claimed_fd = lock_fd, wake_fd, claimed_fd
 
     @classmethod
     def create(cls) -> FrameMailbox:
         shm = SharedMemory(create=True, size=SIZE)
         shm.buf[:_TELEMETRY_AT] = bytes(_TELEMETRY_AT)
         lock = os.eventfd(1, os.EFD_SEMAPHORE | os.EFD_NONBLOCK | os.EFD_CLOEXEC)
-        wake = os.eventfd(0, os.EFD_NONBLOCK | os.EFD_CLOEXEC)
-        return cls(shm, lock, wake, owner=True)
+        wake, claimed = (os.eventfd(0, os.EFD_NONBLOCK | os.EFD_CLOEXEC) for _ in range(2))
+        return cls(shm, lock, wake, claimed, owner=True)
 
     @classmethod
-    def attach(cls, name: str, lock_fd: int, wake_fd: int) -> FrameMailbox:
+    def attach(cls, address: str) -> FrameMailbox:
         """The processor's side, from what :attr:`address` said (the descriptors are inherited)."""
-        return cls(attach_untracked(name), lock_fd, wake_fd, owner=False)
+        name, *fds = address.split()
+        return cls(attach_untracked(name), *map(int, fds), owner=False)
 
     @property
     def address(self) -> str:
-        """``"name lock_fd wake_fd"``: what the processor's process needs to attach."""
-        return f"{self._shm.name} {self.lock_fd} {self.wake_fd}"
+        """``"name lock_fd wake_fd claimed_fd"``: what the processor's process needs to attach."""
+        return f"{self._shm.name} {self.lock_fd} {self.wake_fd} {self.claimed_fd}"
+
+    @property
+    def fds(self) -> tuple[int, int, int]:
+        """The descriptors the processor's process inherits."""
+        return self.lock_fd, self.wake_fd, self.claimed_fd
 
     def fileno(self) -> int:
         """Readable when a frame was offered since :meth:`clear_wake` (for ``select``/``poll``)."""
@@ -125,11 +137,26 @@ class FrameMailbox:
             return None
         return gen, when
 
+    def wait_claimed(self, gen: int, timeout_s: float) -> bool:
+        """Block up to ``timeout_s`` until the processor claimed offer ``gen`` (or a later one); True once it has.
+
+        Raises MailboxGone as :meth:`offer` does.
+        """
+        deadline = time.monotonic() + timeout_s
+        while True:
+            with self._locked():
+                claimed = _CLAIM.unpack_from(self._shm.buf)[0]
+                _WATCH.pack_into(self._shm.buf, _WATCH_AT, 0 if claimed >= gen else gen)
+            remaining = deadline - time.monotonic()
+            if claimed >= gen or remaining <= 0:
+                return claimed >= gen
+            if select.select([self.claimed_fd], [], [], remaining)[0]:
+                _drain(self.claimed_fd)
+
     # -- the processor ----------------------------------------------------------------------------
 
     def clear_wake(self) -> None:
-        with contextlib.suppress(BlockingIOError):
-            os.eventfd_read(self.wake_fd)
+        _drain(self.wake_fd)
 
     def claim(self) -> Offer | None:
         """Take the frame on offer, if there is one not taken yet."""
@@ -139,7 +166,10 @@ class FrameMailbox:
             if gen == 0 or claimed == gen:
                 return None
             _CLAIM.pack_into(self._shm.buf, 0, gen, time.monotonic_ns())
+            watched = _WATCH.unpack_from(self._shm.buf, _WATCH_AT)[0]
             telemetry = bytes(self._shm.buf[_TELEMETRY_AT:_TELEMETRY_AT + tel_len])
+        if watched and gen >= watched:
+            os.eventfd_write(self.claimed_fd, 1)
         shape = (h, w, c) if c else (h, w)
         return Offer(gen, name.rstrip(b"\0").decode(), shape, seq, t_mono, t_wall, telemetry,
                      None if math.isnan(age) else age)
@@ -154,8 +184,8 @@ class FrameMailbox:
         if self._owner:
             with contextlib.suppress(FileNotFoundError):
                 self._shm.unlink()
-            os.close(self.lock_fd)
-            os.close(self.wake_fd)
+            for fd in self.fds:
+                os.close(fd)
 
     @contextlib.contextmanager
     def _locked(self, timeout_s: float = LOCK_TIMEOUT_S) -> Iterator[None]:
@@ -175,6 +205,11 @@ class FrameMailbox:
             yield
         finally:
             os.eventfd_write(self.lock_fd, 1)
+
+
+def _drain(eventfd: int) -> None:
+    with contextlib.suppress(BlockingIOError):
+        os.eventfd_read(eventfd)
 
 
 def attach_untracked(name: str) -> SharedMemory:

@@ -49,6 +49,7 @@ class FrameBuffer:
         """Frames put since creation."""
         self._taken = 0
         self._allocator: Callable[[tuple[int, ...]], np.ndarray | None] | None = None
+        self._read_waiter: Callable[[int, float], bool] | None = None
 
     def put(self, image: np.ndarray, t_mono_ns: int | None = None, t_wall_ns: int | None = None) -> Frame:
         """Stamp ``image`` with the next sequence number and the capture times, and publish it.
@@ -95,8 +96,13 @@ class FrameBuffer:
 
         Lets a replaying source run in lockstep with its reader instead of decoding frames nobody takes.
         """
+        waiter, frame = self._read_waiter, self._frame
+        if waiter is not None and frame is not None and frame.seq > self._read_seq and waiter(frame.seq, timeout):
+            self.mark_read(frame.seq)
+            return True
         with self._cond:
-            return self._cond.wait_for(lambda: self._frame is None or self._read_seq >= self._frame.seq, timeout)
+            return self._cond.wait_for(lambda: self._frame is None or self._read_seq >= self._frame.seq,
+                                       0 if waiter is not None else timeout)
 
     def latest(self) -> Frame | None:
         """The newest frame, or None before the first capture. Marks it as read."""
@@ -125,6 +131,13 @@ class FrameBuffer:
             self._read_seq = seq
             self._taken += 1
             self._cond.notify_all()
+
+    def set_read_waiter(self, waiter: Callable[[int, float], bool] | None) -> None:
+        """Let :meth:`wait_read` ask the reader: ``waiter(seq, timeout)`` blocks until frame ``seq`` is taken (True)
+        or ``timeout`` s passed (False). For a reader in another process that learns of a take before it can
+        :meth:`mark_read` it; None: wait for ``mark_read``.
+        """
+        self._read_waiter = waiter
 
     def set_allocator(self, allocator: Callable[[tuple[int, ...]], np.ndarray | None] | None) -> None:
         """Let the reader provide the arrays frames are captured into (shared memory, say); None: the source's own."""

@@ -15,6 +15,7 @@ autonomy, and a fresh child with the same arguments is started after 1, 2, 4 ...
 from __future__ import annotations
 
 import asyncio
+import functools
 import itertools
 import logging
 import pickle
@@ -98,6 +99,7 @@ class ProcessWorker:
         self._lock = threading.RLock()
         self._send_lock = threading.Lock()
         self._wake = threading.Condition(self._lock)
+        self._offer_made = threading.Condition(self._lock)
         self._nudged = False
         self._starved = False
         """A frame found every slot held: the next slot freed nudges the feeder."""
@@ -107,8 +109,8 @@ class ProcessWorker:
         self._buffer: FrameBuffer | None = None
         self._picked: tuple[FrameBuffer | None, int] = (None, 0)
         """The newest frame taken for an offer (each frame is offered once)."""
-        self._offered: tuple[FrameBuffer | None, int] = (None, 0)
-        """The newest frame put in the mailbox (an older one is never put after it)."""
+        self._offered: tuple[FrameBuffer | None, int, int] = (None, 0, 0)
+        """The newest frame put in the mailbox, and its gen (an older frame is never put after it)."""
         self._pickled_telemetry: tuple[object, bytes] = (None, b"")
         """The newest telemetry update and its pickled fields."""
         self._loop: asyncio.AbstractEventLoop | None = None
@@ -147,12 +149,17 @@ class ProcessWorker:
         """Take frames from ``buffer`` from now on (a new source)."""
         with self._lock:
             if self._buffer is not None:
-                self._buffer.remove_listener(self._on_frame)
-                self._buffer.set_allocator(None)
+                self._detach(self._buffer)
             self._buffer = buffer
             buffer.set_allocator(self._ring.capture_view)  # cameras that can decode into shared memory do
+            buffer.set_read_waiter(functools.partial(self._wait_claimed, buffer))
             buffer.add_listener(self._on_frame)
         self._nudge()
+
+    def _detach(self, buffer: FrameBuffer) -> None:
+        buffer.remove_listener(self._on_frame)
+        buffer.set_allocator(None)
+        buffer.set_read_waiter(None)
 
     async def run(self) -> None:
         """The watchdog: kill a child silent for longer than ``timeout_s``; until cancelled, then stop all."""
@@ -225,8 +232,7 @@ class ProcessWorker:
         with self._wake:
             self._closing = True
             if self._buffer is not None:
-                self._buffer.remove_listener(self._on_frame)
-                self._buffer.set_allocator(None)
+                self._detach(self._buffer)
             self._wake.notify()
         if self._restart_task is not None:
             self._restart_task.cancel()
@@ -268,7 +274,7 @@ class ProcessWorker:
         self.processor = LoadedProcessor(instance=None, info=info, spec=self.spec, kwargs=self.kwargs)
         with self._lock:
             self._child = child
-            self._picked = self._offered = (None, 0)
+            self._picked, self._offered = (None, 0), (None, 0, 0)
         self.state_text = "running"
         self._nudge()
 
@@ -333,7 +339,7 @@ class ProcessWorker:
             child, buffer = self._child, self._buffer
             if self._closing or child is None or buffer is None or self._picked == (buffer, buffer.newest_seq):
                 return
-            frame = buffer.peek()  # read once its result is back (a replay then puts the next)
+            frame = buffer.peek()  # read once the child claimed it (a replay then puts the next)
             if frame is None:
                 return
             slot = self._ring.take_for_child(frame.image)
@@ -366,13 +372,33 @@ class ProcessWorker:
             if not current:
                 unused = [slot]
             else:
-                self._offered = (buffer, frame.seq)
+                self._offered = (buffer, frame.seq, offer.gen)
+                self._offer_made.notify_all()
                 child.offered[offer.gen] = Offered(buffer, frame, slot, copied)
                 child.held[slot.name] = slot
                 replaced = None if taken else child.offered.pop(previous, None)
                 unused = [child.held.pop(replaced.slot.name)] if replaced is not None else []
         for stale in unused:
             self._ring.release_child(stale)
+
+    def _wait_claimed(self, buffer: FrameBuffer, seq: int, timeout_s: float) -> bool:
+        """``buffer``'s read waiter: block until the child claimed frame ``seq`` (True) or ``timeout_s`` passed.
+
+        A replay paced by its reader then puts its next frame while the child still works on this one.
+        """
+        deadline = time.monotonic() + timeout_s
+        with self._offer_made:
+            if not self._offer_made.wait_for(lambda: self._offered[0] is buffer and self._offered[1] >= seq,
+                                             timeout_s):
+                return False
+            child, gen = self._child, self._offered[2]
+        try:
+            if child is None:
+                raise MailboxGone("no processor")
+            return child.mailbox.wait_claimed(gen, max(0.0, deadline - time.monotonic()))
+        except MailboxGone:  # it died: a new one is offered the frame again
+            time.sleep(max(0.0, deadline - time.monotonic()))
+            return False
 
     def _telemetry_now(self) -> tuple[bytes, float | None]:
         """The telemetry attached to a frame as it is offered: the newest update pickled, and the heartbeat age.
@@ -453,7 +479,7 @@ class ProcessWorker:
             # A copied-in frame's overlay is in the slot: lend it before the child's hold goes.
             slot_view = self._ring.lend(offered.slot) if offered is not None and offered.copied else None
         if offered is not None:
-            offered.buffer.mark_read(offered.frame.seq)  # a replay puts its next frame (decoded meanwhile)
+            offered.buffer.mark_read(offered.frame.seq)  # taken (a replay knew at the claim: _wait_claimed)
         self._release(child, released)
         if offered is None or child is not self._child or self._closing:
             return

@@ -214,9 +214,8 @@ def spawn(ready: asyncio.Future[ProcessorInfo]) -> ChildProcess:
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in sys.path if p),  # what this process imports
            LOG_LEVEL_ENV: logging.getLevelName(logging.getLogger().getEffectiveLevel())}
     try:
-        proc = subprocess.Popen([sys.executable, "-m", "processors.child", str(theirs.fileno()),
-                                 *mailbox.address.split()],
-                                pass_fds=(theirs.fileno(), mailbox.lock_fd, mailbox.wake_fd), stdin=subprocess.DEVNULL,
+        proc = subprocess.Popen([sys.executable, "-m", "processors.child", str(theirs.fileno()), mailbox.address],
+                                pass_fds=(theirs.fileno(), *mailbox.fds), stdin=subprocess.DEVNULL,
                                 stdout=subprocess.PIPE, stderr=subprocess.STDOUT, env=env)
     except BaseException:
         mailbox.close()

@@ -6,6 +6,7 @@ Each test runs with both hosts of a processor: its own process (the default) and
 from __future__ import annotations
 
 import asyncio
+import itertools
 import os
 import threading
 import time
@@ -236,6 +237,29 @@ class Drawing:
         self.count += 1
         frame[:8, :8] = self.count % 251  # the overlay: which call drew on this frame
 '''
+
+
+async def test_a_replay_puts_its_next_frame_while_the_child_processes_this_one(tmp_path: Path) -> None:
+    """Process isolation, ``realtime=0``: every frame is processed, and frame n+1 is decoded and put as soon as
+    the child claimed frame n (before its result is back), so the child finds it waiting when it is done."""
+    (tmp_path / "slow.py").write_text(SLOW)
+    video = tmp_path / "clip.mp4"
+    writer = cv2.VideoWriter(str(video), cv2.VideoWriter_fourcc(*"mp4v"), 30, (160, 120))
+    for i in range(10):
+        writer.write(np.full((120, 160, 3), i * 20, np.uint8))
+    writer.release()
+    source = open_source(f"file:{video}?realtime=0")
+    results: list[ProcessedFrame] = []
+    try:
+        async with running_worker("process", f"{tmp_path}/slow.py:Slow", results.append, {"delay": 0.05}) as worker:
+            worker.attach(source.buffer)
+            await collect(worker, results, 8)
+    finally:
+        source.close()
+    assert [r.frame.seq for r in results] == list(range(1, len(results) + 1))  # none skipped
+    assert source.get_properties()["frames_dropped"] == 0
+    put_while_processing = [nxt.frame.t_mono_ns < cur.t_end_ns for cur, nxt in itertools.pairwise(results[1:])]
+    assert all(put_while_processing), put_while_processing
 
 
 @pytest.mark.parametrize("camera", ["file", "synthetic"])

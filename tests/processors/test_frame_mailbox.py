@@ -32,14 +32,13 @@ def claim_in_another_process(box: FrameMailbox) -> str:
     """Claim once from a fresh interpreter attached by address; what it got, as text."""
     code = textwrap.dedent(f"""
         from processors.frame_mailbox import FrameMailbox
-        name, lock_fd, wake_fd = "{box.address}".split()
-        box = FrameMailbox.attach(name, int(lock_fd), int(wake_fd))
+        box = FrameMailbox.attach("{box.address}")
         got = box.claim()
         print(None if got is None else
               (got.gen, got.slot, got.shape, got.seq, got.t_mono_ns, got.telemetry, got.heartbeat_age_s))
         box.close()
     """)
-    return subprocess.run([sys.executable, "-c", code], pass_fds=(box.lock_fd, box.wake_fd), capture_output=True,
+    return subprocess.run([sys.executable, "-c", code], pass_fds=box.fds, capture_output=True,
                           text=True, check=True, timeout=60).stdout.strip()
 
 
@@ -96,3 +95,17 @@ def test_the_last_claim_and_its_time_are_read_without_waiting(mailbox: FrameMail
     os.eventfd_write(mailbox.lock_fd, 1)
     mailbox.close()
     assert mailbox.last_claim() is None
+
+
+def test_the_platform_waits_for_a_claim_and_only_then_is_it_signalled(mailbox: FrameMailbox) -> None:
+    mailbox.offer(offer(1))
+    claim_in_another_process(mailbox)
+    assert wait([mailbox.claimed_fd], timeout=0) == []  # nobody waited: the claim signalled nothing
+    assert mailbox.wait_claimed(1, timeout_s=0)  # claimed already: no wait
+    mailbox.offer(offer(2))
+    started = time.monotonic()
+    assert not mailbox.wait_claimed(2, timeout_s=0.2)  # not claimed: times out
+    assert time.monotonic() - started >= 0.2
+    claim_in_another_process(mailbox)  # the platform now waits for gen 2: this claim signals
+    assert wait([mailbox.claimed_fd], timeout=0) == [mailbox.claimed_fd]
+    assert mailbox.wait_claimed(2, timeout_s=5)
