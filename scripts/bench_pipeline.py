@@ -11,6 +11,10 @@ p50/p95 — the cost of getting a frame into the processor, without the time spe
 Goals (ratios within one run): FPS >= 0.95x the bare loop, CPU/frame <= 1.1x, hand-off p95 <= 1 ms at
 1280x720. Prints one JSON object.
 
+A shared or throttled machine drifts by tens of percent within minutes, so each configuration runs in
+``--rounds`` rounds of bare loop, process and thread back to back; a ratio is taken within its round and
+the median over the rounds is reported (with every round's value).
+
 ``--camera`` measures the regime a drone flies in instead: frames at the video's 30 FPS (``realtime=1``,
 the bare loop paced the same), where every frame finds the processor idle. It reports CPU per frame, the
 platform's extra CPU as a share of one core, and capture-to-result latency p50/p95 (no goals).
@@ -133,33 +137,45 @@ async def platform_run(source: str, processor: str, isolation: str, seconds: flo
     }
 
 
-def camera_rate(processor: str, size: tuple[int, int], video: Path, seconds: float) -> dict[str, Any]:
-    """At the video's 30 FPS: CPU per frame, the platform's extra CPU as a share of a core, latency."""
+def rounds(processor: str, size: tuple[int, int], video: Path, seconds: float, count: int,
+           camera: bool) -> dict[str, Any]:
+    """``count`` rounds of bare loop, process and thread back to back; each measure is the median over the
+    rounds, with the rounds' values in ``"<name>_rounds"``. ``derive(bare, run)`` adds the per-round ratios."""
     roi = target_roi(*size) if processor == "csrt" else None
-    bare = bare_loop(video, processor, seconds, roi, fps=VIDEO_FPS)
-    entry: dict[str, Any] = {"processor": processor, "resolution": f"{size[0]}x{size[1]}", "fps": VIDEO_FPS,
-                             "bare_loop": bare}
-    for isolation in ("process", "thread"):
-        run = entry[isolation] = asyncio.run(platform_run(f"file:{video}?realtime=1", processor, isolation, seconds,
-                                                          roi))
-        extra_s = run["cpu_s_per_frame"] - bare["cpu_s_per_frame"]
-        run["extra_cpu_ms_per_frame"] = extra_s * 1e3
-        run["extra_core_share"] = extra_s * VIDEO_FPS
+    source = f"file:{video}?realtime={int(camera)}"
+    measured: dict[str, list[dict[str, float]]] = {"bare_loop": [], "process": [], "thread": []}
+    for _ in range(count):
+        bare = bare_loop(video, processor, seconds, roi, fps=VIDEO_FPS if camera else None)
+        measured["bare_loop"].append(bare)
+        for isolation in ("process", "thread"):
+            run = asyncio.run(platform_run(source, processor, isolation, seconds, roi))
+            measured[isolation].append({**run, **(extra_cpu(bare, run) if camera else ratios(bare, run))})
+    entry: dict[str, Any] = {"processor": processor, "resolution": f"{size[0]}x{size[1]}", "rounds": count}
+    for name, runs in measured.items():
+        entry[name] = {key: float(np.median([run[key] for run in runs])) for key in runs[0]}
+        for key in ("fps", "fps_ratio_vs_bare", "cpu_ratio_vs_bare", "extra_cpu_ms_per_frame"):
+            if key in runs[0]:
+                entry[name][f"{key}_rounds"] = [round(run[key], 3) for run in runs]
     return entry
 
 
-def compare(processor: str, size: tuple[int, int], video: Path, seconds: float) -> dict[str, Any]:
-    roi = target_roi(*size) if processor == "csrt" else None
-    source = f"file:{video}?realtime=0"
-    entry: dict[str, Any] = {"processor": processor, "resolution": f"{size[0]}x{size[1]}",
-                             "bare_loop": bare_loop(video, processor, seconds, roi)}
-    for isolation in ("process", "thread"):
-        entry[isolation] = asyncio.run(platform_run(source, processor, isolation, seconds, roi))
-    bare = entry["bare_loop"]
-    for isolation in ("process", "thread"):
-        run = entry[isolation]
-        run["fps_ratio_vs_bare"] = run["fps"] / bare["fps"]
-        run["cpu_ratio_vs_bare"] = run["cpu_s_per_frame"] / bare["cpu_s_per_frame"]
+def ratios(bare: dict[str, float], run: dict[str, float]) -> dict[str, float]:
+    return {"fps_ratio_vs_bare": run["fps"] / bare["fps"],
+            "cpu_ratio_vs_bare": run["cpu_s_per_frame"] / bare["cpu_s_per_frame"]}
+
+
+def extra_cpu(bare: dict[str, float], run: dict[str, float]) -> dict[str, float]:
+    extra_s = run["cpu_s_per_frame"] - bare["cpu_s_per_frame"]
+    return {"extra_cpu_ms_per_frame": extra_s * 1e3, "extra_core_share": extra_s * VIDEO_FPS}
+
+
+def camera_rate(processor: str, size: tuple[int, int], video: Path, seconds: float, count: int) -> dict[str, Any]:
+    """At the video's 30 FPS: CPU per frame, the platform's extra CPU as a share of a core, latency."""
+    return {**rounds(processor, size, video, seconds, count, camera=True), "fps": VIDEO_FPS}
+
+
+def compare(processor: str, size: tuple[int, int], video: Path, seconds: float, count: int) -> dict[str, Any]:
+    entry = rounds(processor, size, video, seconds, count, camera=False)
     process = entry["process"]
     entry["goals_met"] = {"fps": process["fps_ratio_vs_bare"] >= GOALS["fps_ratio_min"],
                           "cpu": process["cpu_ratio_vs_bare"] <= GOALS["cpu_ratio_max"]}
@@ -170,7 +186,8 @@ def compare(processor: str, size: tuple[int, int], video: Path, seconds: float) 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--seconds", type=float, default=6.0)
+    parser.add_argument("--seconds", type=float, default=4.0, help="per measurement")
+    parser.add_argument("--rounds", type=int, default=3, help="of bare loop, process and thread; medians reported")
     parser.add_argument("--processors", default=",".join(PROCESSORS))
     parser.add_argument("--resolutions", default=",".join(f"{w}x{h}" for w, h in RESOLUTIONS))
     parser.add_argument("--camera", action="store_true", help=f"frames at {VIDEO_FPS} FPS, as a camera gives them")
@@ -183,7 +200,7 @@ def main() -> None:
             video = Path(tmp) / f"bench-{text}.mp4"
             make_video(video, 150, *size)
             for processor in args.processors.split(","):
-                runs.append(measure(processor, size, video, args.seconds))
+                runs.append(measure(processor, size, video, args.seconds, args.rounds))
                 print(f"{processor} {text} done", file=sys.stderr, flush=True)
     if args.camera:
         print(json.dumps({"mode": f"camera, {VIDEO_FPS} FPS", "runs": runs}, indent=2))
