@@ -15,6 +15,7 @@ autonomy, and a fresh child with the same arguments is started after 1, 2, 4 ...
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import functools
 import itertools
 import logging
@@ -392,13 +393,11 @@ class ProcessWorker:
                                              timeout_s):
                 return False
             child, gen = self._child, self._offered[2]
-        try:
-            if child is None:
-                raise MailboxGone("no processor")
-            return child.mailbox.wait_claimed(gen, max(0.0, deadline - time.monotonic()))
-        except MailboxGone:  # it died: a new one is offered the frame again
-            time.sleep(max(0.0, deadline - time.monotonic()))
-            return False
+        if child is not None:
+            with contextlib.suppress(MailboxGone):
+                return child.mailbox.wait_claimed(gen, max(0.0, deadline - time.monotonic()))
+        time.sleep(max(0.0, deadline - time.monotonic()))  # no child, or it died: its successor is offered the frame
+        return False
 
     def _telemetry_now(self) -> tuple[bytes, float | None]:
         """The telemetry attached to a frame as it is offered: the newest update pickled, and the heartbeat age.

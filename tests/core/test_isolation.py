@@ -15,9 +15,11 @@ import sys
 import time
 from pathlib import Path
 
+import cv2
 import numpy as np
 import pytest
 
+from sources import open_source
 from sources.buffer import FrameBuffer
 from tests.core.flight_helpers import fly_under_autonomy, flying_core, speed, wait_until
 from uav_tui import dataset
@@ -27,6 +29,7 @@ from uav_tui.errors import ConfigError, ProcessorLoadError, UavError
 from uav_tui.events import EventLog
 from uav_tui.headless import format_status
 from uav_tui.process_worker import ProcessWorker
+from uav_tui.worker import ProcessedFrame
 
 MAX_T = 1.5
 
@@ -309,3 +312,46 @@ async def test_after_five_restarts_in_a_minute_it_gives_up_and_says_so(tmp_path:
     assert any(m.startswith("gave up: 5 restarts within 60 s") for m in messages)
     assert worker.state().state == "crashed: restart failed: " + messages[-2].partition(" failed: ")[2]
     assert len(faults) == 1 and "exited with code 3" in faults[0]  # autonomy was stopped once, at the death
+
+
+DIES_ONCE = '''
+import os
+from pathlib import Path
+
+class DiesOnce:
+    """Dies on its third frame, the first time it runs."""
+
+    def __init__(self, marker):
+        self.marker, self.frames = Path(marker), 0
+
+    def photo_processing(self, frame):
+        self.frames += 1
+        if self.frames == 3 and not self.marker.exists():
+            self.marker.touch()
+            os._exit(3)
+'''
+
+
+async def test_a_replay_goes_on_with_the_restarted_processor_after_the_frame_the_dead_one_had(tmp_path: Path) -> None:
+    """``realtime=0`` waits for each frame's claim; a child that dies on frame 3 (it had claimed it) is replaced
+    and the replay resumes with the restarted one at frame 4: only the frame it died on is lost."""
+    (tmp_path / "dies_once.py").write_text(DIES_ONCE)
+    video = tmp_path / "clip.mp4"
+    writer = cv2.VideoWriter(str(video), cv2.VideoWriter_fourcc(*"mp4v"), 30, (64, 48))
+    for i in range(30):
+        writer.write(np.full((48, 64, 3), i, np.uint8))
+    writer.release()
+    source = open_source(f"file:{video}?realtime=0")
+    results: list[ProcessedFrame] = []
+    worker = await ProcessWorker.start(f"{tmp_path}/dies_once.py:DiesOnce", {"marker": str(tmp_path / "died")},
+                                       results.append, events=EventLog(), on_fault=print, first_backoff_s=0.05)
+    worker.attach(source.buffer)
+    task = asyncio.create_task(worker.run())
+    try:
+        await wait_until(lambda: len(results) >= 10, 30, "ten frames from the restarted processor")
+    finally:
+        task.cancel()
+        await asyncio.gather(task, return_exceptions=True)
+        source.close()
+    seqs = [r.frame.seq for r in results]
+    assert seqs == [1, 2, *range(4, len(seqs) + 2)]
