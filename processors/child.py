@@ -211,6 +211,9 @@ class ChildRunner:
         self.has_vector = "getPreparedVector" in loaded.info.capabilities
         self._telemetry: tuple[bytes, dict[str, Any]] = (b"", {})
         """The last frame's pickled telemetry and its fields (telemetry changes slower than frames)."""
+        self._messages = select.poll()
+        self._messages.register(conn.fileno(), select.POLLIN)
+        """The pipe alone, asked with no wait before every frame (``Connection.poll`` builds a selector each time)."""
         self._idle = select.poll()
         for fd in (conn.fileno(), mailbox.fileno()):
             self._idle.register(fd, select.POLLIN)
@@ -222,7 +225,7 @@ class ChildRunner:
         """
         while True:
             try:
-                while self.conn.poll():
+                while self._messages.poll(0):  # a message, or the end of the pipe (recv raises EOFError)
                     self.handle(self.conn.recv())
             except (EOFError, OSError):
                 return

@@ -21,10 +21,9 @@ import os
 import select
 import struct
 import time
-from collections.abc import Iterator
-from dataclasses import dataclass
 from multiprocessing import resource_tracker
 from multiprocessing.shared_memory import SharedMemory
+from typing import NamedTuple
 
 TELEMETRY_BYTES = 16 * 1024
 """Room for the pickled telemetry of one frame (a few hundred bytes in practice)."""
@@ -46,9 +45,8 @@ LOCK_TIMEOUT_S = 0.2
 """Longest wait for the lock: it is held for microseconds, so only a process killed holding it makes this run out."""
 
 
-@dataclass(frozen=True, slots=True)
-class Offer:
-    """One frame as the mailbox carries it."""
+class Offer(NamedTuple):
+    """One frame as the mailbox carries it (a named tuple: built on every frame, on both sides)."""
 
     gen: int
     """Offer number, from 1, increasing."""
@@ -67,12 +65,51 @@ class MailboxGone(Exception):
     """The mailbox was closed, or its lock not released in time (the other process died holding it)."""
 
 
+class SharedLock:
+    """A lock two processes share: an eventfd used as a semaphore, 1 when free (``with lock:`` waits at most
+    :data:`LOCK_TIMEOUT_S`). A class, not a generator context manager: it is taken several times a frame."""
+
+    def __init__(self, fd: int, shm: SharedMemory) -> None:
+        self.fd, self._shm = fd, shm
+
+    def acquire(self, timeout_s: float = LOCK_TIMEOUT_S) -> None:
+        """Raises MailboxGone when the mailbox is closed or the lock stays taken ``timeout_s``."""
+        if self._shm.buf is None:
+            raise MailboxGone("the frame mailbox is closed")
+        try:
+            os.eventfd_read(self.fd)
+            return
+        except BlockingIOError:
+            pass
+        deadline = time.monotonic() + timeout_s
+        while True:
+            remaining = deadline - time.monotonic()
+            if remaining <= 0:
+                raise MailboxGone("the frame mailbox stayed locked: the other process died holding it")
+            select.select([self.fd], [], [], remaining)
+            try:
+                os.eventfd_read(self.fd)
+                return
+            except BlockingIOError:
+                continue
+
+    def release(self) -> None:
+        os.eventfd_write(self.fd, 1)
+
+    def __enter__(self) -> None:
+        self.acquire()
+
+    def __exit__(self, *exc_info: object) -> None:
+        self.release()
+
+
 class FrameMailbox:
     """One side of the mailbox: the platform creates it (:meth:`create`), the processor attaches (:meth:`attach`)."""
 
     def __init__(self, shm: SharedMemory, lock_fd: int, wake_fd: int, claimed_fd: int, owner: bool) -> None:
         self._shm, self._owner = shm, owner
         self.lock_fd, self.wake_fd, self.claimed_fd = lock_fd, wake_fd, claimed_fd
+        self._lock = SharedLock(lock_fd, shm)
 
     @classmethod
     def create(cls) -> FrameMailbox:
@@ -115,7 +152,7 @@ class FrameMailbox:
             raise ValueError(f"offer does not fit: telemetry {len(offer.telemetry)} bytes (at most {TELEMETRY_BYTES}), "
                              f"slot name {len(name)} bytes (at most {_NAME_BYTES})")
         shape = (*offer.shape, 0)[:3]
-        with self._locked():
+        with self._lock:
             claimed = _CLAIM.unpack_from(self._shm.buf)[0]
             gen = _OFFER.unpack_from(self._shm.buf, _OFFER_AT)[0]
             _OFFER.pack_into(self._shm.buf, _OFFER_AT, offer.gen, offer.seq, offer.t_mono_ns, offer.t_wall_ns,
@@ -131,11 +168,13 @@ class FrameMailbox:
         Never waits: None when the lock is taken at this instant (or the mailbox is closed); ask again later.
         """
         try:
-            with self._locked(timeout_s=0):
-                gen, when = _CLAIM.unpack_from(self._shm.buf)
+            self._lock.acquire(timeout_s=0)
         except MailboxGone:
             return None
-        return gen, when
+        try:
+            return _CLAIM.unpack_from(self._shm.buf)
+        finally:
+            self._lock.release()
 
     def wait_claimed(self, gen: int, timeout_s: float) -> bool:
         """Block up to ``timeout_s`` until the processor claimed offer ``gen`` (or a later one); True once it has.
@@ -144,7 +183,7 @@ class FrameMailbox:
         """
         deadline = time.monotonic() + timeout_s
         while True:
-            with self._locked():
+            with self._lock:
                 claimed = _CLAIM.unpack_from(self._shm.buf)[0]
                 _WATCH.pack_into(self._shm.buf, _WATCH_AT, 0 if claimed >= gen else gen)
             remaining = deadline - time.monotonic()
@@ -160,7 +199,7 @@ class FrameMailbox:
 
     def claim(self) -> Offer | None:
         """Take the frame on offer, if there is one not taken yet."""
-        with self._locked():
+        with self._lock:
             claimed = _CLAIM.unpack_from(self._shm.buf)[0]
             gen, seq, t_mono, t_wall, h, w, c, name, age, tel_len = _OFFER.unpack_from(self._shm.buf, _OFFER_AT)
             if gen == 0 or claimed == gen:
@@ -186,25 +225,6 @@ class FrameMailbox:
                 self._shm.unlink()
             for fd in self.fds:
                 os.close(fd)
-
-    @contextlib.contextmanager
-    def _locked(self, timeout_s: float = LOCK_TIMEOUT_S) -> Iterator[None]:
-        if self._shm.buf is None:
-            raise MailboxGone("the frame mailbox is closed")
-        deadline = time.monotonic() + timeout_s
-        while True:
-            try:
-                os.eventfd_read(self.lock_fd)
-                break
-            except BlockingIOError:
-                remaining = deadline - time.monotonic()
-                if remaining <= 0:
-                    raise MailboxGone("the frame mailbox stayed locked: the other process died holding it") from None
-                select.select([self.lock_fd], [], [], remaining)
-        try:
-            yield
-        finally:
-            os.eventfd_write(self.lock_fd, 1)
 
 
 def _drain(eventfd: int) -> None:
