@@ -15,13 +15,13 @@ import sys
 import time
 from pathlib import Path
 
-import cv2
 import numpy as np
 import pytest
 
 from sources import open_source
 from sources.buffer import FrameBuffer
 from tests.core.flight_helpers import fly_under_autonomy, flying_core, speed, wait_until
+from tests.videos import create_video_file
 from uav_tui import dataset
 from uav_tui.config import load_config
 from uav_tui.core import UavCore
@@ -336,11 +336,7 @@ async def test_a_replay_goes_on_with_the_restarted_processor_after_the_frame_the
     """``realtime=0`` waits for each frame's claim; a child that dies on frame 3 (it had claimed it) is replaced
     and the replay resumes with the restarted one at frame 4: only the frame it died on is lost."""
     (tmp_path / "dies_once.py").write_text(DIES_ONCE)
-    video = tmp_path / "clip.mp4"
-    writer = cv2.VideoWriter(str(video), cv2.VideoWriter_fourcc(*"mp4v"), 30, (64, 48))
-    for i in range(30):
-        writer.write(np.full((48, 64, 3), i, np.uint8))
-    writer.release()
+    video = create_video_file(tmp_path / "clip.mp4", width=64, height=48)
     source = open_source(f"file:{video}?realtime=0")
     results: list[ProcessedFrame] = []
     worker = await ProcessWorker.start(f"{tmp_path}/dies_once.py:DiesOnce", {"marker": str(tmp_path / "died")},

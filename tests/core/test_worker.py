@@ -15,7 +15,6 @@ from contextlib import asynccontextmanager
 from pathlib import Path
 from typing import Any
 
-import cv2
 import numpy as np
 import pytest
 
@@ -23,6 +22,7 @@ from processors import load_processor
 from sources import open_source
 from sources.buffer import FrameBuffer
 from sources.synthetic import SyntheticSource
+from tests.videos import create_video_file
 from uav_tui.events import EventLog
 from uav_tui.process_worker import ProcessWorker
 from uav_tui.worker import ProcessedFrame, ProcessorWorker
@@ -243,11 +243,7 @@ async def test_a_replay_puts_its_next_frame_while_the_child_processes_this_one(t
     """Process isolation, ``realtime=0``: every frame is processed, and frame n+1 is decoded and put as soon as
     the child claimed frame n (before its result is back), so the child finds it waiting when it is done."""
     (tmp_path / "slow.py").write_text(SLOW)
-    video = tmp_path / "clip.mp4"
-    writer = cv2.VideoWriter(str(video), cv2.VideoWriter_fourcc(*"mp4v"), 30, (160, 120))
-    for i in range(10):
-        writer.write(np.full((120, 160, 3), i * 20, np.uint8))
-    writer.release()
+    video = create_video_file(tmp_path / "clip.mp4", frames=10)
     source = open_source(f"file:{video}?realtime=0")
     results: list[ProcessedFrame] = []
     try:
@@ -269,11 +265,7 @@ async def test_frames_kept_by_readers_are_never_overwritten(tmp_path: Path, came
     A file is decoded straight into the slots; the synthetic camera draws its own arrays, copied in.
     """
     (tmp_path / "drawing.py").write_text(DRAWING)
-    video = tmp_path / "clip.mp4"
-    writer = cv2.VideoWriter(str(video), cv2.VideoWriter_fourcc(*"mp4v"), 30, (160, 120))
-    for i in range(20):
-        writer.write(np.full((120, 160, 3), i * 10, np.uint8))
-    writer.release()
+    video = create_video_file(tmp_path / "clip.mp4", frames=20)
     source = open_source(f"file:{video}?realtime=0" if camera == "file" else "synthetic:?fps=200&width=160&height=120")
     kept: list[tuple[np.ndarray, np.ndarray]] = []
     processed = 0
