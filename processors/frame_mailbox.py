@@ -76,22 +76,21 @@ class SharedLock:
         """Raises MailboxGone when the mailbox is closed or the lock stays taken ``timeout_s``."""
         if self._shm.buf is None:
             raise MailboxGone("the frame mailbox is closed")
+        deadline = None  # computed only when the lock is taken: the usual case costs one read
+        while not self._try_take():
+            now = time.monotonic()
+            if deadline is None:
+                deadline = now + timeout_s
+            if now >= deadline:
+                raise MailboxGone("the frame mailbox stayed locked: the other process died holding it")
+            select.select([self.fd], [], [], deadline - now)
+
+    def _try_take(self) -> bool:
         try:
             os.eventfd_read(self.fd)
-            return
         except BlockingIOError:
-            pass
-        deadline = time.monotonic() + timeout_s
-        while True:
-            remaining = deadline - time.monotonic()
-            if remaining <= 0:
-                raise MailboxGone("the frame mailbox stayed locked: the other process died holding it")
-            select.select([self.fd], [], [], remaining)
-            try:
-                os.eventfd_read(self.fd)
-                return
-            except BlockingIOError:
-                continue
+            return False
+        return True
 
     def release(self) -> None:
         os.eventfd_write(self.fd, 1)
