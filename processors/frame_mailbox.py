@@ -20,6 +20,7 @@ import math
 import os
 import select
 import struct
+import threading
 import time
 from multiprocessing import resource_tracker
 from multiprocessing.shared_memory import SharedMemory
@@ -109,6 +110,9 @@ class FrameMailbox:
         self._shm, self._owner = shm, owner
         self.lock_fd, self.wake_fd, self.claimed_fd = lock_fd, wake_fd, claimed_fd
         self._lock = SharedLock(lock_fd, shm)
+        self._closing = False
+        self._waiters = 0  # threads in wait_claimed: close wakes them and lets them leave before the fds go
+        self._waiters_left = threading.Condition()
 
     @classmethod
     def create(cls) -> FrameMailbox:
@@ -178,18 +182,29 @@ class FrameMailbox:
     def wait_claimed(self, gen: int, timeout_s: float) -> bool:
         """Block up to ``timeout_s`` until the processor claimed offer ``gen`` (or a later one); True once it has.
 
-        Raises MailboxGone as :meth:`offer` does.
+        Raises MailboxGone as :meth:`offer` does, and when another thread closes the mailbox meanwhile.
         """
-        deadline = time.monotonic() + timeout_s
-        while True:
-            with self._lock:
-                claimed = _CLAIM.unpack_from(self._shm.buf)[0]
-                _WATCH.pack_into(self._shm.buf, _WATCH_AT, 0 if claimed >= gen else gen)
-            remaining = deadline - time.monotonic()
-            if claimed >= gen or remaining <= 0:
-                return claimed >= gen
-            if select.select([self.claimed_fd], [], [], remaining)[0]:
-                _drain(self.claimed_fd)
+        with self._waiters_left:
+            if self._closing:
+                raise MailboxGone("the frame mailbox is closed")
+            self._waiters += 1
+        try:
+            deadline = time.monotonic() + timeout_s
+            while True:
+                with self._lock:
+                    claimed = _CLAIM.unpack_from(self._shm.buf)[0]
+                    _WATCH.pack_into(self._shm.buf, _WATCH_AT, 0 if claimed >= gen else gen)
+                remaining = deadline - time.monotonic()
+                if claimed >= gen or remaining <= 0:
+                    return claimed >= gen
+                if select.select([self.claimed_fd], [], [], remaining)[0]:
+                    if self._closing:
+                        raise MailboxGone("the frame mailbox was closed")
+                    _drain(self.claimed_fd)
+        finally:
+            with self._waiters_left:
+                self._waiters -= 1
+                self._waiters_left.notify_all()
 
     # -- the processor ----------------------------------------------------------------------------
 
@@ -215,9 +230,18 @@ class FrameMailbox:
     # -- both -------------------------------------------------------------------------------------
 
     def close(self) -> None:
-        """Unmap (and, on the platform's side, unlink and close the descriptors). Idempotent."""
-        if self._shm.buf is None:
-            return
+        """Unmap (and, on the platform's side, unlink and close the descriptors). Idempotent.
+
+        A thread in :meth:`wait_claimed` is woken first and has left before the descriptors are closed: it
+        never waits on a closed one, nor reads one the process has meanwhile opened under the same number.
+        """
+        with self._waiters_left:
+            if self._closing:
+                return
+            self._closing = True
+            if self._waiters:
+                os.eventfd_write(self.claimed_fd, 1)
+                self._waiters_left.wait_for(lambda: self._waiters == 0)
         self._shm.close()
         if self._owner:
             with contextlib.suppress(FileNotFoundError):

@@ -9,12 +9,13 @@ import os
 import subprocess
 import sys
 import textwrap
+import threading
 import time
 from multiprocessing.connection import wait
 
 import pytest
 
-from processors.frame_mailbox import FrameMailbox, MailboxGone, Offer
+from processors.frame_mailbox import _WATCH, _WATCH_AT, FrameMailbox, MailboxGone, Offer
 
 
 def offer(gen: int, seq: int | None = None, telemetry: bytes = b"", heartbeat_age_s: float | None = None) -> Offer:
@@ -109,3 +110,27 @@ def test_the_platform_waits_for_a_claim_and_only_then_is_it_signalled(mailbox: F
     claim_in_another_process(mailbox)  # the platform now waits for gen 2: this claim signals
     assert wait([mailbox.claimed_fd], timeout=0) == [mailbox.claimed_fd]
     assert mailbox.wait_claimed(2, timeout_s=5)
+
+
+def test_closing_wakes_a_thread_waiting_for_a_claim_before_its_descriptors_go(mailbox: FrameMailbox) -> None:
+    mailbox.offer(offer(1))
+    outcome: list[BaseException | bool] = []
+
+    def wait_for_the_claim() -> None:
+        try:
+            outcome.append(mailbox.wait_claimed(1, timeout_s=30))
+        except BaseException as exc:  # noqa: BLE001 - what it raised is the result
+            outcome.append(exc)
+
+    waiter = threading.Thread(target=wait_for_the_claim)
+    waiter.start()
+    while not _WATCH.unpack_from(mailbox._shm.buf, _WATCH_AT)[0]:  # it waits once it posted the gen it watches
+        time.sleep(0.001)
+    descriptors = mailbox.fds
+    mailbox.close()  # the process worker closes a dead child's mailbox while the capture thread waits
+    waiter.join(timeout=10)
+    assert not waiter.is_alive()  # woken, not left waiting out its timeout on a closed descriptor
+    assert len(outcome) == 1 and isinstance(outcome[0], MailboxGone)  # not EBADF, not a read of a reused fd
+    for fd in descriptors:
+        with pytest.raises(OSError):
+            os.fstat(fd)  # and the descriptors are closed all the same
