@@ -189,22 +189,24 @@ class FrameMailbox:
                 raise MailboxGone("the frame mailbox is closed")
             self._waiters += 1
         try:
-            deadline = time.monotonic() + timeout_s
-            while True:
-                with self._lock:
-                    claimed = _CLAIM.unpack_from(self._shm.buf)[0]
-                    _WATCH.pack_into(self._shm.buf, _WATCH_AT, 0 if claimed >= gen else gen)
-                remaining = deadline - time.monotonic()
-                if claimed >= gen or remaining <= 0:
-                    return claimed >= gen
-                if select.select([self.claimed_fd], [], [], remaining)[0]:
-                    if self._closing:
-                        raise MailboxGone("the frame mailbox was closed")
-                    _drain(self.claimed_fd)
+            return self._await_claim(gen, time.monotonic() + timeout_s)
         finally:
             with self._waiters_left:
                 self._waiters -= 1
                 self._waiters_left.notify_all()
+
+    def _await_claim(self, gen: int, deadline: float) -> bool:
+        while True:
+            with self._lock:
+                claimed = _CLAIM.unpack_from(self._shm.buf)[0]
+                _WATCH.pack_into(self._shm.buf, _WATCH_AT, 0 if claimed >= gen else gen)
+            remaining = deadline - time.monotonic()
+            if claimed >= gen or remaining <= 0:
+                return claimed >= gen
+            if select.select([self.claimed_fd], [], [], remaining)[0]:
+                if self._closing:
+                    raise MailboxGone("the frame mailbox was closed")
+                _drain(self.claimed_fd)
 
     # -- the processor ----------------------------------------------------------------------------
 
