@@ -18,6 +18,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from controllers.base import FlightController, Telemetry
+from controllers.errors import ConnectError
 
 __all__ = ["FlightController", "Telemetry", "connect_controller"]
 
@@ -40,6 +41,8 @@ async def connect_controller(address: str, *, heartbeat_timeout: float = 10.0,
         ConnectError: bad address, missing/busy device, no heartbeat in time.
     """
     key = address.strip().lower()
+    if key in ("none:", "sim:"):  # the camera's URIs have the colon (``--source sim:``), these names do not
+        raise ConnectError(f"flight controller {address!r}: did you mean {key[:-1]!r} (without the colon)?")
     if key == "none":
         return None
     if key == "sim":

@@ -158,6 +158,8 @@ async def test_nothing_serving_tcp_is_reported() -> None:
         pytest.param("http://1.2.3.4:80", "unknown connection scheme", id="scheme"),
         pytest.param("udpin://0.0.0.0:70000", "bad port", id="port"),
         pytest.param("serial:///dev/ttyNOPE9:57600", "no serial device /dev/ttyNOPE9", id="serial"),
+        pytest.param("sim:", r"did you mean 'sim' \(without the colon\)", id="sim-with-colon"),
+        pytest.param("none:", r"did you mean 'none'", id="none-with-colon"),
     ],
 )
 async def test_bad_connection_strings_fail_at_once(address: str, says: str) -> None:
