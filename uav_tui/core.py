@@ -219,27 +219,47 @@ class UavCore:
         await self._release()
 
     async def _release(self) -> None:
+        """Release every part, each one even if another failed (a bug, reported): the dataset is always closed."""
+        for part, release in (("side channels", self._stop_side_channels), ("tasks", self._cancel_tasks),
+                              ("processor", self._close_worker), ("camera", self._close_source),
+                              ("flight controller", self._close_controller), ("recorder", self._close_recorder)):
+            try:
+                await release()
+            except Exception as exc:  # noqa: BLE001 - reported; the parts after it must still be released
+                self.fail(f"releasing the {part}", exc)
+        self.state = CoreState.STOPPED
+
+    async def _stop_side_channels(self) -> None:
         for side in (self.web, self.camera_tracking):
             if side is not None:
                 await side.stop()
+
+    async def _cancel_tasks(self) -> None:
         for task in self._tasks:
             task.cancel()
         await asyncio.gather(*self._tasks, return_exceptions=True)
         self._tasks.clear()
+
+    async def _close_worker(self) -> None:
         if self.worker is not None:
             self.worker.close()
+
+    async def _close_source(self) -> None:
         if self.source is not None:
             await asyncio.get_running_loop().run_in_executor(None, self.source.close)
+
+    async def _close_controller(self) -> None:
         if self.controller is not None:
             await self.controller.close()
             self.abandoned_calls = list(getattr(self.controller, "unfinished_calls", ()))
             if self.abandoned_calls:
                 self.events.emit("error", "link", "flight controller calls still blocked, abandoned: "
                                  + ", ".join(self.abandoned_calls))
+
+    async def _close_recorder(self) -> None:
         if self.recorder is not None:
             self.telemetry.saver = None
             await asyncio.get_running_loop().run_in_executor(None, self.recorder.close)
-        self.state = CoreState.STOPPED
 
     def _save_without_recording(self, frame: Any, extra: dict[str, Any]) -> None:
         """``tmMgr.save`` with ``--no-record``: say so once in the event log (not on the terminal)."""

@@ -136,6 +136,8 @@ class HeadlessRunner:
             raise
         finally:
             await self.core.stop(self._reason)
+        if self.core.failure is not None and not self.exit_code:  # also a bug met while stopping
+            self.exit_code = EXIT_UNHANDLED_ERROR
         self._say(f"stopped: {self._reason}")
         if note := saved_run_note(self.core):
             self._say(json.dumps({"run_dir": str(self.core.recorder.run_dir)}) if self.json_lines else note)

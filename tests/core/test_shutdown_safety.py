@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import asyncio
 import io
+import json
 import signal
 import time
 from pathlib import Path
@@ -104,3 +105,26 @@ async def test_an_unhandled_error_holds_the_flying_vehicle_then_exits_non_zero(
     await wait_until(lambda: speed(truth.latest()) < 0.15, 3, "the vehicle to stop")
     await asyncio.sleep(0.5)
     assert await setpoints_since(truth, exited) == []  # nothing it started keeps streaming
+
+
+async def test_a_part_that_fails_to_stop_is_reported_and_the_rest_is_still_released(tmp_path: Path) -> None:
+    """A bug in releasing one part (here the processor's) must not leave the camera open or the dataset unfinished."""
+    out = io.StringIO()
+    runner = HeadlessRunner(steering_config(tmp_path, fc="none", record=True, runs_dir=str(tmp_path / "runs")),
+                            out=out)
+    run = asyncio.create_task(runner.run())
+    core = runner.core
+    await wait_until(lambda: core.state is CoreState.RUNNING and core.worker.last is not None, 30, "frames")
+
+    def broken_close() -> None:
+        raise RuntimeError("a bug while stopping")
+
+    core.worker.close = broken_close
+    runner.request_stop("test")
+    code = await asyncio.wait_for(run, 20)
+    assert code == EXIT_UNHANDLED_ERROR
+    assert "unhandled error in the processor task: RuntimeError('a bug while stopping')" in out.getvalue()
+    assert core.state is CoreState.STOPPED
+    assert not core.source.get_properties()["running"]  # released after the part that failed
+    run_json = json.loads((core.recorder.run_dir / "run.json").read_text())
+    assert "end_wall_ns" in run_json  # the dataset was finished

@@ -172,8 +172,10 @@ class UavApp(App[None]):
             return
         self._stopping, self.stop_reason = True, reason
         self.notify(f"stopping ({reason}): holding the vehicle if needed", timeout=10)
-        await self.core.stop(reason)
-        self.exit(return_code=return_code)
+        try:
+            await self.core.stop(reason)
+        finally:  # a bug in stopping must not leave the dashboard up on a terminal that may be gone
+            self.exit(return_code=return_code)
 
     async def on_unmount(self) -> None:
         self.core.events.remove_listener(self.on_core_event)
