@@ -279,7 +279,6 @@ class ChildRunner:
 
 
 def main(fd: int, mailbox_address: str) -> int:
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C reaches the whole process group: the platform decides
     faulthandler.enable()  # a segfault in native code leaves a Python traceback on stderr
     logging.basicConfig(level=os.environ.get(LOG_LEVEL_ENV, "WARNING"), handlers=[TaggedLogHandler()])
     _die_with_parent()

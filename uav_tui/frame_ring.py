@@ -24,6 +24,7 @@ of another size (the camera changed) is never reused: free slots of the old size
 from __future__ import annotations
 
 import contextlib
+import signal
 import sys
 import threading
 import weakref
@@ -75,7 +76,7 @@ class FrameRing:
         self._on_free = on_free
         self._on_unlink = on_unlink
         self._closed = False
-        _start_resource_tracker()
+        ensure_resource_tracker()
 
     def capture_view(self, shape: tuple[int, ...]) -> np.ndarray | None:
         """A free slot as an array for a camera to decode into (``FrameBuffer`` allocator), or None.
@@ -137,6 +138,7 @@ class FrameRing:
             return None
         slot = next((s for s in self._slots if s.holds == 0), None)
         if slot is None:
+            ensure_resource_tracker()
             slot = Slot(SharedMemory(create=True, size=int(np.prod(shape))), shape)
             self._slots.append(slot)
         slot.holds = 1
@@ -160,6 +162,8 @@ class FrameRing:
 
     def _unlink(self, slots: list[Slot]) -> None:
         """Remove ``slots`` from the ring and the system; unmap those nobody holds."""
+        if slots:
+            ensure_resource_tracker()
         for slot in slots:
             self._slots.remove(slot)
             slot.shm.unlink()
@@ -168,11 +172,19 @@ class FrameRing:
         self._on_unlink([s.name for s in slots])
 
 
-def _start_resource_tracker() -> None:
-    """Start multiprocessing's resource tracker (it unlinks our slots if this process is killed) now.
+def ensure_resource_tracker() -> None:
+    """Start multiprocessing's resource tracker (it unlinks shared memory if this process is killed), or
+    start it again if it died. Call before creating or unlinking shared memory.
 
-    It is started on the first SharedMemory and hands it ``sys.stderr``'s descriptor; under the
-    dashboard, Textual has replaced ``sys.stderr`` with an object that has none, so give it the real one.
+    - SharedMemory would start it with ``sys.stderr``'s descriptor; under the dashboard, Textual has
+      replaced ``sys.stderr`` with an object that has none (``bad value(s) in fds_to_keep``): give it the
+      real one.
+    - It shares the terminal's job, and a hang-up is sent to every process of the job: it starts with
+      SIGHUP blocked (the mask is inherited, and it never unblocks it), so it outlives the terminal.
     """
-    with contextlib.redirect_stderr(sys.__stderr__ or sys.stderr):
-        resource_tracker.ensure_running()
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGHUP})
+    try:
+        with contextlib.redirect_stderr(sys.__stderr__ or sys.stderr):
+            resource_tracker.ensure_running()
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)

@@ -29,7 +29,7 @@ from processors.base import ProcessorInfo
 from processors.child import BUFFER_COUNT, LOG_LEVEL_ENV, MEMORY_EXIT_CODE, parse_log_line
 from processors.frame_mailbox import FrameMailbox
 from sources.buffer import Frame, FrameBuffer
-from uav_tui.frame_ring import Slot
+from uav_tui.frame_ring import Slot, ensure_resource_tracker
 from uav_tui.text import safe, shorten
 
 TAIL_LINES = 30
@@ -208,15 +208,21 @@ class Inbox:
 
 
 def spawn(ready: asyncio.Future[ProcessorInfo]) -> ChildProcess:
-    """Start ``python -m processors.child`` with a pipe and a frame mailbox; its output is read on a thread."""
+    """Start ``python -m processors.child`` with a pipe and a frame mailbox; its output is read on a thread.
+
+    The child has a session of its own: a terminal's Ctrl-C, Ctrl-Z and hang-up (sent to every process of the
+    job) reach only the platform, which decides what happens to the processor.
+    """
     ours, theirs = multiprocessing.Pipe()
+    ensure_resource_tracker()
     mailbox = FrameMailbox.create()
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in sys.path if p),  # what this process imports
            LOG_LEVEL_ENV: logging.getLevelName(logging.getLogger().getEffectiveLevel())}
     try:
         proc = subprocess.Popen([sys.executable, "-m", "processors.child", str(theirs.fileno()), mailbox.address],
                                 pass_fds=(theirs.fileno(), *mailbox.fds), stdin=subprocess.DEVNULL,
-                                stdout=subprocess.PIPE, stderr=subprocess.STDOUT, env=env)
+                                stdout=subprocess.PIPE, stderr=subprocess.STDOUT, env=env,
+                                start_new_session=True)
     except BaseException:
         mailbox.close()
         raise

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import signal
 import statistics
 import subprocess
 import sys
@@ -55,6 +56,27 @@ def test_simulator_exits_when_its_parent_dies_without_stopping_it() -> None:
     while _alive(pid) and time.monotonic() < deadline:
         time.sleep(0.05)
     assert not _alive(pid)
+
+
+def test_simulator_outlives_a_hangup_of_its_parents_job() -> None:
+    """Like an autopilot, it is stopped by the platform, not by the hang-up sent to every process of the job."""
+    script = (
+        "from controllers.sim.launcher import SimVehicle; import signal, time\n"
+        "signal.signal(signal.SIGHUP, lambda *_: None)  # the platform handles its hang-up\n"
+        "print(SimVehicle().start().pid, flush=True)\n"
+        "time.sleep(30)\n"
+    )
+    env = {**os.environ, "PYTHONPATH": str(REPO_ROOT)}
+    with subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, env=env, cwd=REPO_ROOT,
+                          start_new_session=True) as parent:
+        try:
+            assert parent.stdout is not None
+            pid = int(parent.stdout.readline())
+            os.killpg(parent.pid, signal.SIGHUP)
+            time.sleep(0.5)
+            assert _alive(pid)
+        finally:
+            parent.kill()  # the simulator follows its parent (the test above)
 
 
 def test_start_failure_quotes_the_simulator_output() -> None:

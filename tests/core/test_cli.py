@@ -67,23 +67,32 @@ def test_vehicle_command_without_a_vehicle_fails_the_script_clearly(tmp_path: Pa
     assert result.stderr.startswith("uav-tui: error: script line 2 (arm) failed") and "--fc sim" in result.stderr
 
 
-@pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGINT, signal.SIGHUP], ids=["TERM", "INT", "HUP"])
-def test_signals_stop_cleanly(tmp_path: Path, signum: int) -> None:
+@pytest.mark.parametrize(("signum", "to_job"), [(signal.SIGTERM, False), (signal.SIGINT, True), (signal.SIGHUP, True)],
+                         ids=["TERM", "INT-Ctrl-C", "HUP-ssh-dropped"])
+def test_signals_stop_cleanly(tmp_path: Path, signum: int, to_job: bool) -> None:
+    """A terminal sends Ctrl-C, and a login shell whose SSH session dropped SIGHUP, to every process of the job:
+    the platform stops in order; its helpers (the processor's process, the shared-memory tracker) are not hit."""
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     process = subprocess.Popen([sys.executable, "-m", "uav_tui", "--no-ui", "--runs-dir", str(tmp_path / "runs")],
-                               cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                               cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                               start_new_session=True)  # a job of its own, as a shell starts it
     try:
         deadline = time.monotonic() + 30
         assert process.stdout is not None
         while time.monotonic() < deadline:  # wait for the first status line: the loop is running
             if "proc" in process.stdout.readline():
                 break
-        process.send_signal(signum)
+        if to_job:
+            os.killpg(process.pid, signum)
+        else:
+            process.send_signal(signum)
         out, err = process.communicate(timeout=20)
     finally:
         process.kill()
     assert process.returncode == 0, err
     assert "stopped:" in out
+    assert "processor (pid" not in out + err  # no crash of the processor's process reported
+    assert "resource_tracker" not in err  # it did not die ("process died unexpectedly, relaunching")
 
 
 @pytest.mark.parametrize(("option", "name", "content"), [

@@ -4,6 +4,7 @@ Flying tests run the simulator on its own, so that its ground truth outlives uav
 
 from __future__ import annotations
 
+import os
 import re
 import shlex
 import shutil
@@ -44,9 +45,11 @@ class Tmux:
         command = [sys.executable, "-m", "uav_tui", "--source", "synthetic:?fps=30", "--processor",
                    f"{ROOT / 'tests/tui/procs.py'}:RecordingProcessor", "--no-record", "--runs-dir",
                    str(tmp_path / "runs"), *flags]
-        # The shell ignores SIGHUP so that it can write the exit status after a hang-up; it writes it whole
-        # or not at all (renamed into place), so a test that sees the file never reads it half-written.
-        script = (f"trap '' HUP; cd {shlex.quote(str(tmp_path))}; {shlex.join(command)}; "
+        # The shell survives a hang-up (it traps SIGHUP, doing nothing) so that it can write the exit status;
+        # it writes it whole or not at all (renamed into place), so a test never reads it half-written. A trap
+        # (not ignoring it) leaves SIGHUP's default to the programs it starts: a hang-up reaches every process
+        # of the job, as over SSH.
+        script = (f"trap : HUP; cd {shlex.quote(str(tmp_path))}; {shlex.join(command)}; "
                   f"echo $? > {self.status}.part; mv {self.status}.part {self.status}")
         env = f"env -u COLORTERM PYTHONPATH={shlex.quote(str(ROOT))} TERM=xterm-256color"
         if colorterm:
@@ -143,17 +146,24 @@ def test_quit_while_flying_holds_the_vehicle_before_exit(tmux, tmp_path, sim_veh
     assert tmux.status.read_text().strip() == "0"
 
 
-@pytest.mark.parametrize(("policy", "hangup"), [("stop", "close"), ("stop", "sighup"), ("continue", "close")],
-                         ids=["stop-terminal-closed", "stop-sighup", "continue-terminal-closed"])
+def processor_process(app: psutil.Process) -> psutil.Process:
+    return next(p for p in app.children() if "processors.child" in " ".join(p.cmdline()))
+
+
+@pytest.mark.parametrize(("policy", "hangup"), [("stop", "close"), ("stop", "ssh"), ("continue", "close"),
+                                                ("continue", "ssh")],
+                         ids=["stop-terminal-closed", "stop-ssh-dropped", "continue-terminal-closed",
+                              "continue-ssh-dropped"])
 @pytest.mark.parametrize("sim_vehicle", [NO_FAILSAFE], indirect=True)
 def test_hangup_stops_or_continues_headless(tmux, tmp_path, sim_vehicle, policy, hangup):
     truth = fly(tmux, tmp_path, sim_vehicle, "--on-hangup", policy)
     app = psutil.Process(tmux.app_pid())
+    processor = processor_process(app)
+    job = os.getpgid(app.pid)
     lost = time.monotonic_ns()
-    if hangup == "close":
-        tmux.kill()  # the terminal is gone; the shell in between swallows SIGHUP: only EIO tells
-    else:
-        app.send_signal(signal.SIGHUP)
+    tmux.kill()  # the terminal is gone; the shell in between swallows SIGHUP: only EIO tells
+    if hangup == "ssh":  # a login shell whose SSH session dropped sends SIGHUP to every process of its job
+        os.killpg(job, signal.SIGHUP)
     if policy == "continue":
         # Headless now, autonomy keeps flying: new vectors keep reaching the vehicle well after the hang-up.
         wait(lambda: any(r["vx"] > 0 and r["t_mono_ns"] > lost + 2e9 for r in
@@ -161,6 +171,7 @@ def test_hangup_stops_or_continues_headless(tmux, tmp_path, sim_vehicle, policy,
              "vectors two seconds after the hang-up")
         assert app.is_running() and not tmux.status.exists()
         assert truth.latest()["mode"] == "OFFBOARD"
+        assert processor_process(app).pid == processor.pid  # the same processor (its target) carries on
         assert app.cpu_percent(interval=1.0) < 50  # headless: not spinning on the dead terminal
         app.send_signal(signal.SIGTERM)
     wait(tmux.status.exists, 20, "the exit status")
