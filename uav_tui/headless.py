@@ -120,7 +120,8 @@ class HeadlessRunner:
         loop = asyncio.get_running_loop()
         for signum, name in ((signal.SIGINT, "Ctrl-C"), (signal.SIGTERM, "SIGTERM"), (signal.SIGHUP, "SIGHUP")):
             if signum == signal.SIGHUP and self.on_hangup == "continue":
-                loop.add_signal_handler(signum, self._say, "SIGHUP: terminal lost, continuing headless")
+                loop.add_signal_handler(signum, self.core.events.emit, "warning", "platform",
+                                        "terminal lost (SIGHUP), --on-hangup continue: the run goes on")
             else:
                 loop.add_signal_handler(signum, self.request_stop, name)
         self.core.events.add_listener(self._print_event)  # before start: what it finds at connect is printed

@@ -10,6 +10,7 @@ import sys
 import time
 from pathlib import Path
 
+import psutil
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -67,21 +68,28 @@ def test_vehicle_command_without_a_vehicle_fails_the_script_clearly(tmp_path: Pa
     assert result.stderr.startswith("uav-tui: error: script line 2 (arm) failed") and "--fc sim" in result.stderr
 
 
+def start_headless(tmp_path: Path, *flags: str) -> subprocess.Popen[str]:
+    """``uav-tui --no-ui`` as a job of its own (as a shell starts it), once its first status line is out."""
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    process = subprocess.Popen([sys.executable, "-m", "uav_tui", "--no-ui", "--runs-dir", str(tmp_path / "runs"),
+                                *flags], cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                               text=True, start_new_session=True)
+    assert process.stdout is not None
+    deadline = time.monotonic() + 30
+    while time.monotonic() < deadline and process.poll() is None:
+        if "proc" in process.stdout.readline():  # the loop is running
+            return process
+    process.kill()
+    pytest.fail(f"no status line: {process.communicate()}")
+
+
 @pytest.mark.parametrize(("signum", "to_job"), [(signal.SIGTERM, False), (signal.SIGINT, True), (signal.SIGHUP, True)],
                          ids=["TERM", "INT-Ctrl-C", "HUP-ssh-dropped"])
 def test_signals_stop_cleanly(tmp_path: Path, signum: int, to_job: bool) -> None:
     """A terminal sends Ctrl-C, and a login shell whose SSH session dropped SIGHUP, to every process of the job:
     the platform stops in order; its helpers (the processor's process, the shared-memory tracker) are not hit."""
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    process = subprocess.Popen([sys.executable, "-m", "uav_tui", "--no-ui", "--runs-dir", str(tmp_path / "runs")],
-                               cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                               start_new_session=True)  # a job of its own, as a shell starts it
+    process = start_headless(tmp_path)
     try:
-        deadline = time.monotonic() + 30
-        assert process.stdout is not None
-        while time.monotonic() < deadline:  # wait for the first status line: the loop is running
-            if "proc" in process.stdout.readline():
-                break
         if to_job:
             os.killpg(process.pid, signum)
         else:
@@ -93,6 +101,23 @@ def test_signals_stop_cleanly(tmp_path: Path, signum: int, to_job: bool) -> None
     assert "stopped:" in out
     assert "processor (pid" not in out + err  # no crash of the processor's process reported
     assert "resource_tracker" not in err  # it did not die ("process died unexpectedly, relaunching")
+
+
+def test_hangup_with_continue_keeps_the_run_and_its_processor_going(tmp_path: Path) -> None:
+    process = start_headless(tmp_path, "--on-hangup", "continue")
+    try:
+        assert process.stdout is not None
+        processor = next(p for p in psutil.Process(process.pid).children() if "processors.child" in p.cmdline())
+        os.killpg(process.pid, signal.SIGHUP)  # the SSH session dropped
+        lines = [process.stdout.readline() for _ in range(3)]  # status lines go on
+        assert processor.is_running() and process.poll() is None
+        process.send_signal(signal.SIGTERM)
+        out, err = process.communicate(timeout=20)
+    finally:
+        process.kill()
+    assert process.returncode == 0, err
+    assert "[warning] platform: terminal lost (SIGHUP), --on-hangup continue: the run goes on" in "".join(lines) + out
+    assert "processor (pid" not in out + err and "stopped: SIGTERM" in out
 
 
 @pytest.mark.parametrize(("option", "name", "content"), [
