@@ -135,7 +135,7 @@ class SimVehicle:
                 stderr=subprocess.STDOUT,
                 stdin=subprocess.DEVNULL,
                 cwd=REPO_ROOT,
-                start_new_session=True,  # like a real autopilot, it outlives a hang-up until it is stopped
+                process_group=0,  # like a real autopilot, it outlives a hang-up until it is stopped
             )
         deadline = time.monotonic() + timeout
         with TruthClient(self.truth_port, subscribe=False) as probe:
