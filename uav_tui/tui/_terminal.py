@@ -2,18 +2,21 @@
 
 A hang-up does not always arrive as SIGHUP: when the shell in between ignores or swallows it, the
 process only notices that the terminal answers every call with EIO. Textual writes the screen from a
-writer thread through a bounded queue; if that thread dies on EIO, the queue fills and the event
-loop blocks for good (and with it the vehicle's hold). So:
+writer thread through a bounded queue; if that thread dies on EIO, or waits on a terminal that stopped
+taking output (an SSH connection stalled on bad Wi-Fi), the queue fills and the event loop blocks (and
+with it the vehicle's hold). So:
 
 - :class:`TerminalWatch` notices the loss three ways (SIGHUP, a failed write, EIO on a periodic
   ``tcgetattr``), points fds 0, 1, 2 at /dev/null at once, and reports it on the loop, once;
-- :func:`driver_for` gives Textual a driver whose writes never raise.
+- :func:`driver_for` gives Textual a driver whose writes never raise and never wait
+  (:class:`ScreenOutput`).
 """
 
 from __future__ import annotations
 
 import asyncio
 import errno
+import functools
 import logging
 import os
 import sys
@@ -28,6 +31,12 @@ logger = logging.getLogger(__name__)
 
 CHECK_PERIOD_S = 0.5
 """How often the watch thread asks the terminal whether it is still there."""
+MAX_BACKLOG_CHARS = 512 * 1024
+"""Screen output not yet taken by the terminal beyond which updates are dropped (a few full screens)."""
+KEPT_WRITE_CHARS = 64
+"""Writes this short (terminal modes: alternate screen, mouse, cursor) are never dropped."""
+CLOSE_TIMEOUT_S = 1.0
+"""How long closing the dashboard waits for a stalled terminal to take the last of its output."""
 
 
 class TerminalWatch:
@@ -80,14 +89,89 @@ class TerminalWatch:
 
 
 def driver_for(watch: TerminalWatch) -> type[LinuxDriver]:
-    """A LinuxDriver whose screen writes report a lost terminal to ``watch`` instead of raising."""
+    """A LinuxDriver whose screen writes never wait (:class:`ScreenOutput`) and report a lost terminal to
+    ``watch`` instead of raising."""
 
     class HangupSafeDriver(LinuxDriver):
         def __init__(self, *args: Any, **kwargs: Any) -> None:
             super().__init__(*args, **kwargs)
-            self._file = _QuietFile(self._file, watch)
+            self._output = ScreenOutput(_QuietFile(self._file, watch), self._repaint)
+            self._loop: asyncio.AbstractEventLoop | None = None
+
+        def start_application_mode(self) -> None:
+            self._loop = asyncio.get_running_loop()
+            super().start_application_mode()
+
+        def write(self, data: str) -> None:
+            self._output.write(data)
+
+        def close(self) -> None:
+            self._output.close(CLOSE_TIMEOUT_S)
+            super().close()
+
+        def _repaint(self) -> None:
+            """Updates were dropped while the terminal was stalled: draw the whole screen again (on the loop)."""
+            if self._loop is not None and not self._loop.is_closed():
+                self._loop.call_soon_threadsafe(functools.partial(self._app.refresh, layout=True))
 
     return HangupSafeDriver
+
+
+class ScreenOutput:
+    """The screen's output, written to the terminal by a thread of its own: ``write`` never waits.
+
+    Textual's own writer waits in ``write`` once 30 writes are queued, so a terminal that stops taking output
+    (an SSH connection stalled on bad Wi-Fi) blocked the event loop, and the flight link with it, within
+    seconds. Here screen updates that would take the backlog past ``max_backlog`` characters are dropped,
+    whole (never a piece of an escape sequence); short writes (terminal modes) are always kept. Once the
+    terminal has taken everything, ``on_drained`` is called if anything was dropped, to repaint the screen.
+    """
+
+    def __init__(self, file: TextIO | _QuietFile, on_drained: Callable[[], None],
+                 max_backlog: int = MAX_BACKLOG_CHARS) -> None:
+        self._file = file
+        self._on_drained = on_drained
+        self._max_backlog = max_backlog
+        self._pending: list[str] = []
+        self._backlog = 0
+        self._dropped = False
+        self._closing = False
+        self._ready = threading.Condition()
+        self._thread = threading.Thread(target=self._run, name="terminal-output", daemon=True)
+        self._thread.start()
+
+    def write(self, text: str) -> None:
+        with self._ready:
+            if len(text) > KEPT_WRITE_CHARS and self._backlog and self._backlog + len(text) > self._max_backlog:
+                self._dropped = True
+                return
+            self._pending.append(text)
+            self._backlog += len(text)
+            self._ready.notify()
+
+    def close(self, timeout: float) -> None:
+        """Write what is pending, waiting at most ``timeout`` s (the terminal may be stalled), then stop."""
+        with self._ready:
+            self._closing = True
+            self._ready.notify()
+        self._thread.join(timeout)
+
+    def _run(self) -> None:
+        while True:
+            with self._ready:
+                self._ready.wait_for(lambda: self._pending or self._closing)
+                if not self._pending:
+                    return
+                text, self._pending = "".join(self._pending), []
+            self._file.write(text)  # may wait for the terminal: only this thread waits
+            self._file.flush()
+            with self._ready:
+                self._backlog -= len(text)
+                drained = self._dropped and not self._pending
+                if drained:
+                    self._dropped = False
+            if drained:
+                self._on_drained()
 
 
 class _QuietFile:
