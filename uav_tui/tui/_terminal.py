@@ -96,11 +96,6 @@ def driver_for(watch: TerminalWatch) -> type[LinuxDriver]:
         def __init__(self, *args: Any, **kwargs: Any) -> None:
             super().__init__(*args, **kwargs)
             self._output = ScreenOutput(_QuietFile(self._file, watch), self._repaint)
-            self._loop: asyncio.AbstractEventLoop | None = None
-
-        def start_application_mode(self) -> None:
-            self._loop = asyncio.get_running_loop()
-            super().start_application_mode()
 
         def write(self, data: str) -> None:
             self._output.write(data)
@@ -111,7 +106,7 @@ def driver_for(watch: TerminalWatch) -> type[LinuxDriver]:
 
         def _repaint(self) -> None:
             """Updates were dropped while the terminal was stalled: draw the whole screen again (on the loop)."""
-            if self._loop is not None and not self._loop.is_closed():
+            if not self._loop.is_closed():  # Textual's driver keeps the app's loop
                 self._loop.call_soon_threadsafe(functools.partial(self._app.refresh, layout=True))
 
     return HangupSafeDriver
