@@ -76,7 +76,6 @@ class FrameRing:
         self._on_free = on_free
         self._on_unlink = on_unlink
         self._closed = False
-        ensure_resource_tracker()
 
     def capture_view(self, shape: tuple[int, ...]) -> np.ndarray | None:
         """A free slot as an array for a camera to decode into (``FrameBuffer`` allocator), or None.
