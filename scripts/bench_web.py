@@ -25,6 +25,7 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from controllers.sim.launcher import free_ports  # noqa: E402
 from uav_tui.config import load_config  # noqa: E402
 from uav_tui.core import UavCore  # noqa: E402
 from uav_tui.worker import ProcessedFrame  # noqa: E402
@@ -89,9 +90,7 @@ async def cpu_percent(seconds: float) -> float:
 async def bench(seconds: float, source: str) -> dict[str, Any]:
     from playwright.async_api import async_playwright
 
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        port = probe.getsockname()[1]
+    (port,) = free_ports(1, socket.SOCK_STREAM)
     core = UavCore(load_config(None, {"source": source, "fc": "none", "record": False, "web": True,
                                       "web_host": "127.0.0.1", "web_port": port}))
     frames: dict[int, tuple[int, int]] = {}

@@ -5,6 +5,7 @@ from __future__ import annotations
 import contextlib
 import logging
 import os
+import random
 import signal
 import socket
 import subprocess
@@ -24,11 +25,46 @@ REPO_ROOT = Path(__file__).resolve().parents[2]
 """Put on the child's PYTHONPATH so the simulator runs without the package being installed."""
 
 
+EPHEMERAL_PORTS = Path("/proc/sys/net/ipv4/ip_local_port_range")
+LOWEST_PORT = 10000
+"""Ports are picked from here up to the start of the kernel's ephemeral range."""
+
+
+def _ephemeral_range_start() -> int:
+    with contextlib.suppress(OSError, ValueError):
+        return int(EPHEMERAL_PORTS.read_text().split()[0])
+    return 32768  # Linux's default; macOS's range starts higher still
+
+
+def free_ports(count: int, kind: socket.SocketKind = socket.SOCK_DGRAM) -> list[int]:
+    """``count`` distinct ports (UDP by default) on 127.0.0.1, free now, below the kernel's ephemeral range.
+
+    A port from ``bind(0)`` is in that range, so once released the kernel may hand it to any socket
+    bound to port 0 (the simulator's own, MAVSDK's, another test's) before its user binds it again:
+    a rare ``Address already in use``. Ports below the range are only ever taken by explicit binds.
+    """
+    candidates = range(LOWEST_PORT, _ephemeral_range_start())
+    chosen: list[socket.socket] = []
+    try:
+        for port in random.sample(candidates, len(candidates)):
+            sock = socket.socket(socket.AF_INET, kind)
+            try:
+                sock.bind(("127.0.0.1", port))
+            except OSError:
+                sock.close()
+                continue
+            chosen.append(sock)
+            if len(chosen) == count:
+                return [s.getsockname()[1] for s in chosen]
+        raise OSError(f"no {count} free ports from {candidates.start} up to the ephemeral range ({EPHEMERAL_PORTS})")
+    finally:
+        for sock in chosen:
+            sock.close()
+
+
 def free_udp_port() -> int:
-    """A UDP port on 127.0.0.1 that was free a moment ago."""
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
+    """A UDP port on 127.0.0.1 that is free now and that no ``bind(0)`` can take (see :func:`free_ports`)."""
+    return free_ports(1)[0]
 
 
 class SimVehicle:
@@ -122,7 +158,7 @@ class SimVehicle:
         """
         if self.running:
             return self
-        self.mavlink_port, self.truth_port = free_udp_port(), free_udp_port()
+        self.mavlink_port, self.truth_port = free_ports(2)
         env = dict(os.environ)
         env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(REPO_ROOT), env.get("PYTHONPATH")]))
         fd, log_name = tempfile.mkstemp(prefix="uav-sim-", suffix=".log")

@@ -8,22 +8,16 @@ orbits, LOITER for hold), not how ArduCopter reacts to it.
 from __future__ import annotations
 
 import asyncio
-import socket
 from collections.abc import AsyncIterator
 
 import pytest
 import pytest_asyncio
 
 from controllers.mavsdk_controller import MavsdkController
+from controllers.sim.launcher import free_udp_port
 from tests.controllers.fake_autopilot import FakeAutopilot, UdpLink, mavlink
 
 GUIDED, LOITER, CIRCLE = 4, 5, 7
-
-
-def free_udp_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 @pytest_asyncio.fixture

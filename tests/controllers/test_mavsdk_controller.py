@@ -19,7 +19,7 @@ import pytest_asyncio
 
 from controllers import FlightController, connect_controller
 from controllers.mavsdk_controller import MavsdkController
-from controllers.sim.launcher import SimVehicle
+from controllers.sim.launcher import SimVehicle, free_udp_port
 from controllers.sim.truth import TruthClient
 from controllers.sim_controller import SimController
 from uav_tui.errors import CommandDenied, ConnectError
@@ -119,12 +119,6 @@ def body_displacement(before: Truth, after: Truth) -> tuple[float, float]:
 
 
 # ---- connecting ----------------------------------------------------------------------------------
-
-
-def free_udp_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 async def test_dead_port_gives_no_heartbeat_within_bounded_time() -> None:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import signal
+import socket
 import statistics
 import subprocess
 import sys
@@ -12,8 +13,9 @@ from pathlib import Path
 
 import pytest
 
+from controllers.sim import launcher
 from controllers.sim.__main__ import build_parser, config_from_args
-from controllers.sim.launcher import REPO_ROOT, SimVehicle
+from controllers.sim.launcher import REPO_ROOT, SimVehicle, free_ports
 from uav_tui.errors import ControllerError
 
 
@@ -30,6 +32,43 @@ def test_start_stop_is_idempotent_and_exits_cleanly() -> None:
     assert not sim.running
     with pytest.raises(ProcessLookupError):
         os.kill(pid, 0)
+
+
+@pytest.mark.parametrize("kind", [socket.SOCK_DGRAM, socket.SOCK_STREAM], ids=["udp", "tcp"])
+def test_free_ports_are_distinct_bindable_and_below_the_ephemeral_range(kind: socket.SocketKind) -> None:
+    ephemeral_start = int(Path("/proc/sys/net/ipv4/ip_local_port_range").read_text().split()[0])
+    ports = free_ports(5, kind)
+    assert len(set(ports)) == 5
+    assert all(launcher.LOWEST_PORT <= port < ephemeral_start for port in ports)
+    for port in ports:
+        with socket.socket(socket.AF_INET, kind) as sock:
+            sock.bind(("127.0.0.1", port))
+
+
+def test_free_ports_skip_ports_in_use(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    window = range(launcher.LOWEST_PORT, launcher.LOWEST_PORT + 20)
+    port_range = tmp_path / "ip_local_port_range"
+    port_range.write_text(f"{window.stop}\t60999\n")
+    monkeypatch.setattr(launcher, "EPHEMERAL_PORTS", port_range)
+    held: list[socket.socket] = []
+    try:
+        for port in window:  # take all but the last two that are free
+            sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+            try:
+                sock.bind(("127.0.0.1", port))
+            except OSError:
+                sock.close()
+                continue
+            held.append(sock)
+        left = [s.getsockname()[1] for s in held[-2:]]
+        for sock in held[-2:]:
+            sock.close()
+        assert sorted(free_ports(2)) == left
+        with pytest.raises(OSError, match="no 3 free ports from"):
+            free_ports(3)
+    finally:
+        for sock in held:
+            sock.close()
 
 
 def _alive(pid: int) -> bool:

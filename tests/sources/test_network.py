@@ -8,6 +8,7 @@ import time
 
 import pytest
 
+from controllers.sim.launcher import free_ports
 from sources import create_source, open_source
 from sources.network import OPTIONS_ENV, NetworkSource, redact
 from uav_tui.errors import SourceError
@@ -20,12 +21,6 @@ def _wait_for(condition, timeout: float) -> bool:
             return True
         time.sleep(0.05)
     return False
-
-
-def _free_port() -> int:
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        return sock.getsockname()[1]
 
 
 @pytest.mark.parametrize("server_fixture", ["rtsp_server", "mjpeg_server"], ids=["rtsp", "http-mjpeg"])
@@ -81,7 +76,7 @@ def test_users_own_ffmpeg_options_win(monkeypatch: pytest.MonkeyPatch) -> None:
 
 
 def test_nothing_listening_fails_to_open_with_advice() -> None:
-    source = NetworkSource(f"rtsp://127.0.0.1:{_free_port()}/live", open_timeout_s=2)
+    source = NetworkSource(f"rtsp://127.0.0.1:{free_ports(1, socket.SOCK_STREAM)[0]}/live", open_timeout_s=2)
     started = time.monotonic()
     assert source.open() is False
     assert time.monotonic() - started < 5

@@ -10,6 +10,7 @@ from typing import Any
 import cv2
 import pytest
 
+from controllers.sim.launcher import free_ports
 from uav_tui.config import load_config
 from uav_tui.core import UavCore
 
@@ -47,10 +48,8 @@ class RecordingProcessor:
             self.buttons.append(id)
 
 
-def free_port(kind: int = socket.SOCK_STREAM) -> int:
-    with socket.socket(socket.AF_INET, kind) as probe:
-        probe.bind(("127.0.0.1", 0))
-        return probe.getsockname()[1]
+def free_port(kind: socket.SocketKind = socket.SOCK_STREAM) -> int:
+    return free_ports(1, kind)[0]
 
 
 def make_core(**overrides: Any) -> UavCore:
