@@ -123,7 +123,7 @@ class UavCore:
             if self.replay is not None:
                 self.gate = ReplayGate(self.config.safety, self.telemetry, self.events, self.controller)
                 self.add_frame_listener(lambda result: self.replay.frame_done())
-                commands = recorded_commands(self.controller.run_dir / "events.csv")  # type: ignore[attr-defined]
+                commands = recorded_commands(self.controller.run_dir)  # type: ignore[attr-defined]
                 self.replay.before_show = CommandReplay(self, loop, commands).before_show
             self.gate.telemetry, self.gate.controller = self.telemetry, self.controller
             await self._check_autopilot_failsafe()

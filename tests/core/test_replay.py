@@ -19,6 +19,7 @@ from uav_tui.cli import main
 from uav_tui.config import load_config
 from uav_tui.jobs import run_jobs
 from uav_tui.recording.interpolate import CONTINUOUS, DISCRETE
+from uav_tui.replay.operator import recorded_commands
 from uav_tui.replay.runner import ReplayJob, replay_run
 from uav_tui.report import write_report
 
@@ -129,6 +130,33 @@ def test_replay_at_max_speed_is_deterministic_and_sees_the_recorded_vehicle(flig
     assert np.allclose(frames["seen_north_m"], telemetry["north_m"].to_numpy()[newest[after]], equal_nan=True)
     modes = telemetry["flight_mode"].fillna("").to_numpy()
     assert frames["seen_mode"].fillna("").tolist() == modes[newest[after]].tolist()
+
+
+def _write_csv(path: Path, rows: list[dict[str, object]]) -> None:
+    with open(path, "w", newline="") as handle:
+        writer = csv.DictWriter(handle, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+
+
+def test_a_command_is_due_before_the_first_frame_the_processor_started_after_it(tmp_path):
+    events = [
+        {"t_mono_ns": 1000, "level": "info", "kind": "command", "origin": "tui", "message": "f 2"},
+        {"t_mono_ns": 1003, "level": "info", "kind": "command", "origin": "tui", "message": "F2 sent to the processor"},
+        {"t_mono_ns": 1500, "level": "info", "kind": "command", "origin": "tui", "message": "arm"},
+        {"t_mono_ns": 2000, "level": "error", "kind": "command", "origin": "tui", "message": "f 9: no such key"},
+        {"t_mono_ns": 3000, "level": "info", "kind": "command", "origin": "web", "message": "roi 1 2 3 4"},
+    ]
+    _write_csv(tmp_path / "events.csv", events)
+    due = [(t_ns, str(command)) for t_ns, command in recorded_commands(tmp_path)]
+    assert due == [(1000, "f 2"), (3000, "roi 1 2 3 4")]  # the processor's commands, at their own time
+
+    # Frame 2 was captured before the F2 but taken by the processor after it: the F2 reached it (live, the
+    # newest frame wins, so the frame taken after a command is often older than the command).
+    frames = [{"t_mono_ns": 900, "t_start_ns": 950}, {"t_mono_ns": 990, "t_start_ns": 1004},
+              {"t_mono_ns": 1020, "t_start_ns": 1040}]
+    _write_csv(tmp_path / "frames.csv", frames)
+    assert [due for due, _ in recorded_commands(tmp_path)] == [990, 3000]  # the ROI: after the last frame
 
 
 def test_two_processors_on_the_same_flight_in_parallel_compare_frame_by_frame(flight, tmp_path):

@@ -3,8 +3,11 @@
 from __future__ import annotations
 
 import asyncio
+import bisect
+import contextlib
 import csv
 import logging
+import math
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -22,9 +25,16 @@ PROCESSOR_WORDS = frozenset({"f", "roi"})
 COMMAND_TIMEOUT_S = 5.0
 
 
-def recorded_commands(events_csv: Path) -> list[tuple[int, Command]]:
-    """(t_mono_ns, command) for each processor command the operator gave in a recorded run, oldest first."""
+def recorded_commands(run_dir: Path) -> list[tuple[int, Command]]:
+    """Each processor command the operator gave in a recorded run, oldest first, with when it is due.
+
+    It is due at the capture time of the first frame the processor started after the command: a
+    processor takes commands between frames, and with the newest frame winning that frame may have
+    been captured before the command was given. (Without a frames.csv: at the command's own time.)
+    """
     commands = []
+    starts = _frame_starts(run_dir / "frames.csv")
+    events_csv = run_dir / "events.csv"
     if events_csv.is_file():
         with open(events_csv, newline="") as handle:
             for row in csv.DictReader(handle):
@@ -35,13 +45,27 @@ def recorded_commands(events_csv: Path) -> list[tuple[int, Command]]:
                 except KNOWN_ERRORS:
                     continue  # a command's outcome ("F1 sent to the processor"), not the command
                 if command is not None and command.word in PROCESSOR_WORDS:
-                    commands.append((int(row["t_mono_ns"]), command))
+                    given = int(row["t_mono_ns"])
+                    first = bisect.bisect_right(starts, (given, math.inf))
+                    commands.append((starts[first][1] if first < len(starts) else given, command))
     commands.sort(key=lambda item: item[0])
     return commands
 
 
+def _frame_starts(frames_csv: Path) -> list[tuple[int, int]]:
+    """(processing start, capture time) of each frame the processor took, in the order it took them."""
+    starts = []
+    if frames_csv.is_file():
+        with open(frames_csv, newline="") as handle:
+            for row in csv.DictReader(handle):
+                with contextlib.suppress(KeyError, TypeError, ValueError):
+                    starts.append((int(row["t_start_ns"]), int(row["t_mono_ns"])))
+    starts.sort()
+    return starts
+
+
 class CommandReplay:
-    """Gives the replayed processor each recorded command before the first frame captured after it.
+    """Gives the replayed processor each recorded command before the frame it is due at (:func:`recorded_commands`).
 
     :meth:`before_show` runs on the camera thread (the timeline's ``before_show`` hook) and waits for
     the command to finish, so the processor has it before that frame, in lockstep and paced alike.
