@@ -5,10 +5,11 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import json
+import logging
 import signal
 import sys
 import time
-from collections.abc import Callable, Coroutine
+from collections.abc import Callable, Coroutine, Iterator
 from dataclasses import asdict
 from pathlib import Path
 from typing import Any, TextIO
@@ -19,7 +20,14 @@ from uav_tui.core import UavCore
 from uav_tui.errors import KNOWN_ERRORS, CommandError, error_line
 from uav_tui.events import Event
 from uav_tui.status import CoreStatus
+from uav_tui.terminal_output import TerminalOutput
 from uav_tui.text import escape, safe
+
+OUTPUT_BACKLOG_CHARS = 64 * 1024
+"""Lines not yet taken by a stalled terminal beyond which new ones are dropped (half a minute of ``--json``
+status): once it takes output again, the operator reads the present, told how much was skipped."""
+CLOSE_TIMEOUT_S = 1.0
+"""How long the end of a run waits for a stalled terminal to take the last of its output."""
 
 EXIT_OK, EXIT_SCRIPT_FAILED, EXIT_START_FAILED, EXIT_UNHANDLED_ERROR, EXIT_ABANDONED = 0, 1, 2, 3, 4
 
@@ -117,6 +125,19 @@ class HeadlessRunner:
         self._reason = "finished"
 
     async def run(self) -> int:
+        """Run until stopped; returns the exit code. What it prints never waits for the terminal."""
+        self._stdout = TerminalOutput(self.out, self._dropped, _gone, max_backlog=OUTPUT_BACKLOG_CHARS, name="stdout")
+        self._stderr = TerminalOutput(sys.stderr, self._dropped, _gone, max_backlog=OUTPUT_BACKLOG_CHARS,
+                                      name="stderr")
+        try:
+            with _logging_to(self._stderr):
+                return await self._run()
+        finally:
+            deadline = time.monotonic() + CLOSE_TIMEOUT_S
+            for output in (self._stdout, self._stderr):
+                output.close(max(0.0, deadline - time.monotonic()))
+
+    async def _run(self) -> int:
         loop = asyncio.get_running_loop()
         for signum, name in ((signal.SIGINT, "Ctrl-C"), (signal.SIGTERM, "SIGTERM"), (signal.SIGHUP, "SIGHUP")):
             if signum == signal.SIGHUP and self.on_hangup == "continue":
@@ -139,7 +160,7 @@ class HeadlessRunner:
             await self.core.stop(self._reason)
         if self.core.failure is not None and not self.exit_code:  # also a bug met while stopping
             self.exit_code = EXIT_UNHANDLED_ERROR
-        self._say(f"stopped: {self._reason}")
+        self._say(json.dumps({"stopped": self._reason}) if self.json_lines else f"stopped: {self._reason}")
         if note := saved_run_note(self.core):
             self._say(json.dumps({"run_dir": str(self.core.recorder.run_dir)}) if self.json_lines else note)
         return EXIT_ABANDONED if self.core.abandoned_calls else self.exit_code
@@ -207,12 +228,31 @@ class HeadlessRunner:
 
     def _error(self, text: str) -> None:
         """Why the run could not start or its script failed: on stderr, as every command-line error."""
-        with contextlib.suppress(OSError):
-            print(safe(error_line(text), multiline=True), file=sys.stderr, flush=True)
+        self._stderr.write(safe(error_line(text), multiline=True) + "\n")
 
     def _say(self, text: str, *, redact: bool = True) -> None:
         """Print one line: escaped, and with passwords hidden unless ``redact`` is False (the page's URL)."""
-        text = safe(text, multiline=True) if redact else escape(text)
-        # A lost terminal must not stop the run: the safety rules decide that, not print().
-        with contextlib.suppress(BrokenPipeError, OSError):
-            print(text, file=self.out, flush=True)
+        self._stdout.write((safe(text, multiline=True) if redact else escape(text)) + "\n")
+
+    def _dropped(self, lines: int) -> None:
+        """The terminal stalled and ``lines`` were not shown (writer thread): say so, in events.csv too."""
+        with contextlib.suppress(RuntimeError):  # the loop closed meanwhile
+            self.core.events.emit("warning", "platform", f"{lines} lines of output were dropped while the terminal "
+                                  "was not taking them (events.csv has every event)")
+
+
+def _gone(error: OSError) -> None:
+    """A lost terminal must not stop the run: the safety rules decide that (``--on-hangup``), not a write."""
+
+
+@contextlib.contextmanager
+def _logging_to(stream: TerminalOutput) -> Iterator[None]:
+    """While the run lasts, log records meant for the terminal go through ``stream`` (which never waits)."""
+    handlers = [h for h in logging.getLogger().handlers
+                if type(h) is logging.StreamHandler and h.stream in (sys.stderr, sys.stdout)]
+    previous = [h.setStream(stream) for h in handlers]
+    try:
+        yield
+    finally:
+        for handler, old in zip(handlers, previous, strict=True):
+            handler.setStream(old)

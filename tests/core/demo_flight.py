@@ -43,6 +43,6 @@ def fly_demo(fc: str, tmp_path: Path, *, wait_first_s: float = 0.0, timeout_s: f
          "--processor", "position_hold", "--script", str(script), "--runs-dir", str(tmp_path / "runs")],
         cwd=tmp_path, env={**os.environ, "PYTHONPATH": str(ROOT)}, capture_output=True, text=True, timeout=timeout_s)
     assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]
-    records = [json.loads(line) for line in result.stdout.splitlines() if line.startswith("{")]
+    records = [json.loads(line) for line in result.stdout.splitlines()]
     status = [r for r in records if "pipeline" in r]
     return DemoRun(result, status, dataset.load(next((tmp_path / "runs").iterdir())))

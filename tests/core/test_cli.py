@@ -2,16 +2,23 @@
 
 from __future__ import annotations
 
+import asyncio
+import fcntl
 import json
 import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
 import psutil
 import pytest
+
+from uav_tui import headless
+from uav_tui.config import load_config
+from uav_tui.core import CoreState
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -36,7 +43,8 @@ def test_headless_run_prints_stats_and_exits_zero(tmp_path: Path) -> None:
 def test_json_lines(tmp_path: Path) -> None:
     result = uav("--no-ui", "--json", "--duration", "2.5", "--runs-dir", str(tmp_path / "runs"), cwd=tmp_path)
     assert result.returncode == 0, result.stderr
-    records = [json.loads(line) for line in result.stdout.splitlines() if line.startswith("{")]
+    records = [json.loads(line) for line in result.stdout.splitlines()]  # every line, to the last
+    assert records[-2] == {"stopped": "--duration 2.5 s reached"} and "run_dir" in records[-1]
     status = [r for r in records if "pipeline" in r]
     assert status and status[-1]["processor"] == "processors.template:MeanBrightnessProcessor"
     assert status[-1]["pipeline"]["frames_processed"] > 10
@@ -154,3 +162,49 @@ def test_log_records_reach_the_terminal_escaped(tmp_path: Path) -> None:
     assert "seen \\x1b[2J\\n[info] command: arm rtsp://a:***@h/" in result.stderr
     assert "\x1b" not in result.stderr and "Hunter2pw" not in result.stderr
     assert not any(line.startswith("[info] command: arm") for line in result.stderr.splitlines())
+
+
+async def test_a_stalled_terminal_never_blocks_a_headless_run(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """An SSH connection stalled on bad Wi-Fi stops reading: ``--no-ui``'s lines wait, then are dropped and that is
+    said once the terminal takes output again; the event loop (the vehicle's link, the hold) never waits."""
+    monkeypatch.setattr(headless, "OUTPUT_BACKLOG_CHARS", 2000)  # one --json status line: drops within seconds
+    read_fd, write_fd = os.pipe()
+    fcntl.fcntl(write_fd, fcntl.F_SETPIPE_SZ, 4096)  # the terminal's buffer, full after a few status lines
+    out = os.fdopen(write_fd, "w")
+    config = load_config(None, {"fc": "sim", "source": "synthetic:?width=160&height=120", "record": False})
+    runner = headless.HeadlessRunner(config, duration=9.0, json_lines=True, out=out)
+    gaps: list[float] = []
+    running = threading.Event()
+
+    async def tick() -> None:  # the loop's own lag: a blocked print would show as a gap of seconds
+        last = time.monotonic()
+        while True:
+            await asyncio.sleep(0.02)
+            gaps.append(time.monotonic() - last)
+            last = time.monotonic()
+            if runner.core.state is CoreState.RUNNING:
+                running.set()
+
+    received: list[bytes] = []
+
+    def read_after_the_stall() -> None:
+        running.wait(30)
+        time.sleep(6.0)  # nothing reads for 6 s of the run
+        while chunk := os.read(read_fd, 1 << 16):
+            received.append(chunk)
+
+    reader = threading.Thread(target=read_after_the_stall)
+    reader.start()
+    ticker = asyncio.create_task(tick())
+    try:
+        assert await asyncio.wait_for(runner.run(), 40) == headless.EXIT_OK
+    finally:
+        ticker.cancel()
+        out.close()
+        reader.join(10)
+        os.close(read_fd)
+    assert max(gaps) < 0.5, f"the loop waited {max(gaps):.2f} s"
+    lines = [json.loads(line) for line in b"".join(received).decode().splitlines()]
+    said = [line["event"]["message"] for line in lines if "event" in line]
+    assert any("lines of output were dropped while the terminal was not taking them" in m for m in said), said
+    assert lines[-1] == {"stopped": "--duration 9 s reached"}  # the end, after the stall, is not lost

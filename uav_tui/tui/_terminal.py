@@ -9,7 +9,8 @@ with it the vehicle's hold). So:
 - :class:`TerminalWatch` notices the loss three ways (SIGHUP, a failed write, EIO on a periodic
   ``tcgetattr``), points fds 0, 1, 2 at /dev/null at once, and reports it on the loop, once;
 - :func:`driver_for` gives Textual a driver whose writes never raise and never wait
-  (:class:`ScreenOutput`).
+  (:class:`~uav_tui.terminal_output.TerminalOutput`: Textual's own writer waits in ``write`` once 30
+  writes are queued, so a stalled terminal blocked the loop within seconds).
 """
 
 from __future__ import annotations
@@ -23,16 +24,16 @@ import sys
 import termios
 import threading
 from collections.abc import Callable
-from typing import Any, TextIO
+from typing import Any
 
 from textual.drivers.linux_driver import LinuxDriver
+
+from uav_tui.terminal_output import TerminalOutput
 
 logger = logging.getLogger(__name__)
 
 CHECK_PERIOD_S = 0.5
 """How often the watch thread asks the terminal whether it is still there."""
-MAX_BACKLOG_CHARS = 512 * 1024
-"""Screen output not yet taken by the terminal beyond which updates are dropped (a few full screens)."""
 KEPT_WRITE_CHARS = 64
 """Writes this short (terminal modes: alternate screen, mouse, cursor) are never dropped."""
 CLOSE_TIMEOUT_S = 1.0
@@ -89,13 +90,14 @@ class TerminalWatch:
 
 
 def driver_for(watch: TerminalWatch) -> type[LinuxDriver]:
-    """A LinuxDriver whose screen writes never wait (:class:`ScreenOutput`) and report a lost terminal to
-    ``watch`` instead of raising."""
+    """A LinuxDriver whose screen writes never wait (:class:`~uav_tui.terminal_output.TerminalOutput`) and
+    report a lost terminal to ``watch`` instead of raising."""
 
     class HangupSafeDriver(LinuxDriver):
         def __init__(self, *args: Any, **kwargs: Any) -> None:
             super().__init__(*args, **kwargs)
-            self._output = ScreenOutput(_QuietFile(self._file, watch), self._repaint)
+            self._output = TerminalOutput(self._file, self._repaint, self._lost, kept_write_chars=KEPT_WRITE_CHARS,
+                                          name="screen-output")
 
         def write(self, data: str) -> None:
             self._output.write(data)
@@ -104,92 +106,15 @@ def driver_for(watch: TerminalWatch) -> type[LinuxDriver]:
             self._output.close(CLOSE_TIMEOUT_S)
             super().close()
 
-        def _repaint(self) -> None:
+        def _repaint(self, dropped: int) -> None:
             """Updates were dropped while the terminal was stalled: draw the whole screen again (on the loop)."""
             if not self._loop.is_closed():  # Textual's driver keeps the app's loop
                 self._loop.call_soon_threadsafe(functools.partial(self._app.refresh, layout=True))
 
+        def _lost(self, error: OSError) -> None:
+            watch.lost(f"writing to the terminal failed: {error.strerror}")
+
     return HangupSafeDriver
-
-
-class ScreenOutput:
-    """The screen's output, written to the terminal by a thread of its own: ``write`` never waits.
-
-    Textual's own writer waits in ``write`` once 30 writes are queued, so a terminal that stops taking output
-    (an SSH connection stalled on bad Wi-Fi) blocked the event loop, and the flight link with it, within
-    seconds. Here screen updates that would take the backlog past ``max_backlog`` characters are dropped,
-    whole (never a piece of an escape sequence); short writes (terminal modes) are always kept. Once the
-    terminal has taken everything, ``on_drained`` is called if anything was dropped, to repaint the screen.
-    """
-
-    def __init__(self, file: TextIO | _QuietFile, on_drained: Callable[[], None],
-                 max_backlog: int = MAX_BACKLOG_CHARS) -> None:
-        self._file = file
-        self._on_drained = on_drained
-        self._max_backlog = max_backlog
-        self._pending: list[str] = []
-        self._backlog = 0
-        self._dropped = False
-        self._closing = False
-        self._ready = threading.Condition()
-        self._thread = threading.Thread(target=self._run, name="terminal-output", daemon=True)
-        self._thread.start()
-
-    def write(self, text: str) -> None:
-        with self._ready:
-            if len(text) > KEPT_WRITE_CHARS and self._backlog and self._backlog + len(text) > self._max_backlog:
-                self._dropped = True
-                return
-            self._pending.append(text)
-            self._backlog += len(text)
-            self._ready.notify()
-
-    def close(self, timeout: float) -> None:
-        """Write what is pending, waiting at most ``timeout`` s (the terminal may be stalled), then stop."""
-        with self._ready:
-            self._closing = True
-            self._ready.notify()
-        self._thread.join(timeout)
-
-    def _run(self) -> None:
-        while True:
-            with self._ready:
-                self._ready.wait_for(lambda: self._pending or self._closing)
-                if not self._pending:
-                    return
-                text, self._pending = "".join(self._pending), []
-            self._file.write(text)  # may wait for the terminal: only this thread waits
-            self._file.flush()
-            with self._ready:
-                self._backlog -= len(text)
-                drained = self._dropped and not self._pending
-                if drained:
-                    self._dropped = False
-            if drained:
-                self._on_drained()
-
-
-class _QuietFile:
-    """Forwards writes to the terminal; an OSError means it is gone: reported, then writes are dropped."""
-
-    def __init__(self, file: TextIO, watch: TerminalWatch) -> None:
-        self._file = file
-        self._watch = watch
-
-    def write(self, text: str) -> None:
-        try:
-            self._file.write(text)
-        except OSError as exc:
-            self._watch.lost(f"writing to the terminal failed: {exc.strerror}")
-
-    def flush(self) -> None:
-        try:
-            self._file.flush()
-        except OSError as exc:
-            self._watch.lost(f"writing to the terminal failed: {exc.strerror}")
-
-    def fileno(self) -> int:
-        return self._file.fileno()
 
 
 def _detach_from_terminal() -> None:
