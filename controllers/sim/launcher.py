@@ -26,8 +26,9 @@ REPO_ROOT = Path(__file__).resolve().parents[2]
 
 
 EPHEMERAL_PORTS = Path("/proc/sys/net/ipv4/ip_local_port_range")
-LOWEST_PORT = 10000
-"""Ports are picked from here up to the start of the kernel's ephemeral range."""
+LOWEST_PORT = 20000
+"""Ports are picked from here up to the start of the kernel's ephemeral range (above MAVLink's 14540-14580,
+5760 and RTSP's 8554, which a ground station or camera on the same machine may bind later)."""
 
 
 def _ephemeral_range_start() -> int:
