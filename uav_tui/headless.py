@@ -145,6 +145,10 @@ class HeadlessRunner:
                                         "terminal lost (SIGHUP), --on-hangup continue: the run goes on")
             else:
                 loop.add_signal_handler(signum, self.request_stop, name)
+        # Suspended, the platform would stop streaming to the vehicle (the autopilot's failsafe would hold it).
+        loop.add_signal_handler(signal.SIGTSTP, self.core.events.emit, "warning", "platform",
+                                "Ctrl-Z ignored: a suspended uav-tui would stop flying the vehicle; detach with "
+                                "tmux or screen, stop with Ctrl-C")
         self.core.events.add_listener(self._print_event)  # before start: what it finds at connect is printed
         try:
             await self.core.start()

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import fcntl
 import json
 import os
@@ -81,7 +82,7 @@ def start_headless(tmp_path: Path, *flags: str) -> subprocess.Popen[str]:
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     process = subprocess.Popen([sys.executable, "-m", "uav_tui", "--no-ui", "--runs-dir", str(tmp_path / "runs"),
                                 *flags], cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                               text=True, start_new_session=True)
+                               text=True, process_group=0)  # a job, in the shell's session
     assert process.stdout is not None
     deadline = time.monotonic() + 30
     while time.monotonic() < deadline and process.poll() is None:
@@ -109,6 +110,26 @@ def test_signals_stop_cleanly(tmp_path: Path, signum: int, to_job: bool) -> None
     assert "stopped:" in out
     assert "processor (pid" not in out + err  # no crash of the processor's process reported
     assert "resource_tracker" not in err  # it did not die ("process died unexpectedly, relaunching")
+
+
+def test_ctrl_z_does_not_suspend_a_headless_run(tmp_path: Path) -> None:
+    """Suspended, the platform would stop streaming to the vehicle: Ctrl-Z (SIGTSTP to the job) is refused, said."""
+    process = start_headless(tmp_path)
+    try:
+        assert process.stdout is not None
+        os.killpg(process.pid, signal.SIGTSTP)
+        time.sleep(1.0)
+        assert psutil.Process(process.pid).status() != psutil.STATUS_STOPPED
+        lines = [process.stdout.readline() for _ in range(3)]  # status lines go on
+        process.send_signal(signal.SIGTERM)
+        out, err = process.communicate(timeout=20)
+    finally:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(process.pid, signal.SIGCONT)  # a stopped process could not be killed
+        process.kill()
+    assert process.returncode == 0, err
+    assert "[warning] platform: Ctrl-Z ignored: a suspended uav-tui would stop flying the vehicle" in "".join(lines)
+    assert "processor (pid" not in out + err and "stopped: SIGTERM" in out
 
 
 def test_hangup_with_continue_keeps_the_run_and_its_processor_going(tmp_path: Path) -> None:
