@@ -27,7 +27,7 @@ from controllers.connection import (
 from controllers.errors import ControllerError
 from controllers.failsafe import STALE_MARGIN_S, FailsafeReport, ParamAccess, check_failsafe
 from controllers.mavlink_commands import px4_set_mode, send_command, velocity_body_setpoint
-from controllers.mavsdk_calls import AbandoningExecutor, bounded, release, use_abandoning_executor
+from controllers.mavsdk_calls import AbandoningExecutor, Subscriptions, bounded, release, use_abandoning_executor
 from controllers.mavsdk_link import LinkMonitor
 from controllers.mavsdk_log import route_mavsdk_log
 from controllers.mavsdk_pose import POSE_RATE_HZ, pose_samples, request_pose_rate
@@ -89,6 +89,7 @@ class MavsdkController:
         self._link: LinkMonitor | None = None
         self._executor: AbandoningExecutor | None = None
         self._stop = asyncio.Event()
+        self._subscriptions = Subscriptions()
         self._closed = False
         self._vectors = VectorStream(self, rate_hz=vector_rate_hz, name="MavsdkController")
 
@@ -143,7 +144,7 @@ class MavsdkController:
         self._telemetry = TelemetryAsync(system)
         self._param = ParamAsync(system)
         self._direct = MavlinkDirectAsync(system)
-        self._link = LinkMonitor(self._direct, self._telemetry, self._sysid)
+        self._link = LinkMonitor(self._direct, self._telemetry, self._sysid, self._subscriptions)
         self._link.start()
         await self._ask_for_telemetry()
 
@@ -189,7 +190,7 @@ class MavsdkController:
         await self._vectors.cancel()
         if self._link is not None:
             await self._link.stop()
-        # Telemetry iterators end on _stop; their unsubscribe is a no-op once MAVSDK is destroyed.
+        await self._subscriptions.close()  # every unsubscribe done before MAVSDK is destroyed
         mavsdk, self._mavsdk = self._mavsdk, None
         if mavsdk is not None and self._executor is not None:
             await release(mavsdk, self._executor, RELEASE_TIMEOUT_S)
@@ -335,7 +336,7 @@ class MavsdkController:
         """Partial telemetry updates keyed by Telemetry field names; ends when the controller closes."""
         if self._system is None:
             raise ControllerError("telemetry: not connected (call connect() first)")
-        async for update in merged_updates(self._telemetry, self.heartbeat_age_s, self._stop):
+        async for update in merged_updates(self._telemetry, self.heartbeat_age_s, self._stop, self._subscriptions):
             yield update
 
     async def pose_samples(self, rate_hz: float = POSE_RATE_HZ) -> AsyncIterator[PoseSample]:
@@ -351,5 +352,5 @@ class MavsdkController:
                 await request_pose_rate(self._direct, self._sysid, rate_hz)
         except TimeoutError:
             logger.warning("pose rate: no answer within %.0f s; keeping the current rates", SETUP_TIMEOUT_S)
-        async for sample in pose_samples(self._direct, self._sysid, self._stop):
+        async for sample in pose_samples(self._direct, self._sysid, self._stop, self._subscriptions):
             yield sample

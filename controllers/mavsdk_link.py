@@ -8,8 +8,10 @@ import json
 import math
 import time
 
-from mavsdk.asyncio.plugins.mavlink_direct import MavlinkDirectAsync
-from mavsdk.asyncio.plugins.telemetry import TelemetryAsync
+from mavsdk.asyncio.plugins.mavlink_direct import MavlinkDirectAsync, MavlinkMessage
+from mavsdk.asyncio.plugins.telemetry import FlightMode, TelemetryAsync
+
+from controllers.mavsdk_calls import Subscriptions
 
 MAV_AUTOPILOT_INVALID = 8
 """HEARTBEAT.autopilot of ground stations and other non-autopilot components."""
@@ -24,18 +26,21 @@ class LinkMonitor:
         system_id: the autopilot's MAVLink system id; other senders are ignored.
     """
 
-    def __init__(self, direct: MavlinkDirectAsync, telemetry: TelemetryAsync, system_id: int) -> None:
+    def __init__(self, direct: MavlinkDirectAsync, telemetry: TelemetryAsync, system_id: int,
+                 subscriptions: Subscriptions) -> None:
         self._direct = direct
         self._telemetry = telemetry
         self._system_id = system_id
+        self._subscriptions = subscriptions
         self._last_heartbeat = time.monotonic()  # connecting means one just arrived
         self._flight_mode: tuple[str | None, float] = (None, -math.inf)
         self._tasks: list[asyncio.Task[None]] = []
 
     def start(self) -> None:
+        read = self._subscriptions.read
         self._tasks = [
-            asyncio.create_task(self._watch_heartbeats(), name="mavsdk-heartbeat"),
-            asyncio.create_task(self._watch_flight_mode(), name="mavsdk-flight-mode"),
+            read(self._direct.subscribe_message("HEARTBEAT"), self._on_heartbeat, "mavsdk-heartbeat"),
+            read(self._telemetry.subscribe_flight_mode(), self._on_flight_mode, "mavsdk-flight-mode"),
         ]
 
     async def stop(self) -> None:
@@ -59,20 +64,19 @@ class LinkMonitor:
         """Wait until the autopilot reports it could arm (position estimate, home, pre-arm checks)."""
         with contextlib.suppress(TimeoutError):
             async with asyncio.timeout(timeout_s):
-                async for health in self._telemetry.subscribe_health():
-                    if health.is_armable and health.is_global_position_ok and health.is_home_position_ok:
-                        return True
+                async with contextlib.aclosing(self._telemetry.subscribe_health()) as healths:
+                    async for health in healths:
+                        if health.is_armable and health.is_global_position_ok and health.is_home_position_ok:
+                            return True
         return False
 
-    async def _watch_heartbeats(self) -> None:
-        async for msg in self._direct.subscribe_message("HEARTBEAT"):
-            if msg.system_id != self._system_id:
-                continue
-            with contextlib.suppress(ValueError):
-                if json.loads(msg.fields_json).get("autopilot") == MAV_AUTOPILOT_INVALID:
-                    continue
-            self._last_heartbeat = time.monotonic()
+    def _on_heartbeat(self, message: MavlinkMessage) -> None:
+        if message.system_id != self._system_id:
+            return
+        with contextlib.suppress(ValueError):
+            if json.loads(message.fields_json).get("autopilot") == MAV_AUTOPILOT_INVALID:
+                return
+        self._last_heartbeat = time.monotonic()
 
-    async def _watch_flight_mode(self) -> None:
-        async for mode in self._telemetry.subscribe_flight_mode():
-            self._flight_mode = (mode.name, time.monotonic())
+    def _on_flight_mode(self, mode: FlightMode) -> None:
+        self._flight_mode = (mode.name, time.monotonic())

@@ -22,6 +22,7 @@ from mavsdk.asyncio.plugins.mavlink_direct import MavlinkDirectAsync, MavlinkMes
 
 from controllers.base import PoseSample
 from controllers.mavlink_commands import command_long, send_command
+from controllers.mavsdk_calls import Subscriptions
 
 logger = logging.getLogger(__name__)
 
@@ -94,27 +95,24 @@ def parse_pose_message(message: MavlinkMessage) -> tuple[Literal["position", "at
         return None
 
 
-async def pose_samples(direct: MavlinkDirectAsync, system_id: int, stop: asyncio.Event) -> AsyncIterator[PoseSample]:
+async def pose_samples(direct: MavlinkDirectAsync, system_id: int, stop: asyncio.Event,
+                       subscriptions: Subscriptions) -> AsyncIterator[PoseSample]:
     """Position and attitude samples from ``system_id`` as they arrive, until ``stop`` is set."""
     queue: asyncio.Queue[PoseSample | None] = asyncio.Queue()
     clock = BootClock()
 
-    async def pump(name: str) -> None:
-        try:
-            async for message in direct.subscribe_message(name):
-                received = time.monotonic_ns()
-                parsed = parse_pose_message(message) if message.system_id == system_id else None
-                if parsed is not None:
-                    kind, boot_ms, values = parsed
-                    queue.put_nowait(PoseSample(kind, clock.to_mono_ns(boot_ms, received), values))
-        except Exception:
-            logger.exception("pose stream %s failed", name)
+    def on_message(message: MavlinkMessage) -> None:
+        received = time.monotonic_ns()
+        parsed = parse_pose_message(message) if message.system_id == system_id else None
+        if parsed is not None:
+            kind, boot_ms, values = parsed
+            queue.put_nowait(PoseSample(kind, clock.to_mono_ns(boot_ms, received), values))
 
     async def end_on_stop() -> None:
         await stop.wait()
         queue.put_nowait(None)
 
-    tasks = [asyncio.create_task(pump(name), name=f"pose-{name}") for name in POSE_MESSAGES]
+    tasks = [subscriptions.read(direct.subscribe_message(name), on_message, f"pose-{name}") for name in POSE_MESSAGES]
     tasks.append(asyncio.create_task(end_on_stop()))
     try:
         while (sample := await queue.get()) is not None:

@@ -22,6 +22,8 @@ from typing import Any
 
 from mavsdk.asyncio.plugins.telemetry import TelemetryAsync
 
+from controllers.mavsdk_calls import Subscriptions
+
 logger = logging.getLogger(__name__)
 
 RATES_HZ: dict[str, float] = {
@@ -132,20 +134,18 @@ async def set_rates(telemetry: TelemetryAsync, rates: dict[str, float] = RATES_H
 
 
 async def merged_updates(
-    telemetry: TelemetryAsync, heartbeat_age_s: Callable[[], float], stop: asyncio.Event
+    telemetry: TelemetryAsync, heartbeat_age_s: Callable[[], float], stop: asyncio.Event, subscriptions: Subscriptions
 ) -> AsyncIterator[Update]:
     """Yield partial updates from every stream in :data:`STREAMS` plus a heartbeat-age tick.
 
-    Ends when ``stop`` is set. Subscriptions are cancelled when the consumer stops iterating.
+    Ends when ``stop`` is set. Subscriptions are cancelled when the consumer stops iterating, and by
+    ``subscriptions.close()``.
     """
     queue: asyncio.Queue[Update | None] = asyncio.Queue()
 
-    async def pump(name: str, convert: Callable[[Any], Update]) -> None:
-        try:
-            async for value in getattr(telemetry, f"subscribe_{name}")():
-                queue.put_nowait(convert(value))
-        except Exception:
-            logger.exception("telemetry stream %s failed", name)
+    def pump(name: str, convert: Callable[[Any], Update]) -> asyncio.Task[None]:
+        return subscriptions.read(getattr(telemetry, f"subscribe_{name}")(),
+                                  lambda value: queue.put_nowait(convert(value)), f"telemetry-{name}")
 
     async def tick() -> None:
         while True:
@@ -156,7 +156,7 @@ async def merged_updates(
         await stop.wait()
         queue.put_nowait(None)
 
-    tasks = [asyncio.create_task(pump(n, c), name=f"telemetry-{n}") for n, c in STREAMS.items()]
+    tasks = [pump(n, c) for n, c in STREAMS.items()]
     tasks += [asyncio.create_task(tick(), name="telemetry-heartbeat"), asyncio.create_task(end_on_stop())]
     try:
         while (update := await queue.get()) is not None:

@@ -7,6 +7,8 @@ putting it back in HOLD at a known point and heading.
 from __future__ import annotations
 
 import asyncio
+import gc
+import inspect
 import math
 import socket
 import time
@@ -17,7 +19,7 @@ from typing import Any
 import pytest
 import pytest_asyncio
 
-from controllers import FlightController, connect_controller
+from controllers import FlightController, connect_controller, mavsdk_calls, mavsdk_controller
 from controllers.mavsdk_controller import MavsdkController
 from controllers.sim.launcher import SimVehicle, free_udp_port
 from controllers.sim.truth import TruthClient
@@ -228,6 +230,36 @@ async def test_connect_detects_px4_and_telemetry_arrives_at_documented_rates(sim
     # Every field arrives; the fast ones (10 Hz) more often than the slow ones (1-2 Hz). Rates: scripts/bench_*.
     assert min(counts[key] for key in FAST_KEYS) > max(counts[key] for key in SLOW_KEYS if key != "heartbeat_age_s")
     assert boot_ms == sorted(boot_ms) and boot_ms[-1] > boot_ms[0]
+
+
+def open_mavsdk_subscriptions() -> list[str]:
+    """MAVSDK's ``subscribe_*`` generators not closed yet: their unsubscribe is still to run."""
+    return [gen.ag_code.co_name for gen in gc.get_objects()
+            if inspect.isasyncgen(gen) and gen.ag_frame is not None and gen.ag_code.co_name.startswith("subscribe_")
+            and "mavsdk" in gen.ag_code.co_filename]
+
+
+async def test_close_unsubscribes_everything_before_mavsdk_is_destroyed(
+    sim_vehicle: SimVehicle, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """An unsubscribe left to the garbage collector ran while MAVSDK was being destroyed: a segfault (seen in CI)."""
+    open_at_release: list[list[str]] = []
+
+    async def release(*args: Any) -> None:  # the real one, after a look at what is still subscribed
+        open_at_release.append(open_mavsdk_subscriptions())
+        await mavsdk_calls.release(*args)
+
+    monkeypatch.setattr(mavsdk_controller, "release", release)
+    flight = await start_flight(sim_vehicle)
+    for stream in (flight.fc.telemetry(), flight.fc.pose_samples()):
+        count = 0
+        async for _ in stream:
+            count += 1
+            if count == 20:
+                break  # the stream is left open: Python closes it later, from the garbage collector
+    assert open_mavsdk_subscriptions()  # the telemetry, pose, heartbeat and flight-mode streams
+    await flight.fc.close()
+    assert open_at_release == [[]]
 
 
 # ---- flying (shared airborne vehicle) ------------------------------------------------------------
