@@ -130,7 +130,10 @@ class HeadlessRunner:
         self._stderr = TerminalOutput(sys.stderr, self._dropped, _gone, max_backlog=OUTPUT_BACKLOG_CHARS,
                                       name="stderr")
         try:
-            with _logging_to(self._stderr):
+            # print() too, the processor's for one; with --json stdout is only JSON, so prints go to stderr.
+            with (_logging_to(self._stderr), contextlib.redirect_stdout(self._stderr if self.json_lines else
+                                                                        self._stdout),
+                  contextlib.redirect_stderr(self._stderr)):
                 return await self._run()
         finally:
             deadline = time.monotonic() + CLOSE_TIMEOUT_S

@@ -246,8 +246,9 @@ def _read_output(child: ChildProcess) -> None:
                 continue
             line = shorten(safe(line), LINE_CHARS)
             child.tail.append(line)
-            with contextlib.suppress(OSError, ValueError):
-                print(line, file=sys.stdout, flush=True)
+            with contextlib.suppress(OSError, ValueError):  # one write: a line is dropped whole, or kept
+                sys.stdout.write(line + "\n")
+                sys.stdout.flush()
     child.output_done.set()
 
 

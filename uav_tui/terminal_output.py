@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import threading
 from collections.abc import Callable
-from typing import Protocol
+from typing import Any, Protocol
 
 MAX_BACKLOG_CHARS = 512 * 1024
 """Output not yet taken by the terminal beyond which writes are dropped (a few full screens)."""
@@ -28,7 +28,8 @@ class TerminalOutput:
     is called (on the writer thread) if writes were dropped, with how many. A write that fails (the
     terminal is gone) is dropped and reported to ``on_error``.
 
-    It is a file for :class:`logging.StreamHandler` too: ``flush`` returns at once.
+    It can stand in for ``sys.stdout`` or a :class:`logging.StreamHandler`'s stream: ``flush`` returns at
+    once, and other file attributes (``encoding``, ``isatty``, ``fileno``) are ``file``'s.
     """
 
     def __init__(
@@ -65,6 +66,9 @@ class TerminalOutput:
 
     def flush(self) -> None:
         """Nothing to do: the writer thread flushes after each batch."""
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._file, name)
 
     def close(self, timeout: float) -> None:
         """Write what is pending, waiting at most ``timeout`` s (the terminal may be stalled), then stop."""

@@ -7,6 +7,7 @@ import contextlib
 import fcntl
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -22,6 +23,15 @@ from uav_tui.config import load_config
 from uav_tui.core import CoreState
 
 ROOT = Path(__file__).resolve().parents[2]
+
+CHATTY_PROCESSOR = """
+class Chatty:
+    def __init__(self):
+        self.tmMgr = None
+
+    def photo_processing(self, frame):
+        print("a researcher's debugging line " + "." * 4000)  # 120 KB/s: the pipe from its process fills in 1 s
+"""
 
 
 def uav(*args: str, cwd: Path, timeout: float = 60) -> subprocess.CompletedProcess[str]:
@@ -49,6 +59,15 @@ def test_json_lines(tmp_path: Path) -> None:
     status = [r for r in records if "pipeline" in r]
     assert status and status[-1]["processor"] == "processors.template:MeanBrightnessProcessor"
     assert status[-1]["pipeline"]["frames_processed"] > 10
+
+
+def test_json_lines_stay_json_when_the_processor_prints(tmp_path: Path) -> None:
+    (tmp_path / "chatty.py").write_text(CHATTY_PROCESSOR)
+    result = uav("--no-ui", "--json", "--duration", "2", "--no-record", "--processor", "chatty.py:Chatty", cwd=tmp_path)
+    assert result.returncode == 0, result.stderr[-2000:]
+    records = [json.loads(line) for line in result.stdout.splitlines()]
+    assert records[-1] == {"stopped": "--duration 2 s reached"}
+    assert "a researcher's debugging line ..." in result.stderr  # its prints go to stderr
 
 
 def test_config_error_names_the_key_and_exits_2(tmp_path: Path) -> None:
@@ -186,15 +205,19 @@ def test_log_records_reach_the_terminal_escaped(tmp_path: Path) -> None:
 
 
 async def test_a_stalled_terminal_never_blocks_a_headless_run(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    """An SSH connection stalled on bad Wi-Fi stops reading: ``--no-ui``'s lines wait, then are dropped and that is
-    said once the terminal takes output again; the event loop (the vehicle's link, the hold) never waits."""
-    monkeypatch.setattr(headless, "OUTPUT_BACKLOG_CHARS", 2000)  # one --json status line: drops within seconds
+    """An SSH connection stalled on bad Wi-Fi stops reading: ``--no-ui``'s lines (and the processor's prints) wait,
+    then are dropped and that is said once the terminal takes output again; the event loop (the vehicle's link, the
+    hold) never waits, and neither does the processor."""
+    monkeypatch.setattr(headless, "OUTPUT_BACKLOG_CHARS", 2000)  # a few of the processor's lines: drops at once
     read_fd, write_fd = os.pipe()
     fcntl.fcntl(write_fd, fcntl.F_SETPIPE_SZ, 4096)  # the terminal's buffer, full after a few status lines
     out = os.fdopen(write_fd, "w")
-    config = load_config(None, {"fc": "sim", "source": "synthetic:?width=160&height=120", "record": False})
-    runner = headless.HeadlessRunner(config, duration=9.0, json_lines=True, out=out)
+    (tmp_path / "chatty.py").write_text(CHATTY_PROCESSOR)
+    config = load_config(None, {"fc": "sim", "source": "synthetic:?width=160&height=120", "record": False,
+                                "processor": f"{tmp_path / 'chatty.py'}:Chatty"})
+    runner = headless.HeadlessRunner(config, duration=9.0, out=out)
     gaps: list[float] = []
+    processed: list[tuple[float, int]] = []  # (time, frames processed)
     running = threading.Event()
 
     async def tick() -> None:  # the loop's own lag: a blocked print would show as a gap of seconds
@@ -205,6 +228,7 @@ async def test_a_stalled_terminal_never_blocks_a_headless_run(tmp_path: Path, mo
             last = time.monotonic()
             if runner.core.state is CoreState.RUNNING:
                 running.set()
+                processed.append((last, runner.core.worker.snapshot().frames_processed))
 
     received: list[bytes] = []
 
@@ -225,7 +249,10 @@ async def test_a_stalled_terminal_never_blocks_a_headless_run(tmp_path: Path, mo
         reader.join(10)
         os.close(read_fd)
     assert max(gaps) < 0.5, f"the loop waited {max(gaps):.2f} s"
-    lines = [json.loads(line) for line in b"".join(received).decode().splitlines()]
-    said = [line["event"]["message"] for line in lines if "event" in line]
-    assert any("lines of output were dropped while the terminal was not taking them" in m for m in said), said
-    assert lines[-1] == {"stopped": "--duration 9 s reached"}  # the end, after the stall, is not lost
+    stalled_from = processed[0][0]
+    during = [count for t, count in processed if stalled_from + 2 <= t <= stalled_from + 5]
+    assert during[-1] - during[0] > 3 * 15, processed  # the processor kept its 30 FPS (a blocked one: none)
+    lines = b"".join(received).decode().splitlines()
+    assert any(re.fullmatch(r"\[warning\] platform: \d+ lines of output were dropped while the terminal was not "
+                            r"taking them \(events.csv has every event\)", line) for line in lines), lines[-20:]
+    assert lines[-1] == "stopped: --duration 9 s reached"  # the end, after the stall, is not lost
