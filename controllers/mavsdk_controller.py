@@ -188,9 +188,7 @@ class MavsdkController:
         self._closed = True
         self._stop.set()
         await self._vectors.cancel()
-        if self._link is not None:
-            await self._link.stop()
-        await self._subscriptions.close()  # every unsubscribe done before MAVSDK is destroyed
+        await self._subscriptions.close()  # the link monitor's too; every unsubscribe done before MAVSDK is destroyed
         mavsdk, self._mavsdk = self._mavsdk, None
         if mavsdk is not None and self._executor is not None:
             await release(mavsdk, self._executor, RELEASE_TIMEOUT_S)

@@ -18,12 +18,13 @@ MAV_AUTOPILOT_INVALID = 8
 
 
 class LinkMonitor:
-    """Follows the autopilot's HEARTBEAT and flight mode in two background tasks.
+    """Follows the autopilot's HEARTBEAT and flight mode in two readers of ``subscriptions``.
 
     Args:
         direct: MavlinkDirect plugin of the autopilot's system (for raw HEARTBEATs).
         telemetry: Telemetry plugin of the same system.
         system_id: the autopilot's MAVLink system id; other senders are ignored.
+        subscriptions: the controller's; closing it ends the monitor.
     """
 
     def __init__(self, direct: MavlinkDirectAsync, telemetry: TelemetryAsync, system_id: int,
@@ -34,19 +35,11 @@ class LinkMonitor:
         self._subscriptions = subscriptions
         self._last_heartbeat = time.monotonic()  # connecting means one just arrived
         self._flight_mode: tuple[str | None, float] = (None, -math.inf)
-        self._tasks: list[asyncio.Task[None]] = []
 
     def start(self) -> None:
-        read = self._subscriptions.read
-        self._tasks = [
-            read(self._direct.subscribe_message("HEARTBEAT"), self._on_heartbeat, "mavsdk-heartbeat"),
-            read(self._telemetry.subscribe_flight_mode(), self._on_flight_mode, "mavsdk-flight-mode"),
-        ]
-
-    async def stop(self) -> None:
-        for task in self._tasks:
-            task.cancel()
-        await asyncio.gather(*self._tasks, return_exceptions=True)
+        """Follow heartbeats and flight modes until ``subscriptions`` is closed."""
+        self._subscriptions.read(self._direct.subscribe_message("HEARTBEAT"), self._on_heartbeat, "mavsdk-heartbeat")
+        self._subscriptions.read(self._telemetry.subscribe_flight_mode(), self._on_flight_mode, "mavsdk-flight-mode")
 
     def heartbeat_age_s(self) -> float:
         """Seconds since the autopilot's last heartbeat."""
