@@ -34,7 +34,8 @@ class SimCameraSource(CaptureSource):
 
     URI: ``sim:[?width=640&height=480&fps=30&hfov=62&mount=down|forward&tilt=DEG&targets=N
     &target_speed=1.0&noise=2&seed=0]``. Without a pose (no provider, or no telemetry yet) it renders
-    a hover at 10 m over the origin, so the pipeline always has frames.
+    a hover at 10 m over the origin, so the pipeline always has frames. Its properties report, at the
+    newest frame, the pose it was drawn from and each target's ``n``, ``e`` and ground ``corners``.
     """
 
     kind = "sim"
@@ -117,7 +118,8 @@ class SimCameraSource(CaptureSource):
 
     def _extra_properties(self) -> dict[str, Any]:
         p = self.pose
-        positions = [dict(zip(("n", "e"), target.position(self._t)[:2], strict=True)) for target in self.targets]
+        positions = [{**dict(zip(("n", "e"), target.position(self._t)[:2], strict=True)),
+                      "corners": target.corners(self._t).tolist()} for target in self.targets]
         return {"hfov": self.camera.hfov_deg, "tilt": self.camera.tilt_deg, "targets": positions,
                 "pose": {"n": p.n, "e": p.e, "d": p.d, "roll": p.roll, "pitch": p.pitch, "yaw": p.yaw},
                 "pose_source": "vehicle telemetry" if self.pose_from_vehicle else "default hover at 10 m (no pose yet)",
