@@ -44,5 +44,7 @@ def test_readme_demo_holds_position_from_the_camera_on_a_real_autopilot(
     assert max(r["telemetry"]["rel_alt_m"] or 0 for r in demo.status) > 9  # took off to 10 m
     reference, pushed, back = (estimated_ne(demo, c) for c in ("f 1", "autonomy on", "autonomy off"))
     assert math.dist(pushed, reference) > 1.0  # PX4 accelerates more gently than the built-in vehicle
+    # PX4 SIH's own estimate strays from its simulated truth by up to 0.5 m and its velocity from the rate of
+    # its position by 0.3-0.6 m/s for seconds (its ULog): the hold settles within ~0.4 m of the reference
     assert math.dist(back, reference) < 0.7, f"ended {math.dist(back, reference):.2f} m from the reference"
     assert (demo.run.frames.decision == "executed").sum() > 3
