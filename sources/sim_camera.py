@@ -119,7 +119,7 @@ class SimCameraSource(CaptureSource):
     def _extra_properties(self) -> dict[str, Any]:
         p = self.pose
         positions = [{**dict(zip(("n", "e"), target.position(self._t)[:2], strict=True)),
-                      "corners": target.corners(self._t).tolist()} for target in self.targets]
+                      "corners": target.corners(self._t).round(2).tolist()} for target in self.targets]
         return {"hfov": self.camera.hfov_deg, "tilt": self.camera.tilt_deg, "targets": positions,
                 "pose": {"n": p.n, "e": p.e, "d": p.d, "roll": p.roll, "pitch": p.pitch, "yaw": p.yaw},
                 "pose_source": "vehicle telemetry" if self.pose_from_vehicle else "default hover at 10 m (no pose yet)",
