@@ -1,6 +1,8 @@
 """Platform overhead: the uav-tui pipeline (processor in its own process, or on a thread) vs the paper's bare loop.
 
-Bare loop: ``ok, frame = cap.read(); alg.photo_processing(frame)`` as fast as it goes.
+Bare loop: ``ok, frame = cap.read(); alg.photo_processing(frame)`` as fast as it goes, each time in a fresh
+interpreter as a researcher's script runs (glibc's default allocator settings: the platform tunes its own, see
+``uav_tui.malloc_tuning``).
 Platform: ``file:VIDEO?realtime=0`` (the file source runs in lockstep with its reader) through the capture
 thread, FrameBuffer and the processor worker, with ``isolation = "process"`` and ``"thread"``.
 
@@ -25,10 +27,12 @@ from __future__ import annotations
 import argparse
 import asyncio
 import json
+import multiprocessing
 import os
 import sys
 import tempfile
 import time
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
 
@@ -145,7 +149,9 @@ def rounds(processor: str, size: tuple[int, int], video: Path, seconds: float, c
     source = f"file:{video}?realtime={int(camera)}"
     measured: dict[str, list[dict[str, float]]] = {"bare_loop": [], "process": [], "thread": []}
     for _ in range(count):
-        bare = bare_loop(video, processor, seconds, roi, fps=VIDEO_FPS if camera else None)
+        with ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn")) as fresh_interpreter:
+            bare = fresh_interpreter.submit(bare_loop, video, processor, seconds, roi,
+                                            VIDEO_FPS if camera else None).result()
         measured["bare_loop"].append(bare)
         for isolation in ("process", "thread"):
             run = asyncio.run(platform_run(source, processor, isolation, seconds, roi))

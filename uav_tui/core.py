@@ -29,6 +29,7 @@ from uav_tui.config import Config
 from uav_tui.errors import KNOWN_ERRORS, NoVehicle, SourceError, UavError
 from uav_tui.events import EventLog, Repeats
 from uav_tui.link import LinkWatch
+from uav_tui.malloc_tuning import tune_this_process
 from uav_tui.operations import Operations
 from uav_tui.process_worker import ProcessWorker
 from uav_tui.recording import Recorder, describe
@@ -112,6 +113,7 @@ class UavCore:
         loop = asyncio.get_running_loop()
         self.events.bind(loop)
         self.started_wall_ns = time.time_ns()
+        tune_this_process()  # the processor's own process gets the same at its start
         # The camera's one-off preparation (the sim: camera's ground) overlaps loading and connecting.
         camera_ready = loop.run_in_executor(None, warm_up_source, self.config.source)
         try:
