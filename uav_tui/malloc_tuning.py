@@ -13,7 +13,6 @@ Only glibc has these settings; elsewhere nothing changes. A user's own ``MALLOC_
 from __future__ import annotations
 
 import ctypes
-import ctypes.util
 import logging
 import os
 from collections.abc import Mapping
@@ -45,9 +44,8 @@ def tune_this_process() -> bool:
     if _user_tuned(os.environ):
         return False
     try:
-        libc = ctypes.CDLL(ctypes.util.find_library("c"))
-        mallopt = libc.mallopt
-    except (OSError, AttributeError, TypeError):  # not glibc (musl, macOS): leave the allocator alone
+        mallopt = ctypes.CDLL(None).mallopt  # this process's own symbols: no ldconfig run to find libc
+    except (OSError, AttributeError):  # no mallopt (macOS): leave the allocator alone
         return False
     applied = mallopt(_M_MMAP_THRESHOLD, MMAP_THRESHOLD) == 1 and mallopt(_M_TRIM_THRESHOLD, TRIM_THRESHOLD) == 1
     if not applied:
