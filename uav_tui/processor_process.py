@@ -29,8 +29,8 @@ from processors.base import ProcessorInfo
 from processors.child import BUFFER_COUNT, LOG_LEVEL_ENV, MEMORY_EXIT_CODE, parse_log_line
 from processors.frame_mailbox import FrameMailbox
 from sources.buffer import Frame, FrameBuffer
+from uav_tui import malloc_tuning, opencv_pool
 from uav_tui.frame_ring import Slot, ensure_resource_tracker
-from uav_tui.malloc_tuning import child_environment
 from uav_tui.text import safe, shorten
 
 TAIL_LINES = 30
@@ -219,7 +219,8 @@ def spawn(ready: asyncio.Future[ProcessorInfo]) -> ChildProcess:
     ours, theirs = multiprocessing.Pipe()
     ensure_resource_tracker()
     mailbox = FrameMailbox.create()
-    env = {**child_environment(os.environ), "PYTHONPATH": os.pathsep.join(p for p in sys.path if p),  # its imports
+    env = {**opencv_pool.child_environment(malloc_tuning.child_environment(os.environ)),
+           "PYTHONPATH": os.pathsep.join(p for p in sys.path if p),  # its imports
            LOG_LEVEL_ENV: logging.getLevelName(logging.getLogger().getEffectiveLevel())}
     try:
         proc = subprocess.Popen([sys.executable, "-m", "processors.child", str(theirs.fileno()), mailbox.address],

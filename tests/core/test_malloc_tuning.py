@@ -9,8 +9,6 @@ from pathlib import Path
 
 import pytest
 
-from uav_tui.config import load_config
-from uav_tui.core import UavCore
 from uav_tui.malloc_tuning import ENVIRONMENT, child_environment
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -55,14 +53,3 @@ def test_the_users_own_malloc_settings_win() -> None:
     tunables = {"GLIBC_TUNABLES": "glibc.malloc.trim_threshold=1"}
     assert child_environment(tunables) == tunables
 
-
-async def test_the_processors_process_starts_with_the_settings(tmp_path: Path) -> None:
-    core = UavCore(load_config(None, {"source": "synthetic:", "processor": "template", "fc": "none",
-                                      "record": False, "isolation": "process", "runs_dir": str(tmp_path)}))
-    await core.start()
-    try:
-        pid = core.worker.state().pid
-        environ = dict(entry.split("=", 1) for entry in Path(f"/proc/{pid}/environ").read_text().split("\0") if entry)
-    finally:
-        await core.stop()
-    assert {name: environ.get(name) for name in ENVIRONMENT} == ENVIRONMENT
