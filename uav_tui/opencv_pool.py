@@ -6,8 +6,8 @@ follows at once. In its own process the processor shares the cores with the plat
 video decoder, and that spinning took the CPU they needed: position hold at 640x480 spent 0.25 ms a frame in
 its idle OpenCV worker (0.13 ms in the bare loop, 0.05 ms with these settings), and CSRT's hand-off from capture
 to processing at 1280x720 took 1.1 ms at p95 (0.2 ms with them). A sleeping worker is woken for its next job:
-at 30 FPS CSRT takes as long as before in its default ``fast`` mode (8.7 ms a frame at 1280x720) and 2 % longer in
-``paper`` mode (28 ms), for 0.3-1 ms less CPU a frame.
+at 30 FPS CSRT takes as long as before in its default ``fast`` mode (8.4 ms a frame at 1280x720) and 1 % longer in
+``paper`` mode (22-23 ms), for 0.6-1.3 ms (paper: 4 ms) less CPU a frame.
 
 OpenCV reads the variables once, when it is loaded, so they are given to the processor's process at its start.
 A user's own value for any of them wins.
