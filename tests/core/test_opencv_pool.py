@@ -26,7 +26,7 @@ def workers_cpu_s():  # on-CPU time of every thread but this one, to the nanosec
     return total / 1e9
 cv2.cvtColor(image, cv2.COLOR_BGR2GRAY)  # the pool is started
 before = workers_cpu_s()
-for _ in range(100):  # a processor's frames: a few parallel jobs, then a wait for the next frame
+for _ in range(100):  # a processor's frames: a parallel job, then a wait for the next frame
     cv2.cvtColor(image, cv2.COLOR_BGR2GRAY)
     time.sleep(0.005)
 print(workers_cpu_s() - before)
