@@ -1,8 +1,8 @@
 """Platform overhead: the uav-tui pipeline (processor in its own process, or on a thread) vs the paper's bare loop.
 
 Bare loop: ``ok, frame = cap.read(); alg.photo_processing(frame)`` as fast as it goes, each time in a fresh
-interpreter as a researcher's script runs (glibc's default allocator settings: the platform tunes its own, see
-``uav_tui.malloc_tuning``).
+interpreter as a researcher's script runs: glibc's default allocator and OpenCV's default thread pool (the platform
+sets its own for the processor's process, see ``uav_tui.malloc_tuning`` and ``uav_tui.opencv_pool``).
 Platform: ``file:VIDEO?realtime=0`` (the file source runs in lockstep with its reader) through the capture
 thread, FrameBuffer and the processor worker, with ``isolation = "process"`` and ``"thread"``.
 
