@@ -8,7 +8,7 @@ a segfault or a leak here cannot freeze or kill the flight path.
 
 Messages, platform -> child (pickled tuples, ``Connection.send``)::
 
-    ("load", spec, kwargs, memory_mb)        first message: cap memory, construct the processor
+    ("load", spec, kwargs, memory_mb, save_images)  first: cap memory, construct the processor
     ("call", call_id, method, args)          catch_cmd / customize_processing
     ("forget", [slot, ...])                  the platform freed these slots: unmap them
 
@@ -23,7 +23,8 @@ in the mailbox (the image in a shared-memory slot, read and drawn in place, and 
 attached to it) and answers with a ``result`` for that offer's ``gen``.
 
 ``saves`` are the ``tmMgr.save(frame, **extra)`` calls made meanwhile: ``(image, extra)``, the image
-copied at the call (what is drawn afterwards must not reach the dataset), so it is pickled.
+copied at the call (what is drawn afterwards must not reach the dataset), so it is pickled. When the
+platform does not record (``save_images`` false) the image is None: nothing is copied or sent for it.
 The processor's log records go to stderr one per line, as ``LOG_TAG level name "json text"``, so the
 platform logs them as its own (escaped and redacted like every record); anything else the process
 prints is forwarded line by line, escaped.
@@ -106,9 +107,11 @@ def parse_log_line(line: str) -> tuple[int, str, str] | None:
 class FrameTelemetry:
     """``self.tmMgr`` inside the child: the telemetry the platform attached to the frame being processed."""
 
-    def __init__(self) -> None:
+    def __init__(self, *, images: bool = True) -> None:
         self.current: SimpleNamespace = SimpleNamespace()
-        self.saves: list[tuple[np.ndarray, dict[str, Any]]] = []
+        self.saves: list[tuple[np.ndarray | None, dict[str, Any]]] = []
+        self.images = images
+        """Send each saved image (False: the platform does not record, so only the call and its columns go)."""
 
     def snapshot(self) -> SimpleNamespace:
         """The telemetry at the capture of the frame being processed (fields as in ``controllers.base.Telemetry``)."""
@@ -125,9 +128,9 @@ class FrameTelemetry:
         if not isinstance(image, np.ndarray) or image.ndim not in (2, 3):
             raise TypeError(f"tmMgr.save(frame, **extra): frame must be an image array, got {type(image).__name__}")
         # A copy: the image as it is now, not with what photo_processing draws on it afterwards.
-        self.saves.append((np.array(image), {k: _picklable(v) for k, v in extra.items()}))
+        self.saves.append((np.array(image) if self.images else None, {k: _picklable(v) for k, v in extra.items()}))
 
-    def take_saves(self) -> list[tuple[np.ndarray, dict[str, Any]]]:
+    def take_saves(self) -> list[tuple[np.ndarray | None, dict[str, Any]]]:
         saves, self.saves = self.saves, []
         return saves
 
@@ -200,12 +203,12 @@ def _die_with_parent() -> None:
 class ChildRunner:
     """Serves one processor: calls as they arrive, the newest frame whenever no call waits; one at a time."""
 
-    def __init__(self, conn: Connection, mailbox: FrameMailbox, loaded: Any) -> None:
+    def __init__(self, conn: Connection, mailbox: FrameMailbox, loaded: Any, *, save_images: bool = True) -> None:
         self.conn = conn
         self.mailbox = mailbox
         self.loaded = loaded
         self.instance = loaded.instance
-        self.telemetry = FrameTelemetry()
+        self.telemetry = FrameTelemetry(images=save_images)
         self.instance.tmMgr = self.telemetry
         self.slots = Slots()
         self.has_vector = "getPreparedVector" in loaded.info.capabilities
@@ -284,7 +287,7 @@ def main(fd: int, mailbox_address: str) -> int:
     _die_with_parent()
     conn = Connection(fd)
     mailbox = FrameMailbox.attach(mailbox_address)
-    _, spec, kwargs, memory_mb = conn.recv()
+    _, spec, kwargs, memory_mb, save_images = conn.recv()
     try:
         _limit_memory(memory_mb)
         try:
@@ -293,7 +296,7 @@ def main(fd: int, mailbox_address: str) -> int:
             send_message(conn, ("load_error", str(exc), exc.path, exc.class_name, exc.missing))
             return 0
         send_message(conn, ("ready", loaded.info))
-        ChildRunner(conn, mailbox, loaded).serve()
+        ChildRunner(conn, mailbox, loaded, save_images=save_images).serve()
     except MemoryError:
         traceback.print_exc()
         print(f"processor_memory_mb = {memory_mb:g} MB reached", file=sys.stderr, flush=True)

@@ -171,7 +171,7 @@ class UavCore:
         return await ProcessWorker.start(
             config.processor, config.processor_args, self._on_result, events=self.events,
             on_fault=self._on_processor_fault, timeout_s=config.processor_timeout,
-            memory_mb=config.processor_memory_mb or None)
+            memory_mb=config.processor_memory_mb or None, save_images=config.recording.record)
 
     def _on_processor_fault(self, reason: str) -> None:
         """The processor's process died or was killed: autonomy off, and hold if a vector flies."""

@@ -70,6 +70,8 @@ class ProcessWorker:
         on_fault: called on the loop with the reason when the child dies or is killed (stop autonomy).
         timeout_s: a frame or call unanswered this long gets the child killed and restarted.
         memory_mb: the child's address-space cap (RLIMIT_AS), None for none.
+        save_images: False when the platform does not record: ``tmMgr.save`` then sends the child's columns
+            but not its image (which would be copied and piped here only to be dropped).
         first_backoff_s: the wait before the first restart; it doubles with each one.
     """
 
@@ -77,7 +79,7 @@ class ProcessWorker:
 
     def __init__(self, spec: str, kwargs: dict[str, Any], on_result: Callable[[ProcessedFrame], None], *,
                  events: EventLog, on_fault: Callable[[str], None], timeout_s: float = 5.0,
-                 memory_mb: float | None = None, first_backoff_s: float = 1.0) -> None:
+                 memory_mb: float | None = None, save_images: bool = True, first_backoff_s: float = 1.0) -> None:
         self.spec, self.kwargs = spec, dict(kwargs)
         self.processor = LoadedProcessor(instance=None, info=ProcessorInfo(spec, None, frozenset()), spec=spec,
                                          kwargs=self.kwargs)
@@ -93,6 +95,7 @@ class ProcessWorker:
         self.events = events
         self.timeout_s = timeout_s
         self.memory_mb = memory_mb
+        self.save_images = save_images
         self.first_backoff_s = first_backoff_s
         self.state_text = "starting"
         self._on_result = on_result
@@ -258,7 +261,7 @@ class ProcessWorker:
         child = await loop.run_in_executor(self._spawner, spawn, loop.create_future())
         self._all_children.append(child)
         loop.add_reader(child.inbox.fileno(), self._on_readable, child)
-        self._send(child, ("load", self.spec, self.kwargs, self.memory_mb))
+        self._send(child, ("load", self.spec, self.kwargs, self.memory_mb, self.save_images))
         try:
             await asyncio.wait_for(asyncio.shield(child.ready), LOAD_TIMEOUT_S)
         except TimeoutError:
