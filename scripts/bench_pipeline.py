@@ -17,6 +17,10 @@ A shared or throttled machine drifts by tens of percent within minutes, so each 
 ``--rounds`` rounds of bare loop, process and thread back to back; a ratio is taken within its round and
 the median over the rounds is reported (with every round's value).
 
+``--footage aerial`` replays real drone video instead of the generated scene: 25 frames of each sequence of the
+aerial-tracking set (``$UAV_TUI_DATA_DIR``, else ``shared/data`` beside the repository), resized to each resolution.
+Real frames take longer to decode than the scene's flat shapes, so the platform's fixed cost per frame weighs less.
+
 ``--camera`` measures the regime a drone flies in instead: frames at the video's 30 FPS (``realtime=1``,
 the bare loop paced the same), where every frame finds the processor idle. It reports CPU per frame, the
 platform's extra CPU as a share of one core, and capture-to-result latency p50/p95 (no goals).
@@ -26,12 +30,14 @@ from __future__ import annotations
 
 import argparse
 import asyncio
+import itertools
 import json
 import multiprocessing
 import os
 import sys
 import tempfile
 import time
+from collections.abc import Iterable, Iterator
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
@@ -42,9 +48,11 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from processors import load_processor  # noqa: E402
+from processors.detection import find_data_dir  # noqa: E402
 from sources.synthetic import SyntheticScene  # noqa: E402
 from uav_tui.config import load_config  # noqa: E402
 from uav_tui.core import UavCore  # noqa: E402
+from uav_tui.evaluation import find_sequences  # noqa: E402
 from uav_tui.worker import ProcessedFrame  # noqa: E402
 
 PROCESSORS = ("template", "csrt", "position_hold", "yolo")
@@ -53,11 +61,29 @@ VIDEO_FPS = 30
 GOALS = {"fps_ratio_min": 0.95, "cpu_ratio_max": 1.1, "handoff_p95_ms_max_at_1280x720": 1.0}
 
 
-def make_video(path: Path, frames: int, width: int, height: int) -> None:
+FRAMES = 150
+AERIAL_FRAMES_PER_SEQUENCE = 25
+
+
+def synthetic_frames(width: int, height: int) -> Iterator[np.ndarray]:
     scene = SyntheticScene(width, height, seed=1)
+    return (scene.render(i) for i in range(FRAMES))
+
+
+def aerial_frames(width: int, height: int) -> Iterator[np.ndarray]:
+    """The first frames of every aerial-tracking sequence, resized (SequenceError when the set is not there)."""
+    for sequence in find_sequences([find_data_dir() / "aerial-tracking"]):
+        for frame in itertools.islice(sequence.frames(), AERIAL_FRAMES_PER_SEQUENCE):
+            yield cv2.resize(frame, (width, height), interpolation=cv2.INTER_AREA)
+
+
+FOOTAGE = {"synthetic": synthetic_frames, "aerial": aerial_frames}
+
+
+def make_video(path: Path, frames: Iterable[np.ndarray], width: int, height: int) -> None:
     writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"mp4v"), VIDEO_FPS, (width, height))
-    for i in range(frames):
-        writer.write(scene.render(i))
+    for frame in frames:
+        writer.write(frame)
     writer.release()
 
 
@@ -197,6 +223,8 @@ def main() -> None:
     parser.add_argument("--processors", default=",".join(PROCESSORS))
     parser.add_argument("--resolutions", default=",".join(f"{w}x{h}" for w, h in RESOLUTIONS))
     parser.add_argument("--camera", action="store_true", help=f"frames at {VIDEO_FPS} FPS, as a camera gives them")
+    parser.add_argument("--footage", choices=sorted(FOOTAGE), default="synthetic",
+                        help="the video replayed: the generated scene, or real drone video (the aerial-tracking set)")
     args = parser.parse_args()
     measure = camera_rate if args.camera else compare
     runs = []
@@ -204,14 +232,14 @@ def main() -> None:
         for text in args.resolutions.split(","):
             size = tuple(int(v) for v in text.split("x"))
             video = Path(tmp) / f"bench-{text}.mp4"
-            make_video(video, 150, *size)
+            make_video(video, FOOTAGE[args.footage](*size), *size)
             for processor in args.processors.split(","):
                 runs.append(measure(processor, size, video, args.seconds, args.rounds))
                 print(f"{processor} {text} done", file=sys.stderr, flush=True)
     if args.camera:
-        print(json.dumps({"mode": f"camera, {VIDEO_FPS} FPS", "runs": runs}, indent=2))
+        print(json.dumps({"mode": f"camera, {VIDEO_FPS} FPS", "footage": args.footage, "runs": runs}, indent=2))
     else:
-        print(json.dumps({"goals": GOALS, "runs": runs,
+        print(json.dumps({"goals": GOALS, "footage": args.footage, "runs": runs,
                           "all_goals_met": all(all(r["goals_met"].values()) for r in runs)}, indent=2))
 
 
