@@ -70,7 +70,7 @@ class ProcessWorker:
         on_fault: called on the loop with the reason when the child dies or is killed (stop autonomy).
         timeout_s: a frame or call unanswered this long gets the child killed and restarted.
         memory_mb: the child's address-space cap (RLIMIT_AS), None for none.
-        save_images: False when the platform does not record: ``tmMgr.save`` then sends the child's columns
+        save_images: False when the platform does not record: ``tmMgr.save`` in the child then sends its columns
             but not its image (which would be copied and piped here only to be dropped).
         first_backoff_s: the wait before the first restart; it doubles with each one.
     """
