@@ -8,9 +8,9 @@ a segfault or a leak here cannot freeze or kill the flight path.
 
 Messages, platform -> child (pickled tuples, ``Connection.send``)::
 
-    ("load", spec, kwargs, memory_mb, save_images)  first: cap memory, construct the processor
-    ("call", call_id, method, args)          catch_cmd / customize_processing
-    ("forget", [slot, ...])                  the platform freed these slots: unmap them
+    ("load", spec, kwargs, memory_mb, save_images)  first message: cap memory, construct the processor
+    ("call", call_id, method, args)                 catch_cmd / customize_processing
+    ("forget", [slot, ...])                         the platform freed these slots: unmap them
 
 child -> platform (:func:`send_message`: pickle protocol 5, arrays out of band)::
 
