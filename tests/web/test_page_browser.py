@@ -72,9 +72,16 @@ async def test_page_streams_video_and_selects_targets(web_core: UavCore, tmp_pat
 
             # a click selects a small box (a tenth of the shorter side) around the point
             x, y, w, h = await picture_box(page)
+            shown = await page.locator("#events li").count()
+            await page.evaluate("document.getElementById('reply').textContent = ''")
             await page.mouse.click(x + 0.5 * w, y + 0.5 * h)
             await wait_for(lambda: len(processor.rois) == 3, what="catch_cmd after a click")
             assert close_to(processor.rois[-1], (296, 216, 48, 48)), processor.rois[-1]
+            # its reply and event reach the page, status pushes go on: the picture stays where the operator aims
+            await page.wait_for_function(f"document.querySelectorAll('#events li').length > {shown}")
+            await page.wait_for_function("document.getElementById('reply').textContent !== ''")
+            await page.evaluate("document.getElementById('status').textContent += ' and a long line' .repeat(20)")
+            assert await picture_box(page) == (x, y, w, h)
 
             # a finger tap does the same (pointer events)
             await page.touchscreen.tap(x + 0.75 * w, y + 0.25 * h)

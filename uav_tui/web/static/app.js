@@ -20,7 +20,7 @@ async function post(path, body) {
     text = "no connection: " + e;
   }
   const reply = $("reply");
-  reply.textContent = text;
+  reply.textContent = reply.title = text;
   reply.className = ok ? "reply" : "reply bad";
   return ok;
 }
@@ -103,7 +103,7 @@ function showTracked(tracked, frame) {
 // -- video -----------------------------------------------------------------------------------------
 
 function setLink(text, bad) {
-  $("link").textContent = "video: " + text;
+  $("link").textContent = $("link").title = "video: " + text;
   $("link").className = bad ? "badge bad" : "badge";
 }
 
