@@ -2,14 +2,25 @@
 
 from __future__ import annotations
 
+import itertools
+import logging
 import statistics
 import time
+from pathlib import Path
 
+import cv2
+import numpy as np
 import pytest
 
-from sources import create_source, open_source
+from processors.detection import find_data_dir
+from sources import create_source, decoder_threads, open_source
 from sources.buffer import FrameBuffer
+from sources.file import FileSource
 from uav_tui.errors import SourceError
+from uav_tui.evaluation import find_sequences
+
+AERIAL = find_data_dir() / "aerial-tracking"
+CLIP_FRAMES = 10
 
 
 def _collect(buffer: FrameBuffer, duration_s: float) -> list[tuple[int, int]]:
@@ -107,3 +118,84 @@ def test_corrupt_file_is_reported_not_raised_from_the_thread(tmp_path) -> None:
     source.close()
     with pytest.raises(SourceError, match="cannot open camera"):
         open_source(f"file:{bad}")
+
+
+@pytest.fixture
+def aerial_clip(tmp_path: Path) -> Path:
+    """The first frames of a real drone video (the aerial-tracking set), 320x240, as an MP4 file."""
+    if not AERIAL.is_dir():
+        pytest.skip(f"{AERIAL} is not here")
+    path = tmp_path / "aerial.mp4"
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter.fourcc(*"mp4v"), 30, (320, 240))
+    for frame in itertools.islice(find_sequences([AERIAL])[0].frames(), CLIP_FRAMES):
+        writer.write(cv2.resize(frame, (320, 240), interpolation=cv2.INTER_AREA))
+    writer.release()
+    return path
+
+
+@pytest.fixture
+def switch_every_few_frames(monkeypatch: pytest.MonkeyPatch, caplog: pytest.LogCaptureFixture) -> None:
+    """The file source tries the other decoder thread count every 3 frames (instead of every 30 s)."""
+    monkeypatch.setattr(decoder_threads, "WINDOW_S", 0.0)
+    monkeypatch.setattr(decoder_threads, "MIN_FRAMES", 3)
+    monkeypatch.setattr(decoder_threads, "RETRY_S", -1.0)
+    caplog.set_level(logging.INFO, logger="sources.file")
+
+
+def _replayed(uri: str, count: int) -> tuple[list[np.ndarray], dict]:
+    source = open_source(uri)
+    try:
+        images, seq = [], 0
+        while len(images) < count:
+            frame = source.buffer.wait_newer(seq, timeout=5)
+            assert frame is not None
+            assert frame.seq == seq + 1  # a reader taking every frame of a realtime=0 replay misses none
+            images.append(frame.image.copy())
+            seq = frame.seq
+        return images, source.get_properties()
+    finally:
+        source.close()
+
+
+def _every_frame(path: Path) -> list[np.ndarray]:
+    capture = cv2.VideoCapture(str(path), cv2.CAP_FFMPEG)
+    frames = []
+    while (frame := capture.read()[1]) is not None:
+        frames.append(frame)
+    capture.release()
+    return frames
+
+
+def _same_sequence(images: list[np.ndarray], clip: list[np.ndarray]) -> bool:
+    return all(np.array_equal(image, clip[i % len(clip)]) for i, image in enumerate(images))
+
+
+def test_switching_decoder_threads_mid_replay_neither_skips_nor_repeats_a_frame(
+        aerial_clip: Path, switch_every_few_frames: None, caplog: pytest.LogCaptureFixture) -> None:
+    images, props = _replayed(f"file:{aerial_clip}?realtime=0", 5 * CLIP_FRAMES)
+    switches = [r.getMessage() for r in caplog.records if ": decoding on" in r.getMessage()]
+    assert len(switches) >= 8, switches
+    assert any("one thread" in s for s in switches) and any("FFmpeg's" in s for s in switches)
+    assert any(s.endswith("from frame 0") for s in switches)  # one across the end of the file, too
+    assert props["decoder_threads_adaptive"] and props["loops"] >= 4
+    assert _same_sequence(images, _every_frame(aerial_clip))
+
+
+def test_a_reopened_file_that_lands_on_another_frame_is_not_used(
+        aerial_clip: Path, switch_every_few_frames: None, caplog: pytest.LogCaptureFixture,
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    open_at = FileSource._open_at
+    monkeypatch.setattr(FileSource, "_open_at", lambda self, threads, position: open_at(self, threads, position + 1))
+    images, props = _replayed(f"file:{aerial_clip}?realtime=0", 3 * CLIP_FRAMES)
+    assert _same_sequence(images, _every_frame(aerial_clip))
+    assert props["decoder_threads"] == 1 and not props["decoder_threads_adaptive"]
+    assert any("decodes another frame than the one due" in r.getMessage() for r in caplog.records)
+    assert not any(": decoding on" in r.getMessage() for r in caplog.records)
+
+
+def test_threads_fixes_the_decoder_thread_count(aerial_clip: Path, switch_every_few_frames: None) -> None:
+    images, props = _replayed(f"file:{aerial_clip}?realtime=0&threads=0", 2 * CLIP_FRAMES)
+    assert props["decoder_threads"] == "ffmpeg" and not props["decoder_threads_adaptive"]
+    assert _same_sequence(images, _every_frame(aerial_clip))
+    with pytest.raises(SourceError, match="threads=.-1. must be a number >= 0"):
+        create_source(f"file:{aerial_clip}?threads=-1")
