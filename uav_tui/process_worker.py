@@ -352,11 +352,11 @@ class ProcessWorker:
                 self._nudged = True
                 self._wake.notify()
                 return
-            self._picked = (buffer, frame.seq)
             slot = slot or self._ring.acquire(frame.image.shape)
             if slot is None:
-                self._starved = True  # every slot held: skipped; a newer frame or a freed slot tries again
+                self._starved = True  # every slot held: not picked; a newer frame or a freed slot tries again
                 return
+            self._picked = (buffer, frame.seq)
             forget, self._to_forget = self._to_forget, []
         if copied:
             np.copyto(slot.array(), frame.image)  # the slot is ours alone until it is offered

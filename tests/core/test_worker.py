@@ -24,6 +24,7 @@ from sources.buffer import FrameBuffer
 from sources.synthetic import SyntheticSource
 from tests.videos import create_video_file
 from uav_tui.events import EventLog
+from uav_tui.frame_ring import MAX_SLOTS
 from uav_tui.process_worker import ProcessWorker
 from uav_tui.telemetry import TelemetryManager
 from uav_tui.worker import ProcessedFrame, ProcessorWorker
@@ -284,6 +285,52 @@ async def test_a_replay_puts_its_next_frame_while_the_child_processes_this_one(t
     assert source.get_properties()["frames_dropped"] == 0
     put_while_processing = [nxt.frame.t_mono_ns < cur.t_end_ns for cur, nxt in itertools.pairwise(results[1:])]
     assert all(put_while_processing), put_while_processing
+
+
+KEEPER = """
+class Keeper:
+    def __init__(self):
+        self.kept = []
+
+    def photo_processing(self, frame):
+        self.kept.append(frame)  # a processor that keeps every frame (a history for its own use)
+
+    def customize_processing(self, n):
+        self.kept.clear()
+"""
+
+
+async def test_a_replay_resumes_when_the_processor_lets_go_of_every_slot(tmp_path: Path) -> None:
+    """Process isolation, ``realtime=0``: a processor that keeps every frame holds every shared-memory slot, and the
+    replay waits (nothing overwritten, nothing skipped); the moment it lets go, the frame that found no slot is
+    handed over and the replay goes on. That frame used to stay marked as handed over, and the replay stalled."""
+    (tmp_path / "keeper.py").write_text(KEEPER)
+    source = open_source(f"file:{create_video_file(tmp_path / 'clip.mp4', frames=20)}?realtime=0")
+    seqs: list[int] = []
+
+    async def stalled(timeout: float = 10) -> int:
+        deadline, count = time.monotonic() + timeout, -1
+        while len(seqs) != count and time.monotonic() < deadline:
+            count = len(seqs)
+            await asyncio.sleep(0.3)
+        return count
+
+    try:
+        async with running_worker("process", f"{tmp_path}/keeper.py:Keeper",
+                                  lambda result: seqs.append(result.frame.seq)) as worker:
+            worker.attach(source.buffer)
+            task = asyncio.create_task(worker.run())
+            held = await stalled()
+            assert 0 < held <= MAX_SLOTS  # the processor holds every slot: the replay waits
+            await worker.call("customize_processing", 1)  # it lets go
+            deadline = time.monotonic() + 10
+            while len(seqs) < held + 5 and time.monotonic() < deadline:
+                await asyncio.sleep(0.01)
+            task.cancel()
+    finally:
+        source.close()
+    assert len(seqs) >= held + 5, f"stalled again at {len(seqs)} frames"
+    assert seqs == list(range(1, len(seqs) + 1))  # none skipped
 
 
 @pytest.mark.parametrize("camera", ["file", "synthetic"])
