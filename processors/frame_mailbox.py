@@ -32,6 +32,8 @@ TELEMETRY_BYTES = 16 * 1024
 _CLAIM = struct.Struct("=qq")
 """Written by the processor: the gen it claimed last, and when (``time.monotonic_ns``, the same clock in both
 processes)."""
+_CLAIM_GEN = struct.Struct("=q")
+"""The first field of ``_CLAIM`` alone: the gen claimed last."""
 _WATCH = struct.Struct("=q")
 """Written by the platform: the gen whose claim it waits for (0: none), so the processor signals it."""
 _WATCH_AT = _CLAIM.size
@@ -189,7 +191,11 @@ class FrameMailbox:
                 raise MailboxGone("the frame mailbox is closed")
             self._waiters += 1
         try:
-            return self._await_claim(gen, time.monotonic() + timeout_s)
+            # The usual case when decoding is the bottleneck, read without the lock (the mapping stays while a
+            # waiter is counted): claims only grow and the gen is one aligned 8-byte word, so a read that races
+            # a claim can only say "not yet", and the locked wait below asks again.
+            claimed = _CLAIM_GEN.unpack_from(self._shm.buf)[0] >= gen
+            return claimed or self._await_claim(gen, time.monotonic() + timeout_s)
         finally:
             with self._waiters_left:
                 self._waiters -= 1

@@ -46,11 +46,11 @@ class Slot:
     shm: SharedMemory
     shape: tuple[int, ...]
     holds: int = 0
-    address: int = field(init=False)
-    """Where the slot's pixels are mapped in this process."""
+    mapping: object = field(init=False)
+    """What the slot's arrays are views of (their ``base``): how a frame decoded into the slot is recognised."""
 
     def __post_init__(self) -> None:
-        self.address = self.array().__array_interface__["data"][0]
+        self.mapping = self.array().base
 
     @property
     def name(self) -> str:
@@ -92,9 +92,9 @@ class FrameRing:
 
     def take_for_child(self, image: np.ndarray) -> Slot | None:
         """The slot ``image`` was captured into, with the child's hold taken; None if it is not one of ours."""
-        address = image.__array_interface__["data"][0]
+        mapping = image.base
         with self._lock:
-            slot = next((s for s in self._slots if s.address == address and s.shape == image.shape), None)
+            slot = next((s for s in self._slots if s.mapping is mapping and s.shape == image.shape), None)
             if slot is not None:
                 slot.holds += 1
             return slot

@@ -392,8 +392,8 @@ class ProcessWorker:
         """
         deadline = time.monotonic() + timeout_s
         with self._offer_made:
-            if not self._offer_made.wait_for(lambda: self._offered[0] is buffer and self._offered[1] >= seq,
-                                             timeout_s):
+            if not self._was_offered(buffer, seq) and not self._offer_made.wait_for(
+                    lambda: self._was_offered(buffer, seq), timeout_s):
                 return False
             child, gen = self._child, self._offered[2]
         if child is not None:
@@ -401,6 +401,9 @@ class ProcessWorker:
                 return child.mailbox.wait_claimed(gen, max(0.0, deadline - time.monotonic()))
         time.sleep(max(0.0, deadline - time.monotonic()))  # no child, or it died: its successor is offered the frame
         return False
+
+    def _was_offered(self, buffer: FrameBuffer, seq: int) -> bool:
+        return self._offered[0] is buffer and self._offered[1] >= seq
 
     def _telemetry_now(self) -> tuple[bytes, float | None]:
         """The telemetry attached to a frame as it is offered: the newest update pickled, and the heartbeat age.
