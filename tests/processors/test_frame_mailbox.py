@@ -110,6 +110,10 @@ def test_the_platform_waits_for_a_claim_and_only_then_is_it_signalled(mailbox: F
     claim_in_another_process(mailbox)  # the platform now waits for gen 2: this claim signals
     assert wait([mailbox.claimed_fd], timeout=0) == [mailbox.claimed_fd]
     assert mailbox.wait_claimed(2, timeout_s=5)
+    os.eventfd_read(mailbox.claimed_fd)
+    mailbox.offer(offer(3))
+    claim_in_another_process(mailbox)  # the watch for gen 2 was used up: nobody waits, nothing is signalled
+    assert wait([mailbox.claimed_fd], timeout=0) == []
 
 
 def test_closing_wakes_a_thread_waiting_for_a_claim_before_its_descriptors_go(mailbox: FrameMailbox) -> None:
