@@ -228,8 +228,8 @@ class FrameMailbox:
                 return None
             _CLAIM.pack_into(self._shm.buf, 0, gen, time.monotonic_ns())
             watched = _WATCH.unpack_from(self._shm.buf, _WATCH_AT)[0]
-            if watched and gen >= watched:  # signalled once: a platform that finds the claim without waiting
-                _WATCH.pack_into(self._shm.buf, _WATCH_AT, 0)  # never clears the watch itself
+            if watched and gen >= watched:  # the watch is used up (a platform that finds a claim made without
+                _WATCH.pack_into(self._shm.buf, _WATCH_AT, 0)  # waiting for it never clears the watch itself)
             telemetry = bytes(self._shm.buf[_TELEMETRY_AT:_TELEMETRY_AT + tel_len])
         if watched and gen >= watched:
             os.eventfd_write(self.claimed_fd, 1)
