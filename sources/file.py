@@ -2,7 +2,11 @@
 
 from __future__ import annotations
 
+import contextlib
 import logging
+import os
+import sys
+import threading
 import time
 from pathlib import Path
 from typing import Any
@@ -20,6 +24,11 @@ logger = logging.getLogger(__name__)
 
 DEFAULT_FPS = 30.0
 """Used when a file does not state its frame rate."""
+NICENESS = 5
+"""How much lower than the platform's the priority of a replay's decoding is (its capture thread, and FFmpeg's threads,
+which that thread starts). Decoding ahead then takes the CPU the processor and the event loop leave: with every core
+busy, a processor waiting for a frame was woken up to 1.1 ms late at p95 (real 1280x720 video on 2 cores); 0.3 ms
+with it."""
 
 
 class FileSource(VideoCaptureSource):
@@ -82,6 +91,13 @@ class FileSource(VideoCaptureSource):
 
     def _no_frame_error(self) -> Exception:
         return SourceError(f"{self.device}: opened but no frame could be decoded (corrupt or truncated file?)")
+
+    def _capture_loop(self) -> None:
+        if sys.platform == "linux":  # elsewhere the priority is the whole process's
+            niceness = min(19, os.getpriority(os.PRIO_PROCESS, 0) + NICENESS)  # 0: this thread, on Linux
+            with contextlib.suppress(OSError):
+                os.setpriority(os.PRIO_PROCESS, threading.get_native_id(), niceness)
+        super()._capture_loop()
 
     def _grab(self) -> np.ndarray | None:
         assert self._pacer is not None

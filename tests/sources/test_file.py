@@ -4,7 +4,10 @@ from __future__ import annotations
 
 import itertools
 import logging
+import os
 import statistics
+import sys
+import threading
 import time
 from pathlib import Path
 
@@ -15,7 +18,7 @@ import pytest
 from processors.detection import find_data_dir
 from sources import create_source, decoder_threads, open_source
 from sources.buffer import FrameBuffer
-from sources.file import FileSource
+from sources.file import NICENESS, FileSource
 from uav_tui.errors import SourceError
 from uav_tui.evaluation import find_sequences
 
@@ -199,3 +202,27 @@ def test_threads_fixes_the_decoder_thread_count(aerial_clip: Path, switch_every_
     assert _same_sequence(images, _every_frame(aerial_clip))
     with pytest.raises(SourceError, match="threads=.-1. must be a number >= 0"):
         create_source(f"file:{aerial_clip}?threads=-1")
+
+
+def _niceness(tid: int) -> int:
+    return int(Path(f"/proc/self/task/{tid}/stat").read_text().rpartition(")")[2].split()[16])
+
+
+@pytest.mark.skipif(sys.platform != "linux", reason="per-thread priorities are Linux's")
+def test_a_replay_decodes_at_a_lower_priority_than_the_platform(
+        aerial_clip: Path, switch_every_few_frames: None, caplog: pytest.LogCaptureFixture) -> None:
+    platform = _niceness(threading.get_native_id())
+    source = open_source(f"file:{aerial_clip}?realtime=0")
+    try:
+        seq, deadline = 0, time.monotonic() + 10
+        while not any("FFmpeg's" in r.getMessage() for r in caplog.records) and time.monotonic() < deadline:
+            frame = source.buffer.wait_newer(seq, timeout=5)  # a reader taking every frame until a switch
+            seq = frame.seq if frame is not None else seq
+        assert source._thread is not None
+        assert _niceness(source._thread.native_id) == min(19, platform + NICENESS)
+        decoders = [int(tid) for tid in os.listdir("/proc/self/task")
+                    if Path(f"/proc/self/task/{tid}/comm").read_text().startswith("av:")]
+        assert decoders, "FFmpeg started no decoder thread"
+        assert {_niceness(tid) for tid in decoders} == {min(19, platform + NICENESS)}  # started by the capture thread
+    finally:
+        source.close()
