@@ -24,11 +24,11 @@ logger = logging.getLogger(__name__)
 
 DEFAULT_FPS = 30.0
 """Used when a file does not state its frame rate."""
-NICENESS = 5
-"""How much lower than the platform's the priority of a replay's decoding is (its capture thread, and FFmpeg's threads,
-which that thread starts). Decoding ahead then takes the CPU the processor and the event loop leave: with every core
-busy, a processor waiting for a frame was woken up to 1.1 ms late at p95 (real 1280x720 video on 2 cores); 0.3 ms
-with it."""
+NICENESS = 2
+"""How much lower than the platform's the priority of a replay's decoding is (its capture thread, and FFmpeg's
+threads, which that thread starts), so decoding ahead takes the CPU the processor and the event loop leave. Real
+1280x720 video on 2 cores, every core busy: a processor waiting for a frame was woken 1.1 ms late at p95, 0.5-0.9 ms
+with 2 levels. With 5 levels it was 0.3 ms, but YOLO, whose own threads fill every core, lost 11 % of its FPS."""
 
 
 class FileSource(VideoCaptureSource):
