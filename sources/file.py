@@ -14,7 +14,7 @@ from typing import Any
 import cv2
 import numpy as np
 
-from sources.decoder_threads import DecoderThreads
+from sources.decoder_threads import SINGLE, DecoderThreads
 from sources.errors import SourceError
 from sources.pacing import Pacer
 from sources.uri import SourceUri
@@ -54,7 +54,7 @@ class FileSource(VideoCaptureSource):
         self.frame_count = 0
         self._pacer: Pacer | None = None
         self._adaptive = threads is None
-        self._decoder = DecoderThreads() if threads is None else DecoderThreads(threads=threads)
+        self._decoder = DecoderThreads(threads=SINGLE if threads is None else threads)
         self._position = 0
         """Index of the next frame the capture decodes."""
         self._reopened: tuple[cv2.VideoCapture, int] | None = None
