@@ -58,6 +58,13 @@ class ProcessorRaised(Exception):
     """The researcher's method raised in the child; the message is ``Type: message``."""
 
 
+RESULTS_POLL_S = 0.001
+"""The child's messages that come closer together than this (a replay's results, never a camera's) are read this
+often, in batches, instead of each waking the event loop: the child's write then wakes nobody. Messages further
+apart are read as they arrive. A result frees its frame's slot, so a poll period passes at most ``MAX_SLOTS`` frames.
+(Template matching on a generated 640x480 replay: CPU a frame 1.13x -> 1.09x the bare loop.)"""
+
+
 class ProcessWorker:
     """Runs a processor in a child process, always on the newest frame of a buffer.
 
@@ -445,11 +452,34 @@ class ProcessWorker:
     # -- the child's messages (on the loop, when its pipe is readable) -----------------------------
 
     def _on_readable(self, child: ChildProcess) -> None:
+        """Read the pipe; when the previous read was under :data:`RESULTS_POLL_S` ago, poll it from now on."""
+        now = time.monotonic()
+        frequent, child.last_read_s = now - child.last_read_s < RESULTS_POLL_S, now
+        if self._read(child) is not None and frequent:
+            loop = asyncio.get_running_loop()
+            loop.remove_reader(child.inbox.fileno())
+            loop.call_later(RESULTS_POLL_S, self._poll, child)
+
+    def _poll(self, child: ChildProcess) -> None:
+        """Read what came since the last poll; when nothing did, wait for the pipe to be readable again."""
+        if child.inbox.closed:
+            return
+        count = self._read(child)
+        if count is None:
+            return
+        loop = asyncio.get_running_loop()
+        if count:
+            loop.call_later(RESULTS_POLL_S, self._poll, child)
+        else:
+            loop.add_reader(child.inbox.fileno(), self._on_readable, child)
+
+    def _read(self, child: ChildProcess) -> int | None:
+        """Handle every message that has arrived; how many there were, None when the pipe ended."""
         messages = child.inbox.read()
         if messages is None:
             self._stop_reading(child)
             child.exit_watch = asyncio.create_task(self._watch_exit(child), name=f"processor {child.pid} exit")
-            return
+            return None
         for data, buffers in messages:
             try:
                 message = pickle.loads(data, buffers=buffers)
@@ -460,6 +490,7 @@ class ProcessWorker:
                 self._take_result(child, message)
             else:
                 self._on_message(child, message)
+        return len(messages)
 
     def _stop_reading(self, child: ChildProcess) -> None:
         if child.inbox.closed:

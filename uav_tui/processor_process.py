@@ -80,6 +80,8 @@ class ChildProcess:
     inbox: Inbox = field(init=False)
     exit_watch: asyncio.Task[None] | None = None
     """Waits for the exit once the pipe ended, then reports it."""
+    last_read_s: float = 0.0
+    """When (monotonic s) its pipe was last found readable."""
 
     def __post_init__(self) -> None:
         self.inbox = Inbox(self.conn)

@@ -8,6 +8,7 @@ from __future__ import annotations
 import asyncio
 import itertools
 import os
+import signal
 import threading
 import time
 from collections.abc import AsyncIterator, Callable
@@ -23,9 +24,11 @@ from sources import open_source
 from sources.buffer import FrameBuffer
 from sources.synthetic import SyntheticSource
 from tests.videos import create_video_file
+from uav_tui import process_worker
 from uav_tui.events import EventLog
 from uav_tui.frame_ring import MAX_SLOTS
 from uav_tui.process_worker import ProcessWorker
+from uav_tui.processor_process import Inbox
 from uav_tui.telemetry import TelemetryManager
 from uav_tui.worker import ProcessedFrame, ProcessorWorker
 
@@ -331,6 +334,70 @@ async def test_a_replay_resumes_when_the_processor_lets_go_of_every_slot(tmp_pat
         source.close()
     assert len(seqs) >= held + 5, f"stalled again at {len(seqs)} frames"
     assert seqs == list(range(1, len(seqs) + 1))  # none skipped
+
+
+IDLE = """
+class Idle:
+    def photo_processing(self, frame):
+        pass
+
+    def customize_processing(self, n):
+        return n
+"""
+
+
+async def test_results_closer_together_than_the_poll_period_are_read_in_batches(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Process isolation: a replay's results, closer together than ``RESULTS_POLL_S``, are read in batches instead
+    of each waking the loop, none lost or out of order; once they stop, the pipe is watched again, so a lone reply
+    is read as it comes, not a poll later; and a child killed while its results are polled is still reported."""
+    poll_s = 0.2
+    monkeypatch.setattr(process_worker, "RESULTS_POLL_S", poll_s)
+    batches: list[int] = []
+    read = Inbox.read
+
+    def counted_read(inbox: Inbox) -> list[Any] | None:
+        messages = read(inbox)
+        if messages:
+            batches.append(len(messages))
+        return messages
+
+    monkeypatch.setattr(Inbox, "read", counted_read)
+    (tmp_path / "idle.py").write_text(IDLE)
+    video = create_video_file(tmp_path / "clip.mp4", frames=20)
+    seqs: list[int] = []
+    faults: list[str] = []
+    worker = await ProcessWorker.start(f"{tmp_path}/idle.py:Idle", {}, lambda result: seqs.append(result.frame.seq),
+                                       events=EventLog(), on_fault=faults.append)
+    task = asyncio.create_task(worker.run())
+    try:
+        replay = open_source(f"file:{video}?realtime=0")
+        try:
+            worker.attach(replay.buffer)
+            await until(lambda: len(seqs) >= 60, "60 results")
+        finally:
+            replay.close()
+        await asyncio.sleep(3 * poll_s)  # a poll found nothing new: the pipe is watched again
+        assert seqs == list(range(1, len(seqs) + 1))
+        assert max(batches) >= 5 and len(batches) < len(seqs) / 4, batches
+
+        asked = time.monotonic()
+        assert await worker.call("customize_processing", 7) == 7
+        assert time.monotonic() - asked < poll_s / 2
+
+        replay = open_source(f"file:{video}?realtime=0")
+        try:
+            worker.attach(replay.buffer)
+            polled = len(seqs)
+            await until(lambda: len(seqs) >= polled + 20, "20 more results")
+            os.kill(worker.state().pid, signal.SIGKILL)
+            await until(lambda: faults, "the death reported")
+        finally:
+            replay.close()
+        assert "SIGKILL" in faults[0], faults
+    finally:
+        task.cancel()
+        worker.close()
 
 
 @pytest.mark.parametrize("camera", ["file", "synthetic"])
