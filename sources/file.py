@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import contextlib
+import functools
 import logging
 import os
 import sys
 import threading
 import time
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
@@ -26,9 +28,10 @@ DEFAULT_FPS = 30.0
 """Used when a file does not state its frame rate."""
 NICENESS = 2
 """How much lower than the platform's the priority of a replay's decoding is (its capture thread, and FFmpeg's
-threads, which that thread starts), so decoding ahead takes the CPU the processor and the event loop leave. Real
-1280x720 video on 2 cores, every core busy: a processor waiting for a frame was woken 1.1 ms late at p95, 0.5-0.9 ms
-with 2 levels. With 5 levels it was 0.3 ms, but YOLO, whose own threads fill every core, lost 11 % of its FPS."""
+frame threads, whichever thread opened the file), so decoding ahead takes the CPU the processor and the event
+loop leave. Real 1280x720 video on 2 cores, every core busy: a processor waiting for a frame was woken 1.1 ms late
+at p95, 0.5-0.9 ms with 2 levels. With 5 levels it was 0.3 ms, but YOLO, whose own threads fill every core, lost
+11 % of its FPS."""
 
 
 class FileSource(VideoCaptureSource):
@@ -55,6 +58,8 @@ class FileSource(VideoCaptureSource):
         self._pacer: Pacer | None = None
         self._adaptive = threads is None
         self._decoder = DecoderThreads(threads=SINGLE if threads is None else threads)
+        self._decoding_niceness = min(19, os.getpriority(os.PRIO_PROCESS, 0) + NICENESS)
+        """The priority decoding runs at (on Linux, ``os.getpriority`` of 0 is the calling thread's)."""
         self._position = 0
         """Index of the next frame the capture decodes."""
         self._reopened: tuple[cv2.VideoCapture, int] | None = None
@@ -73,7 +78,20 @@ class FileSource(VideoCaptureSource):
         return self._capture_on(self._decoder.threads)
 
     def _capture_on(self, threads: int) -> cv2.VideoCapture:
-        return cv2.VideoCapture(self.device, self._backend, [cv2.CAP_PROP_N_THREADS, threads])
+        """Opened on one decoder thread (the capture thread), or on a thread at the decoding priority, which the
+        frame threads FFmpeg starts as it opens inherit."""
+        open_capture = functools.partial(cv2.VideoCapture, self.device, self._backend,
+                                         [cv2.CAP_PROP_N_THREADS, threads])
+        if threads == SINGLE:
+            return open_capture()
+        with ThreadPoolExecutor(1, initializer=self._lower_priority) as decoding_priority:
+            return decoding_priority.submit(open_capture).result()
+
+    def _lower_priority(self) -> None:
+        """Give the calling thread the decoding priority (Linux: a per-thread priority; elsewhere the process's)."""
+        if sys.platform == "linux":
+            with contextlib.suppress(OSError):
+                os.setpriority(os.PRIO_PROCESS, threading.get_native_id(), self._decoding_niceness)
 
     def _open_device(self) -> None:
         path = Path(self.device)
@@ -93,10 +111,7 @@ class FileSource(VideoCaptureSource):
         return SourceError(f"{self.device}: opened but no frame could be decoded (corrupt or truncated file?)")
 
     def _capture_loop(self) -> None:
-        if sys.platform == "linux":  # elsewhere the priority is the whole process's
-            niceness = min(19, os.getpriority(os.PRIO_PROCESS, 0) + NICENESS)  # 0: this thread, on Linux
-            with contextlib.suppress(OSError):
-                os.setpriority(os.PRIO_PROCESS, threading.get_native_id(), niceness)
+        self._lower_priority()
         super()._capture_loop()
 
     def _grab(self) -> np.ndarray | None:

@@ -209,6 +209,11 @@ def _niceness(tid: int) -> int:
 
 
 @pytest.mark.skipif(sys.platform != "linux", reason="per-thread priorities are Linux's")
+def _decoder_threads() -> list[int]:
+    return [int(tid) for tid in os.listdir("/proc/self/task")
+            if Path(f"/proc/self/task/{tid}/comm").read_text().startswith("av:")]
+
+
 def test_a_replay_decodes_at_a_lower_priority_than_the_platform(
         aerial_clip: Path, switch_every_few_frames: None, caplog: pytest.LogCaptureFixture) -> None:
     platform = _niceness(threading.get_native_id())
@@ -220,9 +225,22 @@ def test_a_replay_decodes_at_a_lower_priority_than_the_platform(
             seq = frame.seq if frame is not None else seq
         assert source._thread is not None
         assert _niceness(source._thread.native_id) == min(19, platform + NICENESS)
-        decoders = [int(tid) for tid in os.listdir("/proc/self/task")
-                    if Path(f"/proc/self/task/{tid}/comm").read_text().startswith("av:")]
+        decoders = _decoder_threads()
         assert decoders, "FFmpeg started no decoder thread"
         assert {_niceness(tid) for tid in decoders} == {min(19, platform + NICENESS)}  # started by the capture thread
+    finally:
+        source.close()
+
+
+def test_a_fixed_thread_count_decodes_at_the_lower_priority_too(aerial_clip: Path) -> None:
+    """``threads=2``: the file is opened (and FFmpeg's threads started) before the capture thread runs, on a thread
+    at the decoding priority; opened on the caller's thread, they ran at the platform's."""
+    platform = _niceness(threading.get_native_id())
+    source = open_source(f"file:{aerial_clip}?realtime=0&threads=2")
+    try:
+        assert source.buffer.wait_newer(0, timeout=5) is not None
+        decoders = _decoder_threads()
+        assert decoders, "FFmpeg started no decoder thread"
+        assert {_niceness(tid) for tid in decoders} == {min(19, platform + NICENESS)}
     finally:
         source.close()
