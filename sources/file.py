@@ -88,7 +88,7 @@ class FileSource(VideoCaptureSource):
             return decoding_priority.submit(open_capture).result()
 
     def _lower_priority(self) -> None:
-        """Give the calling thread the decoding priority (Linux: a per-thread priority; elsewhere the process's)."""
+        """Give the calling thread the decoding priority (Linux only: elsewhere a priority is the whole process's)."""
         if sys.platform == "linux":
             with contextlib.suppress(OSError):
                 os.setpriority(os.PRIO_PROCESS, threading.get_native_id(), self._decoding_niceness)
