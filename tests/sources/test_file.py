@@ -208,12 +208,12 @@ def _niceness(tid: int) -> int:
     return int(Path(f"/proc/self/task/{tid}/stat").read_text().rpartition(")")[2].split()[16])
 
 
-@pytest.mark.skipif(sys.platform != "linux", reason="per-thread priorities are Linux's")
 def _decoder_threads() -> list[int]:
     return [int(tid) for tid in os.listdir("/proc/self/task")
             if Path(f"/proc/self/task/{tid}/comm").read_text().startswith("av:")]
 
 
+@pytest.mark.skipif(sys.platform != "linux", reason="per-thread priorities are Linux's")
 def test_a_replay_decodes_at_a_lower_priority_than_the_platform(
         aerial_clip: Path, switch_every_few_frames: None, caplog: pytest.LogCaptureFixture) -> None:
     platform = _niceness(threading.get_native_id())
@@ -232,6 +232,7 @@ def test_a_replay_decodes_at_a_lower_priority_than_the_platform(
         source.close()
 
 
+@pytest.mark.skipif(sys.platform != "linux", reason="per-thread priorities are Linux's")
 def test_a_fixed_thread_count_decodes_at_the_lower_priority_too(aerial_clip: Path) -> None:
     """``threads=2``: the file is opened (and FFmpeg's threads started) before the capture thread runs, on a thread
     at the decoding priority; opened on the caller's thread, they ran at the platform's."""
