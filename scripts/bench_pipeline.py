@@ -1,10 +1,16 @@
 """Platform overhead: the uav-tui pipeline (processor in its own process, or on a thread) vs the paper's bare loop.
 
+Platform: ``file:VIDEO?realtime=0`` (the file source runs in lockstep with its reader) through the capture
+thread, FrameBuffer and the processor worker, with ``isolation = "process"`` and ``"thread"``.
 Bare loop: ``ok, frame = cap.read(); alg.photo_processing(frame)`` as fast as it goes, each time in a fresh
 interpreter as a researcher's script runs: glibc's default allocator and OpenCV's default thread pool (the platform
 sets its own for the processor's process, see ``uav_tui.malloc_tuning`` and ``uav_tui.opencv_pool``).
-Platform: ``file:VIDEO?realtime=0`` (the file source runs in lockstep with its reader) through the capture
-thread, FrameBuffer and the processor worker, with ``isolation = "process"`` and ``"thread"``.
+After each platform run, the bare loop replays exactly the frames that run processed: from the frame the target
+was selected on (csrt; untimed up to the measured frames), then the measured frames, timed. A tracker's work per
+frame depends on what it is doing: on real 1280x720 video, CSRT lost its target on 10 % of the first 300 frames
+after the selection (7.2-7.6 ms a frame) and on 25 % of the frames the platform measures after its warm-up
+(8.1-8.9 ms), so a bare loop timed from the selection did less work a frame than the platform. ``same_work``
+says both tracked the same box on every measured frame.
 
 For every reference processor (csrt with a target selected) at 640x480 and 1280x720: processed FPS, CPU
 per processed frame (with the processor's own process counted), and the hand-off time: from the moment
@@ -14,7 +20,7 @@ Goals (ratios within one run): FPS >= 0.95x the bare loop, CPU/frame <= 1.1x, ha
 1280x720. Prints one JSON object.
 
 A shared or throttled machine drifts by tens of percent within minutes, so each configuration runs in
-``--rounds`` rounds of bare loop, process and thread back to back; a ratio is taken within its round and
+``--rounds`` rounds of process, thread and their bare loops back to back; a ratio is taken within its round and
 the median over the rounds is reported (with every round's value).
 
 ``--footage aerial`` replays real drone video instead of the generated scene: 25 frames of each sequence of the
@@ -37,8 +43,9 @@ import os
 import sys
 import tempfile
 import time
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -48,6 +55,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from processors import load_processor  # noqa: E402
+from processors.base import Box, read_box  # noqa: E402
 from processors.detection import find_data_dir  # noqa: E402
 from sources.synthetic import SyntheticScene  # noqa: E402
 from uav_tui.config import load_config  # noqa: E402
@@ -66,6 +74,8 @@ WARM_UP_S = 3.5
 """Before measuring: decoder and caches warm, and the file source has chosen its decoder thread count (a window
 on each, see ``sources.decoder_threads``)."""
 AERIAL_FRAMES_PER_SEQUENCE = 25
+BARE_WARM_UP_FRAMES = 30
+"""Processed untimed before the bare loop's measured frames, when no target was selected."""
 
 
 def synthetic_frames(width: int, height: int) -> Iterator[np.ndarray]:
@@ -95,32 +105,58 @@ def target_roi(width: int, height: int) -> tuple[int, int, int, int]:
     return width // 2 - width // 16, height // 2 - height // 16, width // 8, height // 8
 
 
-def bare_loop(path: Path, processor: str, seconds: float, roi: tuple[int, int, int, int] | None,
-              fps: float | None = None) -> dict[str, float]:
-    """As fast as it goes, or paced at ``fps`` like a camera (then with read-to-result latency)."""
+@dataclass(frozen=True)
+class Replayed:
+    """The frames a platform run processed, by capture sequence number (1: the video's first frame)."""
+
+    selected: int | None
+    """The frame the target was selected on (csrt), None without one."""
+    first: int
+    last: int
+    """The measured frames, both included."""
+    boxes: list[Box | None]
+    """What the processor tracked after each measured frame (its ``box``)."""
+
+
+def bare_loop(path: Path, processor: str, replayed: Replayed, roi: Box | None, fps: float | None) -> dict[str, Any]:
+    """The frames ``replayed`` says: untimed from the selection (or :data:`BARE_WARM_UP_FRAMES` frames before the
+    measured ones), then the measured ones as fast as it goes, or paced at ``fps`` like a camera (then with
+    read-to-result latency)."""
     algorithm = load_processor(processor).instance
     cap = cv2.VideoCapture(str(path), cv2.CAP_FFMPEG)
+    start = replayed.selected or max(1, replayed.first - BARE_WARM_UP_FRAMES)
+    for _ in range((start - 1) % int(cap.get(cv2.CAP_PROP_FRAME_COUNT))):
+        _read_looping(cap)
     if roi is not None:
         algorithm.catch_cmd(roi)
+    for _ in range(start, replayed.first):
+        algorithm.photo_processing(_read_looping(cap))
+    frames = replayed.last - replayed.first + 1
+    boxes: list[Box | None] = []
     latencies: list[float] = []
-    frames, wall0, cpu0 = 0, time.perf_counter(), time.process_time()
-    while time.perf_counter() - wall0 < seconds:
+    wall0, cpu0 = time.perf_counter(), time.process_time()
+    for index in range(frames):
         if fps:
-            time.sleep(max(0.0, wall0 + frames / fps - time.perf_counter()))
-        ok, frame = cap.read()
-        if not ok:
-            cap.set(cv2.CAP_PROP_POS_FRAMES, 0)
-            continue
+            time.sleep(max(0.0, wall0 + index / fps - time.perf_counter()))
+        frame = _read_looping(cap)
         read = time.perf_counter()
         algorithm.photo_processing(frame)
         latencies.append(time.perf_counter() - read)
-        frames += 1
+        boxes.append(read_box(algorithm))  # as the platform reads it after every frame
     wall, cpu = time.perf_counter() - wall0, time.process_time() - cpu0
     cap.release()
-    result = {"fps": frames / wall, "cpu_s_per_frame": cpu / frames, "frames": frames}
-    if fps:
-        result.update(latency_percentiles(np.array(latencies) * 1e3))
-    return result
+    return {"fps": frames / wall, "cpu_s_per_frame": cpu / frames, "frames": frames,
+            "same_work": _same_boxes(boxes, replayed.boxes),
+            **(latency_percentiles(np.array(latencies) * 1e3) if fps else {})}
+
+
+def _read_looping(cap: cv2.VideoCapture) -> np.ndarray:
+    """The next frame, from the first again after the last (as the file source does)."""
+    ok, frame = cap.read()
+    if not ok:
+        cap.set(cv2.CAP_PROP_POS_FRAMES, 0)
+        ok, frame = cap.read()
+    return frame
 
 
 def latency_percentiles(ms: np.ndarray) -> dict[str, float]:
@@ -137,13 +173,19 @@ def _cpu_s(pid: int | None) -> float:
 
 
 async def platform_run(source: str, processor: str, isolation: str, seconds: float,
-                       roi: tuple[int, int, int, int] | None) -> dict[str, float]:
+                       roi: Box | None) -> tuple[dict[str, float], Replayed]:
+    """The measures of one run, and which frames it processed."""
     core = UavCore(load_config(None, {"source": source, "processor": processor, "fc": "none", "record": False,
                                       "isolation": isolation, "processor_call_timeout": 30.0}))
     results: list[tuple[int, int, int, int]] = []  # (seq, captured, started, ready): never keep the images
+    boxes: list[Box | None] = []
+    selected: list[int] = []
 
     def record(r: ProcessedFrame) -> None:
         results.append((r.frame.seq, r.frame.t_mono_ns, r.t_start_ns, r.t_vector_ns or r.t_end_ns))
+        boxes.append(r.box)
+        if r.box is not None and not selected:
+            selected.append(r.frame.seq)  # the first frame tracked: the one the target was selected on
 
     await core.start()
     core.add_frame_listener(record)
@@ -152,15 +194,16 @@ async def platform_run(source: str, processor: str, isolation: str, seconds: flo
     await asyncio.sleep(WARM_UP_S)
     child = core.worker.state().pid
     results.clear()
+    boxes.clear()
     wall0, cpu0, child0 = time.perf_counter(), time.process_time(), _cpu_s(child)
     await asyncio.sleep(seconds)
     wall, cpu = time.perf_counter() - wall0, time.process_time() - cpu0 + _cpu_s(child) - child0
-    snapshot = list(results)
+    snapshot, measured_boxes = list(results), boxes[:len(results)]
     await core.stop()
     stamps = np.array(snapshot, dtype=np.int64).reshape(-1, 4)
     ready = np.maximum(stamps[1:, 1], stamps[:-1, 3])  # the frame is there and the processor is free
     handoff = np.clip(stamps[1:, 2] - ready, 0, None) / 1e6
-    return {
+    measures = {
         "fps": len(snapshot) / wall,
         "cpu_s_per_frame": cpu / max(1, len(snapshot)),
         "frames": len(snapshot),
@@ -168,22 +211,24 @@ async def platform_run(source: str, processor: str, isolation: str, seconds: flo
         "handoff_ms_p95": float(np.percentile(handoff, 95)),
         **latency_percentiles((stamps[:, 3] - stamps[:, 1]) / 1e6),  # capture to result
     }
+    return measures, Replayed(selected[0] if selected else None, int(stamps[0, 0]), int(stamps[-1, 0]), measured_boxes)
 
 
 def rounds(processor: str, size: tuple[int, int], video: Path, seconds: float, count: int,
            camera: bool) -> dict[str, Any]:
-    """``count`` rounds of bare loop, process and thread back to back; each measure is the median over the
-    rounds, with the rounds' values in ``"<name>_rounds"``. ``derive(bare, run)`` adds the per-round ratios."""
+    """``count`` rounds of process and thread, each with its bare loop; each measure is the median over the
+    rounds, with the rounds' values in ``"<name>_rounds"``. ``"bare_loop"`` is the process runs' bare loop."""
     roi = target_roi(*size) if processor == "csrt" else None
     source = f"file:{video}?realtime={int(camera)}"
     measured: dict[str, list[dict[str, float]]] = {"bare_loop": [], "process": [], "thread": []}
+    same_work = []
     for _ in range(count):
-        with ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn")) as fresh_interpreter:
-            bare = fresh_interpreter.submit(bare_loop, video, processor, seconds, roi,
-                                            VIDEO_FPS if camera else None).result()
-        measured["bare_loop"].append(bare)
         for isolation in ("process", "thread"):
-            run = asyncio.run(platform_run(source, processor, isolation, seconds, roi))
+            run, replayed = asyncio.run(platform_run(source, processor, isolation, seconds, roi))
+            bare = in_fresh_interpreter(bare_loop, video, processor, replayed, roi, VIDEO_FPS if camera else None)
+            same_work.append(bare.pop("same_work"))
+            if isolation == "process":
+                measured["bare_loop"].append(bare)
             measured[isolation].append({**run, **(extra_cpu(bare, run) if camera else ratios(bare, run))})
     entry: dict[str, Any] = {"processor": processor, "resolution": f"{size[0]}x{size[1]}", "rounds": count}
     for name, runs in measured.items():
@@ -191,7 +236,19 @@ def rounds(processor: str, size: tuple[int, int], video: Path, seconds: float, c
         for key in ("fps", "fps_ratio_vs_bare", "cpu_ratio_vs_bare", "extra_cpu_ms_per_frame"):
             if key in runs[0]:
                 entry[name][f"{key}_rounds"] = [round(run[key], 3) for run in runs]
+    entry["same_work"] = all(same_work)
     return entry
+
+
+def in_fresh_interpreter(function: Callable[..., dict[str, Any]], *args: Any) -> dict[str, Any]:
+    with ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn")) as fresh_interpreter:
+        return fresh_interpreter.submit(function, *args).result()
+
+
+def _same_boxes(bare: list[Box | None], platform: list[Box | None]) -> bool:
+    """Frame by frame, both tracked the same box (within a pixel), or neither tracked anything."""
+    return len(bare) == len(platform) and all(
+        b is p if b is None or p is None else np.allclose(b, p, atol=1) for b, p in zip(bare, platform, strict=True))
 
 
 def ratios(bare: dict[str, float], run: dict[str, float]) -> dict[str, float]:
@@ -222,7 +279,7 @@ def compare(processor: str, size: tuple[int, int], video: Path, seconds: float, 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--seconds", type=float, default=4.0, help="per measurement")
-    parser.add_argument("--rounds", type=int, default=3, help="of bare loop, process and thread; medians reported")
+    parser.add_argument("--rounds", type=int, default=3, help="of process and thread, each with its bare loop")
     parser.add_argument("--processors", default=",".join(PROCESSORS))
     parser.add_argument("--resolutions", default=",".join(f"{w}x{h}" for w, h in RESOLUTIONS))
     parser.add_argument("--camera", action="store_true", help=f"frames at {VIDEO_FPS} FPS, as a camera gives them")
