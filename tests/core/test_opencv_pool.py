@@ -1,4 +1,4 @@
-"""OpenCV's thread pool in the processor's process: idle workers sleep instead of spinning."""
+"""OpenCV's thread pool in the processor's process: idle workers soon sleep instead of spinning for a millisecond."""
 
 from __future__ import annotations
 
