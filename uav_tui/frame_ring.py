@@ -144,9 +144,14 @@ class FrameRing:
         return slot
 
     def _view(self, slot: Slot) -> np.ndarray:
-        """A view of ``slot`` whose finalizer drops one hold (taken by the caller)."""
+        """A view of ``slot`` whose finalizer drops one hold (taken by the caller).
+
+        The finalizer refers to the ring weakly: finalizers are kept by a global registry, and a view
+        kept by the ring's owner (its last frame) would otherwise keep the owner, its pipes and every
+        slot alive for good once it is closed.
+        """
         view = slot.array()
-        weakref.finalize(view, self._drop, slot)
+        weakref.finalize(view, _drop_view_hold, weakref.ref(self), slot)
         return view
 
     def _drop(self, slot: Slot) -> None:
@@ -169,6 +174,16 @@ class FrameRing:
             if slot.holds == 0:
                 slot.shm.close()
         self._on_unlink([s.name for s in slots])
+
+
+def _drop_view_hold(ring: weakref.ref[FrameRing], slot: Slot) -> None:
+    """A view of ``slot`` is gone: drop its hold; unmap the slot if its ring is gone too and nobody holds it."""
+    if (alive := ring()) is not None:
+        alive._drop(slot)
+        return
+    slot.holds -= 1  # the ring was collected: only views reach the slot now, each on its last reference
+    if slot.holds == 0:
+        slot.shm.close()
 
 
 def ensure_resource_tracker() -> None:

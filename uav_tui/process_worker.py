@@ -250,6 +250,7 @@ class ProcessWorker:
         for child in self._all_children:
             child.kill("stopped")
             self._stop_reading(child)
+            self._hang_up(child)
             if child.exit_watch is None and self._loop is not None and not self._loop.is_closed():
                 self._loop.run_in_executor(None, child.proc.wait)  # reap it (``run`` waits for that too)
             for call in child.calls.values():
@@ -440,6 +441,11 @@ class ProcessWorker:
             return False
         return True
 
+    def _hang_up(self, child: ChildProcess) -> None:
+        """Close our end of ``child``'s pipe (under the send lock: a send never writes to a reused descriptor)."""
+        with self._send_lock:
+            child.conn.close()
+
     def _forget(self, names: list[str]) -> None:
         self._to_forget.extend(names)
 
@@ -580,6 +586,7 @@ class ProcessWorker:
         with self._lock:
             child.offered.clear()
             child.mailbox.close()
+        self._hang_up(child)
         self._release(child, list(child.held))
         tail = "\n".join(child.tail)
         if not child.ready.done():

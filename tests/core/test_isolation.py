@@ -7,6 +7,8 @@ held comes from the simulator's ground truth.
 from __future__ import annotations
 
 import asyncio
+import contextlib
+import gc
 import json
 import os
 import select
@@ -266,6 +268,53 @@ async def test_reload_swaps_only_a_processor_that_loads(tmp_path: Path) -> None:
     finally:
         await core.stop()
 
+
+
+def open_descriptors(*, collect_garbage: bool = True) -> list[str]:
+    """What this process has open, by default after collecting garbage (closing what only a reference cycle kept)."""
+    if collect_garbage:
+        gc.collect()
+    targets = []
+    for fd in os.listdir("/proc/self/fd"):
+        with contextlib.suppress(OSError):  # the listing's own descriptor, closed by now
+            targets.append(os.readlink(f"/proc/self/fd/{fd}"))
+    return sorted(targets)
+
+
+@pytest.mark.skipif(not Path("/proc/self/fd").is_dir(), reason="counts descriptors in Linux's /proc")
+async def test_starting_stopping_and_reloading_leave_no_descriptor_open(tmp_path: Path) -> None:
+    """Each child has a pipe, a mailbox and frame slots; none may outlive it (they ran out after ~200 starts).
+
+    Both ways frames reach the slots: a video decoded into them, generated frames copied in.
+    """
+    video = tmp_path / "clip.mp4"
+    create_video_file(video, frames=60)
+    sources = [f"file:{video}?realtime=0", "synthetic:?width=160&height=120"]
+
+    async def run_once(source: str, reloads: int = 0) -> None:
+        core = UavCore(load_config(None, {"source": source, "processor": "template", "fc": "none", "record": False}))
+        await core.start()
+        try:
+            await wait_until(lambda: core.worker.last is not None, 10, "a processed frame")
+            for _ in range(reloads):
+                assert "reloaded" in await core.execute("reload")
+                await wait_until(lambda: core.worker.last is not None, 10, "a frame from the new child")
+        finally:
+            await core.stop()
+
+    await run_once(sources[1])  # starts what lives as long as the process (the resource tracker)
+    before = open_descriptors()
+    for source in sources * 2:
+        await run_once(source)
+    assert open_descriptors() == before
+    sockets = [target for target in before if target.startswith("socket:")]
+    gc.disable()  # the pipes are closed as their child ends, not whenever garbage is collected
+    try:
+        await run_once(sources[0], reloads=3)
+        assert [t for t in open_descriptors(collect_garbage=False) if t.startswith("socket:")] == sockets
+    finally:
+        gc.enable()
+    assert open_descriptors() == before
 
 
 def test_isolation_accepts_only_process_or_thread() -> None:
