@@ -10,7 +10,7 @@ was selected on (csrt; untimed up to the measured frames), then the measured fra
 frame depends on what it is doing: on real 1280x720 video, CSRT lost its target on 10 % of the first 300 frames
 after the selection (7.2-7.6 ms a frame) and on 25 % of the frames the platform measures after its warm-up
 (8.1-8.9 ms), so a bare loop timed from the selection did less work a frame than the platform. ``same_work``
-says both tracked the same box on every measured frame.
+says both tracked the same box on every measured frame (else ``first_different_frames`` says where they parted).
 
 For every reference processor (csrt with a target selected) at 640x480 and 1280x720: processed FPS, CPU
 per processed frame (with the processor's own process counted), and the hand-off time: from the moment
@@ -146,7 +146,7 @@ def bare_loop(path: Path, processor: str, replayed: Replayed, roi: Box | None, f
     wall, cpu = time.perf_counter() - wall0, time.process_time() - cpu0
     cap.release()
     return {"fps": frames / wall, "cpu_s_per_frame": cpu / frames, "frames": frames,
-            "same_work": _same_boxes(boxes, replayed.boxes),
+            "first_different_frame": _first_difference(boxes, replayed),
             **(latency_percentiles(np.array(latencies) * 1e3) if fps else {})}
 
 
@@ -221,12 +221,13 @@ def rounds(processor: str, size: tuple[int, int], video: Path, seconds: float, c
     roi = target_roi(*size) if processor == "csrt" else None
     source = f"file:{video}?realtime={int(camera)}"
     measured: dict[str, list[dict[str, float]]] = {"bare_loop": [], "process": [], "thread": []}
-    same_work = []
+    different_from: list[int] = []
     for _ in range(count):
         for isolation in ("process", "thread"):
             run, replayed = asyncio.run(platform_run(source, processor, isolation, seconds, roi))
             bare = in_fresh_interpreter(bare_loop, video, processor, replayed, roi, VIDEO_FPS if camera else None)
-            same_work.append(bare.pop("same_work"))
+            if (differs := bare.pop("first_different_frame")) is not None:
+                different_from.append(differs)
             if isolation == "process":
                 measured["bare_loop"].append(bare)
             measured[isolation].append({**run, **(extra_cpu(bare, run) if camera else ratios(bare, run))})
@@ -236,7 +237,9 @@ def rounds(processor: str, size: tuple[int, int], video: Path, seconds: float, c
         for key in ("fps", "fps_ratio_vs_bare", "cpu_ratio_vs_bare", "extra_cpu_ms_per_frame"):
             if key in runs[0]:
                 entry[name][f"{key}_rounds"] = [round(run[key], 3) for run in runs]
-    entry["same_work"] = all(same_work)
+    entry["same_work"] = not different_from
+    if different_from:
+        entry["first_different_frames"] = different_from
     return entry
 
 
@@ -245,10 +248,13 @@ def in_fresh_interpreter(function: Callable[..., dict[str, Any]], *args: Any) ->
         return fresh_interpreter.submit(function, *args).result()
 
 
-def _same_boxes(bare: list[Box | None], platform: list[Box | None]) -> bool:
-    """Frame by frame, both tracked the same box (within a pixel), or neither tracked anything."""
-    return len(bare) == len(platform) and all(
-        b is p if b is None or p is None else np.allclose(b, p, atol=1) for b, p in zip(bare, platform, strict=True))
+def _first_difference(bare: list[Box | None], platform: Replayed) -> int | None:
+    """The first measured frame (its sequence number) on which the bare loop did not track what the platform did
+    (the same box within a pixel, or nothing in both); None when it did on every one."""
+    for seq, (b, p) in enumerate(zip(bare, platform.boxes, strict=True), start=platform.first):
+        if not (b is p if b is None or p is None else np.allclose(b, p, atol=1)):
+            return seq
+    return None
 
 
 def ratios(bare: dict[str, float], run: dict[str, float]) -> dict[str, float]:
