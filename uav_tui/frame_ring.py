@@ -177,13 +177,10 @@ class FrameRing:
 
 
 def _drop_view_hold(ring: weakref.ref[FrameRing], slot: Slot) -> None:
-    """A view of ``slot`` is gone: drop its hold; unmap the slot if its ring is gone too and nobody holds it."""
+    """A view of ``slot`` is gone: drop its hold. Without the ring (collected) there is nothing to drop: the slot's
+    memory is unmapped as the last view's finalizer, the last reference to the slot, goes."""
     if (alive := ring()) is not None:
         alive._drop(slot)
-        return
-    slot.holds -= 1  # the ring was collected: only views reach the slot now, each on its last reference
-    if slot.holds == 0:
-        slot.shm.close()
 
 
 def ensure_resource_tracker() -> None:
