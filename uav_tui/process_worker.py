@@ -249,7 +249,6 @@ class ProcessWorker:
             self._restart_task.cancel()
         for child in self._all_children:
             child.kill("stopped")
-            self._stop_reading(child)
             self._hang_up(child)
             if child.exit_watch is None and self._loop is not None and not self._loop.is_closed():
                 self._loop.run_in_executor(None, child.proc.wait)  # reap it (``run`` waits for that too)
@@ -441,11 +440,6 @@ class ProcessWorker:
             return False
         return True
 
-    def _hang_up(self, child: ChildProcess) -> None:
-        """Close our end of ``child``'s pipe (under the send lock: a send never writes to a reused descriptor)."""
-        with self._send_lock:
-            child.conn.close()
-
     def _forget(self, names: list[str]) -> None:
         self._to_forget.extend(names)
 
@@ -483,7 +477,7 @@ class ProcessWorker:
         """Handle every message that has arrived; how many there were, None when the pipe ended."""
         messages = child.inbox.read()
         if messages is None:
-            self._stop_reading(child)
+            self._hang_up(child)
             child.exit_watch = asyncio.create_task(self._watch_exit(child), name=f"processor {child.pid} exit")
             return None
         for data, buffers in messages:
@@ -498,13 +492,17 @@ class ProcessWorker:
                 self._on_message(child, message)
         return len(messages)
 
-    def _stop_reading(self, child: ChildProcess) -> None:
+    def _hang_up(self, child: ChildProcess) -> None:
+        """Stop reading ``child``'s pipe and close our ends of it (the child ended, or is being killed); the
+        connection under the send lock, so that a send never writes to a reused descriptor."""
         if child.inbox.closed:
             return
         loop = self._loop
         if loop is not None and not loop.is_closed():
             loop.remove_reader(child.inbox.fileno())
         child.inbox.close()
+        with self._send_lock:
+            child.conn.close()
 
     async def _watch_exit(self, child: ChildProcess) -> None:
         """The pipe ended: stop autonomy as soon as the exit is known, report once the last output is in."""
@@ -586,7 +584,6 @@ class ProcessWorker:
         with self._lock:
             child.offered.clear()
             child.mailbox.close()
-        self._hang_up(child)
         self._release(child, list(child.held))
         tail = "\n".join(child.tail)
         if not child.ready.done():
