@@ -16,7 +16,7 @@ child -> platform (:func:`send_message`: pickle protocol 5, arrays out of band):
 
     ("ready", ProcessorInfo) | ("load_error", message, path, class_name, missing)
     ("result", gen, t_start_ns, t_end_ns, t_vector_ns, vector, box, error, saves, released)
-    ("reply", call_id, ok, value_or_error, saves, released)
+    ("reply", call_id, ok, value_or_error, t_taken_ns, saves, released)
 
 Frames are not messages: whenever it is free (no call waiting), this process claims the frame on offer
 in the mailbox (the image in a shared-memory slot, read and drawn in place, and the pickled telemetry
@@ -272,13 +272,14 @@ class ChildRunner:
                 self.slots.released())
 
     def call(self, call_id: int, method: str, args: tuple[Any, ...]) -> tuple[Any, ...]:
+        taken = time.monotonic_ns()
         try:
             value, ok = _picklable(getattr(self.instance, method)(*args)), True
         except MemoryError:
             raise
         except Exception as exc:  # noqa: BLE001 - handed to the operator as the command's error
             value, ok = f"{type(exc).__name__}: {exc}", False
-        return ("reply", call_id, ok, value, self.telemetry.take_saves(), self.slots.released())
+        return ("reply", call_id, ok, value, taken, self.telemetry.take_saves(), self.slots.released())
 
 
 def main(fd: int, mailbox_address: str) -> int:

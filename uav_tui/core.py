@@ -359,13 +359,14 @@ class UavCore:
                                     "MAVLink connection string")
                 if self.gate.enabled:  # any operator command pre-empts autonomy at once
                     await self.gate.disable(origin, f"pre-empted by operator command '{parsed}'", hold=False)
-            message = await self._operations.run(parsed, origin)
+            outcome = await self._operations.run(parsed, origin)
         except KNOWN_ERRORS as exc:
-            self.events.emit("error", "command", f"{parsed}: {exc}", origin)
+            self.events.emit("error", "command", f"{parsed}: {exc}", origin, command=str(parsed))
             raise
-        if message:
-            self.events.emit("info", "command", message, origin)
-        return message
+        if outcome.message:
+            self.events.emit("info", "command", outcome.message, origin, command=str(parsed),
+                             t_mono_ns=outcome.t_mono_ns)
+        return outcome.message
 
     # -- status ----------------------------------------------------------------------------------
 

@@ -32,7 +32,7 @@ from uav_tui.recording.interpolate import CONTINUOUS, DISCRETE
 from uav_tui.recording.rows import EVENT_COLUMNS, FRAME_OWN_COLUMNS, TELEMETRY_COLUMNS
 
 _TEXT = ("flight_mode", "gps_fix", "decision", "error", "image", "extra", "telemetry", "level", "kind", "origin",
-         "message")
+         "message", "command")
 _FLAGS = ("armed", "in_air", "health_ok", "saved")
 _INTEGERS = ("fc_boot_ms", "satellites", "frame_id", "seq", "box_x", "box_y", "box_w", "box_h")
 

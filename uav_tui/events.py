@@ -33,6 +33,8 @@ class Event:
     message: str
     origin: str = "platform"
     """Who caused it: ``tui``, ``script``, ``web``, ``mavlink``, ``platform`` ..."""
+    command: str = ""
+    """The operator command this event is the outcome or the error of (empty for other events)."""
 
 
 class EventLog:
@@ -58,10 +60,18 @@ class EventLog:
         if listener in self._listeners:
             self._listeners.remove(listener)
 
-    def emit(self, level: Level, kind: Kind, message: str, origin: str = "platform") -> Event:
-        """Record and deliver an event; ``message`` and ``origin`` are bounded, redacted and escaped here."""
+    def emit(self, level: Level, kind: Kind, message: str, origin: str = "platform", *, command: str = "",
+             t_mono_ns: int | None = None) -> Event:
+        """Record and deliver an event; ``message``, ``origin`` and ``command`` are bounded, redacted and escaped here.
+
+        ``t_mono_ns``: when it happened, if that was before now (the wall time is moved back with it).
+        """
         message = safe(shorten(message, MAX_MESSAGE_CHARS), multiline=True)
-        event = Event(time.time_ns(), time.monotonic_ns(), level, kind, message, safe(shorten(origin, 200)))
+        t_mono, t_wall = time.monotonic_ns(), time.time_ns()
+        if t_mono_ns is not None:
+            t_mono, t_wall = t_mono_ns, t_wall - (t_mono - t_mono_ns)
+        event = Event(t_wall, t_mono, level, kind, message, safe(shorten(origin, 200)),
+                      safe(shorten(command, MAX_MESSAGE_CHARS)))
         logger.debug("[%s/%s/%s] %s", level, kind, origin, message)  # interfaces show events; logs keep them
         loop = self._loop
         if loop is None or threading.get_ident() == self._loop_thread:

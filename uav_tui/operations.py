@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import asyncio
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 from uav_tui.autonomy import check_vector
 from uav_tui.commands import Command, check_limits
@@ -25,20 +25,30 @@ PLAIN_VEHICLE_CALLS: dict[str, tuple[str, str]] = {
 """Commands that are one FlightController call without arguments: word -> (method, what to report)."""
 
 
+class Outcome(NamedTuple):
+    """What a command did, and when, if that was before it returned."""
+
+    message: str
+    t_mono_ns: int | None = None
+    """When it took effect (monotonic ns); None: when it returned. A processor call took effect when the
+    processor began it: the frames it started after that saw it (a replay gives it before the same frame)."""
+
+
 class Operations:
     """One coroutine per command word; each returns what happened or raises UavError saying why not."""
 
     def __init__(self, core: UavCore) -> None:
         self.core = core
 
-    async def run(self, command: Command, origin: str) -> str:
+    async def run(self, command: Command, origin: str) -> Outcome:
         check_limits(command, self.core.config.safety)
         plain = PLAIN_VEHICLE_CALLS.get(command.word)
         if plain is not None:
             method, done = plain
             await getattr(self._vehicle(), method)()
-            return done
-        return await getattr(self, f"_{command.word}")(*command.args, origin=origin)
+            return Outcome(done)
+        outcome = await getattr(self, f"_{command.word}")(*command.args, origin=origin)
+        return outcome if isinstance(outcome, Outcome) else Outcome(outcome)
 
     async def _takeoff(self, altitude: float | None = None, *, origin: str) -> str:
         altitude = altitude or self.core.config.safety.takeoff_alt
@@ -63,17 +73,17 @@ class Operations:
             await gate.disable(origin)
         return ""
 
-    async def _f(self, button: int, *, origin: str) -> str:
-        await self._call_processor("customize_processing", button)
-        return f"F{button} sent to the processor"
+    async def _f(self, button: int, *, origin: str) -> Outcome:
+        taken = await self._call_processor("customize_processing", button)
+        return Outcome(f"F{button} sent to the processor", taken)
 
-    async def _roi(self, x: int, y: int, w: int, h: int, *, origin: str) -> str:
+    async def _roi(self, x: int, y: int, w: int, h: int, *, origin: str) -> Outcome:
         source = self.core.source
         width, height = source.get_frame_size() if source else (0, 0)
         if w <= 0 or h <= 0 or x + w > width or y + h > height:
             raise CommandError(f"roi ({x}, {y}, {w}, {h}) is not inside the {width}x{height} frame", key="roi")
-        await self._call_processor("catch_cmd", (x, y, w, h))
-        return f"target region ({x}, {y}, {w}, {h}) sent to the processor"
+        taken = await self._call_processor("catch_cmd", (x, y, w, h))
+        return Outcome(f"target region ({x}, {y}, {w}, {h}) sent to the processor", taken)
 
     async def _snapshot(self, *, origin: str) -> str:
         if self.core.recorder is None:
@@ -116,7 +126,8 @@ class Operations:
         assert self.core.controller is not None  # execute() refuses vehicle commands without one
         return self.core.controller
 
-    async def _call_processor(self, method: str, *args: Any) -> None:
+    async def _call_processor(self, method: str, *args: Any) -> int:
+        """Call the processor's ``method``; returns when it began the call (monotonic ns)."""
         worker = self.core.worker
         assert worker is not None
         loaded = worker.processor
@@ -124,7 +135,7 @@ class Operations:
             raise UavError(f"processor {loaded.info.name} has no {method}() method")
         timeout = self.core.config.processor_call_timeout
         try:
-            await asyncio.wait_for(worker.call(method, *args), timeout)
+            answer = await asyncio.wait_for(worker.call(method, *args), timeout)
         except TimeoutError:
             raise UavError(f"{loaded.info.name}.{method}{describe(args)} did not return within {timeout:g} s "
                            "(processor_call_timeout); the processor may be hung") from None
@@ -135,3 +146,4 @@ class Operations:
         except Exception as exc:  # the researcher's code raised (thread isolation): report it, keep running
             raise UavError(f"{loaded.info.name}.{method}{describe(args)} raised {type(exc).__name__}: "
                            f"{shorten(str(exc), 500)}") from exc
+        return answer.t_taken_ns

@@ -42,7 +42,7 @@ from uav_tui.frame_ring import FrameRing
 from uav_tui.processor_process import ChildProcess, Offered, PendingCall, describe_exit, rss_mb, spawn
 from uav_tui.stats import PipelineStats, RollingStats
 from uav_tui.telemetry import TelemetryManager
-from uav_tui.worker import ProcessedFrame, ProcessorState
+from uav_tui.worker import Answer, ProcessedFrame, ProcessorState
 
 logger = logging.getLogger(__name__)
 
@@ -188,7 +188,7 @@ class ProcessWorker:
             self.close()
             await asyncio.get_running_loop().run_in_executor(None, self._reap, 2.0)
 
-    async def call(self, method: str, *args: Any) -> Any:
+    async def call(self, method: str, *args: Any) -> Answer:
         """Call ``processor.<method>(*args)`` in the child; raises ProcessorRaised if it raised there.
 
         A call still unanswered from before makes this one fail at once (UavError): commands never
@@ -560,13 +560,13 @@ class ProcessWorker:
             if not child.ready.done():
                 child.ready.set_exception(ProcessorLoadError(text, path=path, class_name=class_name, missing=missing))
         elif kind == "reply":
-            _, call_id, ok, value, saves, released = message
+            _, call_id, ok, value, taken, saves, released = message
             self._release(child, released)
             self._store(saves, None)
             call = child.calls.pop(call_id, None)
             if call is not None and not call.future.done():
                 if ok:
-                    call.future.set_result(value)
+                    call.future.set_result(Answer(value, taken))
                 else:
                     call.future.set_exception(ProcessorRaised(value))
 

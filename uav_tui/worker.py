@@ -52,6 +52,15 @@ class ProcessedFrame:
 
 
 @dataclass(frozen=True, slots=True)
+class Answer:
+    """What an operator's call into the processor (``catch_cmd``, ``customize_processing``) returned, and when."""
+
+    value: Any
+    t_taken_ns: int
+    """When the processor began the call (monotonic ns): the frames it started after that saw its effect."""
+
+
+@dataclass(frozen=True, slots=True)
 class ProcessorState:
     """How the processor's host is doing, for the status line, the TUI and the web page."""
 
@@ -137,10 +146,14 @@ class ProcessorWorker:
             # code is still running in a thread at shutdown. A hung processor is abandoned after the wait.
             await asyncio.get_running_loop().run_in_executor(None, self._thread.join, JOIN_TIMEOUT_S)
 
-    async def call(self, method: str, *args: Any) -> Any:
+    async def call(self, method: str, *args: Any) -> Answer:
         """Call ``processor.<method>(*args)`` on the processor thread; its exception propagates."""
         bound = getattr(self.processor.instance, method)
-        return await self._submit(lambda: bound(*args))
+
+        def answer() -> Answer:
+            taken = time.monotonic_ns()
+            return Answer(bound(*args), taken)
+        return await self._submit(answer)
 
     async def replace(self, processor: LoadedProcessor) -> LoadedProcessor:
         """Swap in another processor between two frames; returns the old one."""

@@ -24,7 +24,8 @@ class Brightness:
         rows = np.flatnonzero(frame[::4, ::4, 2].mean(axis=1) > level)
         self.box = (8, int(rows[0]) * 4, 32, 32) if len(rows) else None
         seen = self.tmMgr.snapshot()
-        self.tmMgr.save(frame, seen_t_mono_ns=seen.t_mono_ns, seen_north_m=seen.north_m, seen_mode=seen.flight_mode)
+        self.tmMgr.save(frame, seen_t_mono_ns=seen.t_mono_ns, seen_north_m=seen.north_m, seen_mode=seen.flight_mode,
+                        gain=self.gain)
         frame[:16, :16] = 255  # the overlay: never in the recorded video
 
     def getPreparedVector(self):

@@ -109,7 +109,7 @@ async def test_the_processor_process_loads_no_platform_module(tmp_path: Path) ->
     worker = await ProcessWorker.start(f"{tmp_path}/modules.py:Modules", {}, print, events=EventLog(),
                                        on_fault=print)
     try:
-        loaded = await worker.call("customize_processing", 1)
+        loaded = (await worker.call("customize_processing", 1)).value
     finally:
         worker.close()
     assert "processors.loading" in loaded and "numpy" in loaded  # it is the processor's process ...

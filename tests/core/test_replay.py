@@ -84,6 +84,20 @@ def test_the_video_has_one_frame_per_index_row_each_joining_a_frame_row(flight):
         assert decoded[position][:16, :16].mean() < 230  # the overlay (white) was drawn after the copy
 
 
+def test_a_processor_command_is_stamped_when_the_processor_took_it(flight):
+    run = dataset.load(flight)
+    outcome = run.events[run.events["message"] == "F2 sent to the processor"].iloc[0]
+    given = run.events[run.events["message"] == "f 2"].iloc[0]
+    assert outcome["command"] == "f 2" and outcome["origin"] == given["origin"] == "script"
+    assert given["t_mono_ns"] < outcome["t_mono_ns"]
+    # Every frame the processor started after it took F2 was reversed by it, and none before.
+    frames = run.frames.dropna(subset=["gain"])
+    after = frames["t_start_ns"] > outcome["t_mono_ns"]
+    assert (frames.loc[after, "gain"] == -1.0).all() and (frames.loc[~after, "gain"] == 1.0).all()
+    assert after.sum() >= 10 and (~after).sum() >= 10
+    assert recorded_commands(flight)[0][0] == int(frames.loc[after, "t_mono_ns"].iloc[0])
+
+
 def test_replay_at_max_speed_is_deterministic_and_sees_the_recorded_vehicle(flight, tmp_path):
     first = _replay(flight, BRIGHTNESS, tmp_path / "one")
     second = _replay(flight, BRIGHTNESS, tmp_path / "two")
@@ -105,10 +119,12 @@ def test_replay_at_max_speed_is_deterministic_and_sees_the_recorded_vehicle(flig
     for name in DISCRETE:
         assert joined[f"{name}_a"].equals(joined[f"{name}_b"].rename(f"{name}_a")), name
 
-    # The same processor on the recorded video, given the operator's F2 when it was given: the same vectors
-    # (up to the video's compression), reversed from the same frame on.
+    # The same processor on the recorded video, given the operator's F2 before the frame it reached the processor
+    # before in flight: reversed from the same frame on, the same vectors (up to the video's compression).
     replayed = one.events[one.events["origin"] == "replay"]
     assert replayed["message"].tolist() == ["f 2", "F2 sent to the processor"]
+    assert joined["gain_a"].isin([1.0, -1.0]).all() and (joined["gain_a"] == -1.0).any()
+    assert joined["gain_a"].equals(joined["gain_b"].rename("gain_a"))
     assert np.allclose(joined["vx_a"], joined["vx_b"], atol=0.05)
     assert (np.sign(joined["vx_a"]) == np.sign(joined["vx_b"]))[joined["vx_a"].abs() > 0.05].all()
 
@@ -157,6 +173,21 @@ def test_a_command_is_due_before_the_first_frame_the_processor_started_after_it(
               {"t_mono_ns": 1020, "t_start_ns": 1040}]
     _write_csv(tmp_path / "frames.csv", frames)
     assert [due for due, _ in recorded_commands(tmp_path)] == [990, 3000]  # the ROI: after the last frame
+
+    # Recorded with the command column: the outcome rows, stamped when the processor took the command. Frame 2
+    # started before it did, so the F2 is due at frame 3. A command that failed was not taken: not replayed.
+    stamped = [
+        {"t_mono_ns": 1000, "level": "info", "kind": "command", "origin": "tui", "message": "f 2", "command": ""},
+        {"t_mono_ns": 1010, "level": "info", "kind": "command", "origin": "tui", "message": "F2 sent to the processor",
+         "command": "f 2"},
+        {"t_mono_ns": 1500, "level": "info", "kind": "command", "origin": "tui", "message": "arm", "command": ""},
+        {"t_mono_ns": 1501, "level": "info", "kind": "command", "origin": "tui", "message": "armed", "command": "arm"},
+        {"t_mono_ns": 2000, "level": "info", "kind": "command", "origin": "tui", "message": "f 3", "command": ""},
+        {"t_mono_ns": 3000, "level": "error", "kind": "command", "origin": "tui", "message": "f 3: did not return",
+         "command": "f 3"},
+    ]
+    _write_csv(tmp_path / "events.csv", stamped)
+    assert [(t_ns, str(command)) for t_ns, command in recorded_commands(tmp_path)] == [(1020, "f 2")]
 
 
 def test_two_processors_on_the_same_flight_in_parallel_compare_frame_by_frame(flight, tmp_path):

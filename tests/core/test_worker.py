@@ -74,6 +74,22 @@ class Gated:
             time.sleep(0.005)
 '''
 
+STEERED = '''
+class Steered:
+    def __init__(self):
+        self.tmMgr = None
+        self.sign = 1.0
+
+    def customize_processing(self, id):
+        self.sign = -self.sign
+
+    def photo_processing(self, frame):
+        self.vector = (self.sign, 0.0, 1.0)
+
+    def getPreparedVector(self):
+        return self.vector
+'''
+
 FAILING = '''
 class Failing:
     def __init__(self):
@@ -200,12 +216,50 @@ async def test_all_calls_run_on_one_thread(tmp_path: Path, isolation: str) -> No
         task = asyncio.create_task(worker.run())
         for _ in range(5):
             buffer.put(np.zeros((4, 4, 3), np.uint8))
-            pid, threads, buttons = await worker.call("customize_processing", 2)
+            pid, threads, buttons = (await worker.call("customize_processing", 2)).value
             await asyncio.sleep(0.01)
         task.cancel()
     assert results and buttons == [2] * 5
     assert len(threads) == 1 and threading.get_ident() not in threads
     assert (pid != os.getpid()) == (isolation == "process")
+
+
+@BOTH
+async def test_a_call_is_stamped_when_the_processor_began_it(tmp_path: Path, isolation: str) -> None:
+    """Frames come without a pause; each F-key flips the processor's sign. The frames it started after a call's
+    stamp saw that call, and no frame before did: the stamp says before which frame a replay must give it."""
+    (tmp_path / "steered.py").write_text(STEERED)
+    buffer = FrameBuffer()
+    results: list[ProcessedFrame] = []
+    stamps: list[int] = []
+    feeding = threading.Event()
+    feeder = threading.Thread(target=_feed, args=(buffer, feeding), daemon=True)
+    async with running_worker(isolation, f"{tmp_path}/steered.py:Steered", results.append) as worker:
+        worker.attach(buffer)
+        task = asyncio.create_task(worker.run())
+        feeder.start()
+        try:
+            for calls in range(1, 6):
+                await until(lambda calls=calls: len(results) >= 20 * calls, f"{20 * calls} results")
+                asked = time.monotonic_ns()
+                stamps.append((await worker.call("customize_processing", 1)).t_taken_ns)
+                assert asked < stamps[-1] < time.monotonic_ns()
+            await until(lambda: len(results) >= 120, "120 results")
+        finally:
+            feeding.set()
+            feeder.join()
+            task.cancel()
+    signs = [result.vector[0] for result in results]
+    expected = [(-1.0) ** sum(stamp < result.t_start_ns for stamp in stamps) for result in results]
+    assert signs == expected
+    assert not [(stamp, r.frame.seq) for stamp in stamps for r in results if r.t_start_ns <= stamp <= r.t_end_ns]
+
+
+def _feed(buffer: FrameBuffer, stop: threading.Event) -> None:
+    """Put a frame every 0.2 ms until ``stop``: the processor always has a newer one waiting."""
+    image = np.zeros((4, 4, 3), np.uint8)
+    while not stop.wait(0.0002):
+        buffer.put(image)
 
 
 @BOTH
@@ -382,7 +436,7 @@ async def test_results_closer_together_than_the_poll_period_are_read_in_batches(
         assert max(batches) >= 5 and len(batches) < len(seqs) / 4, batches
 
         asked = time.monotonic()
-        assert await worker.call("customize_processing", 7) == 7
+        assert (await worker.call("customize_processing", 7)).value == 7
         assert time.monotonic() - asked < poll_s / 2
 
         replay = open_source(f"file:{video}?realtime=0")

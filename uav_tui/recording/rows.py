@@ -22,8 +22,9 @@ from uav_tui.worker import ProcessedFrame
 TELEMETRY_COLUMNS: tuple[str, ...] = TELEMETRY_FIELDS
 """telemetry.csv: one row per telemetry update; ``t_mono_ns``/``t_wall_ns`` are when it was received."""
 
-EVENT_COLUMNS: tuple[str, ...] = ("t_wall_ns", "t_mono_ns", "level", "kind", "origin", "message")
-"""events.csv: one row per :class:`uav_tui.events.Event`."""
+EVENT_COLUMNS: tuple[str, ...] = ("t_wall_ns", "t_mono_ns", "level", "kind", "origin", "message", "command")
+"""events.csv: one row per :class:`uav_tui.events.Event`; ``command`` names the operator command an outcome
+or error row reports on."""
 
 FRAME_OWN_COLUMNS: tuple[str, ...] = (
     "frame_id", "seq", "t_wall_ns", "t_mono_ns", "t_start_ns", "t_end_ns", "t_vector_ns", "vx", "vy", "vt",
@@ -91,7 +92,8 @@ def frame_record(result: ProcessedFrame, frame_id: int, image: str, extra_json: 
 
 
 def event_row(event: Event) -> Row:
-    return Row("events", [event.t_wall_ns, event.t_mono_ns, event.level, event.kind, event.origin, event.message])
+    return Row("events", [event.t_wall_ns, event.t_mono_ns, event.level, event.kind, event.origin, event.message,
+                          event.command])
 
 
 def telemetry_row(sample: TelemetrySample) -> Row:

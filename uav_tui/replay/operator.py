@@ -28,26 +28,33 @@ COMMAND_TIMEOUT_S = 5.0
 def recorded_commands(run_dir: Path) -> list[tuple[int, Command]]:
     """Each processor command the operator gave in a recorded run, oldest first, with when it is due.
 
-    It is due at the capture time of the first frame the processor started after the command: a
-    processor takes commands between frames, and with the newest frame winning that frame may have
-    been captured before the command was given. (Without a frames.csv: at the command's own time.)
+    It is due at the capture time of the first frame the processor started after it took the command:
+    a processor takes commands between frames, and with the newest frame winning that frame may have
+    been captured before the command was given. The command's outcome row in events.csv is stamped
+    when the processor took it (its ``command`` column names the command). Runs recorded before that
+    column existed have only the time the command was given, a frame early when the processor started
+    one in between; commands the processor failed or did not answer are in them too. (Without a
+    frames.csv: at the stamp itself.)
     """
     commands = []
     starts = _frame_starts(run_dir / "frames.csv")
     events_csv = run_dir / "events.csv"
     if events_csv.is_file():
         with open(events_csv, newline="") as handle:
-            for row in csv.DictReader(handle):
+            rows = csv.DictReader(handle)
+            stamped = "command" in (rows.fieldnames or ())
+            for row in rows:
                 if row.get("kind") != "command" or row.get("level") != "info" or not row.get("t_mono_ns"):
                     continue
+                text = row["command"] if stamped else row.get("message")
                 try:
-                    command = parse(row.get("message") or "")
+                    command = parse(text or "")
                 except KNOWN_ERRORS:
-                    continue  # a command's outcome ("F1 sent to the processor"), not the command
+                    continue  # an outcome ("F1 sent to the processor") in a run without the column
                 if command is not None and command.word in PROCESSOR_WORDS:
-                    given = int(row["t_mono_ns"])
-                    first = bisect.bisect_right(starts, (given, math.inf))
-                    commands.append((starts[first][1] if first < len(starts) else given, command))
+                    taken = int(row["t_mono_ns"])
+                    first = bisect.bisect_right(starts, (taken, math.inf))
+                    commands.append((starts[first][1] if first < len(starts) else taken, command))
     commands.sort(key=lambda item: item[0])
     return commands
 
