@@ -109,16 +109,20 @@ class SIFTPositionHold:
 
     # ---- contract -------------------------------------------------------------------------------
     def photo_processing(self, frame: np.ndarray) -> None:
-        """Store the reference or, when due, estimate the offset; draw the overlay in place."""
-        work, scale = self._work(frame)
+        """Store the reference or, when due, estimate the offset; draw the overlay in place.
+
+        Other frames (no reference, or between estimates) are only drawn on: they are not converted or scaled.
+        """
+        scale = self._scale(frame.shape[1])
         if self._pending_spot is not None:
+            work = self._work(frame, scale)
             sx, sy = self._pending_spot
             spot = (work.shape[1] / 2.0, work.shape[0] / 2.0) if sx < 0 else (sx * scale, sy * scale)
             self._store_reference(work, spot, at_centre=sx < 0)
             self._pending_spot = None
         elif self._ref_gray is not None and time.monotonic() - self._last_estimate >= self._cfg["interval_s"]:
             self._last_estimate = time.monotonic()
-            self._estimate(work, frame)
+            self._estimate(self._work(frame, scale), frame)
         self._draw(frame, scale)
 
     def catch_cmd(self, roi: tuple[int, int, int, int]) -> None:
@@ -143,13 +147,16 @@ class SIFTPositionHold:
         return self._vector if fresh else None
 
     # ---- internals ------------------------------------------------------------------------------
-    def _work(self, frame: np.ndarray) -> tuple[np.ndarray, float]:
+    def _scale(self, width: int) -> float:
+        """Work pixels per frame pixel: down to ``work_width``, never up."""
+        work_width = self._cfg["work_width"]
+        return work_width / width if 0 < work_width < width else 1.0
+
+    def _work(self, frame: np.ndarray, scale: float) -> np.ndarray:
         gray = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
-        ww = self._cfg["work_width"]
-        if not 0 < ww < gray.shape[1]:
-            return gray, 1.0
-        scale = ww / gray.shape[1]
-        return cv2.resize(gray, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA), scale
+        if scale == 1.0:
+            return gray
+        return cv2.resize(gray, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA)
 
     def _telemetry(self) -> tuple[float, float, float]:
         """(altitude m, roll deg, pitch deg); fallbacks where telemetry is missing."""
