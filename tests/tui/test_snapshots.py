@@ -20,6 +20,7 @@ from uav_tui.stats import PipelineStats
 from uav_tui.status import CoreStatus
 from uav_tui.tui._event_log import EventLogView
 from uav_tui.tui.app import UavApp
+from uav_tui.worker import ProcessorState
 
 from .conftest import started
 
@@ -49,6 +50,7 @@ STATUS = CoreStatus(
     vectors_rejected=1,
     recording={"run_dir": "runs/2026-11-22T08-00-00Z", "frames_saved": 57, "dropped": 3},
     box=(300, 200, 120, 90),
+    processor_state=ProcessorState("process", "running", 4242, 38.0),
 )
 
 EVENTS = [

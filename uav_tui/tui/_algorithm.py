@@ -7,11 +7,15 @@ from rich.text import Text
 from uav_tui.status import CoreStatus
 from uav_tui.tui._panel import StatusPanel
 
+MIN_NAME = 6
+"""Characters of the processor's name kept when its host's state needs the room (an 80-column terminal)."""
+
 
 class AlgorithmPanel(StatusPanel):
     """The researcher's processor: name and host, its ``box``, last vector and decision, errors.
 
-    The optional methods it lacks show as dimmed keys (ROI, F1-F4) and in the vector row.
+    The optional methods it lacks show as dimmed keys (ROI, F1-F4) and in the vector row. Where the row is
+    too narrow for the processor's name and its host's state (pid, memory), the name is shortened.
     """
 
     TITLE = "Algorithm"
@@ -32,7 +36,12 @@ class AlgorithmPanel(StatusPanel):
         errors = Text(str(status.pipeline.errors))
         if status.processor_error:
             errors.append(" ").append(self.styled(status.processor_error, "bad"))
-        name, host = Text(status.processor.rsplit(":", 1)[-1]), status.processor_state
-        if host is not None:  # where it runs: its own process (pid, memory) or a platform thread
-            name.append(" ").append(self.styled(host.summary(), "good" if host.state == "running" else "bad"))
-        return self.rows(("proc", name), ("box", box), ("vec", vector), ("auto", auto), ("err", errors))
+        labels = ("proc", "box", "vec", "auto", "err")
+        proc = Text(status.processor.rsplit(":", 1)[-1])
+        if (host := status.processor_state) is not None:  # where it runs: its own process (pid, memory) or a thread
+            summary = host.summary()
+            room = self.value_width(*labels)
+            if room is not None and len(proc) + 1 + len(summary) > room:  # the name yields: it never changes
+                proc.truncate(max(MIN_NAME, room - 1 - len(summary)), overflow="ellipsis")
+            proc.append(" ").append(self.styled(summary, "good" if host.state == "running" else "bad"))
+        return self.rows(*zip(labels, (proc, box, vector, auto, errors), strict=True))

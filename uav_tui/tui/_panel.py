@@ -61,6 +61,10 @@ class StatusPanel(Static):
         """The panel's text for ``status``."""
         raise NotImplementedError
 
+    def value_width(self, *labels: str) -> int | None:
+        """Columns left for a row's value beside the longest of ``labels`` (None before the panel has a size)."""
+        return self.size.width - max(map(len, labels)) - 1 if self.size.width else None
+
     def rows(self, *rows: tuple[str, Text | str]) -> Text:
         """``label value`` lines with the labels in one column."""
         label_style = self.get_component_rich_style("panel--label")
