@@ -61,7 +61,7 @@ def load_script(path: Path, safety: SafetyConfig | None = None) -> list[tuple[in
 
 
 def format_status(status: CoreStatus, elapsed_s: float) -> str:
-    """One line, short enough for an 80-column terminal's scrollback to stay readable."""
+    """One line a status: pipeline, processor, vehicle, autonomy (wider than 80 columns with a vehicle: it wraps)."""
     p, t = status.pipeline, status.telemetry
     line = (f"{elapsed_s:6.1f}s cam {p.capture_fps:4.1f}fps proc {p.processed_fps:4.1f}fps "
             f"age {p.frame_age_ms:3.0f}ms p50/p95 {p.processing_ms_p50:.1f}/{p.processing_ms_p95:.1f}ms "
