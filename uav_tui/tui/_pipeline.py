@@ -7,23 +7,37 @@ from rich.text import Text
 from uav_tui.status import CoreStatus
 from uav_tui.tui._panel import StatusPanel
 
+MIN_URI = 12
+"""Characters of the camera's URI kept when its size and state need the room (an 80-column terminal)."""
+
+
+def short_uri(uri: str, width: int) -> str:
+    """``uri`` in at most ``width`` characters. Its options (after ``?``) go first, as the device or address
+    before them says which camera it is; else what follows the scheme gives way to the end (a file's name)."""
+    if len(uri) <= width:
+        return uri
+    if len(uri.partition("?")[0]) <= width - 1:
+        return f"{uri[:width - 1]}…"
+    scheme = uri.partition(":")[0] + ":"
+    head = scheme if len(scheme) <= width // 2 else ""
+    return f"{head}…{uri[len(uri) - (width - 1 - len(head)):]}"
+
 
 class PipelinePanel(StatusPanel):
-    """How frames flow: camera -> processor, and what is being recorded."""
+    """How frames flow: camera -> processor, and what is being recorded.
+
+    Where the camera row is too narrow, its URI is shortened (:func:`short_uri`) so that the frame size and
+    ``STALLED`` stay in view.
+    """
 
     TITLE = "Pipeline"
 
     def describe(self, status: CoreStatus) -> Text:
-        p, source = status.pipeline, status.source
-        size = f"{source.get('width', 0)}x{source.get('height', 0)}"
-        camera = Text(f"{status.source_uri} {size}")
-        if source.get("stalled_since"):
-            camera.append(" STALLED", self.get_component_rich_style("panel--bad"))
+        p = status.pipeline
         age = Text(f"{p.frame_age_ms:.0f} ms")
         if p.busy_ms > 1000:
             age.append(f" busy {p.busy_ms / 1000:.1f} s", self.get_component_rich_style("panel--warn"))
         rows = [
-            ("cam", camera),
             ("fps", f"cam {p.capture_fps:4.1f}  proc {p.processed_fps:4.1f}"),
             ("age", age),
             ("time", f"p50 {p.processing_ms_p50:.1f}  p95 {p.processing_ms_p95:.1f} ms"),
@@ -32,7 +46,16 @@ class PipelinePanel(StatusPanel):
         ]
         if status.recording:
             rows.append(("run", str(status.recording.get("run_dir", "")).rstrip("/").rsplit("/", 1)[-1]))
+        rows.insert(0, ("cam", self._camera(status, self.value_width("cam", *(label for label, _ in rows)))))
         return self.rows(*rows)
+
+    def _camera(self, status: CoreStatus, room: int | None) -> Text:
+        """URI, frame size and ``STALLED``; the URI shortened to leave the rest ``room`` (None: whole)."""
+        state = Text(f" {status.source.get('width', 0)}x{status.source.get('height', 0)}")
+        if status.source.get("stalled_since"):
+            state.append(" STALLED", self.get_component_rich_style("panel--bad"))
+        uri = status.source_uri if room is None else short_uri(status.source_uri, max(MIN_URI, room - len(state)))
+        return Text(uri).append_text(state)
 
     def _recording(self, recording: dict[str, object]) -> Text:
         if not recording:

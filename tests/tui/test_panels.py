@@ -1,0 +1,34 @@
+"""The status panels on an 80-column terminal: what stays in view when a row is longer than the panel."""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+
+import pytest
+
+from uav_tui.core import UavCore
+from uav_tui.tui._pipeline import PipelinePanel
+from uav_tui.tui.app import UavApp
+
+from .test_snapshots import FRAME, STATUS
+
+
+@pytest.mark.parametrize(("uri", "size", "stalled", "row"), [
+    # The README's USB camera with options: the device stays, the options give way to size and stall.
+    ("usb:/dev/video2?width=1280&height=720&fps=30&fourcc=MJPG", (1280, 720), True,
+     "cam  usb:/dev/video2… 1280x720 STALLED"),
+    # A video file: its name stays.
+    ("file:/home/pi/flights/2026-11-20/lake-crossing.mp4", (1920, 1080), False,
+     "cam  file:…lake-crossing.mp4 1920x1080"),
+    ("synthetic:?fps=30", (640, 480), False, "cam  synthetic:?fps=30 640x480"),
+])
+async def test_the_camera_row_keeps_frame_size_and_stall_in_view(make_config, uri, size, stalled, row):
+    width, height = size
+    source = {"width": width, "height": height, **({"stalled_since": time.time()} if stalled else {})}
+    status = dataclasses.replace(STATUS, source_uri=uri, source=source)
+    app = UavApp(UavCore(make_config()), status=lambda: status, frames=lambda: (1, FRAME, None))
+    async with app.run_test(size=(80, 24)) as pilot:
+        await pilot.pause(0.3)
+        panel = app.query_one(PipelinePanel)
+        assert panel.render_line(0).text.rstrip() == row
