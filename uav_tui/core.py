@@ -49,6 +49,12 @@ logger = logging.getLogger(__name__)
 Worker = ProcessorWorker | ProcessWorker
 """The two hosts of a processor (``isolation = "thread" | "process"``); they have one public surface."""
 
+LEFT_ALONE_AT_EXIT = frozenset({"LAND", "RETURN_TO_LAUNCH", "MISSION", "MANUAL", "STABILIZED", "ALTCTL", "ACRO",
+                                "RATTITUDE"})
+"""Flight modes (MAVSDK's names) a hold before exit would interrupt: the vehicle landing or returning by
+itself (the operator's ``land``/``rtl`` or a failsafe), a mission, a pilot flying by hand. Exit holds the
+vehicle in any other mode, where something uav-tui started (a vector, an orbit, a takeoff) may be flying it."""
+
 
 class CoreState(enum.Enum):
     NEW = "new"  # constructed, nothing opened
@@ -207,18 +213,29 @@ class UavCore:
             self.events.emit("info", "web", f"camera tracking on {self.config.web.camera_mavlink}")
 
     async def stop(self, reason: str = "quit") -> None:
-        """Hold the vehicle if a vector could be flying, then release everything. Idempotent."""
+        """Hold the vehicle if something uav-tui started could be flying it, then release everything. Idempotent.
+
+        A vehicle that lands, returns, flies a mission or is flown by hand is left to it
+        (:data:`LEFT_ALONE_AT_EXIT`).
+        """
         if self.state is CoreState.STOPPED:
             return
         self.events.emit("info", "platform", f"stopping: {reason}")
         await self.gate.disable("platform", reason if self.gate.enabled else "operator", hold=False)
-        if self.controller is not None and (self.controller.vector_active or self.telemetry.snapshot().in_air):
-            try:
-                await asyncio.wait_for(self.controller.hold(), 5)
-                self.events.emit("info", "platform", "vehicle put in hold before exit")
-            except (*KNOWN_ERRORS, TimeoutError) as exc:
-                self.events.emit("error", "platform", f"hold before exit failed: {exc!r}")
+        vehicle = self.telemetry.snapshot()
+        if self.controller is not None and (self.controller.vector_active or vehicle.in_air):
+            await self._hold_before_exit(self.controller, vehicle.flight_mode)
         await self._release()
+
+    async def _hold_before_exit(self, controller: FlightController, mode: str | None) -> None:
+        if mode in LEFT_ALONE_AT_EXIT:
+            self.events.emit("info", "platform", f"vehicle left in {mode} mode at exit: a hold would interrupt it")
+            return
+        try:
+            await asyncio.wait_for(controller.hold(), 5)
+            self.events.emit("info", "platform", "vehicle put in hold before exit")
+        except (*KNOWN_ERRORS, TimeoutError) as exc:
+            self.events.emit("error", "platform", f"hold before exit failed: {exc!r}")
 
     async def _release(self) -> None:
         """Release every part, each one even if another failed (a bug, reported): the dataset is always closed."""

@@ -63,6 +63,31 @@ def test_signal_during_a_vector_holds_before_exit(flying_uav, signum: int) -> No
     assert late == []  # nothing it started keeps streaming setpoints
 
 
+@pytest.mark.parametrize(("command", "reported", "mode"), [("land", "LAND", "LAND"),
+                                                        ("rtl", "RETURN_TO_LAUNCH", "RTL")])
+def test_exit_leaves_a_landing_or_returning_vehicle_to_it(tmp_path: Path, sim_vehicle: SimVehicle, command: str,
+                                                         reported: str, mode: str) -> None:
+    """A script ending with ``land`` (or quitting, or the SSH session dropping, while the vehicle lands or a
+    failsafe brings it home) must not leave it hovering where a hold before exit would stop it."""
+    truth = sim_vehicle.truth()
+    process = start_steering_flight(tmp_path, sim_vehicle.connection_string,
+                                    f"arm\ntakeoff 5\nwait 8\n{command}\nwait 1\n")
+    try:
+        out, _ = process.communicate(timeout=60)
+        exited_alt = -truth.wait_latest()["d"]
+        assert process.returncode == 0, out
+        assert f"vehicle left in {reported} mode at exit: a hold would interrupt it" in out, out
+        assert "vehicle put in hold before exit" not in out
+        assert exited_alt > 2, "the vehicle was still flying when uav-tui exited"
+        wait_for(lambda: -truth.latest()["d"] < exited_alt - 0.5 or -truth.latest()["d"] > exited_alt + 0.5, 10,
+                 f"the vehicle to go on {'landing' if command == 'land' else 'returning'} after the exit")
+        assert truth.latest()["mode"] == mode
+    finally:
+        process.kill()
+        process.communicate()
+        truth.close()
+
+
 def test_sigkill_leaves_the_autopilot_failsafe_to_hold(flying_uav) -> None:
     process, truth = flying_uav
     process.send_signal(signal.SIGKILL)

@@ -83,3 +83,23 @@ async def test_quit_while_armed_asks_and_stops_the_core(make_app):
         assert app.is_running and app.core.state is CoreState.RUNNING
         await pilot.press("q", "y")
         await wait_for(pilot, lambda: app.core.state is CoreState.STOPPED, what="the core to stop")
+
+
+async def test_quit_while_the_vehicle_lands_says_it_goes_on_landing(make_app):
+    app = make_app(fc="sim", takeoff_alt=3.0)
+    async with app.run_test(size=(80, 24)) as pilot:
+        await started(pilot)
+        await pilot.press("a", "y")
+        await wait_for(pilot, lambda: armed(app), what="the vehicle to arm")
+        await pilot.press("t", "y")
+        await wait_for(pilot, lambda: (v := app.core.telemetry.snapshot()).in_air and (v.rel_alt_m or 0) > 2,
+                       timeout=30, what="the vehicle to climb")
+        await pilot.press("l")
+        await wait_for(pilot, lambda: app.core.telemetry.snapshot().flight_mode == "LAND", what="LAND mode")
+        await pilot.press("q")
+        assert isinstance(app.screen, ConfirmScreen)
+        assert app.screen.question == "The vehicle is ARMED. Quit? It is left in LAND mode."
+        await pilot.press("y")
+        await wait_for(pilot, lambda: app.core.state is CoreState.STOPPED, what="the core to stop")
+        assert in_log(app, "vehicle left in LAND mode at exit: a hold would interrupt it")
+        assert not in_log(app, "vehicle put in hold before exit")

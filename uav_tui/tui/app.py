@@ -14,7 +14,7 @@ from textual.css.query import NoMatches
 from textual.driver import Driver
 
 from uav_tui.commands import VEHICLE_COMMANDS, parse
-from uav_tui.core import CoreState, UavCore
+from uav_tui.core import LEFT_ALONE_AT_EXIT, CoreState, UavCore
 from uav_tui.errors import KNOWN_ERRORS, CommandError, error_line
 from uav_tui.events import Event
 from uav_tui.headless import EXIT_UNHANDLED_ERROR
@@ -278,12 +278,15 @@ class UavApp(App[None]):
             self.notify("no frame to select a region in yet", severity="warning")
 
     async def action_quit(self) -> None:
-        """Quit; while the vehicle is armed only after a confirmation (it is put in hold first)."""
+        """Quit; while the vehicle is armed only after a confirmation that says what the exit does to it."""
         if self.core.state is not CoreState.RUNNING:
             await self.shutdown("quit")
             return
-        if self.core.telemetry.snapshot().armed:
-            self.push_screen(ConfirmScreen("The vehicle is ARMED. Quit? It is put in hold first.", "Quit"),
+        vehicle = self.core.telemetry.snapshot()
+        if vehicle.armed:
+            then = (f"It is left in {vehicle.flight_mode} mode." if vehicle.flight_mode in LEFT_ALONE_AT_EXIT
+                    else "It is put in hold first.")
+            self.push_screen(ConfirmScreen(f"The vehicle is ARMED. Quit? {then}", "Quit"),
                              lambda yes: self.send("quit") if yes else None)
         else:
             self.send("quit")
