@@ -167,7 +167,7 @@ class UavApp(App[None]):
         await self.shutdown(failure or "quit", EXIT_UNHANDLED_ERROR if failure else 0)
 
     async def shutdown(self, reason: str, return_code: int = 0) -> None:
-        """Stop the core (holding the vehicle if it flies a vector or is in the air), then exit."""
+        """Stop the core (it holds the vehicle where something uav-tui started may fly it), then exit."""
         if self._stopping:
             return
         self._stopping, self.stop_reason = True, reason
