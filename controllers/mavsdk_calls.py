@@ -79,7 +79,7 @@ class AbandoningExecutor(ThreadPoolExecutor):
     def shutdown(self, wait: bool = True, *, cancel_futures: bool = False) -> None:
         """Return at once: a call blocked in MAVSDK is abandoned (its daemon thread dies with the process)."""
         if self.running and not self._shut_down:
-            logger.warning("abandoning MAVSDK calls still blocked: %s", ", ".join(self.running))
+            logger.warning("abandoning calls on the event loop's executor still blocked: %s", ", ".join(self.running))
         self._shut_down = True
 
 

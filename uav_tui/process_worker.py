@@ -250,8 +250,8 @@ class ProcessWorker:
         for child in self._all_children:
             child.kill("stopped")
             self._hang_up(child)
-            if child.exit_watch is None and self._loop is not None and not self._loop.is_closed():
-                self._loop.run_in_executor(None, child.proc.wait)  # reap it (``run`` waits for that too)
+            if child.exit_watch is None:  # reap it; not on the loop's executor, which may be ending with a failed start
+                threading.Thread(target=child.proc.wait, name=f"reap-{child.pid}", daemon=True).start()
             for call in child.calls.values():
                 if not call.future.done():
                     call.future.cancel()

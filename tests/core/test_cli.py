@@ -18,6 +18,7 @@ from pathlib import Path
 import psutil
 import pytest
 
+from controllers.sim.launcher import free_ports
 from uav_tui import headless
 from uav_tui.config import load_config
 from uav_tui.core import CoreState
@@ -83,6 +84,20 @@ def test_processor_import_error_says_file_line_and_what_is_missing(tmp_path: Pat
     assert result.returncode == 2
     assert result.stderr.startswith("uav-tui: error: ") and "mine.py:2" in result.stderr
     assert "missing_dependency" in result.stderr
+
+
+def test_a_vehicle_that_never_answers_is_one_clear_line_and_nothing_left_running(tmp_path: Path) -> None:
+    (port,) = free_ports(1)
+    result = uav("--no-ui", "--duration", "1", "--fc", f"udpin://127.0.0.1:{port}", "--connect-timeout", "1",
+                 cwd=tmp_path)
+    assert result.returncode == 2
+    # Before: a warning about "MAVSDK calls still blocked: Popen.wait" followed (the processor's process reaped
+    # through the loop's executor after the loop had ended).
+    assert result.stderr.splitlines() == [
+        f"uav-tui: error: no heartbeat on udpin://127.0.0.1:{port} within 1 s: check wiring / baud / port / that "
+        "the autopilot sends to this port (PX4 SITL sends to udpin://0.0.0.0:14540)"], result.stderr
+    left = [p for p in psutil.process_iter(["cwd"]) if p.info["cwd"] == str(tmp_path)]
+    assert left == []  # the processor's process started while connecting is gone too
 
 
 def test_vehicle_command_without_a_vehicle_fails_the_script_clearly(tmp_path: Path) -> None:
