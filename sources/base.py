@@ -81,8 +81,9 @@ class CaptureSource:
                 return True
             try:
                 self._open_device()
-            except Exception as exc:  # noqa: BLE001 - the reason is reported, not lost
-                self._fail(str(exc))
+            except Exception as exc:  # noqa: BLE001 - the reason is the caller's to report (not logged twice)
+                self.errors += 1
+                self.last_error = str(exc)
                 return False
             self._device_open = True
             self._stop.clear()

@@ -100,6 +100,15 @@ def test_a_vehicle_that_never_answers_is_one_clear_line_and_nothing_left_running
     assert left == []  # the processor's process started while connecting is gone too
 
 
+def test_a_camera_that_cannot_open_is_one_clear_line(tmp_path: Path) -> None:
+    result = uav("--no-ui", "--duration", "1", "--source", "file:flight.mp4", cwd=tmp_path)
+    assert result.returncode == 2
+    # Before: the source's own warning said the same first.
+    assert result.stderr.splitlines() == [
+        f"uav-tui: error: cannot open camera 'file:flight.mp4': no such video file: flight.mp4 (working "
+        f"directory: {tmp_path})"], result.stderr
+
+
 def test_vehicle_command_without_a_vehicle_fails_the_script_clearly(tmp_path: Path) -> None:
     (tmp_path / "flight.txt").write_text("f 1\narm\n")
     (tmp_path / "mine.py").write_text("class Mine:\n    def photo_processing(self, frame):\n        pass\n"
