@@ -64,3 +64,11 @@ def test_a_bad_line_names_the_file_and_line(video_sequence: Path) -> None:
 def test_a_folder_without_sequences_says_what_one_is(tmp_path: Path) -> None:
     with pytest.raises(SequenceError, match="video.mp4 \\+ gt.txt"):
         find_sequences([tmp_path])
+
+
+def test_a_file_is_not_a_sequence_and_its_folder_is_suggested(video_sequence: Path) -> None:
+    with pytest.raises(SequenceError, match=f"video.mp4 is a file, .*: name the folder it is in, {video_sequence}$"):
+        find_sequences([video_sequence / "video.mp4"])
+    (video_sequence.parent / "notes.txt").write_text("")
+    with pytest.raises(SequenceError, match="notes.txt is a file, not a sequence folder or a folder of them$"):
+        find_sequences([video_sequence.parent / "notes.txt"])

@@ -92,6 +92,9 @@ def find_sequences(paths: list[Path]) -> list[Sequence]:
     for path in paths:
         if not path.exists():
             raise SequenceError(f"{path} does not exist")
+        if not path.is_dir():
+            hint = f": name the folder it is in, {path.parent}" if _is_sequence(path.parent) else ""
+            raise SequenceError(f"{path} is a file, not a sequence folder or a folder of them{hint}")
         if _is_sequence(path):
             found.append(load_sequence(path))
             continue
