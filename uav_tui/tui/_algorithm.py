@@ -39,9 +39,9 @@ class AlgorithmPanel(StatusPanel):
         labels = ("proc", "box", "vec", "auto", "err")
         proc = Text(status.processor.rsplit(":", 1)[-1])
         if (host := status.processor_state) is not None:  # where it runs: its own process (pid, memory) or a thread
-            summary = host.summary()
-            room = self.value_width(*labels)
-            if room is not None and len(proc) + 1 + len(summary) > room:  # the name yields: it never changes
-                proc.truncate(max(MIN_NAME, room - 1 - len(summary)), overflow="ellipsis")
-            proc.append(" ").append(self.styled(summary, "good" if host.state == "running" else "bad"))
+            summary = Text(" ").append_text(self.styled(host.summary(), "good" if host.state == "running" else "bad"))
+            room = self.room_before(summary, labels, MIN_NAME)
+            if room is not None and len(proc) > room:  # the name yields: it never changes
+                proc.truncate(room, overflow="ellipsis")
+            proc.append_text(summary)
         return self.rows(*zip(labels, (proc, box, vector, auto, errors), strict=True))

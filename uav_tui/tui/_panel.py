@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from typing import ClassVar
 
 from rich.text import Text
@@ -61,9 +62,12 @@ class StatusPanel(Static):
         """The panel's text for ``status``."""
         raise NotImplementedError
 
-    def value_width(self, *labels: str) -> int | None:
-        """Columns left for a row's value beside the longest of ``labels`` (None before the panel has a size)."""
-        return self.size.width - max(map(len, labels)) - 1 if self.size.width else None
+    def room_before(self, tail: Text | str, labels: Iterable[str], minimum: int) -> int | None:
+        """Columns a row's value may give its leading part so that ``tail`` after it stays whole, at least
+        ``minimum``; the row's label is the longest of ``labels``. None before the panel has a size."""
+        if not self.size.width:
+            return None
+        return max(minimum, self.size.width - max(map(len, labels)) - 1 - len(tail))
 
     def rows(self, *rows: tuple[str, Text | str]) -> Text:
         """``label value`` lines with the labels in one column."""

@@ -46,16 +46,16 @@ class PipelinePanel(StatusPanel):
         ]
         if status.recording:
             rows.append(("run", str(status.recording.get("run_dir", "")).rstrip("/").rsplit("/", 1)[-1]))
-        rows.insert(0, ("cam", self._camera(status, self.value_width("cam", *(label for label, _ in rows)))))
+        rows.insert(0, ("cam", self._camera(status, ["cam", *(label for label, _ in rows)])))
         return self.rows(*rows)
 
-    def _camera(self, status: CoreStatus, room: int | None) -> Text:
-        """URI, frame size and ``STALLED``; the URI shortened to leave the rest ``room`` (None: whole)."""
+    def _camera(self, status: CoreStatus, labels: list[str]) -> Text:
+        """URI, frame size and ``STALLED``; the URI shortened where the row is too narrow for all of it."""
         state = Text(f" {status.source.get('width', 0)}x{status.source.get('height', 0)}")
         if status.source.get("stalled_since"):
             state.append(" STALLED", self.get_component_rich_style("panel--bad"))
-        uri = status.source_uri if room is None else short_uri(status.source_uri, max(MIN_URI, room - len(state)))
-        return Text(uri).append_text(state)
+        room = self.room_before(state, labels, MIN_URI)
+        return Text(status.source_uri if room is None else short_uri(status.source_uri, room)).append_text(state)
 
     def _recording(self, recording: dict[str, object]) -> Text:
         if not recording:
