@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import os
 import threading
+import time
 from typing import Any
 from urllib.parse import urlsplit
 
@@ -55,6 +56,8 @@ class NetworkSource(VideoCaptureSource):
         self.read_timeout_s = read_timeout_s
         family = "rtsp" if self.kind.startswith("rtsp") else "http"
         self.options = os.environ.get(OPTIONS_ENV) or LOW_LATENCY_OPTIONS[family]
+        self._open_s = 0.0
+        """How long the last attempt to open took (one refused at once is not a timeout)."""
 
     @classmethod
     def from_uri(cls, uri: SourceUri, **_context: Any) -> NetworkSource:
@@ -69,17 +72,21 @@ class NetworkSource(VideoCaptureSource):
         with _env_lock:
             previous = os.environ.get(OPTIONS_ENV)
             os.environ[OPTIONS_ENV] = self.options
+            started = time.monotonic()
             try:
                 return cv2.VideoCapture(self.url, self._backend, params)
             finally:
+                self._open_s = time.monotonic() - started
                 if previous is None:
                     del os.environ[OPTIONS_ENV]
                 else:
                     os.environ[OPTIONS_ENV] = previous
 
     def _open_error(self) -> Exception:
-        return SourceError(f"{self.device}: no stream within {self.open_timeout_s:g} s (is the server up, the "
-                           "address, port and path right, the credentials accepted?)")
+        failed = (f"no stream within {self.open_timeout_s:g} s" if self._open_s >= 0.9 * self.open_timeout_s
+                  else f"the stream did not open (failed after {self._open_s:.1f} s)")
+        return SourceError(f"{self.device}: {failed}: is the server up, the address, port and path right, the "
+                           "credentials accepted?")
 
     def _no_frame_error(self) -> Exception:
         return SourceError(f"{self.device}: connected but no frame arrived within {self.read_timeout_s:g} s")
