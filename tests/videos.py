@@ -6,6 +6,9 @@ from pathlib import Path
 
 import cv2
 import numpy as np
+import pytest
+
+from processors.detection import find_data_dir
 
 
 def create_video_file(path: Path, *, frames: int = 30, width: int = 160, height: int = 120, fps: float = 15.0,
@@ -23,3 +26,27 @@ def create_video_file(path: Path, *, frames: int = 30, width: int = 160, height:
         writer.write(image)
     writer.release()
     return path
+
+
+def damaged_copy(video: Path, path: Path, *, spots: int = 40) -> Path:
+    """``video`` with 8 bytes inverted at ``spots`` places across its middle half, as a flaky SD card or a
+    lossy stream leaves it: it opens and every frame decodes, and FFmpeg complains of each damaged one."""
+    data = bytearray(video.read_bytes())
+    size = len(data)
+    for spot in range(spots):
+        at = size // 4 + spot * (size // 2) // spots
+        data[at:at + 8] = bytes(byte ^ 0xFF for byte in data[at:at + 8])
+    path.write_bytes(data)
+    return path
+
+
+def damaged_aerial_video(folder: Path) -> Path:
+    """A real drone video (the aerial-tracking set's dtb70-Gull2, 1280x720 MPEG-4, 237 frames) damaged by
+    :func:`damaged_copy`, in ``folder``; the test is skipped where the set is not here."""
+    try:
+        video = find_data_dir() / "aerial-tracking" / "dtb70-Gull2" / "video.mp4"
+    except FileNotFoundError as exc:
+        pytest.skip(str(exc))
+    if not video.is_file():
+        pytest.skip(f"{video} is not here")
+    return damaged_copy(video, folder / "damaged.mp4")

@@ -19,6 +19,7 @@ from uav_tui.config import Config, SafetyConfig
 from uav_tui.core import UavCore
 from uav_tui.errors import KNOWN_ERRORS, CommandError, error_line
 from uav_tui.events import Event
+from uav_tui.native_stderr import native_stderr_as_events
 from uav_tui.status import CoreStatus
 from uav_tui.terminal_output import TerminalOutput
 from uav_tui.text import escape, safe
@@ -125,20 +126,25 @@ class HeadlessRunner:
         self._reason = "finished"
 
     async def run(self) -> int:
-        """Run until stopped; returns the exit code. What it prints never waits for the terminal."""
-        self._stdout = TerminalOutput(self.out, self._dropped, _gone, max_backlog=OUTPUT_BACKLOG_CHARS, name="stdout")
-        self._stderr = TerminalOutput(sys.stderr, self._dropped, _gone, max_backlog=OUTPUT_BACKLOG_CHARS,
-                                      name="stderr")
-        try:
-            # print() too, the processor's for one; with --json stdout is only JSON, so prints go to stderr.
-            with (_logging_to(self._stderr), contextlib.redirect_stdout(self._stderr if self.json_lines else
-                                                                        self._stdout),
-                  contextlib.redirect_stderr(self._stderr)):
-                return await self._run()
-        finally:
-            deadline = time.monotonic() + CLOSE_TIMEOUT_S
-            for output in (self._stdout, self._stderr):
-                output.close(max(0.0, deadline - time.monotonic()))
+        """Run until stopped; returns the exit code. What it prints never waits for the terminal.
+
+        Native libraries' lines on stderr (FFmpeg's, OpenCV's) are printed as events too.
+        """
+        with native_stderr_as_events(self.core.events, asyncio.get_running_loop()) as self._native_lines:
+            self._stdout = TerminalOutput(self.out, self._dropped, _gone, max_backlog=OUTPUT_BACKLOG_CHARS,
+                                          name="stdout")
+            self._stderr = TerminalOutput(sys.stderr, self._dropped, _gone, max_backlog=OUTPUT_BACKLOG_CHARS,
+                                          name="stderr")
+            try:
+                # print() too, the processor's for one; with --json stdout is only JSON, so prints go to stderr.
+                with (_logging_to(self._stderr), contextlib.redirect_stdout(self._stderr if self.json_lines else
+                                                                            self._stdout),
+                      contextlib.redirect_stderr(self._stderr)):
+                    return await self._run()
+            finally:
+                deadline = time.monotonic() + CLOSE_TIMEOUT_S
+                for output in (self._stdout, self._stderr):
+                    output.close(max(0.0, deadline - time.monotonic()))
 
     async def _run(self) -> int:
         loop = asyncio.get_running_loop()
@@ -156,6 +162,7 @@ class HeadlessRunner:
         try:
             await self.core.start()
         except KNOWN_ERRORS as exc:
+            self._native_lines.flush()  # what FFmpeg said of it ("Connection refused") comes first
             self._error(str(exc))
             return EXIT_START_FAILED
         try:

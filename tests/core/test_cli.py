@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import csv
 import fcntl
 import json
 import os
@@ -19,6 +20,7 @@ import psutil
 import pytest
 
 from controllers.sim.launcher import free_ports
+from tests.videos import damaged_aerial_video
 from uav_tui import headless
 from uav_tui.config import load_config
 from uav_tui.core import CoreState
@@ -107,6 +109,21 @@ def test_a_camera_that_cannot_open_is_one_clear_line(tmp_path: Path) -> None:
     assert result.stderr.splitlines() == [
         f"uav-tui: error: cannot open camera 'file:flight.mp4': no such video file: flight.mp4 (working "
         f"directory: {tmp_path})"], result.stderr
+
+
+def test_a_damaged_real_video_is_reported_in_events_not_sprayed_on_the_terminal(tmp_path: Path) -> None:
+    video = damaged_aerial_video(tmp_path)
+    result = uav("--no-ui", "--duration", "9", "--fc", "none", "--source", f"file:{video}", "--runs-dir",
+                 str(tmp_path / "runs"), cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    # Before: FFmpeg's raw lines on stderr, in no record of the run.
+    assert "[mpeg4 @" not in result.stderr, result.stderr
+    printed = re.findall(r"^\[\w+\] platform: native library: .+$", result.stdout, re.MULTILINE)
+    assert any(re.match(r"\[warning\] platform: native library: \[mpeg4 @ 0x\w+\] .", line) for line in printed), \
+        result.stdout
+    with open(next((tmp_path / "runs").iterdir()) / "events.csv", newline="") as file:
+        recorded = [row for row in csv.DictReader(file) if row["origin"] == "native"]
+    assert [f"[{row['level']}] {row['kind']}: {row['message']}" for row in recorded] == printed
 
 
 def test_vehicle_command_without_a_vehicle_fails_the_script_clearly(tmp_path: Path) -> None:

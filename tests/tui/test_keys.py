@@ -8,6 +8,7 @@ from pathlib import Path
 from uav_tui.commands import parse
 from uav_tui.core import CoreState
 from uav_tui.errors import CommandError
+from uav_tui.native_stderr import ORIGIN as NATIVE_ORIGIN
 from uav_tui.tui.app import KEYS
 from uav_tui.tui.screens import ConfirmScreen
 
@@ -139,3 +140,16 @@ async def test_the_dashboard_shows_the_page_url_with_its_token_but_never_records
         assert TOKEN in url
         assert not [e for e in app.core.events.recent if TOKEN in e.message]
         assert any(e.message.endswith("?token=***") for e in app.core.events.recent if e.kind == "web")
+
+
+async def test_native_library_lines_are_logged_without_popping_up(make_app):
+    app = make_app()
+    async with app.run_test(size=(80, 24)) as pilot:
+        await started(pilot)
+        app.clear_notifications()
+        for n in range(30):  # a decoder's burst: it would cover the screen with pop-ups
+            app.core.events.emit("warning", "platform", f"native library: [h264 @ 0x1] error {n}", NATIVE_ORIGIN)
+        app.core.events.emit("warning", "platform", "a warning of the platform's own")
+        await wait_for(pilot, lambda: list(app._notifications), what="the pop-up of the platform's warning")
+        assert [n.message for n in app._notifications] == ["a warning of the platform's own"]
+        assert in_log(app, "native library: [h264 @ 0x1] error 29")

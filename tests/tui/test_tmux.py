@@ -23,6 +23,7 @@ import pytest
 from controllers.sim.launcher import SimVehicle
 from controllers.sim.truth import TruthClient
 from tests.core.flight_helpers import NO_FAILSAFE, STEERING_PROCESSOR, speed
+from tests.videos import damaged_aerial_video
 
 ROOT = Path(__file__).parents[2]
 
@@ -226,6 +227,19 @@ def test_a_finished_script_leaves_the_dashboard_to_the_operator(tmux, tmp_path):
     wait(lambda: tmux.log_shows("script finished"), 30, "the end of the script in the event log")
     time.sleep(1)
     assert not tmux.status.exists()  # still running
+    tmux.keys("q")
+    wait(tmux.status.exists, 15, "the exit status")
+    assert tmux.status.read_text().strip() == "0"
+
+
+def test_a_damaged_real_video_leaves_the_screen_whole(tmux, tmp_path):
+    video = damaged_aerial_video(tmp_path)
+    tmux.start("--fc", "none", "--source", f"file:{video}", tmp_path=tmp_path)
+    wait(lambda: tmux.log_shows("native library: [mpeg4 @ 0x"), 30, "FFmpeg's complaint in the event log")
+    lines = tmux.screen().splitlines()
+    # Before: FFmpeg wrote over the panels, the preview and the key bar, and the log never had it.
+    assert not any("mpeg4" in line[:LOG_COLUMN] for line in lines), lines
+    assert lines[-1].rstrip().endswith("q Quit  ? Help") and "Preview" in lines[2], lines
     tmux.keys("q")
     wait(tmux.status.exists, 15, "the exit status")
     assert tmux.status.read_text().strip() == "0"

@@ -24,6 +24,7 @@ from uav_tui.config import Config
 from uav_tui.core import CoreState, UavCore
 from uav_tui.events import EventLog
 from uav_tui.headless import EXIT_ABANDONED, EXIT_SCRIPT_FAILED, EXIT_UNHANDLED_ERROR, run_script, saved_run_note
+from uav_tui.native_stderr import native_stderr_as_events
 from uav_tui.tui._terminal import CHECK_PERIOD_S, TerminalWatch, driver_for
 from uav_tui.tui.app import LOG_ORIGIN, UavApp
 
@@ -70,7 +71,12 @@ class TuiSession:
         self._tasks: set[asyncio.Task[Any]] = set()
 
     async def run(self) -> int:
+        """Run until the end; native libraries' lines on stderr are events meanwhile (they would tear the screen)."""
         loop = asyncio.get_running_loop()
+        with native_stderr_as_events(self.core.events, loop):
+            return await self._run(loop)
+
+    async def _run(self, loop: asyncio.AbstractEventLoop) -> int:
         handled = {signal.SIGTERM: "SIGTERM", signal.SIGINT: "SIGINT"}
         for signum, name in handled.items():
             loop.add_signal_handler(signum, self.request_stop, name)

@@ -28,6 +28,7 @@ from typing import Any
 
 from textual.drivers.linux_driver import LinuxDriver
 
+from uav_tui.native_stderr import fileno_of
 from uav_tui.terminal_output import TerminalOutput
 
 logger = logging.getLogger(__name__)
@@ -118,10 +119,14 @@ def driver_for(watch: TerminalWatch) -> type[LinuxDriver]:
 
 
 def _detach_from_terminal() -> None:
-    """Point stdin, stdout and stderr at /dev/null: reads and writes on the dead terminal would fail."""
+    """Point stdin, stdout and stderr at /dev/null: reads and writes on the dead terminal would fail.
+
+    Stderr is whichever fd ``sys.__stderr__`` writes on: while native output is captured
+    (:mod:`uav_tui.native_stderr`), fd 2 is its pipe and stays so.
+    """
     try:
         null = os.open(os.devnull, os.O_RDWR)
-        for fd in (0, 1, 2):
+        for fd in {0, 1, fileno_of(sys.__stderr__) or 2}:
             os.dup2(null, fd)
         os.close(null)
     except OSError:

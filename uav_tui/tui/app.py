@@ -18,6 +18,7 @@ from uav_tui.core import LEFT_ALONE_AT_EXIT, CoreState, UavCore
 from uav_tui.errors import KNOWN_ERRORS, CommandError, error_line
 from uav_tui.events import Event
 from uav_tui.headless import EXIT_UNHANDLED_ERROR
+from uav_tui.native_stderr import ORIGIN as NATIVE_ORIGIN
 from uav_tui.status import CoreStatus
 from uav_tui.text import safe
 from uav_tui.tui._algorithm import AlgorithmPanel
@@ -197,11 +198,11 @@ class UavApp(App[None]):
             panel.status = status
 
     def on_core_event(self, event: Event) -> None:
-        """Log every event; warnings and errors also pop up (except log records)."""
+        """Log every event; warnings and errors also pop up (except log records and native libraries' lines)."""
         if not self.is_running:
             return
         self.query_one(EventLogView).add_event(event)
-        if event.level != "info" and event.origin != LOG_ORIGIN:
+        if event.level != "info" and event.origin not in (LOG_ORIGIN, NATIVE_ORIGIN):
             self.notify(event.message, title=event.kind, severity=event.level, timeout=6)
 
     def _newest_frame(self) -> tuple[int, object, tuple[int, int, int, int] | None] | None:

@@ -1,0 +1,177 @@
+"""What native libraries write on file descriptor 2, turned into events.
+
+FFmpeg, OpenCV, libjpeg and libcamera print straight to fd 2: a damaged frame in a lossy RTSP stream
+or a USB camera's MJPEG gives ``[h264 @ 0x…] error while decoding MB 12 5`` or ``Corrupt JPEG data``,
+many times a second. The dashboard is drawn on that same terminal, so the lines landed in the middle
+of the screen; headless, they came unescaped and unbounded between the status lines, a terminal that
+stopped taking output made the decoder (and with it the camera) wait, and ``events.csv`` never had
+them.
+
+While :func:`native_stderr_as_events` lasts, fd 2 is a pipe that never makes a writer wait (what
+does not fit while the loop is busy is lost, not waited for). The event loop reads it as it reads a
+socket and emits each line as an event (``native library: …``; escaped, bounded, at most
+:data:`BURST_LINES` at once and :data:`LINES_PER_S` after that, with a count of what was left out).
+Python's own writes to stderr (log records, tracebacks, the dashboard itself) keep going to the
+terminal through a duplicate of the old fd 2.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+import os
+import re
+import sys
+import time
+from collections.abc import Iterator
+from typing import Any
+
+from uav_tui.events import EventLog, Level
+from uav_tui.text import shorten
+
+LINE_CHARS = 300
+"""Longer lines are cut (one that never ends is taken in pieces this long)."""
+BURST_LINES = 20
+"""Lines that become events at once before the rate limit applies (a decoder's burst at one damaged frame)."""
+LINES_PER_S = 1.0
+"""Lines a second that become events in a flood; the others are counted and the count is said."""
+ORIGIN = "native"
+"""The events' origin: interfaces list them without popping them up (a flood would cover the screen)."""
+_INFO = re.compile(r"\b(INFO|DEBUG)\b")
+"""A line its library marks as information (libcamera's ``INFO Camera …``, OpenCV's ``[ INFO:0@…``)."""
+
+
+@contextlib.contextmanager
+def native_stderr_as_events(events: EventLog, loop: asyncio.AbstractEventLoop) -> Iterator[NativeLines]:
+    """While it lasts, lines native code writes on fd 2 are events on ``loop``, not text on the terminal.
+
+    Python file objects on fd 2 (``sys.stderr``, ``sys.__stderr__``, logging's stream handlers) are
+    pointed at a duplicate of it meanwhile, so they keep writing to the terminal. Call it on ``loop``.
+    """
+    with contextlib.suppress(Exception):
+        sys.stderr.flush()
+    terminal_fd = os.dup(2)
+    terminal = open(terminal_fd, "w", buffering=1, encoding=_encoding(), errors="backslashreplace")  # noqa: SIM115
+    read_fd, write_fd = os.pipe()
+    os.set_blocking(read_fd, False)
+    os.set_blocking(write_fd, False)
+    os.dup2(write_fd, 2)
+    os.close(write_fd)
+    moved = _point_at(terminal, _on_fd_2())
+    lines = NativeLines(read_fd, events, loop)
+    try:
+        yield lines
+    finally:
+        os.dup2(terminal_fd, 2)
+        for restore in moved:
+            restore()
+        lines.close()
+        terminal.close()
+
+
+class NativeLines:
+    """The pipe's reading end, read on the loop whenever it has data; its lines become events within the limit."""
+
+    def __init__(self, fd: int, events: EventLog, loop: asyncio.AbstractEventLoop) -> None:
+        self._fd = fd
+        self._events = events
+        self._loop = loop
+        self._partial = b""
+        self._tokens = float(BURST_LINES)
+        self._refilled = time.monotonic()
+        self._left_out = 0
+        self._count_due: asyncio.TimerHandle | None = None
+        loop.add_reader(fd, self.flush)
+
+    def flush(self) -> None:
+        """Emit what the pipe holds now (on the loop; a report that follows a native line calls it first)."""
+        while True:
+            try:
+                chunk = os.read(self._fd, 65536)
+            except BlockingIOError:
+                return
+            if not chunk:  # every writing end is closed
+                self._loop.remove_reader(self._fd)
+                return
+            *lines, self._partial = (self._partial + chunk).split(b"\n")
+            if len(self._partial) > LINE_CHARS:
+                lines.append(self._partial)
+                self._partial = b""
+            for line in lines:
+                self._line(line.decode("utf-8", "replace").rstrip())
+
+    def close(self) -> None:
+        """Emit what is left (a child process may still hold the pipe's other end) and stop reading."""
+        self.flush()
+        self._line(self._partial.decode("utf-8", "replace").rstrip())
+        self._say_left_out(at_end=True)
+        if self._count_due is not None:
+            self._count_due.cancel()
+        self._loop.remove_reader(self._fd)
+        os.close(self._fd)
+
+    def _line(self, text: str) -> None:
+        if not text:
+            return
+        if not self._take():
+            self._left_out += 1
+            if self._count_due is None:
+                self._count_due = self._loop.call_later(1 / LINES_PER_S, self._say_left_out)
+            return
+        self._say_left_out()
+        level: Level = "info" if _INFO.search(text) else "warning"
+        self._events.emit(level, "platform", f"native library: {shorten(text, LINE_CHARS)}", ORIGIN)
+
+    def _take(self) -> bool:
+        now = time.monotonic()
+        self._tokens = min(BURST_LINES, self._tokens + (now - self._refilled) * LINES_PER_S)
+        self._refilled = now
+        if self._tokens < 1:
+            return False
+        self._tokens -= 1
+        return True
+
+    def _say_left_out(self, *, at_end: bool = False) -> None:
+        self._count_due = None
+        if self._left_out and (at_end or self._take()):
+            self._events.emit("warning", "platform",
+                              f"native library: {self._left_out} more lines left out (too many at once)", ORIGIN)
+            self._left_out = 0
+        elif self._left_out:
+            self._count_due = self._loop.call_later(1 / LINES_PER_S, self._say_left_out)
+
+
+def _encoding() -> str:
+    return getattr(sys.__stderr__, "encoding", None) or "utf-8"
+
+
+def _on_fd_2() -> list[tuple[Any, str]]:
+    """Where Python holds a file on fd 2: ``(owner, attribute)`` pairs (sys and logging's stream handlers)."""
+    places: list[tuple[Any, str]] = [(sys, "stderr"), (sys, "__stderr__")]
+    places += [(handler, "stream") for handler in logging.getLogger().handlers
+               if isinstance(handler, logging.StreamHandler)]
+    return [(owner, name) for owner, name in places if fileno_of(getattr(owner, name, None)) == 2]
+
+
+def _point_at(terminal: Any, places: list[tuple[Any, str]]) -> list[Any]:
+    """Point every place at ``terminal``; returns what puts each back (unless it was changed meanwhile)."""
+    restores = []
+    for owner, name in places:
+        old = getattr(owner, name)
+        setattr(owner, name, terminal)
+
+        def restore(owner: Any = owner, name: str = name, old: Any = old) -> None:
+            if getattr(owner, name) is terminal:
+                setattr(owner, name, old)
+
+        restores.append(restore)
+    return restores
+
+
+def fileno_of(file: Any) -> int | None:
+    """The file descriptor a Python file writes on, None for one without."""
+    try:
+        return file.fileno()
+    except (AttributeError, OSError, ValueError):
+        return None
