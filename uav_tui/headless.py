@@ -64,7 +64,8 @@ def load_script(path: Path, safety: SafetyConfig | None = None) -> list[tuple[in
 def format_status(status: CoreStatus, elapsed_s: float) -> str:
     """One line a status: pipeline, processor, vehicle, autonomy (wider than 80 columns with a vehicle: it wraps)."""
     p, t = status.pipeline, status.telemetry
-    line = (f"{elapsed_s:6.1f}s cam {p.capture_fps:4.1f}fps proc {p.processed_fps:4.1f}fps "
+    stalled = " STALLED" if status.source.get("stalled_since") else ""
+    line = (f"{elapsed_s:6.1f}s cam {p.capture_fps:4.1f}fps{stalled} proc {p.processed_fps:4.1f}fps "
             f"age {p.frame_age_ms:3.0f}ms p50/p95 {p.processing_ms_p50:.1f}/{p.processing_ms_p95:.1f}ms "
             f"skip {p.frames_skipped} err {p.errors}")
     if status.processor_state is not None:

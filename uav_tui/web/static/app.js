@@ -148,7 +148,8 @@ function showStatus(message) {
   auto.textContent = s.autonomy ? "AUTO ON" : "AUTO OFF";
   auto.className = s.autonomy ? "badge on" : "badge off";
   auto.title = s.autonomy_stop_reason || "";
-  let line = `${message.frame[0]}x${message.frame[1]} cam ${fmt(p.capture_fps, 1, "")} ` +
+  const stalled = s.source && s.source.stalled_since ? " camera STALLED" : "";
+  let line = `${message.frame[0]}x${message.frame[1]}${stalled} cam ${fmt(p.capture_fps, 1, "")} ` +
     `proc ${fmt(p.processed_fps, 1, "")} fps age ${fmt(p.frame_age_ms, 0, "ms")} err ${p.errors ?? "-"}`;
   if (s.fc !== "none") {
     line += ` | hb ${fmt(s.heartbeat_age_s, 1, "s")} ${s.link_lost ? "LINK LOST, stale: " : ""}` +
