@@ -24,6 +24,7 @@ from matplotlib.figure import Figure
 from uav_tui.autonomy import check_vector
 from uav_tui.config import SafetyConfig
 from uav_tui.dataset import Dataset, load
+from uav_tui.recording.crash import CRASH_FILE, crash_summary
 from uav_tui.report_replay import REPLAY_PLOT, replay_figure
 from uav_tui.text import redact
 
@@ -117,7 +118,10 @@ def summary(run: Dataset) -> str:
     drops = run.info.get("recording", {}).get("dropped")
     if drops:
         lines.append(f"recorder dropped {drops} items: {run.info['recording'].get('drops')}")
-    if run.info.get("end_wall_ns") is None:
+    if crash := crash_summary(run.path):
+        lines.append(f"the process crashed: {crash}; {CRASH_FILE} has every thread's stack; data up to the "
+                     "last flush")
+    elif run.info.get("end_wall_ns") is None:
         lines.append("the run did not end cleanly (no end time in run.json): data up to the last flush")
     return "\n".join(lines)
 

@@ -11,6 +11,7 @@ from typing import Any
 
 from uav_tui.config import find_config_file, load_config
 from uav_tui.errors import KNOWN_ERRORS, UavError, error_line
+from uav_tui.recording.crash import crash_summary
 from uav_tui.text import redact
 
 
@@ -69,7 +70,7 @@ def _list(runs_dir: Path) -> int:
     for run in runs:
         duration = "?" if run["duration_s"] is None else str(datetime.timedelta(seconds=round(run["duration_s"])))
         start = run["start"].replace("+00:00", "").replace("T", " ")
-        note = "" if run["finished"] else "  (not closed)"
+        note = "  (crashed)" if crash_summary(run["path"]) else "" if run["finished"] else "  (not closed)"
         print(f"{_cell(run['name'], 24):<24} {_cell(start, 20):<20} {duration:>9} {run['frames']:>7} "
               f"{run['bytes'] / 1e6:>7.1f}MB  {_cell(run['processor'], 24):<24} {_cell(run['source'], 40)}{note}")
     return 0

@@ -29,6 +29,7 @@ from controllers.base import Telemetry
 from uav_tui.config import RecordingConfig
 from uav_tui.errors import UavError
 from uav_tui.events import Event
+from uav_tui.recording.crash import CrashRecord
 from uav_tui.recording.rows import (
     TABLES,
     FrameAligner,
@@ -92,6 +93,8 @@ class Recorder:
         """Processed frames seen (rows queued)."""
         self.misplaced_saves = 0
         """``tmMgr.save`` calls made outside ``photo_processing`` (ignored)."""
+        self.crash: CrashRecord | None = None
+        """Where a crash of this process writes its stacks while the run is open (set by :meth:`open`)."""
         self._emit: Callable[[str, str], None] = lambda level, message: None
         self._current: Callable[[], ProcessedFrame | None] = lambda: None
         self._ids = itertools.count(1)
@@ -132,6 +135,7 @@ class Recorder:
             raise UavError(f"cannot create the run folder under {config.runs_dir}: {exc.strerror or exc}; "
                            "choose another with --runs-dir, or run with --no-record") from exc
         recorder.writer.start()
+        recorder.crash = CrashRecord(run_dir)
         logger.info("Recorder(%s): recording", run_dir)
         return recorder
 
@@ -262,6 +266,8 @@ class Recorder:
             write_json(self.run_dir / "run.json", self.info)
         except OSError as exc:
             logger.error("Recorder(%s): cannot finish run.json: %s", self.run_dir, exc)
+        if self.crash is not None:
+            self.crash.close()
 
     def _problem(self, reason: str, message: str) -> None:
         logger.warning("Recorder(%s): %s", self.run_dir, message)
