@@ -11,6 +11,7 @@ import threading
 from pathlib import Path
 
 import cv2
+import numpy as np
 import pytest
 
 from tests.videos import damaged_aerial_video
@@ -51,6 +52,21 @@ async def test_ffmpeg_complaints_about_a_damaged_real_video_are_events_not_termi
     err = capfd.readouterr().err
     assert "[mpeg4 @" not in err  # before: every complaint went to the terminal, over the dashboard
     assert "a Python line" in err  # Python's own stderr still reaches it
+
+
+async def test_libjpeg_on_a_cut_jpeg_as_a_usb_camera_sends_it_is_an_event(tmp_path: Path) -> None:
+    video = damaged_aerial_video(tmp_path)
+    ok, image = cv2.VideoCapture(str(video)).read()
+    assert ok
+    jpeg = cv2.imencode(".jpg", image)[1].tobytes()
+    cut = np.frombuffer(jpeg[:len(jpeg) // 2] + jpeg[-2:], np.uint8)  # half a frame, as a USB hiccup leaves it
+    events = EventLog()
+    events.bind(asyncio.get_running_loop())
+    seen = collect(events)
+    with native_stderr_as_events(events, asyncio.get_running_loop()):
+        assert cv2.imdecode(cut, cv2.IMREAD_COLOR) is not None
+        await asyncio.sleep(0.2)
+    assert [e.message for e in seen] == ["native library: Corrupt JPEG data: premature end of data segment"]
 
 
 async def test_a_flood_is_bounded_and_never_makes_the_writer_wait(tmp_path: Path) -> None:
