@@ -51,7 +51,10 @@ def native_stderr_as_events(events: EventLog, loop: asyncio.AbstractEventLoop) -
     """
     with contextlib.suppress(Exception):
         sys.stderr.flush()
-    terminal_fd = os.dup(2)
+    try:
+        terminal_fd = os.dup(2)
+    except OSError:  # started without stderr (2>&-): native lines still become events
+        terminal_fd = os.open(os.devnull, os.O_WRONLY)
     terminal = open(terminal_fd, "w", buffering=1, encoding=_encoding(), errors="backslashreplace")  # noqa: SIM115
     read_fd, write_fd = os.pipe()
     os.set_blocking(read_fd, False)
@@ -106,8 +109,6 @@ class NativeLines:
         self.flush()
         self._line(self._partial.decode("utf-8", "replace").rstrip())
         self._say_left_out(at_end=True)
-        if self._count_due is not None:
-            self._count_due.cancel()
         self._loop.remove_reader(self._fd)
         os.close(self._fd)
 
@@ -133,12 +134,17 @@ class NativeLines:
         return True
 
     def _say_left_out(self, *, at_end: bool = False) -> None:
-        self._count_due = None
-        if self._left_out and (at_end or self._take()):
+        """Say how many lines were left out, now if the limit allows (or at the end), else in a while."""
+        if self._count_due is not None:
+            self._count_due.cancel()
+            self._count_due = None
+        if not self._left_out:
+            return
+        if at_end or self._take():
             self._events.emit("warning", "platform",
                               f"native library: {self._left_out} more lines left out (too many at once)", ORIGIN)
             self._left_out = 0
-        elif self._left_out:
+        else:
             self._count_due = self._loop.call_later(1 / LINES_PER_S, self._say_left_out)
 
 
