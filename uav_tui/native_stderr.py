@@ -10,7 +10,8 @@ them.
 While :func:`native_stderr_as_events` lasts, fd 2 is a pipe that never makes a writer wait (what
 does not fit while the loop is busy is lost, not waited for). The event loop reads it as it reads a
 socket and emits each line as an event (``native library: …``; escaped, bounded, at most
-:data:`BURST_LINES` at once and :data:`LINES_PER_S` after that, with a count of what was left out).
+:class:`~uav_tui.line_budget.LineBudget`'s 20 at once and one a second after that, with a count of
+what was left out).
 Python's own writes to stderr (log records, tracebacks, the dashboard itself) keep going to the
 terminal through a duplicate of the old fd 2.
 """
@@ -23,19 +24,15 @@ import logging
 import os
 import re
 import sys
-import time
 from collections.abc import Iterator
 from typing import Any
 
 from uav_tui.events import EventLog, Level
+from uav_tui.line_budget import LineBudget
 from uav_tui.text import shorten
 
 LINE_CHARS = 300
 """Longer lines are cut (one that never ends is taken in pieces this long)."""
-BURST_LINES = 20
-"""Lines that become events at once before the rate limit applies (a decoder's burst at one damaged frame)."""
-LINES_PER_S = 1.0
-"""Lines a second that become events in a flood; the others are counted and the count is said."""
 ORIGIN = "native"
 """The events' origin: interfaces list them without popping them up (a flood would cover the screen)."""
 _INFO = re.compile(r"\b(INFO|DEBUG)\b")
@@ -74,17 +71,14 @@ def native_stderr_as_events(events: EventLog, loop: asyncio.AbstractEventLoop) -
 
 
 class NativeLines:
-    """The pipe's reading end, read on the loop whenever it has data; its lines become events within the limit."""
+    """The pipe's reading end, read on the loop whenever it has data; its lines become events within a budget."""
 
     def __init__(self, fd: int, events: EventLog, loop: asyncio.AbstractEventLoop) -> None:
         self._fd = fd
         self._events = events
         self._loop = loop
         self._partial = b""
-        self._tokens = float(BURST_LINES)
-        self._refilled = time.monotonic()
-        self._left_out = 0
-        self._count_due: asyncio.TimerHandle | None = None
+        self._budget = LineBudget(self._emit, self._emit_left_out, loop)
         loop.add_reader(fd, self.flush)
 
     def flush(self) -> None:
@@ -102,50 +96,27 @@ class NativeLines:
                 lines.append(self._partial)
                 self._partial = b""
             for line in lines:
-                self._line(line.decode("utf-8", "replace").rstrip())
+                self._line(line)
 
     def close(self) -> None:
         """Emit what is left (a child process may still hold the pipe's other end) and stop reading."""
         self.flush()
-        self._line(self._partial.decode("utf-8", "replace").rstrip())
-        self._say_left_out(at_end=True)
+        self._line(self._partial)
+        self._budget.close()
         self._loop.remove_reader(self._fd)
         os.close(self._fd)
 
-    def _line(self, text: str) -> None:
-        if not text:
-            return
-        if not self._take():
-            self._left_out += 1
-            if self._count_due is None:
-                self._count_due = self._loop.call_later(1 / LINES_PER_S, self._say_left_out)
-            return
-        self._say_left_out()
+    def _line(self, raw: bytes) -> None:
+        if text := raw.decode("utf-8", "replace").rstrip():
+            self._budget.line(text)
+
+    def _emit(self, text: str) -> None:
         level: Level = "info" if _INFO.search(text) else "warning"
         self._events.emit(level, "platform", f"native library: {shorten(text, LINE_CHARS)}", ORIGIN)
 
-    def _take(self) -> bool:
-        now = time.monotonic()
-        self._tokens = min(BURST_LINES, self._tokens + (now - self._refilled) * LINES_PER_S)
-        self._refilled = now
-        if self._tokens < 1:
-            return False
-        self._tokens -= 1
-        return True
-
-    def _say_left_out(self, *, at_end: bool = False) -> None:
-        """Say how many lines were left out, now if the limit allows (or at the end), else in a while."""
-        if self._count_due is not None:
-            self._count_due.cancel()
-            self._count_due = None
-        if not self._left_out:
-            return
-        if at_end or self._take():
-            self._events.emit("warning", "platform",
-                              f"native library: {self._left_out} more lines left out (too many at once)", ORIGIN)
-            self._left_out = 0
-        else:
-            self._count_due = self._loop.call_later(1 / LINES_PER_S, self._say_left_out)
+    def _emit_left_out(self, count: int) -> None:
+        self._events.emit("warning", "platform", f"native library: {count} more lines left out (too many at once)",
+                          ORIGIN)
 
 
 def _encoding() -> str:

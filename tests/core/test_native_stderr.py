@@ -16,7 +16,8 @@ import pytest
 
 from tests.videos import damaged_aerial_video
 from uav_tui.events import Event, EventLog
-from uav_tui.native_stderr import BURST_LINES, ORIGIN, native_stderr_as_events
+from uav_tui.line_budget import BURST_LINES
+from uav_tui.native_stderr import ORIGIN, native_stderr_as_events
 
 
 def collect(events: EventLog) -> list[Event]:

@@ -21,3 +21,21 @@ class RecordingProcessor:
 
     def customize_processing(self, id):
         self.buttons.append(id)
+
+
+class PrintingProcessor:
+    """Prints as a researcher debugging does: a line every 30 frames; F-key N prints N * 100 lines at once, the
+    first with a terminal escape in it."""
+
+    def __init__(self):
+        self.frames = 0
+
+    def photo_processing(self, frame):
+        self.frames += 1
+        if self.frames % 30 == 0:
+            print(f"hello from the processor, frame {self.frames}")
+
+    def customize_processing(self, id):
+        print("\x1b[2Jcleared?")
+        for n in range(1, id * 100):
+            print("line", n)

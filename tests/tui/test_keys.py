@@ -153,3 +153,18 @@ async def test_native_library_lines_are_logged_without_popping_up(make_app):
         await wait_for(pilot, lambda: list(app._notifications), what="the pop-up of the platform's warning")
         assert [n.message for n in app._notifications] == ["a warning of the platform's own"]
         assert in_log(app, "native library: [h264 @ 0x1] error 29")
+
+
+async def test_what_the_processor_prints_is_in_the_log_and_a_flood_is_bounded(make_app):
+    app = make_app(processor=f"{HERE / 'procs.py'}:PrintingProcessor")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await started(pilot)
+        # Before: print() under the dashboard went nowhere.
+        await wait_for(pilot, lambda: in_log(app, "print: hello from the processor, frame 30"), what="a print")
+        await pilot.press("f1")
+        await wait_for(pilot, lambda: in_log(app, "more printed lines not shown (too many at once)"), timeout=5,
+                       what="the count of the lines left out")
+        shown = [strip.text for strip in app.query_one("#events").lines]
+        assert any("print: \\x1b[2Jcleared?" in line for line in shown), shown  # escaped: it cannot clear the screen
+        assert not any("\x1b" in line for line in shown)
+        assert sum("print: line " in line for line in shown) < 25  # a burst of 20, then about one a second

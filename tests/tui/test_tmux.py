@@ -245,6 +245,15 @@ def test_a_damaged_real_video_leaves_the_screen_whole(tmux, tmp_path):
     assert tmux.status.read_text().strip() == "0"
 
 
+def test_what_the_processor_prints_in_its_own_process_shows_in_the_log(tmux, tmp_path):
+    tmux.start("--fc", "none", "--processor", f"{ROOT / 'tests/tui/procs.py'}:PrintingProcessor", tmp_path=tmp_path)
+    # Before: lost, with nothing on the screen.
+    wait(lambda: tmux.log_shows("print: hello from the processor, frame 60"), 30, "the processor's print in the log")
+    tmux.keys("q")
+    wait(tmux.status.exists, 15, "the exit status")
+    assert tmux.status.read_text().strip() == "0"
+
+
 @pytest.mark.parametrize(("colorterm", "truecolor"), [("", False), ("truecolor", True)],
                          ids=["256-colours", "truecolor"])
 def test_colours_follow_what_the_terminal_says_it_can_do(tmux, tmp_path, colorterm, truecolor):

@@ -1,14 +1,23 @@
-"""The event log panel: operator commands, autonomy decisions, warnings and errors, newest last."""
+"""The event log panel: operator commands, autonomy decisions, warnings and errors, newest last; and what
+the processor prints."""
 
 from __future__ import annotations
 
+import asyncio
 import time
 from typing import ClassVar
 
+from rich.style import Style
 from rich.text import Text
+from textual import events
 from textual.widgets import RichLog
 
 from uav_tui.events import Event
+from uav_tui.line_budget import LineBudget
+from uav_tui.text import safe, shorten
+
+PRINT_CHARS = 500
+"""A longer printed line is cut."""
 
 LEVEL_MARK = {"info": " ", "warning": "!", "error": "X"}
 """One character per level, so the log reads without colours too."""
@@ -33,12 +42,36 @@ class EventLogView(RichLog):
 
     def on_mount(self) -> None:
         self.border_title = "Events"
+        self._printed = LineBudget(self._show_printed, self._show_left_out, asyncio.get_running_loop())
+        self._partial = {False: "", True: ""}
+        self.app.begin_capture_print(self)
 
     def add_event(self, event: Event) -> None:
         """Append one event."""
-        clock = time.strftime("%H:%M:%S", time.localtime(event.t_wall_ns / 1e9))
-        line = Text(f"{clock} ", self.get_component_rich_style("log--time"))
         style = self.get_component_rich_style(f"log--{event.level}") if event.level != "info" else None
         origin = f"[{event.origin}] " if event.origin not in ("platform", "tui") else ""
-        line.append(f"{LEVEL_MARK[event.level]} {event.kind}: {origin}{event.message}", style)
+        self._write(event.t_wall_ns / 1e9, f"{LEVEL_MARK[event.level]} {event.kind}: {origin}{event.message}", style)
+
+    def on_print(self, event: events.Print) -> None:
+        """What is printed in the platform's process (the processor's ``print()``, in either isolation), a line
+        at a time within a :class:`LineBudget`: with no terminal of its own, it would be lost."""
+        *lines, rest = (self._partial[event.stderr] + event.text).split("\n")
+        if len(rest) > PRINT_CHARS:
+            lines.append(rest)
+            rest = ""
+        self._partial[event.stderr] = rest
+        for line in lines:
+            if line.strip():
+                self._printed.line(("stderr: " if event.stderr else "print: ") + safe(shorten(line, PRINT_CHARS)))
+
+    def _show_printed(self, text: str) -> None:
+        self._write(time.time(), f"  {text}")
+
+    def _show_left_out(self, count: int) -> None:
+        self._write(time.time(), f"! {count} more printed lines not shown (too many at once)",
+                    self.get_component_rich_style("log--warning"))
+
+    def _write(self, t_wall_s: float, text: str, style: Style | None = None) -> None:
+        line = Text(time.strftime("%H:%M:%S ", time.localtime(t_wall_s)), self.get_component_rich_style("log--time"))
+        line.append(text, style)
         self.write(line)

@@ -1,0 +1,72 @@
+"""Lines from outside shown at a bounded rate: a burst at once, then a few a second, and a count of the rest.
+
+A decoder complaining of every damaged block, or a processor that prints on every frame, must not
+bury what the operator needs to read (nor cost the loop a line each).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import time
+from collections.abc import Callable
+
+BURST_LINES = 20
+"""Lines shown at once before the rate applies."""
+LINES_PER_S = 1.0
+"""Lines a second shown in a flood; the others are counted and the count is said."""
+
+
+class LineBudget:
+    """Passes lines to ``say_line`` within the budget and says how many it left out with ``say_left_out``.
+
+    The count is said before the next line that fits, or within ``1 / per_s`` seconds once the flood
+    stops, or at :meth:`close`. Use it on ``loop``'s thread.
+    """
+
+    def __init__(self, say_line: Callable[[str], None], say_left_out: Callable[[int], None],
+                 loop: asyncio.AbstractEventLoop, *, burst: int = BURST_LINES, per_s: float = LINES_PER_S) -> None:
+        self._say_line = say_line
+        self._say_left_out = say_left_out
+        self._loop = loop
+        self._burst = burst
+        self._per_s = per_s
+        self._tokens = float(burst)
+        self._refilled = time.monotonic()
+        self.left_out = 0
+        """Lines not shown and not yet counted aloud."""
+        self._count_due: asyncio.TimerHandle | None = None
+
+    def line(self, text: str) -> None:
+        if not self._take():
+            self.left_out += 1
+            if self._count_due is None:
+                self._count_due = self._loop.call_later(1 / self._per_s, self._count)
+            return
+        self._count()
+        self._say_line(text)
+
+    def close(self) -> None:
+        """Say the count now, whatever the budget."""
+        self._count(at_end=True)
+
+    def _take(self) -> bool:
+        now = time.monotonic()
+        self._tokens = min(self._burst, self._tokens + (now - self._refilled) * self._per_s)
+        self._refilled = now
+        if self._tokens < 1:
+            return False
+        self._tokens -= 1
+        return True
+
+    def _count(self, *, at_end: bool = False) -> None:
+        """Say how many lines were left out, now if the budget allows (or at the end), else in a while."""
+        if self._count_due is not None:
+            self._count_due.cancel()
+            self._count_due = None
+        if not self.left_out:
+            return
+        if at_end or self._take():
+            self._say_left_out(self.left_out)
+            self.left_out = 0
+        else:
+            self._count_due = self._loop.call_later(1 / self._per_s, self._count)
