@@ -131,7 +131,7 @@ class HeadlessRunner:
 
         Native libraries' lines on stderr (FFmpeg's, OpenCV's) are printed as events too.
         """
-        with native_stderr_as_events(self.core.events, asyncio.get_running_loop()) as self._native_lines:
+        with native_stderr_as_events(self.core.events) as self._native_lines:
             self._stdout = TerminalOutput(self.out, self._dropped, _gone, max_backlog=OUTPUT_BACKLOG_CHARS,
                                           name="stdout")
             self._stderr = TerminalOutput(sys.stderr, self._dropped, _gone, max_backlog=OUTPUT_BACKLOG_CHARS,

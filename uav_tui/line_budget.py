@@ -20,14 +20,13 @@ class LineBudget:
     """Passes lines to ``say_line`` within the budget and says how many it left out with ``say_left_out``.
 
     The count is said before the next line that fits, or within ``1 / per_s`` seconds once the flood
-    stops, or at :meth:`close`. Use it on ``loop``'s thread.
+    stops, or at :meth:`close`. Call it on the event loop's thread.
     """
 
-    def __init__(self, say_line: Callable[[str], None], say_left_out: Callable[[int], None],
-                 loop: asyncio.AbstractEventLoop, *, burst: int = BURST_LINES, per_s: float = LINES_PER_S) -> None:
+    def __init__(self, say_line: Callable[[str], None], say_left_out: Callable[[int], None], *,
+                 burst: int = BURST_LINES, per_s: float = LINES_PER_S) -> None:
         self._say_line = say_line
         self._say_left_out = say_left_out
-        self._loop = loop
         self._burst = burst
         self._per_s = per_s
         self._tokens = float(burst)
@@ -40,7 +39,7 @@ class LineBudget:
         if not self._take():
             self.left_out += 1
             if self._count_due is None:
-                self._count_due = self._loop.call_later(1 / self._per_s, self._count)
+                self._count_due = asyncio.get_running_loop().call_later(1 / self._per_s, self._count)
             return
         self._count()
         self._say_line(text)
@@ -69,4 +68,4 @@ class LineBudget:
             self._say_left_out(self.left_out)
             self.left_out = 0
         else:
-            self._count_due = self._loop.call_later(1 / self._per_s, self._count)
+            self._count_due = asyncio.get_running_loop().call_later(1 / self._per_s, self._count)

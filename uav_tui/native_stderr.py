@@ -40,11 +40,11 @@ _INFO = re.compile(r"\b(INFO|DEBUG)\b")
 
 
 @contextlib.contextmanager
-def native_stderr_as_events(events: EventLog, loop: asyncio.AbstractEventLoop) -> Iterator[NativeLines]:
-    """While it lasts, lines native code writes on fd 2 are events on ``loop``, not text on the terminal.
+def native_stderr_as_events(events: EventLog) -> Iterator[NativeLines]:
+    """While it lasts, lines native code writes on fd 2 are events, not text on the terminal. Use it on the loop.
 
     Python file objects on fd 2 (``sys.stderr``, ``sys.__stderr__``, logging's stream handlers) are
-    pointed at a duplicate of it meanwhile, so they keep writing to the terminal. Call it on ``loop``.
+    pointed at a duplicate of it meanwhile, so they keep writing to the terminal.
     """
     with contextlib.suppress(Exception):
         sys.stderr.flush()
@@ -59,7 +59,7 @@ def native_stderr_as_events(events: EventLog, loop: asyncio.AbstractEventLoop) -
     os.dup2(write_fd, 2)
     os.close(write_fd)
     moved = _point_at(terminal, _on_fd_2())
-    lines = NativeLines(read_fd, events, loop)
+    lines = NativeLines(read_fd, events, asyncio.get_running_loop())
     try:
         yield lines
     finally:
@@ -78,7 +78,7 @@ class NativeLines:
         self._events = events
         self._loop = loop
         self._partial = b""
-        self._budget = LineBudget(self._emit, self._emit_left_out, loop)
+        self._budget = LineBudget(self._emit, self._emit_left_out)
         loop.add_reader(fd, self.flush)
 
     def flush(self) -> None:

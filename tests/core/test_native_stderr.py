@@ -41,7 +41,7 @@ async def test_ffmpeg_complaints_about_a_damaged_real_video_are_events_not_termi
     events = EventLog()
     events.bind(asyncio.get_running_loop())
     seen = collect(events)
-    with native_stderr_as_events(events, asyncio.get_running_loop()):
+    with native_stderr_as_events(events):
         frames = await asyncio.to_thread(decode_all, video)  # FFmpeg writes on fd 2 from the decoding thread
         print("a Python line", file=sys.stderr, flush=True)
         logging.getLogger("test").warning("a log record")
@@ -64,7 +64,7 @@ async def test_libjpeg_on_a_cut_jpeg_as_a_usb_camera_sends_it_is_an_event(tmp_pa
     events = EventLog()
     events.bind(asyncio.get_running_loop())
     seen = collect(events)
-    with native_stderr_as_events(events, asyncio.get_running_loop()):
+    with native_stderr_as_events(events):
         assert cv2.imdecode(cut, cv2.IMREAD_COLOR) is not None
         await asyncio.sleep(0.2)
     assert [e.message for e in seen] == ["native library: Corrupt JPEG data: premature end of data segment"]
@@ -83,7 +83,7 @@ async def test_a_flood_is_bounded_and_never_makes_the_writer_wait(tmp_path: Path
                 os.write(2, f"[h264 @ 0x1] error while decoding MB {n} \x1b[2J\n".encode())
         written.set()
 
-    with native_stderr_as_events(events, asyncio.get_running_loop()):
+    with native_stderr_as_events(events):
         writer = threading.Thread(target=flood)
         writer.start()
         writer.join(timeout=30)  # the loop is blocked here: nobody reads the pipe meanwhile
@@ -102,7 +102,7 @@ async def test_everything_is_put_back_after(capfd: pytest.CaptureFixture[str]) -
     handler = logging.StreamHandler(sys.__stderr__)
     logging.getLogger().addHandler(handler)
     try:
-        with native_stderr_as_events(EventLog(), asyncio.get_running_loop()):
+        with native_stderr_as_events(EventLog()):
             assert handler.stream is not dunder and sys.__stderr__ is not dunder
         assert (sys.stderr, sys.__stderr__, handler.stream) == (stderr, dunder, dunder)
     finally:

@@ -3,7 +3,6 @@ the processor prints."""
 
 from __future__ import annotations
 
-import asyncio
 import time
 from typing import ClassVar
 
@@ -39,11 +38,12 @@ class EventLogView(RichLog):
 
     def __init__(self, *, id: str | None = None) -> None:
         super().__init__(id=id, max_lines=500, min_width=20, wrap=True, markup=False, auto_scroll=True)
+        self._printed = LineBudget(self._show_printed, self._show_left_out)
+        self._partial = {False: "", True: ""}
+        """The end of what was printed to stdout (False) and stderr (True) that is not a whole line yet."""
 
     def on_mount(self) -> None:
         self.border_title = "Events"
-        self._printed = LineBudget(self._show_printed, self._show_left_out, asyncio.get_running_loop())
-        self._partial = {False: "", True: ""}
         self.app.begin_capture_print(self)
 
     def add_event(self, event: Event) -> None:

@@ -72,11 +72,11 @@ class TuiSession:
 
     async def run(self) -> int:
         """Run until the end; native libraries' lines on stderr are events meanwhile (they would tear the screen)."""
-        loop = asyncio.get_running_loop()
-        with native_stderr_as_events(self.core.events, loop):
-            return await self._run(loop)
+        with native_stderr_as_events(self.core.events):
+            return await self._run()
 
-    async def _run(self, loop: asyncio.AbstractEventLoop) -> int:
+    async def _run(self) -> int:
+        loop = asyncio.get_running_loop()
         handled = {signal.SIGTERM: "SIGTERM", signal.SIGINT: "SIGINT"}
         for signum, name in handled.items():
             loop.add_signal_handler(signum, self.request_stop, name)
