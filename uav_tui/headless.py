@@ -131,7 +131,7 @@ class HeadlessRunner:
 
         Native libraries' lines on stderr (FFmpeg's, OpenCV's) are printed as events too.
         """
-        with native_stderr_as_events(self.core.events) as self._native_lines:
+        with native_stderr_as_events(self.core.events) as self._flush_native_lines:
             self._stdout = TerminalOutput(self.out, self._dropped, _gone, max_backlog=OUTPUT_BACKLOG_CHARS,
                                           name="stdout")
             self._stderr = TerminalOutput(sys.stderr, self._dropped, _gone, max_backlog=OUTPUT_BACKLOG_CHARS,
@@ -163,7 +163,7 @@ class HeadlessRunner:
         try:
             await self.core.start()
         except KNOWN_ERRORS as exc:
-            self._native_lines.flush()  # what FFmpeg said of it ("Connection refused") comes first
+            self._flush_native_lines()  # what FFmpeg said of it ("Connection refused") comes first
             self._error(str(exc))
             return EXIT_START_FAILED
         try:

@@ -24,7 +24,7 @@ import logging
 import os
 import re
 import sys
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from typing import Any
 
 from uav_tui.events import EventLog, Level
@@ -40,18 +40,19 @@ _INFO = re.compile(r"\b(INFO|DEBUG)\b")
 
 
 @contextlib.contextmanager
-def native_stderr_as_events(events: EventLog) -> Iterator[NativeLines]:
+def native_stderr_as_events(events: EventLog) -> Iterator[Callable[[], None]]:
     """While it lasts, lines native code writes on fd 2 are events, not text on the terminal. Use it on the loop.
 
     Python file objects on fd 2 (``sys.stderr``, ``sys.__stderr__``, logging's stream handlers) are
-    pointed at a duplicate of it meanwhile, so they keep writing to the terminal.
+    pointed at a duplicate of it meanwhile, so they keep writing to the terminal. Gives what emits the
+    lines written so far at once (a report that follows them calls it first).
     """
+    if fileno_of(sys.__stderr__) != 2:  # started without stderr (2>&-): fd 2 may be any file opened since
+        yield lambda: None
+        return
     with contextlib.suppress(Exception):
         sys.stderr.flush()
-    try:
-        terminal_fd = os.dup(2)
-    except OSError:  # started without stderr (2>&-): native lines still become events
-        terminal_fd = os.open(os.devnull, os.O_WRONLY)
+    terminal_fd = os.dup(2)
     terminal = open(terminal_fd, "w", buffering=1, encoding=_encoding(), errors="backslashreplace")  # noqa: SIM115
     read_fd, write_fd = os.pipe()
     os.set_blocking(read_fd, False)
@@ -61,7 +62,7 @@ def native_stderr_as_events(events: EventLog) -> Iterator[NativeLines]:
     moved = _point_at(terminal, _on_fd_2())
     lines = NativeLines(read_fd, events, asyncio.get_running_loop())
     try:
-        yield lines
+        yield lines.flush
     finally:
         os.dup2(terminal_fd, 2)
         for restore in moved:
@@ -82,7 +83,7 @@ class NativeLines:
         loop.add_reader(fd, self.flush)
 
     def flush(self) -> None:
-        """Emit what the pipe holds now (on the loop; a report that follows a native line calls it first)."""
+        """Emit what the pipe holds now."""
         while True:
             try:
                 chunk = os.read(self._fd, 65536)

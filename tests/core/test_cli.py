@@ -126,6 +126,17 @@ def test_a_damaged_real_video_is_reported_in_events_not_sprayed_on_the_terminal(
     assert [f"[{row['level']}] {row['kind']}: {row['message']}" for row in recorded] == printed
 
 
+def test_a_run_started_without_stderr_runs(tmp_path: Path) -> None:
+    # As some launchers start it (2>&-): fd 2 is then whatever the process opens next (the event loop's
+    # selector, say), which capturing native stderr must not take over.
+    command = [sys.executable, "-m", "uav_tui", "--no-ui", "--fc", "none", "--source", "synthetic:", "--duration",
+               "2", "--runs-dir", str(tmp_path / "runs")]
+    result = subprocess.run(["sh", "-c", 'exec "$@" 2>&-', "sh", *command], cwd=tmp_path, capture_output=True,
+                            text=True, timeout=60, env={**os.environ, "PYTHONPATH": str(ROOT)})
+    assert result.returncode == 0, result.stdout
+    assert "stopped: --duration 2 s reached" in result.stdout
+
+
 def test_vehicle_command_without_a_vehicle_fails_the_script_clearly(tmp_path: Path) -> None:
     (tmp_path / "flight.txt").write_text("f 1\narm\n")
     (tmp_path / "mine.py").write_text("class Mine:\n    def photo_processing(self, frame):\n        pass\n"

@@ -126,7 +126,8 @@ def _detach_from_terminal() -> None:
     """
     try:
         null = os.open(os.devnull, os.O_RDWR)
-        for fd in {0, 1, fileno_of(sys.__stderr__) or 2}:
+        stderr = fileno_of(sys.__stderr__)  # None: started without one, fd 2 may be any file
+        for fd in (0, 1) if stderr is None else {0, 1, stderr}:
             os.dup2(null, fd)
         os.close(null)
     except OSError:
