@@ -23,12 +23,15 @@ class Telemetry:
 
     Angles are degrees, positions metres (NED relative to the autopilot's local origin, i.e. home),
     velocities m/s, times nanoseconds. ``t_mono_ns``/``t_wall_ns`` are when the last field changed on
-    this computer; ``fc_boot_ms`` is the autopilot's own clock where MAVLink carries it.
+    this computer; ``fc_boot_ms`` is the autopilot's own clock where MAVLink carries it;
+    ``fc_clock_offset_ms`` is the autopilot's UTC time (from GPS, in SYSTEM_TIME) minus this
+    computer's wall clock, once the autopilot knows the time (a Pi without a network has none right).
     """
 
     t_mono_ns: int = 0
     t_wall_ns: int = 0
     fc_boot_ms: int | None = None
+    fc_clock_offset_ms: int | None = None
     lat_deg: float | None = None
     lon_deg: float | None = None
     abs_alt_m: float | None = None

@@ -17,6 +17,7 @@ from __future__ import annotations
 import asyncio
 import logging
 import math
+import time
 from collections.abc import AsyncIterator, Callable
 from typing import Any
 
@@ -98,6 +99,11 @@ def from_health(h: Any) -> Update:
     return {"health_ok": bool(ok)}
 
 
+def from_unix_epoch_time(time_us: int) -> Update:
+    """SYSTEM_TIME's UTC time as the offset from this computer's clock (0: the autopilot does not know it)."""
+    return {"fc_clock_offset_ms": round(time_us / 1000 - time.time_ns() / 1e6)} if time_us > 0 else {}
+
+
 STREAMS: dict[str, Callable[[Any], Update]] = {
     "position": from_position,
     "attitude_euler": from_attitude_euler,
@@ -106,6 +112,7 @@ STREAMS: dict[str, Callable[[Any], Update]] = {
     "battery": from_battery,
     "gps_info": from_gps_info,
     "health": from_health,
+    "unix_epoch_time": from_unix_epoch_time,
     "flight_mode": lambda m: {"flight_mode": m.name},
     "armed": lambda armed: {"armed": bool(armed)},
     "in_air": lambda in_air: {"in_air": bool(in_air)},
@@ -144,8 +151,11 @@ async def merged_updates(
     queue: asyncio.Queue[Update | None] = asyncio.Queue()
 
     def pump(name: str, convert: Callable[[Any], Update]) -> asyncio.Task[None]:
-        return subscriptions.read(getattr(telemetry, f"subscribe_{name}")(),
-                                  lambda value: queue.put_nowait(convert(value)), f"telemetry-{name}")
+        def put(value: Any) -> None:
+            if update := convert(value):  # {}: nothing known yet
+                queue.put_nowait(update)
+
+        return subscriptions.read(getattr(telemetry, f"subscribe_{name}")(), put, f"telemetry-{name}")
 
     async def tick() -> None:
         while True:

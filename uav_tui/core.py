@@ -24,6 +24,7 @@ from sources import CameraSource, open_source, warm_up_source
 from sources.pose import PoseTrack
 from uav_tui import pose_feed
 from uav_tui.autonomy import AutonomyGate
+from uav_tui.clock_check import ClockCheck
 from uav_tui.commands import VEHICLE_COMMANDS, Command, parse
 from uav_tui.config import Config
 from uav_tui.errors import KNOWN_ERRORS, NoVehicle, SourceError, UavError
@@ -128,6 +129,8 @@ class UavCore:
                                                        sim_vehicle=self.config.sim.vehicle())
             self.telemetry = TelemetryManager(self.controller)
             self.replay = getattr(self.controller, "timeline", None)
+            if self.controller is not None and self.replay is None:  # a replay's clock was the recording's
+                self.telemetry.add_listener(ClockCheck(self.events))
             if self.replay is not None:
                 self.gate = ReplayGate(self.config.safety, self.telemetry, self.events, self.controller)
                 self.add_frame_listener(lambda result: self.replay.frame_done())

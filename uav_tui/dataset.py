@@ -34,7 +34,7 @@ from uav_tui.recording.rows import EVENT_COLUMNS, FRAME_OWN_COLUMNS, TELEMETRY_C
 _TEXT = ("flight_mode", "gps_fix", "decision", "error", "image", "extra", "telemetry", "level", "kind", "origin",
          "message", "command")
 _FLAGS = ("armed", "in_air", "health_ok", "saved")
-_INTEGERS = ("fc_boot_ms", "satellites", "frame_id", "seq", "box_x", "box_y", "box_w", "box_h")
+_INTEGERS = ("fc_boot_ms", "fc_clock_offset_ms", "satellites", "frame_id", "seq", "box_x", "box_y", "box_w", "box_h")
 
 
 @dataclass(frozen=True)

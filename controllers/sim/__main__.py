@@ -69,6 +69,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--rtl-alt", type=float, default=10.0, metavar="M", help="RTL_RETURN_ALT")
     p.add_argument("--gps-delay", type=float, default=0.5, metavar="S", help="seconds until a 3D fix")
     p.add_argument("--rate", type=float, default=50.0, metavar="HZ", help="physics step rate")
+    p.add_argument("--gps-clock-offset", type=float, default=0.0, metavar="S",
+                   help="UTC time sent in SYSTEM_TIME minus this computer's clock (play a ground computer whose "
+                   "clock is wrong)")
     p.add_argument("--parent-pid", type=int, default=None, metavar="PID", help="exit when PID stops being our parent")
     p.add_argument("--log-level", default="INFO", help="logging level on stderr")
     return p
@@ -94,6 +97,7 @@ def config_from_args(args: argparse.Namespace) -> ServerConfig:
         offboard_loss_action=args.offboard_loss_action,
         failsafe_land_after_s=args.failsafe_land_after,
         parent_pid=args.parent_pid,
+        gps_clock_offset_s=args.gps_clock_offset,
         physics=physics,
     )
 

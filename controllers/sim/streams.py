@@ -28,6 +28,7 @@ DEFAULT_RATES_HZ: dict[int, float] = {
     M.MAVLINK_MSG_ID_HOME_POSITION: 0.5,
     M.MAVLINK_MSG_ID_BATTERY_STATUS: 1.0,
     M.MAVLINK_MSG_ID_VFR_HUD: 4.0,
+    M.MAVLINK_MSG_ID_SYSTEM_TIME: 1.0,
 }
 """Streamed at boot, in Hz."""
 _SLACK_S = 0.005
@@ -78,10 +79,13 @@ def landed_state(v: Multicopter) -> int:
 class TelemetryStreams:
     """Builds telemetry messages from a :class:`Multicopter` and decides which are due."""
 
-    def __init__(self, encoder: mavlink.MAVLink, vehicle: Multicopter, home: Home) -> None:
+    def __init__(self, encoder: mavlink.MAVLink, vehicle: Multicopter, home: Home, *,
+                 gps_clock_offset_s: float = 0.0) -> None:
         self.enc = encoder
         self.v = vehicle
         self.home = home
+        self.gps_clock_offset_s = gps_clock_offset_s
+        """How far the UTC time in SYSTEM_TIME is from this computer's clock (a ground computer's clock is wrong)."""
         self._boot_ns = time.monotonic_ns()
         self._builders: dict[int, Callable[[], mavlink.MAVLink_message]] = {
             M.MAVLINK_MSG_ID_HEARTBEAT: self.heartbeat,
@@ -95,6 +99,7 @@ class TelemetryStreams:
             M.MAVLINK_MSG_ID_HOME_POSITION: self.home_position,
             M.MAVLINK_MSG_ID_BATTERY_STATUS: self.battery_status,
             M.MAVLINK_MSG_ID_VFR_HUD: self.vfr_hud,
+            M.MAVLINK_MSG_ID_SYSTEM_TIME: self.system_time,
             M.MAVLINK_MSG_ID_AUTOPILOT_VERSION: self.autopilot_version,
         }
         self._interval = {mid: 1.0 / hz for mid, hz in DEFAULT_RATES_HZ.items()}
@@ -282,6 +287,11 @@ class TelemetryStreams:
         return self.enc.vfr_hud_encode(
             speed, speed, heading, 50 if v.in_air else 0, v.altitude + self.home.alt_m, -float(v.vel[2])
         )
+
+    def system_time(self) -> mavlink.MAVLink_message:
+        """UTC from GPS once there is a fix (0 before, as PX4 sends it), and the boot time."""
+        unix_us = round((time.time() + self.gps_clock_offset_s) * 1e6) if self.v.gps_fix else 0
+        return self.enc.system_time_encode(unix_us, self.boot_ms())
 
     def autopilot_version(self) -> mavlink.MAVLink_message:
         return self.enc.autopilot_version_encode(

@@ -41,6 +41,8 @@ class ServerConfig:
     failsafe_land_after_s: float = 10.0
     parent_pid: int | None = None
     """Exit when this process is no longer our parent (the launcher died without stopping us)."""
+    gps_clock_offset_s: float = 0.0
+    """The UTC time the vehicle sends (SYSTEM_TIME) minus this computer's clock."""
     physics: PhysicsConfig = field(default_factory=PhysicsConfig)
 
 
@@ -53,7 +55,8 @@ class SimVehicleServer:
         self.lock = threading.RLock()
         self.vehicle = Multicopter(config.physics, wind=config.wind, seed=config.seed)
         self.link = MavlinkLink(config.mavlink_port)
-        self.streams = TelemetryStreams(self.link.encoder, self.vehicle, config.home)
+        self.streams = TelemetryStreams(self.link.encoder, self.vehicle, config.home,
+                                        gps_clock_offset_s=config.gps_clock_offset_s)
         self.commands = CommandHandler(self)
         self.truth = TruthServer(self, config.truth_port)
         self.setpoint: OffboardSetpoint | None = None

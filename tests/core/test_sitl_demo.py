@@ -48,3 +48,6 @@ def test_readme_demo_holds_position_from_the_camera_on_a_real_autopilot(
     # its position by 0.3-0.6 m/s for seconds (its ULog): the hold settles within ~0.4 m of the reference
     assert math.dist(back, reference) < 0.7, f"ended {math.dist(back, reference):.2f} m from the reference"
     assert (demo.run.frames.decision == "executed").sum() > 3
+    # The autopilot's UTC time (SYSTEM_TIME) reaches telemetry.csv; a SITL takes it from this computer's clock.
+    offsets = demo.run.telemetry["fc_clock_offset_ms"].dropna()
+    assert len(offsets) and (offsets.abs() < 2000).all(), offsets.describe()
