@@ -107,6 +107,9 @@ class UavCore:
         """Link-loss / recovery events and the dead-simulator report (None without a flight controller)."""
         self.abandoned_calls: list[str] = []
         """Flight-controller calls still blocked when the core stopped (the process should exit non-zero)."""
+        self.handed_over: str | None = None
+        """The mode (MAVSDK's name) the last vehicle command handed the vehicle to: LAND after ``land``,
+        RETURN_TO_LAUNCH after ``rtl``; None after any other vehicle command."""
 
     # -- lifecycle -------------------------------------------------------------------------------
 
@@ -227,11 +230,25 @@ class UavCore:
         await self.gate.disable("platform", reason if self.gate.enabled else "operator", hold=False)
         vehicle = self.telemetry.snapshot()
         if self.controller is not None and (self.controller.vector_active or vehicle.in_air):
-            await self._hold_before_exit(self.controller, vehicle.flight_mode)
+            await self._hold_before_exit(self.controller)
         await self._release()
 
-    async def _hold_before_exit(self, controller: FlightController, mode: str | None) -> None:
+    def mode_left_at_exit(self) -> str | None:
+        """The mode the vehicle is left in at exit (:data:`LEFT_ALONE_AT_EXIT`), or None: it is held first.
+
+        Right after uav-tui's own ``land`` or ``rtl`` the autopilot may not have reported its new mode
+        yet (PX4 says it in its next heartbeat, up to a second later): that command's mode counts, unless
+        vectors fly the vehicle again.
+        """
+        mode = self.telemetry.snapshot().flight_mode
         if mode in LEFT_ALONE_AT_EXIT:
+            return mode
+        if self.handed_over is not None and not (self.controller is not None and self.controller.vector_active):
+            return self.handed_over
+        return None
+
+    async def _hold_before_exit(self, controller: FlightController) -> None:
+        if mode := self.mode_left_at_exit():
             self.events.emit("info", "platform", f"vehicle left in {mode} mode at exit: a hold would interrupt it")
             return
         try:

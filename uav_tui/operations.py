@@ -6,7 +6,7 @@ import asyncio
 from typing import TYPE_CHECKING, Any, NamedTuple
 
 from uav_tui.autonomy import check_vector
-from uav_tui.commands import Command, check_limits
+from uav_tui.commands import VEHICLE_COMMANDS, Command, check_limits
 from uav_tui.errors import CommandError, ProcessorLoadError, UavError
 from uav_tui.process_worker import ProcessorRaised
 from uav_tui.text import describe, shorten
@@ -14,6 +14,9 @@ from uav_tui.text import describe, shorten
 if TYPE_CHECKING:
     from controllers.base import FlightController
     from uav_tui.core import UavCore
+
+HANDED_OVER = {"land": "LAND", "rtl": "RETURN_TO_LAUNCH"}
+"""Commands that hand the vehicle to the autopilot's own mode (MAVSDK's name): exit leaves it there."""
 
 PLAIN_VEHICLE_CALLS: dict[str, tuple[str, str]] = {
     "arm": ("arm", "armed"),
@@ -46,8 +49,11 @@ class Operations:
         if plain is not None:
             method, done = plain
             await getattr(self._vehicle(), method)()
-            return Outcome(done)
-        outcome = await getattr(self, f"_{command.word}")(*command.args, origin=origin)
+            outcome: Outcome | str = done
+        else:
+            outcome = await getattr(self, f"_{command.word}")(*command.args, origin=origin)
+        if command.word in VEHICLE_COMMANDS:
+            self.core.handed_over = HANDED_OVER.get(command.word)
         return outcome if isinstance(outcome, Outcome) else Outcome(outcome)
 
     async def _takeoff(self, altitude: float | None = None, *, origin: str) -> str:

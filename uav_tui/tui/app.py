@@ -14,7 +14,7 @@ from textual.css.query import NoMatches
 from textual.driver import Driver
 
 from uav_tui.commands import VEHICLE_COMMANDS, parse
-from uav_tui.core import LEFT_ALONE_AT_EXIT, CoreState, UavCore
+from uav_tui.core import CoreState, UavCore
 from uav_tui.errors import KNOWN_ERRORS, CommandError, error_line
 from uav_tui.events import Event
 from uav_tui.headless import EXIT_UNHANDLED_ERROR
@@ -285,8 +285,8 @@ class UavApp(App[None]):
             return
         vehicle = self.core.telemetry.snapshot()
         if vehicle.armed:
-            then = (f"It is left in {vehicle.flight_mode} mode." if vehicle.flight_mode in LEFT_ALONE_AT_EXIT
-                    else "It is put in hold first.")
+            mode = self.core.mode_left_at_exit()
+            then = f"It is left in {mode} mode." if mode else "It is put in hold first."
             self.push_screen(ConfirmScreen(f"The vehicle is ARMED. Quit? {then}", "Quit"),
                              lambda yes: self.send("quit") if yes else None)
         else:
