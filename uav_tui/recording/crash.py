@@ -20,6 +20,7 @@ from uav_tui.text import safe, shorten
 
 CRASH_FILE = "crash.txt"
 SUMMARY_CHARS = 300
+"""The longest summary (a path can be long)."""
 _FRAME = re.compile(r'^\s+File "(?P<file>[^"]*)", line (?P<line>\d+) in (?P<function>.*)$')
 
 
@@ -55,6 +56,9 @@ def crash_summary(run_dir: Path) -> str | None:
     current = next((i for i, line in enumerate(lines) if line.startswith("Current thread")), len(lines))
     frames = list(itertools.takewhile(bool, map(_FRAME.match, lines[current + 1:])))
     where = [f"{m['function']} ({m['file']}:{m['line']})" for m in frames[:2]]
-    text = lines[0].strip() + (f" in {where[0]}" if where else "") + (f", called from {where[1]}"
-                                                                       if len(where) > 1 else "")
+    text = lines[0].strip()
+    if where:
+        text += f" in {where[0]}"
+    if len(where) > 1:
+        text += f", called from {where[1]}"
     return safe(shorten(text, SUMMARY_CHARS))
