@@ -19,8 +19,8 @@ LINES_PER_S = 1.0
 class LineBudget:
     """Passes lines to ``say_line`` within the budget and says how many it left out with ``say_left_out``.
 
-    The count is said before the next line that fits, or within ``1 / per_s`` seconds once the flood
-    stops, or at :meth:`close`. Call it on the event loop's thread.
+    The count is said before the next line that fits, or ``1 / per_s`` seconds after the first line left
+    out, or at :meth:`close`. Call it on the event loop's thread.
     """
 
     def __init__(self, say_line: Callable[[str], None], say_left_out: Callable[[int], None], *,
@@ -45,8 +45,8 @@ class LineBudget:
         self._say_line(text)
 
     def close(self) -> None:
-        """Say the count now, whatever the budget."""
-        self._count(at_end=True)
+        """Say the count now."""
+        self._count()
 
     def _take(self) -> bool:
         now = time.monotonic()
@@ -57,15 +57,12 @@ class LineBudget:
         self._tokens -= 1
         return True
 
-    def _count(self, *, at_end: bool = False) -> None:
-        """Say how many lines were left out, now if the budget allows (or at the end), else in a while."""
+    def _count(self) -> None:
+        """Say how many lines were left out. It takes no share of the budget: a steady stream at the rate would
+        starve it, and it comes at most once per line shown or per ``1 / per_s`` seconds anyway."""
         if self._count_due is not None:
             self._count_due.cancel()
             self._count_due = None
-        if not self.left_out:
-            return
-        if at_end or self._take():
+        if self.left_out:
             self._say_left_out(self.left_out)
             self.left_out = 0
-        else:
-            self._count_due = asyncio.get_running_loop().call_later(1 / self._per_s, self._count)

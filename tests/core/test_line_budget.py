@@ -1,0 +1,21 @@
+"""The line budget: a burst, then a steady rate, and the count of what was left out said in time."""
+
+from __future__ import annotations
+
+import asyncio
+
+from uav_tui.line_budget import LineBudget
+
+
+async def test_a_steady_stream_at_the_rate_does_not_starve_the_count() -> None:
+    said: list[str] = []
+    budget = LineBudget(said.append, lambda n: said.append(f"{n} left out"), burst=2, per_s=20.0)
+    for n in range(10):  # a flood: 2 shown, 8 left out
+        budget.line(f"flood {n}")
+    for n in range(12):  # then one line per refill, for 0.6 s
+        await asyncio.sleep(0.05)
+        budget.line(f"steady {n}")
+    # Before: each steady line took the token the count waited for, so the count came only at close.
+    assert said[:3] == ["flood 0", "flood 1", "8 left out"]
+    budget.close()
+    assert sum("left out" in line for line in said) <= 1 + sum(line.startswith("steady") for line in said)
