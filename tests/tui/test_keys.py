@@ -69,10 +69,11 @@ async def test_reload_keeps_the_old_processor_on_a_broken_file_and_loads_a_fixed
     async with app.run_test(size=(80, 24)) as pilot:
         await started(pilot)
         old = app.core.worker.processor.instance
+        broken_line = len(mine.read_text().splitlines()) + 2
         mine.write_text(mine.read_text() + "\n    def broken(self:\n")
         await pilot.press("R")
         await wait_for(pilot, lambda: in_log(app, "reload failed"), what="the reload error in the log")
-        assert in_log(app, "mine.py:25: SyntaxError")
+        assert in_log(app, f"mine.py:{broken_line}: SyntaxError")
         assert any(n.severity == "error" and "reload failed" in n.message for n in app._notifications)
         frames = old.frames
         await wait_for(pilot, lambda: old.frames > frames + 3, what="the old processor to keep processing")
