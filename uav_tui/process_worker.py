@@ -9,7 +9,8 @@ by the event loop itself whenever the pipe is readable, never blocking it. The w
 (``run``, on the loop) kills a child that stays silent longer than ``processor_timeout``; a child that
 dies for any reason is reported (exit code or signal, last lines of its output), ``on_fault`` stops
 autonomy, and a fresh child with the same arguments is started after 1, 2, 4 ... s, at most
-:data:`MAX_RESTARTS` times a minute.
+:data:`MAX_RESTARTS` times a minute. Whenever a child is killed or ends, so do the processes it started
+(its process group).
 """
 
 from __future__ import annotations
@@ -20,7 +21,6 @@ import functools
 import itertools
 import logging
 import pickle
-import subprocess
 import threading
 import time
 from collections import deque
@@ -248,10 +248,8 @@ class ProcessWorker:
         if self._restart_task is not None:
             self._restart_task.cancel()
         for child in self._all_children:
-            child.kill("stopped")
+            child.kill("stopped")  # reaped by its exit watch's thread, not the loop's executor (a failed start ends it)
             self._hang_up(child)
-            if child.exit_watch is None:  # reap it; not on the loop's executor, which may be ending with a failed start
-                threading.Thread(target=child.proc.wait, name=f"reap-{child.pid}", daemon=True).start()
             for call in child.calls.values():
                 if not call.future.done():
                     call.future.cancel()
@@ -267,6 +265,7 @@ class ProcessWorker:
         loop = self._loop = asyncio.get_running_loop()
         child = await loop.run_in_executor(self._spawner, spawn, loop.create_future())
         self._all_children.append(child)
+        child.watch_exit(functools.partial(_call_soon, loop, self._ended, child))
         loop.add_reader(child.inbox.fileno(), self._on_readable, child)
         self._send(child, ("load", self.spec, self.kwargs, self.memory_mb, self.save_images))
         try:
@@ -297,7 +296,7 @@ class ProcessWorker:
 
     def _running_child(self) -> ChildProcess:
         child = self._child
-        if child is None or child.proc.poll() is not None:
+        if child is None or child.ended.is_set():
             raise UavError(f"the processor is not running ({self.state_text})")
         return child
 
@@ -478,7 +477,6 @@ class ProcessWorker:
         messages = child.inbox.read()
         if messages is None:
             self._hang_up(child)
-            child.exit_watch = asyncio.create_task(self._watch_exit(child), name=f"processor {child.pid} exit")
             return None
         for data, buffers in messages:
             try:
@@ -504,12 +502,21 @@ class ProcessWorker:
         with self._send_lock:
             child.conn.close()
 
-    async def _watch_exit(self, child: ChildProcess) -> None:
-        """The pipe ended: stop autonomy as soon as the exit is known, report once the last output is in."""
-        loop = asyncio.get_running_loop()
-        returncode = await loop.run_in_executor(None, child.proc.wait)
+    def _ended(self, child: ChildProcess, returncode: int) -> None:
+        """``child`` ended (its group killed, it reaped): take what it sent before, stop autonomy at once, report
+        once its last output is in."""
+        if not child.inbox.closed:
+            self._read(child)
+        self._hang_up(child)
         self._on_death(child, returncode)
-        await loop.run_in_executor(None, child.output_done.wait, 0.5)
+        if self._closing:  # nothing to report: no wait for its output
+            self._on_exit(child, returncode)
+        else:
+            child.exit_report = asyncio.create_task(self._report_exit(child, returncode),
+                                                    name=f"processor {child.pid} exit")
+
+    async def _report_exit(self, child: ChildProcess, returncode: int) -> None:
+        await asyncio.get_running_loop().run_in_executor(None, child.output_done.wait, 0.5)
         self._on_exit(child, returncode)
 
     def _take_result(self, child: ChildProcess, message: tuple[Any, ...]) -> None:
@@ -630,10 +637,15 @@ class ProcessWorker:
             return
 
     def _reap(self, timeout: float) -> None:
+        """Wait until every child has been reaped (by its exit watch)."""
         deadline = time.monotonic() + timeout
-        for child in self._all_children:
-            try:
-                child.proc.wait(max(0.0, deadline - time.monotonic()))
-            except subprocess.TimeoutExpired:
+        for child in list(self._all_children):  # the loop removes those it saw end
+            if not child.ended.wait(max(0.0, deadline - time.monotonic())):
                 logger.error("ProcessWorker(%s): pid %s did not exit", self.spec, child.pid)
+
+
+def _call_soon(loop: asyncio.AbstractEventLoop, callback: Callable[..., None], *args: Any) -> None:
+    """``callback(*args)`` on ``loop``, from any thread; nothing once the loop is closed."""
+    with contextlib.suppress(RuntimeError):
+        loop.call_soon_threadsafe(callback, *args)
 

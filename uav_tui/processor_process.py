@@ -21,6 +21,7 @@ import subprocess
 import sys
 import threading
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from multiprocessing.connection import Connection
 from typing import Any
@@ -78,8 +79,10 @@ class ChildProcess:
     """Why the platform killed it (empty: it died by itself)."""
     output_done: threading.Event = field(default_factory=threading.Event)
     inbox: Inbox = field(init=False)
-    exit_watch: asyncio.Task[None] | None = None
-    """Waits for the exit once the pipe ended, then reports it."""
+    ended: threading.Event = field(default_factory=threading.Event)
+    """Set once it ended and was reaped (by :meth:`watch_exit`'s thread, the only one that reaps it)."""
+    exit_report: asyncio.Task[None] | None = None
+    """Reports its end once its last output is in."""
     last_read_s: float = 0.0
     """When (monotonic s) its pipe was last found readable."""
 
@@ -100,10 +103,35 @@ class ChildProcess:
         return min(starts, default=None)
 
     def kill(self, reason: str) -> None:
-        """SIGKILL, whatever the processor is doing; ``reason`` goes into the report."""
+        """SIGKILL, whatever the processor is doing, with what it started (:meth:`kill_group`); ``reason`` goes
+        into the report."""
         self.kill_reason = self.kill_reason or reason
-        if self.proc.poll() is None:
-            self.proc.kill()
+        self.kill_group()
+
+    def kill_group(self) -> None:
+        """SIGKILL every process of its process group: it and the processes it started (``subprocess``,
+        ``multiprocessing``), unless one left the group. Only until it is reaped: till then the group's id, its
+        pid, cannot name another process's group."""
+        if self.proc.returncode is None:
+            with contextlib.suppress(ProcessLookupError, PermissionError):
+                os.killpg(self.proc.pid, signal.SIGKILL)
+
+    def watch_exit(self, on_end: Callable[[int], None]) -> None:
+        """From now on, wait on a thread of its own for it to end, however it ends; then kill what it left running
+        in its group, reap it and call ``on_end(exit status)`` on that thread.
+
+        Its end is known from the process itself, not from its pipe: a process it forked (``multiprocessing``'s
+        default on Linux) holds the pipe open after it died.
+        """
+        threading.Thread(target=self._wait_exit, args=(on_end,), name=f"processor-{self.pid}-exit", daemon=True).start()
+
+    def _wait_exit(self, on_end: Callable[[int], None]) -> None:
+        with contextlib.suppress(ChildProcessError):
+            os.waitid(os.P_PID, self.proc.pid, os.WEXITED | os.WNOWAIT)  # ended, not reaped: the group id is ours
+        self.kill_group()
+        returncode = self.proc.wait()
+        self.ended.set()
+        on_end(returncode)
 
 
 class Inbox:
