@@ -54,6 +54,7 @@ import sys
 import time
 import traceback
 import weakref
+from multiprocessing import resource_tracker
 from multiprocessing.connection import Connection
 from multiprocessing.shared_memory import SharedMemory
 from types import SimpleNamespace
@@ -194,6 +195,26 @@ def _limit_memory(memory_mb: float | None) -> None:
         resource.setrlimit(resource.RLIMIT_AS, (limit, hard if hard != resource.RLIM_INFINITY else limit))
 
 
+def _start_resource_tracker() -> None:
+    """Start multiprocessing's resource tracker in the platform's process group, not this process's.
+
+    The tracker unlinks the shared memory and semaphores this process, and those it starts, leave behind
+    once they have all ended; the platform kills this process's whole group, and the tracker must outlive it.
+    Meanwhile this process is in the platform's (the terminal's) group: terminal signals are ignored, and
+    the tracker keeps ignoring them, so a hang-up does not end it before it has cleaned up.
+    """
+    own_group, platform_group = os.getpgid(0), os.getpgid(os.getppid())
+    ignored = {sig: signal.signal(sig, signal.SIG_IGN)
+               for sig in (signal.SIGINT, signal.SIGQUIT, signal.SIGTSTP, signal.SIGHUP)}
+    try:
+        os.setpgid(0, platform_group)
+        resource_tracker.ensure_running()
+        os.setpgid(0, own_group)
+    finally:
+        for sig, handler in ignored.items():
+            signal.signal(sig, handler)
+
+
 def _die_with_parent() -> None:
     """Linux: be killed when the platform dies, whatever this process is doing."""
     with contextlib.suppress(OSError, AttributeError):  # not Linux
@@ -286,6 +307,7 @@ def main(fd: int, mailbox_address: str) -> int:
     faulthandler.enable()  # a segfault in native code leaves a Python traceback on stderr
     logging.basicConfig(level=os.environ.get(LOG_LEVEL_ENV, "WARNING"), handlers=[TaggedLogHandler()])
     _die_with_parent()
+    _start_resource_tracker()
     conn = Connection(fd)
     mailbox = FrameMailbox.attach(mailbox_address)
     _, spec, kwargs, memory_mb, save_images = conn.recv()

@@ -21,13 +21,15 @@ from uav_tui.process_worker import ProcessWorker
 
 SPAWNER = '''
 import multiprocessing, os, subprocess, sys, time
+from multiprocessing import shared_memory
 from pathlib import Path
 
 def _sleep():
     time.sleep(600)
 
 class Spawner:
-    """Starts a helper process and a multiprocessing worker, and appends their pids to ``marker``;
+    """Starts a helper process and a multiprocessing worker, and appends their pids to ``marker``; creates
+    shared memory (left for multiprocessing's resource tracker to unlink) and writes its name to ``marker.shm``;
     F2 ends its own process, F4 hangs."""
 
     def __init__(self, marker):
@@ -36,6 +38,8 @@ class Spawner:
         self.worker.start()
         with open(marker, "a") as pids:
             pids.write(f"{helper.pid} {self.worker.pid}\\n")
+        self.scratch = shared_memory.SharedMemory(create=True, size=2**20)
+        Path(marker + ".shm").write_text(self.scratch.name)
 
     def photo_processing(self, frame):
         pass
@@ -78,6 +82,8 @@ async def test_stopping_the_platform_ends_the_processes_the_processor_started(tm
     finally:
         worker.close()  # as quit and SIGTERM do
     await wait_until(lambda: not any(running(pid) for pid in helpers), 5, "the processor's helpers to end")
+    scratch = Path("/dev/shm") / (tmp_path / "pids.shm").read_text().lstrip("/")
+    await wait_until(lambda: not scratch.exists(), 5, "the processor's shared memory to be unlinked")
 
 
 async def test_a_processor_killed_for_hanging_takes_what_it_started_with_it(tmp_path: Path) -> None:
