@@ -163,7 +163,7 @@ def latency_percentiles(ms: np.ndarray) -> dict[str, float]:
     return {"latency_ms_p50": float(np.percentile(ms, 50)), "latency_ms_p95": float(np.percentile(ms, 95))}
 
 
-def _cpu_s(pid: int | None) -> float:
+def cpu_s(pid: int | None) -> float:
     """CPU seconds (user + system) of another process, from /proc; 0 when there is none."""
     if pid is None or pid == os.getpid():
         return 0.0
@@ -195,9 +195,9 @@ async def platform_run(source: str, processor: str, isolation: str, seconds: flo
     child = core.worker.state().pid
     results.clear()
     boxes.clear()
-    wall0, cpu0, child0 = time.perf_counter(), time.process_time(), _cpu_s(child)
+    wall0, cpu0, child0 = time.perf_counter(), time.process_time(), cpu_s(child)
     await asyncio.sleep(seconds)
-    wall, cpu = time.perf_counter() - wall0, time.process_time() - cpu0 + _cpu_s(child) - child0
+    wall, cpu = time.perf_counter() - wall0, time.process_time() - cpu0 + cpu_s(child) - child0
     snapshot, measured_boxes = list(results), boxes[:len(results)]
     await core.stop()
     stamps = np.array(snapshot, dtype=np.int64).reshape(-1, 4)
