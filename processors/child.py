@@ -54,6 +54,7 @@ import sys
 import time
 import traceback
 import weakref
+from collections.abc import Iterator
 from multiprocessing import resource_tracker
 from multiprocessing.connection import Connection
 from multiprocessing.shared_memory import SharedMemory
@@ -201,18 +202,36 @@ def _start_resource_tracker() -> None:
     The tracker unlinks the shared memory and semaphores this process, and those it starts, leave behind
     once they have all ended; the platform kills this process's whole group, and the tracker must outlive it.
     Meanwhile this process is in the platform's (the terminal's) group: terminal signals are ignored, and
-    the tracker keeps ignoring them, so a hang-up does not end it before it has cleaned up.
+    the tracker keeps ignoring them, so a hang-up does not end it before it has cleaned up. Its output goes
+    to /dev/null, not to this process's pipe: the platform's reader of that pipe would wait for it to end.
     """
     own_group, platform_group = os.getpgid(0), os.getpgid(os.getppid())
     ignored = {sig: signal.signal(sig, signal.SIG_IGN)
                for sig in (signal.SIGINT, signal.SIGQUIT, signal.SIGTSTP, signal.SIGHUP)}
     try:
         os.setpgid(0, platform_group)
-        resource_tracker.ensure_running()
+        with _output_to_devnull():
+            resource_tracker.ensure_running()
         os.setpgid(0, own_group)
     finally:
         for sig, handler in ignored.items():
             signal.signal(sig, handler)
+
+
+@contextlib.contextmanager
+def _output_to_devnull() -> Iterator[None]:
+    """Descriptors 1 and 2 on /dev/null meanwhile: what is started now inherits that instead."""
+    saved = [os.dup(fd) for fd in (1, 2)]
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    try:
+        for fd in (1, 2):
+            os.dup2(devnull, fd)
+        yield
+    finally:
+        for fd, copy in zip((1, 2), saved, strict=True):
+            os.dup2(copy, fd)
+            os.close(copy)
+        os.close(devnull)
 
 
 def _die_with_parent() -> None:

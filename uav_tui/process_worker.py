@@ -516,7 +516,8 @@ class ProcessWorker:
                                                     name=f"processor {child.pid} exit")
 
     async def _report_exit(self, child: ChildProcess, returncode: int) -> None:
-        await asyncio.get_running_loop().run_in_executor(None, child.output_done.wait, 0.5)
+        if child.output_reader is not None:
+            await asyncio.get_running_loop().run_in_executor(None, child.output_reader.join, 0.5)
         self._on_exit(child, returncode)
 
     def _take_result(self, child: ChildProcess, message: tuple[Any, ...]) -> None:
@@ -637,11 +638,12 @@ class ProcessWorker:
             return
 
     def _reap(self, timeout: float) -> None:
-        """Wait until every child has been reaped (by its exit watch)."""
+        """Wait until every child has been reaped and its output read to the end (by its own threads)."""
         deadline = time.monotonic() + timeout
         for child in list(self._all_children):  # the loop removes those it saw end
-            if not child.ended.wait(max(0.0, deadline - time.monotonic())):
-                logger.error("ProcessWorker(%s): pid %s did not exit", self.spec, child.pid)
+            if not child.join_threads(max(0.0, deadline - time.monotonic())):
+                logger.error("ProcessWorker(%s): pid %s %s", self.spec, child.pid, "still holds its output open: a "
+                             "process it started left its group" if child.ended.is_set() else "did not exit")
 
 
 def _call_soon(loop: asyncio.AbstractEventLoop, callback: Callable[..., None], *args: Any) -> None:

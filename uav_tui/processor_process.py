@@ -20,6 +20,7 @@ import struct
 import subprocess
 import sys
 import threading
+import time
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -77,10 +78,12 @@ class ChildProcess:
     """Slots the child may still reference."""
     kill_reason: str = ""
     """Why the platform killed it (empty: it died by itself)."""
-    output_done: threading.Event = field(default_factory=threading.Event)
+    output_reader: threading.Thread | None = None
+    """Reads its output (stdout and stderr) until every process that holds it ended."""
     inbox: Inbox = field(init=False)
     ended: threading.Event = field(default_factory=threading.Event)
     """Set once it ended and was reaped (by :meth:`watch_exit`'s thread, the only one that reaps it)."""
+    exit_watcher: threading.Thread | None = None
     exit_report: asyncio.Task[None] | None = None
     """Reports its end once its last output is in."""
     last_read_s: float = 0.0
@@ -123,7 +126,17 @@ class ChildProcess:
         Its end is known from the process itself, not from its pipe: a process it forked (``multiprocessing``'s
         default on Linux) holds the pipe open after it died.
         """
-        threading.Thread(target=self._wait_exit, args=(on_end,), name=f"processor-{self.pid}-exit", daemon=True).start()
+        self.exit_watcher = threading.Thread(target=self._wait_exit, args=(on_end,), name=f"processor-{self.pid}-exit",
+                                             daemon=True)
+        self.exit_watcher.start()
+
+    def join_threads(self, timeout: float) -> bool:
+        """Wait up to ``timeout`` s for its exit watch and its output reader to finish; True once both have."""
+        deadline = time.monotonic() + timeout
+        for thread in (self.exit_watcher, self.output_reader):
+            if thread is not None:
+                thread.join(max(0.0, deadline - time.monotonic()))
+        return not any(thread is not None and thread.is_alive() for thread in (self.exit_watcher, self.output_reader))
 
     def _wait_exit(self, on_end: Callable[[int], None]) -> None:
         with contextlib.suppress(ChildProcessError):
@@ -263,7 +276,9 @@ def spawn(ready: asyncio.Future[ProcessorInfo]) -> ChildProcess:
     finally:
         theirs.close()
     child = ChildProcess(proc, ours, mailbox, ready)
-    threading.Thread(target=_read_output, args=(child,), name=f"processor-{proc.pid}-output", daemon=True).start()
+    child.output_reader = threading.Thread(target=_read_output, args=(child,), name=f"processor-{proc.pid}-output",
+                                           daemon=True)
+    child.output_reader.start()
     return child
 
 
@@ -281,7 +296,6 @@ def _read_output(child: ChildProcess) -> None:
             with contextlib.suppress(OSError, ValueError):  # one write: a line is dropped whole, or kept
                 sys.stdout.write(line + "\n")
                 sys.stdout.flush()
-    child.output_done.set()
 
 
 def describe_exit(returncode: int, memory_mb: float | None) -> str:
