@@ -84,6 +84,7 @@ class ChildProcess:
     ended: threading.Event = field(default_factory=threading.Event)
     """Set once it ended and was reaped (by :meth:`watch_exit`'s thread, the only one that reaps it)."""
     exit_watcher: threading.Thread | None = None
+    """The thread of :meth:`watch_exit`."""
     exit_report: asyncio.Task[None] | None = None
     """Reports its end once its last output is in."""
     last_read_s: float = 0.0

@@ -89,9 +89,8 @@ async def test_stopping_the_platform_ends_the_processes_the_processor_started(tm
 async def test_a_processor_killed_for_hanging_takes_what_it_started_with_it(tmp_path: Path) -> None:
     worker, marker, faults = await start_spawner(tmp_path, timeout_s=1.0)
     task = asyncio.create_task(worker.run())
+    call = asyncio.create_task(worker.call("customize_processing", 4))
     try:
-        [helpers] = started(marker)
-        call = asyncio.create_task(worker.call("customize_processing", 4))
         await wait_until(lambda: len(started(marker)) == 2, 20, "the restarted processor")
         first, second = started(marker)
         assert not any(running(pid) for pid in first)  # killed with the hung processor ...
