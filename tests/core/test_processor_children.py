@@ -9,6 +9,8 @@ may never reap the orphans it inherits).
 from __future__ import annotations
 
 import asyncio
+import os
+import signal
 import time
 from pathlib import Path
 
@@ -115,6 +117,23 @@ async def test_a_processor_that_dies_leaves_nothing_it_started_running(tmp_path:
         reported = time.monotonic()
         await wait_until(lambda: not any(running(pid) for pid in helpers), 5, "its helpers to end")
         assert time.monotonic() - reported < 1.0 and "exited with code 3" in faults[0]
+    finally:
+        task.cancel()
+        await asyncio.gather(task, return_exceptions=True)
+
+
+async def test_an_idle_processor_killed_from_outside_is_reported_though_its_worker_holds_its_pipe(
+        tmp_path: Path) -> None:
+    """As the kernel's OOM killer would, while it waits for a frame: no call or frame pending makes it overdue, so
+    only its end can tell (before, its forked worker kept the pipe open and nothing ever reported it)."""
+    worker, marker, faults = await start_spawner(tmp_path)
+    task = asyncio.create_task(worker.run())
+    try:
+        pid = worker.state().pid
+        os.kill(pid, signal.SIGKILL)
+        await wait_until(lambda: bool(faults), 2, "the death to be reported")
+        assert faults == [f"processor (pid {pid}) killed by SIGKILL (out of memory? the kernel's OOM killer sends it)"]
+        await wait_until(lambda: len(started(marker)) == 2 and worker.state().pid != pid, 20, "the restart")
     finally:
         task.cancel()
         await asyncio.gather(task, return_exceptions=True)
