@@ -32,7 +32,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from bench_pipeline import FOOTAGE, cpu_s, make_video  # noqa: E402
+from bench_pipeline import FOOTAGE, cpu_s, footage_videos  # noqa: E402
 
 SLOTS = 2
 GEN = struct.Struct("=q")
@@ -138,11 +138,9 @@ def main() -> None:
     args = parser.parse_args()
     runs = []
     with tempfile.TemporaryDirectory() as tmp:
-        for text in args.resolutions.split(","):
-            size = tuple(int(v) for v in text.split("x"))
-            video = Path(tmp) / f"floor-{text}.mp4"
-            make_video(video, FOOTAGE[args.footage](*size), *size)
-            runs.append({"resolution": text, "frames": args.frames, **rounds(video, args.frames, args.rounds)})
+        for (width, height), video in footage_videos(args.resolutions, args.footage, Path(tmp)):
+            runs.append({"resolution": f"{width}x{height}", "frames": args.frames,
+                         **rounds(video, args.frames, args.rounds)})
     print(json.dumps({"footage": args.footage, "runs": runs}, indent=2))
 
 

@@ -100,6 +100,15 @@ def make_video(path: Path, frames: Iterable[np.ndarray], width: int, height: int
     writer.release()
 
 
+def footage_videos(resolutions: str, footage: str, folder: Path) -> Iterator[tuple[tuple[int, int], Path]]:
+    """Each size of ``resolutions`` (``"640x480,1280x720"``) and ``footage`` written at it in ``folder``."""
+    for text in resolutions.split(","):
+        width, height = (int(v) for v in text.split("x"))
+        video = folder / f"bench-{text}.mp4"
+        make_video(video, FOOTAGE[footage](width, height), width, height)
+        yield (width, height), video
+
+
 def target_roi(width: int, height: int) -> tuple[int, int, int, int]:
     """The region csrt is given: the middle of the frame."""
     return width // 2 - width // 16, height // 2 - height // 16, width // 8, height // 8
@@ -295,13 +304,10 @@ def main() -> None:
     measure = camera_rate if args.camera else compare
     runs = []
     with tempfile.TemporaryDirectory() as tmp:
-        for text in args.resolutions.split(","):
-            size = tuple(int(v) for v in text.split("x"))
-            video = Path(tmp) / f"bench-{text}.mp4"
-            make_video(video, FOOTAGE[args.footage](*size), *size)
+        for size, video in footage_videos(args.resolutions, args.footage, Path(tmp)):
             for processor in args.processors.split(","):
                 runs.append(measure(processor, size, video, args.seconds, args.rounds))
-                print(f"{processor} {text} done", file=sys.stderr, flush=True)
+                print(f"{processor} {size[0]}x{size[1]} done", file=sys.stderr, flush=True)
     if args.camera:
         print(json.dumps({"mode": f"camera, {VIDEO_FPS} FPS", "footage": args.footage, "runs": runs}, indent=2))
     else:
