@@ -8,9 +8,13 @@ from typing import Any
 import cv2
 import numpy as np
 
+from processors.models import nanotrack_files
 from processors.steering import Box
 
 logger = logging.getLogger(__name__)
+
+_SHIPPED_MODELS = {"nano": nanotrack_files}
+"""Trackers whose default parameters name the models that ship with the package (see :mod:`processors.models`)."""
 
 
 def available_trackers() -> dict[str, tuple[Any, str]]:
@@ -31,7 +35,8 @@ class OpenCVTracker:
     """OpenCV's ``Tracker<NAME>`` with its defaults (or ``params``), behind the processor contract.
 
     ``catch_cmd(roi)`` starts the tracker on the next frame; ``photo_processing`` updates it and draws
-    the box. ``box`` is the tracker's box, or None when it reports failure (it keeps trying).
+    the box. ``box`` is the tracker's box, or None when it reports failure (it keeps trying). ``nano``
+    loads the NanoTrack v2 models shipped in :mod:`processors.models` unless ``backbone``/``neckhead`` are given.
 
     Args:
         tracker: lower-case OpenCV name (``csrt``, ``kcf``, ``mil``, ...; see :func:`available_trackers`).
@@ -45,7 +50,7 @@ class OpenCVTracker:
         self.tmMgr = None
         self.name = tracker
         self._namespace, self._stem = factories[tracker]
-        self._params = params
+        self._params = {**(_SHIPPED_MODELS[tracker]() if tracker in _SHIPPED_MODELS else {}), **params}
         self._create()  # a wrong parameter fails here, at load time
         self._tracker: Any = None
         self._pending: Box | None = None

@@ -34,7 +34,7 @@ class YoloDetector:
 
     The backend is chosen by the model file: ``.pt`` Ultralytics (the ``yolo`` extra), ``.onnx``
     exported by Ultralytics (ONNX Runtime), ``.cfg``/``.weights`` Darknet (OpenCV DNN). Default:
-    the Yolo-Fastest 1.1 Darknet model in the shared data folder. Detections are drawn on the frame
+    the Yolo-Fastest 1.1 Darknet model shipped with the package. Detections are drawn on the frame
     and, at most every ``save_interval_s``, the drawn frame is saved through ``tmMgr`` with the
     detection count and labels.
 
@@ -55,7 +55,7 @@ class YoloDetector:
         F4: gain / 1.25.
 
     Args:
-        model: model file or Darknet folder; None = shared ``yolo-fastest-1.1``.
+        model: model file or Darknet folder; None = the shipped ``yolo-fastest-1.1``.
         conf, nms: confidence and NMS IoU thresholds.
         input_size: network input side; None = the model's own.
         classes: class names or ids to keep; None = all.

@@ -17,13 +17,12 @@ from typing import Protocol
 
 import numpy as np
 
+from processors.models import YOLO_FASTEST
+
 logger = logging.getLogger(__name__)
 
 DATA_DIR_ENV = "UAV_TUI_DATA_DIR"
-"""Environment variable naming the shared data folder (the one holding ``yolo-fastest-1.1/``)."""
-
-DEFAULT_MODEL = "yolo-fastest-1.1"
-"""The Darknet model shipped in the shared data folder (COCO, 320 x 320)."""
+"""Environment variable naming the shared data folder (the one holding ``aerial-tracking/``)."""
 
 
 @dataclass(frozen=True)
@@ -87,7 +86,7 @@ def find_data_dir() -> Path:
             return candidate
     raise FileNotFoundError(
         f"no shared data folder found (tried {', '.join(tried[:3])}, ...): set {DATA_DIR_ENV} to the folder "
-        f"holding {DEFAULT_MODEL}/, or pass model=<path to a .cfg, .onnx or .pt file>"
+        "holding aerial-tracking/"
     )
 
 
@@ -96,7 +95,7 @@ def load_backend(model: str | os.PathLike[str] | None, config: DetectorConfig) -
 
     Args:
         model: path to ``.pt``, ``.onnx``, ``.cfg``/``.weights`` or a folder with a Darknet pair;
-            None = the default Darknet model in the shared data folder.
+            None = Yolo-Fastest 1.1, the Darknet model shipped in :mod:`processors.models`.
         config: thresholds and input size.
 
     Raises:
@@ -104,7 +103,7 @@ def load_backend(model: str | os.PathLike[str] | None, config: DetectorConfig) -
         ValueError: the file type is not one of the supported ones.
         ImportError: the backend's library is not installed (the message says which extra).
     """
-    path = Path(model).expanduser() if model is not None else find_data_dir() / DEFAULT_MODEL
+    path = Path(model).expanduser() if model is not None else YOLO_FASTEST
     if not path.exists():
         raise FileNotFoundError(f"detector model {path} does not exist")
     suffix = path.suffix.lower()
