@@ -109,6 +109,31 @@ async def test_announces_itself_as_a_tracking_camera(tracking: tuple[UavCore, Gr
     assert heartbeat.type == mavlink.MAV_TYPE_CAMERA and heartbeat.get_srcComponent() == mavlink.MAV_COMP_ID_CAMERA
 
 
+async def test_a_handler_bug_fails_its_command_is_logged_once_and_the_component_goes_on(
+        tracking: tuple[UavCore, GroundStation], monkeypatch: pytest.MonkeyPatch,
+        caplog: pytest.LogCaptureFixture) -> None:
+    core, station = tracking
+
+    def bug(*args: Any, **kwargs: Any) -> None:
+        raise RuntimeError("a bug in the handler")
+
+    monkeypatch.setattr("uav_tui.web.mavlink_tracking.point_to_roi", bug)
+    for _ in range(6):
+        await station.command(mavlink.MAV_CMD_CAMERA_TRACK_POINT, 0.5, 0.5, 0.05)
+        ack = await station.receive("COMMAND_ACK", command=mavlink.MAV_CMD_CAMERA_TRACK_POINT)
+        assert ack.result == mavlink.MAV_RESULT_FAILED
+    monkeypatch.undo()
+    await station.command(mavlink.MAV_CMD_CAMERA_TRACK_POINT, 0.5, 0.5, 0.05)
+    ack = await station.receive("COMMAND_ACK", command=mavlink.MAV_CMD_CAMERA_TRACK_POINT)
+    assert ack.result == mavlink.MAV_RESULT_ACCEPTED and processor_of(core).rois == [(288, 208, 64, 64)]
+    tracebacks = [r for r in caplog.records if r.exc_info and "a bug in the handler" in str(r.exc_info[1])]
+    assert len(tracebacks) == 1  # once per kind of failure
+    said = [e.message for e in core.events.recent if "a bug in the handler" in e.message]
+    assert len(said) == 3 and "RuntimeError" in said[0]  # the rest are counted, within the line budget
+    core.camera_tracking.failures.close()
+    assert any("3 more handler failures (6 in all)" in e.message for e in core.events.recent)
+
+
 @pytest.mark.parametrize("address", ["serial:/dev/ttyS0", "udpin:14580", "udpin:0.0.0.0:port", "tcp:host:5760"])
 def test_bad_endpoints_say_what_is_expected(address: str) -> None:
     with pytest.raises(ConfigError, match="udpin:HOST:PORT"):

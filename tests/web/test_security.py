@@ -212,3 +212,16 @@ async def test_impossible_values_are_400_with_a_clear_message(web_core: UavCore,
             base(web_core) + "/api/command", params={"token": TOKEN}, json={"command": "f 4"}) as response:
         assert response.status == 200  # and the page still works
     assert processor_of(web_core).buttons == [4] and processor_of(web_core).rois == []
+
+
+@pytest.mark.parametrize("body", [{"rect": [10**400, 0, 1, 1]}, {"point": [0.5, -(10**400)]}],
+                         ids=["rect-huge-int", "point-huge-int"])
+async def test_an_impossible_selection_is_400_and_selecting_still_works(web_core: UavCore, body: dict) -> None:
+    async with aiohttp.ClientSession() as http:
+        async with http.post(base(web_core) + "/api/roi", params={"token": TOKEN}, json=body) as response:
+            assert response.status == 400
+            assert "is not a number in 0..1" in await response.text()
+        async with http.post(base(web_core) + "/api/roi", params={"token": TOKEN},
+                             json={"point": [0.5, 0.5]}) as response:
+            assert response.status == 200
+    assert processor_of(web_core).rois == [(296, 216, 48, 48)]

@@ -12,12 +12,17 @@ the tracking capability flags, so a ground station discovers it.
 Endpoint (config ``camera_mavlink``): ``udpin:HOST:PORT`` listens and answers whoever spoke last;
 ``udpout:HOST:PORT`` (or ``udp:``) sends to a ground station / MAVLink router. All of it runs on the
 event loop: a datagram endpoint, MAVLink 2 packing with pymavlink's generated dialect, no threads.
+
+Anyone on the network can send to it, unauthenticated: every field is checked before use (a bad one is
+DENIED, with a warning event), a message whose handling still raises is FAILED and reported
+(:class:`HandlerFailures`), and commands beyond the queue are dropped and counted within a line budget.
 """
 
 from __future__ import annotations
 
 import asyncio
 import logging
+import math
 from collections.abc import Callable
 from typing import Any
 
@@ -26,12 +31,21 @@ from pymavlink.dialects.v20 import common as mavlink
 from processors.base import Box
 from uav_tui.commands import Command
 from uav_tui.errors import KNOWN_ERRORS, CommandError, ConfigError, UavError
+from uav_tui.line_budget import LineBudget
+from uav_tui.text import describe
+from uav_tui.web.failures import HandlerFailures
 from uav_tui.web.roi import point_to_roi, rect_to_roi
 
 logger = logging.getLogger(__name__)
 
 STATUS_PERIOD_S = 1.0
 """HEARTBEAT and CAMERA_TRACKING_IMAGE_STATUS are sent this often."""
+
+QUEUE_COMMANDS = 16
+"""Commands waiting to be handled; more are dropped (and counted)."""
+
+MAX_MESSAGE_ID = 2**24 - 1
+"""MAVLink 2 message ids are 24 bits."""
 
 
 def parse_endpoint(address: str) -> tuple[str, str, int]:
@@ -90,8 +104,12 @@ class CameraTracking:
         """False after MAV_CMD_CAMERA_STOP_TRACKING until the next track command: the status says idle."""
         self.tracked: tuple[Box | None, tuple[int, int], bool] = (None, (0, 0), False)
         """The newest processed frame's box, its frame size and whether the processor raised on it."""
-        self._commands: asyncio.Queue[Any] = asyncio.Queue(maxsize=16)
+        self._commands: asyncio.Queue[Any] = asyncio.Queue(maxsize=QUEUE_COMMANDS)
         self._tasks: list[asyncio.Task[None]] = []
+        self.failures = HandlerFailures(core.events, f"CameraTracking({address})")
+        self.dropped = 0
+        """Commands dropped because the queue was full."""
+        self._drops: LineBudget | None = None
 
     async def start(self) -> None:
         loop = asyncio.get_running_loop()
@@ -103,6 +121,7 @@ class CameraTracking:
             raise UavError(f"camera_mavlink {self.address}: {exc.strerror}; is another program using the "
                            "port? pick another one") from exc
         self.core.add_frame_listener(self._on_frame)
+        self._drops = LineBudget(lambda _: self._say_dropped(1), self._say_dropped, burst=1, per_s=1.0)
         self._tasks = [asyncio.create_task(self._handle_commands(), name="camera-commands"),
                        asyncio.create_task(self._report(), name="camera-status")]
         logger.info("CameraTracking(%s) started", self.address)
@@ -114,6 +133,9 @@ class CameraTracking:
             task.cancel()
         await asyncio.gather(*self._tasks, return_exceptions=True)
         self._tasks = []
+        if self._drops is not None:
+            self._drops.close()
+        self.failures.close()
         if self.transport is not None:
             self.transport.close()
             self.transport = None
@@ -129,30 +151,53 @@ class CameraTracking:
         """Datagram from the ground station (on the loop): queue the commands addressed to us."""
         if self.scheme == "udpin":
             self.peer = addr
-        for message in self.mav.parse_buffer(data) or []:
+        try:
+            messages = self.mav.parse_buffer(data) or []
+        except Exception as exc:  # noqa: BLE001 - pymavlink on bytes from anyone: a bug there costs one datagram
+            self.failures.failed(f"a datagram from {describe(addr)}", exc)
+            return
+        for message in messages:
             if message.get_type() != "COMMAND_LONG":
                 continue
             if message.target_system not in (0, self.mav.srcSystem) or \
                     message.target_component not in (0, self.mav.srcComponent):
                 continue
             if self._commands.full():
-                logger.warning("CameraTracking(%s): command queue full, dropped %s", self.address, message.command)
+                self.dropped += 1
+                if self._drops is not None:
+                    self._drops.line("")
             else:
                 self._commands.put_nowait(message)
+
+    def _say_dropped(self, count: int) -> None:
+        """Within the line budget: a drop, or the count of the drops since the last one said."""
+        self.core.events.emit("warning", "web", f"camera component: command queue full, dropped {count} "
+                              f"command{'s' if count != 1 else ''} ({self.dropped} in all; is something flooding "
+                              f"{self.address}?)")
 
     async def _handle_commands(self) -> None:
         while True:
             message = await self._commands.get()
-            result, reply = await self._dispatch(message)
+            try:
+                result, reply = await self._dispatch(message)
+            except Exception as exc:  # noqa: BLE001 - a bug: this command fails, the next one is handled
+                self.failures.failed(f"command {message.command} from {_origin(message)}", exc)
+                result, reply = mavlink.MAV_RESULT_FAILED, None
             self.mav.command_ack_send(message.command, result, target_system=message.get_srcSystem(),
                                       target_component=message.get_srcComponent())
             if reply is not None:  # requested messages follow their ACK
-                reply()
+                self._guarded(reply, f"the reply to command {message.command}")
+
+    def _guarded(self, send: Callable[[], None], what: str) -> None:
+        try:
+            send()
+        except Exception as exc:  # noqa: BLE001 - a bug: reported, the component goes on
+            self.failures.failed(what, exc)
 
     async def _dispatch(self, message: Any) -> tuple[int, Callable[[], None] | None]:
         """(MAV_RESULT, what to send after the ACK) for one COMMAND_LONG."""
-        command, origin = message.command, f"mavlink:{message.get_srcSystem()}/{message.get_srcComponent()}"
-        params = (message.param1, message.param2, message.param3, message.param4)
+        command, origin = message.command, _origin(message)
+        params = (message.param1, message.param2, message.param3, message.param4)  # checked by rect/point_to_roi
         if command == mavlink.MAV_CMD_CAMERA_TRACK_RECTANGLE:
             return await self._select(mavlink.CAMERA_TRACKING_MODE_RECTANGLE, params, origin), self._send_status
         if command == mavlink.MAV_CMD_CAMERA_TRACK_POINT:
@@ -162,7 +207,13 @@ class CameraTracking:
             self.core.events.emit("info", "command", "ground station stopped tracking (the processor keeps its "
                                   "target until the next selection)", origin)
             return mavlink.MAV_RESULT_ACCEPTED, self._send_status
-        requested = int(message.param1) if command == mavlink.MAV_CMD_REQUEST_MESSAGE else None
+        requested = None
+        if command == mavlink.MAV_CMD_REQUEST_MESSAGE:
+            requested = _message_id(message.param1)
+            if requested is None:
+                self.core.events.emit("warning", "command", "camera command rejected: MAV_CMD_REQUEST_MESSAGE "
+                                      f"param1 = {describe(message.param1)} is not a MAVLink message id", origin)
+                return mavlink.MAV_RESULT_DENIED, None
         if command == mavlink.MAV_CMD_REQUEST_CAMERA_INFORMATION or \
                 requested == mavlink.MAVLINK_MSG_ID_CAMERA_INFORMATION:
             return mavlink.MAV_RESULT_ACCEPTED, self._send_information
@@ -192,10 +243,12 @@ class CameraTracking:
 
     async def _report(self) -> None:
         while True:
-            self.mav.heartbeat_send(mavlink.MAV_TYPE_CAMERA, mavlink.MAV_AUTOPILOT_INVALID, 0, 0,
-                                    mavlink.MAV_STATE_ACTIVE)
-            self._send_status()
+            self._guarded(self._send_heartbeat, "the heartbeat")
+            self._guarded(self._send_status, "the tracking status")
             await asyncio.sleep(STATUS_PERIOD_S)
+
+    def _send_heartbeat(self) -> None:
+        self.mav.heartbeat_send(mavlink.MAV_TYPE_CAMERA, mavlink.MAV_AUTOPILOT_INVALID, 0, 0, mavlink.MAV_STATE_ACTIVE)
 
     def _send_status(self) -> None:
         box, (width, height), failed = self.tracked
@@ -218,3 +271,14 @@ class CameraTracking:
             0, list(b"uav-tui".ljust(32, b"\0")), list(b"processed camera".ljust(32, b"\0")), 0, 0.0, 0.0, 0.0,
             size[0], size[1], 0,
             mavlink.CAMERA_CAP_FLAGS_HAS_TRACKING_POINT | mavlink.CAMERA_CAP_FLAGS_HAS_TRACKING_RECTANGLE, 0, b"")
+
+
+def _origin(message: Any) -> str:
+    return f"mavlink:{message.get_srcSystem()}/{message.get_srcComponent()}"
+
+
+def _message_id(value: float) -> int | None:
+    """MAV_CMD_REQUEST_MESSAGE's param1 as a message id, or None when it is not one (NaN, inf, 2.5, -3)."""
+    if not (math.isfinite(value) and value == int(value) and 0 <= value <= MAX_MESSAGE_ID):
+        return None
+    return int(value)

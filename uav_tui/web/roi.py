@@ -78,7 +78,11 @@ def _numbers(value: Any, count: int) -> bool:
 
 
 def _check_unit(value: float) -> None:
-    if not (isinstance(value, int | float) and math.isfinite(value) and 0.0 <= value <= 1.0):
+    try:  # an int from JSON may have any number of digits: too large for a float
+        unit = isinstance(value, int | float) and math.isfinite(value) and 0.0 <= value <= 1.0
+    except OverflowError:
+        unit = False
+    if not unit:
         raise CommandError(f"normalized coordinate {describe(value)} is not a number in 0..1", key="roi")
 
 

@@ -8,6 +8,9 @@ Routes (every one needs the token, else 401 and nothing else):
 - ``POST /api/roi``: ``{"rect": [x0, y0, x1, y1]}`` or ``{"point": [x, y]}``, normalized -> ``roi``;
 - ``POST /api/command``: ``{"command": "f 2"}``, one of WEB_COMMANDS.
 
+Every field of a request is checked before use; a handler that still raises (a bug) answers that request
+with a 500 and is reported once (:class:`HandlerFailures`), and the server goes on.
+
 The token travels as ``?token=`` or ``Authorization: Bearer``. Failed attempts are slowed per client
 address (:class:`AuthThrottle`: 429 with ``Retry-After``). POST routes and the websocket also refuse a
 browser ``Origin`` other than the page's own or one listed in ``web_origins`` (403). Commands go
@@ -35,6 +38,7 @@ from uav_tui.core import CoreState
 from uav_tui.errors import KNOWN_ERRORS, CommandError, UavError
 from uav_tui.events import Event
 from uav_tui.text import describe, shorten
+from uav_tui.web.failures import HandlerFailures
 from uav_tui.web.mdns import adopt_mdns_resolver
 from uav_tui.web.roi import roi_from_message
 from uav_tui.web.throttle import AuthThrottle
@@ -74,6 +78,7 @@ class WebServer:
         self._throttle = AuthThrottle()
         self._origins = frozenset(o.strip().rstrip("/").lower() for o in config.web_origins.split(",") if o.strip())
         self._runner: web.AppRunner | None = None
+        self.failures = HandlerFailures(core.events, "web page")
 
     @property
     def url(self) -> str:
@@ -85,7 +90,7 @@ class WebServer:
 
     async def start(self) -> None:
         adopt_mdns_resolver()
-        app = web.Application(middlewares=[self._auth], client_max_size=256 * 1024)
+        app = web.Application(middlewares=[self._guard, self._auth], client_max_size=256 * 1024)
         app.router.add_get("/", self._page)
         app.router.add_static("/static/", STATIC)
         app.router.add_post("/offer", self._offer)
@@ -110,8 +115,21 @@ class WebServer:
         if self._runner is not None:
             runner, self._runner = self._runner, None
             await runner.cleanup()
+        self.failures.close()
 
     # -- access ----------------------------------------------------------------------------------
+
+    @web.middleware
+    async def _guard(self, request: web.Request, handler: Any) -> web.StreamResponse:
+        """A handler that raises (a bug) fails its own request with a 500, reported; the server goes on."""
+        try:
+            return await handler(request)
+        except web.HTTPException:
+            raise
+        except Exception as exc:  # noqa: BLE001 - reported once by HandlerFailures
+            self.failures.failed(f"{request.method} {describe(request.path)} from {_origin(request)}", exc)
+            raise web.HTTPInternalServerError(text="500: this request could not be handled (a bug, logged); "
+                                                   "the page goes on") from None
 
     @web.middleware
     async def _auth(self, request: web.Request, handler: Any) -> web.StreamResponse:
