@@ -11,7 +11,8 @@ import cv2
 import numpy as np
 
 from processors import sift_match, target_search
-from processors.steering import Box, Steering, Vector, draw_target
+from processors.follow import TargetFollower
+from processors.steering import Box
 
 logger = logging.getLogger(__name__)
 
@@ -46,7 +47,7 @@ _ADAPT_RATE = 0.05
 """Weight of the newest patch in the adaptive appearance, on frames that match well."""
 
 
-class CSRTTrackingProcessor:
+class CSRTTrackingProcessor(TargetFollower):
     """Track an operator-selected target with CSRT; judge loss on evidence; re-acquire it when it is back.
 
     ``catch_cmd(roi)`` starts CSRT on the region and stores its appearance (a small grayscale template,
@@ -62,16 +63,8 @@ class CSRTTrackingProcessor:
     In ``fast`` mode CSRT runs on the frame shrunk by the smallest whole factor that brings the target
     under ``target_px`` pixels across (never up-scaled); boxes are always in full-frame pixels.
 
-    Vector: body-frame velocity (vx forward, vy right, m/s, clamped to ``max_speed`` <= 1) that
-    moves the vehicle so that the target comes to the frame centre (``camera="down"``), or keeps it
-    centred horizontally and at its selection-time size (``camera="forward"``); ``t`` =
-    ``vector_t`` s. ``getPreparedVector`` returns None when no target is selected or it is lost.
-
-    Operator buttons:
-        F1: drop the target (stop following).
-        F2: re-acquire now (run the SIFT search on the next frame, even while tracking).
-        F3: gain x 1.25.
-        F4: gain / 1.25.
+    The vector, the overlay and the operator buttons are :class:`~processors.follow.TargetFollower`'s
+    (F1 drop, F2 run the SIFT search on the next frame even while tracking, F3/F4 gain).
 
     Args:
         mode: "fast" or "paper" (see above and the module's ``_MODES``).
@@ -119,9 +112,8 @@ class CSRTTrackingProcessor:
         unknown = sorted(key for key in self._cfg["csrt"] if not hasattr(cv2.TrackerCSRT_Params(), key))
         if unknown:
             raise ValueError(f"csrt: TrackerCSRT_Params has no field {', '.join(unknown)}")
-        self.tmMgr = None
+        super().__init__(camera, gain, dead_band, max_speed, vector_t)
         self.mode = mode
-        self.steering = Steering(camera, gain, dead_band, max_speed, vector_t)
         self.loss_ratio, self.loss_score = loss_ratio, loss_score
         self.max_jump, self.lost_after = max_jump, max(1, int(lost_after))
         self.accept_ratio = accept_ratio
@@ -129,66 +121,17 @@ class CSRTTrackingProcessor:
         self.ratio = ratio
         self._sift = sift_match.make_sift(self._cfg["sift_features"])
         self._tracker: cv2.Tracker | None = None
-        self._pending_roi: Box | None = None
         self._shrink = 1  # work frame = full frame / shrink (a whole factor)
         self._ref_feat: sift_match.Features | None = None  # SIFT-frame pixels
         self._ref_box: Box | None = None  # SIFT-frame pixels, where the reference features were taken
         self._templates: list[np.ndarray] = []  # [at selection, adapted]; work-frame appearance
         self._quality: deque[float] = deque(maxlen=_QUALITY_HISTORY)
-        self._ref_height = 0.0
         self._work_box: Box | None = None  # work-frame pixels: the last box accepted as the target
         self._csrt_box: Box | None = None  # work-frame pixels: where CSRT is now (it keeps running while lost)
         self._tracking = False
         self._evidence = 0  # frames of loss evidence in a row
         self._lost_frames = 0
         self._force_search = False
-        self._vector: Vector | None = None
-        self.score = 0.0
-        """Appearance score of the last tracked box (diagnostics, drawn beside it)."""
-
-    # ---- contract -------------------------------------------------------------------------------
-    def photo_processing(self, frame: np.ndarray) -> None:
-        """Update the tracker on ``frame`` and draw the overlay on it in place."""
-        if self._pending_roi is not None:
-            self._start(frame, self._pending_roi)
-            self._pending_roi = None
-        elif self._templates:
-            work = self._work_frame(frame)
-            was_tracking = self._tracking
-            self._update(work)
-            if not self._tracking and not was_tracking:
-                self._lost_frames += 1
-                self._search_near(work)
-            if self._force_search or (not self._tracking and (self._lost_frames - 1) % self._cfg["sift_every"] == 0):
-                self._reacquire_sift(frame, work)
-        box = self.box
-        self._vector = self.steering.vector(box, (frame.shape[1], frame.shape[0]), self._ref_height) if box else None
-        self._draw(frame)
-
-    def catch_cmd(self, roi: tuple[int, int, int, int]) -> None:
-        """Select the target: ``roi`` = (x, y, w, h) in frame pixels; tracking starts on the next frame."""
-        x, y, w, h = (float(v) for v in roi)
-        if w < 4 or h < 4:
-            logger.warning("CSRTTrackingProcessor: ROI %s too small, ignored", roi)
-            return
-        self._pending_roi = (x, y, w, h)
-
-    def customize_processing(self, id: int) -> None:  # noqa: A002 - published name
-        """F1 drop target, F2 re-acquire now, F3 gain up, F4 gain down."""
-        if id == 1:
-            self._tracker, self._templates, self._work_box, self._vector = None, [], None, None
-            self._tracking = False
-            logger.info("CSRTTrackingProcessor: target dropped")
-        elif id == 2:
-            self._force_search = True
-        elif id == 3:
-            self.steering.scale_gain(1.25)
-        elif id == 4:
-            self.steering.scale_gain(1 / 1.25)
-
-    def getPreparedVector(self) -> Vector | None:
-        """(vx, vy, t) towards the target, or None when there is no tracked target."""
-        return self._vector
 
     # ---- state ----------------------------------------------------------------------------------
     @property
@@ -199,9 +142,27 @@ class CSRTTrackingProcessor:
         return tuple(v * self._shrink for v in self._work_box)  # type: ignore[return-value]
 
     @property
-    def lost(self) -> bool:
-        """True while a target is selected but not currently tracked."""
-        return bool(self._templates) and not self._tracking
+    def selected(self) -> bool:
+        """True while a target is selected (tracked or lost)."""
+        return bool(self._templates)
+
+    # ---- hooks ----------------------------------------------------------------------------------
+    def _track(self, frame: np.ndarray) -> None:
+        work = self._work_frame(frame)
+        was_tracking = self._tracking
+        self._update(work)
+        if not self._tracking and not was_tracking:
+            self._lost_frames += 1
+            self._search_near(work)
+        if self._force_search or (not self._tracking and (self._lost_frames - 1) % self._cfg["sift_every"] == 0):
+            self._reacquire_sift(frame, work)
+
+    def _drop(self) -> None:
+        self._tracker, self._templates, self._work_box = None, [], None
+        self._tracking = False
+
+    def _search_now(self) -> None:
+        self._force_search = True
 
     # ---- internals ------------------------------------------------------------------------------
     def _work_frame(self, frame: np.ndarray) -> np.ndarray:
@@ -246,14 +207,7 @@ class CSRTTrackingProcessor:
         self._evidence = 0
         self._lost_frames = 0
 
-    def _start(self, frame: np.ndarray, roi: Box) -> None:
-        fh, fw = frame.shape[:2]
-        x0, y0 = max(roi[0], 0.0), max(roi[1], 0.0)
-        x1, y1 = min(roi[0] + roi[2], float(fw)), min(roi[1] + roi[3], float(fh))
-        if x1 - x0 < 4 or y1 - y0 < 4:
-            logger.warning("CSRTTrackingProcessor: ROI %s is outside the %dx%d frame, ignored", roi, fw, fh)
-            return
-        roi = (x0, y0, x1 - x0, y1 - y0)
+    def _start(self, frame: np.ndarray, roi: Box) -> bool:
         target_px = self._cfg["target_px"]
         self._shrink = max(1, int(np.ceil(np.sqrt(roi[2] * roi[3]) / target_px))) if target_px else 1
         work = self._work_frame(frame)
@@ -261,7 +215,7 @@ class CSRTTrackingProcessor:
         appearance = target_search.template(cv2.cvtColor(work, cv2.COLOR_BGR2GRAY), box)
         if appearance is None:
             logger.warning("CSRTTrackingProcessor: ROI %s is too small to track, ignored", roi)
-            return
+            return False
         self._templates = [appearance, appearance.copy()]
         self._quality.clear()
         small, sift_scale = self._sift_gray(frame)
@@ -271,10 +225,10 @@ class CSRTTrackingProcessor:
         mask[max(y, 0) : y + h, max(x, 0) : x + w] = 255
         self._ref_feat = sift_match.detect(self._sift, small, mask)
         self._ref_box = sift_box  # type: ignore[assignment]
-        self._ref_height = roi[3]
         self._new_tracker(work, box)  # type: ignore[arg-type]
         logger.info("CSRTTrackingProcessor: target %s selected (tracked at 1/%d), %d SIFT keypoints", roi,
                     self._shrink, len(self._ref_feat))
+        return True
 
     def _baseline(self, score: float) -> float:
         """The target's own typical appearance score (median of recent tracked frames)."""
@@ -346,10 +300,3 @@ class CSRTTrackingProcessor:
         logger.info("CSRTTrackingProcessor: re-acquired by SIFT (%d inliers)", found.inliers)
         if self.tmMgr is not None:
             self.tmMgr.save(frame, event="reacquired", inliers=found.inliers)
-
-    def _draw(self, frame: np.ndarray) -> None:
-        box = self.box
-        if box is not None:
-            draw_target(frame, box, self._vector, (0, 255, 0), f"{self.score:.2f}")
-        elif self._templates:
-            cv2.putText(frame, "LOST - searching", (8, 20), cv2.FONT_HERSHEY_SIMPLEX, 0.6, (0, 0, 255), 2)

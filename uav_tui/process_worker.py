@@ -35,6 +35,7 @@ from processors import LoadedProcessor
 from processors.base import ProcessorInfo
 from processors.errors import ProcessorLoadError
 from processors.frame_mailbox import TELEMETRY_BYTES, MailboxGone, Offer
+from processors.frame_telemetry import DEFAULT_SAVE_MAX_HZ
 from sources.buffer import Frame, FrameBuffer
 from uav_tui.errors import UavError
 from uav_tui.events import EventLog
@@ -79,6 +80,7 @@ class ProcessWorker:
         memory_mb: the child's address-space cap (RLIMIT_AS), None for none.
         save_images: False when the platform does not record: ``tmMgr.save`` in the child then sends its columns
             but not its image (which would be copied and piped here only to be dropped).
+        save_max_hz: ``tmMgr.save`` calls kept per second of frame time (the rest are dropped in the child).
         first_backoff_s: the wait before the first restart; it doubles with each one.
     """
 
@@ -86,7 +88,8 @@ class ProcessWorker:
 
     def __init__(self, spec: str, kwargs: dict[str, Any], on_result: Callable[[ProcessedFrame], None], *,
                  events: EventLog, on_fault: Callable[[str], None], timeout_s: float = 5.0,
-                 memory_mb: float | None = None, save_images: bool = True, first_backoff_s: float = 1.0) -> None:
+                 memory_mb: float | None = None, save_images: bool = True,
+                 save_max_hz: float = DEFAULT_SAVE_MAX_HZ, first_backoff_s: float = 1.0) -> None:
         self.spec, self.kwargs = spec, dict(kwargs)
         self.processor = LoadedProcessor(instance=None, info=ProcessorInfo(spec, None, frozenset()), spec=spec,
                                          kwargs=self.kwargs)
@@ -103,6 +106,7 @@ class ProcessWorker:
         self.timeout_s = timeout_s
         self.memory_mb = memory_mb
         self.save_images = save_images
+        self.save_max_hz = save_max_hz
         self.first_backoff_s = first_backoff_s
         self.state_text = "starting"
         self._on_result = on_result
@@ -153,7 +157,7 @@ class ProcessWorker:
     # -- the common worker surface ---------------------------------------------------------------
 
     def bind_telemetry(self, telemetry: TelemetryManager) -> None:
-        """Attach ``telemetry.snapshot()`` to every frame handed over, store ``tmMgr.save`` through it."""
+        """Attach the telemetry at each frame's capture to it as it is handed over; store ``tmMgr.save`` through it."""
         self.telemetry = telemetry
 
     def attach(self, buffer: FrameBuffer) -> None:
@@ -267,7 +271,7 @@ class ProcessWorker:
         self._all_children.append(child)
         child.watch_exit(functools.partial(_call_soon, loop, self._ended, child))
         loop.add_reader(child.inbox.fileno(), self._on_readable, child)
-        self._send(child, ("load", self.spec, self.kwargs, self.memory_mb, self.save_images))
+        self._send(child, ("load", self.spec, self.kwargs, self.memory_mb, self.save_images, self.save_max_hz))
         try:
             await asyncio.wait_for(asyncio.shield(child.ready), LOAD_TIMEOUT_S)
         except TimeoutError:
@@ -369,7 +373,7 @@ class ProcessWorker:
         if forget:
             self._send(child, ("forget", forget))
         offer = Offer(next(self._gens), slot.name, slot.shape, frame.seq, frame.t_mono_ns, frame.t_wall_ns,
-                      *self._telemetry_now())
+                      *self._telemetry_at(frame.t_mono_ns))
         with self._lock:
             current = child is self._child and not self._closing
             if current and self._offered[0] is buffer and self._offered[1] >= frame.seq:
@@ -411,15 +415,15 @@ class ProcessWorker:
     def _was_offered(self, buffer: FrameBuffer, seq: int) -> bool:
         return self._offered[0] is buffer and self._offered[1] >= seq
 
-    def _telemetry_now(self) -> tuple[bytes, float | None]:
-        """The telemetry attached to a frame as it is offered: the newest update pickled, and the heartbeat age.
+    def _telemetry_at(self, t_mono_ns: int) -> tuple[bytes, float | None]:
+        """The telemetry attached to a frame: the newest update received by its capture pickled, the heartbeat age now.
 
         The update is pickled once, when it arrives; frames come faster than telemetry. Empty without a
         telemetry manager.
         """
         if self.telemetry is None:
             return b"", None
-        latest, heartbeat_age = self.telemetry.newest()
+        latest, heartbeat_age = self.telemetry.at(t_mono_ns)
         if latest is not self._pickled_telemetry[0]:
             data = pickle.dumps({name: getattr(latest, name) for name in TELEMETRY_FIELDS
                                  if name != "heartbeat_age_s"})

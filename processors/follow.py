@@ -1,0 +1,133 @@
+"""What the tracking processors share: selecting a target, the F1-F4 buttons, the vector towards it, the overlay.
+
+:class:`TargetFollower` implements the published methods (``catch_cmd``, ``customize_processing``,
+``getPreparedVector``, ``photo_processing``) once; a tracker (``csrt``, ``nanotrack``) supplies the tracking
+through four hooks and the ``box``/``selected`` properties.
+"""
+
+from __future__ import annotations
+
+import logging
+
+import cv2
+import numpy as np
+
+from processors.steering import Box, Steering, Vector, draw_target
+
+logger = logging.getLogger(__name__)
+
+MIN_ROI = 4
+"""Shortest side, in frame pixels, of a selection that is taken."""
+
+
+class TargetFollower:
+    """Target selection, steering, F1-F4 and overlay around a tracker's hooks.
+
+    A subclass implements ``_start(frame, roi) -> bool`` (begin tracking ``roi``, full-frame pixels, already
+    clipped to the frame; False when it cannot), ``_track(frame)`` (one frame while a target is selected),
+    ``_drop()`` (forget the target) and ``_search_now()`` (look for the target on the next frame), and the
+    ``box`` (full-frame pixels, None while lost) and ``selected`` properties. ``score`` is drawn beside the box.
+
+    Vector: body-frame velocity (vx forward, vy right, m/s, clamped to ``max_speed`` <= 1) that moves the
+    vehicle so that the target comes to the frame centre (``camera="down"``), or keeps it centred
+    horizontally and at its selection-time size (``camera="forward"``); ``t`` = ``vector_t`` s.
+    ``getPreparedVector`` returns None when no target is selected or it is lost.
+
+    Operator buttons:
+        F1: drop the target (stop following).
+        F2: search for the target now (on the next frame, even while tracking).
+        F3: gain x 1.25.
+        F4: gain / 1.25.
+    """
+
+    def __init__(self, camera: str, gain: float, dead_band: float, max_speed: float, vector_t: float) -> None:
+        self.tmMgr = None
+        self.steering = Steering(camera, gain, dead_band, max_speed, vector_t)
+        self.score = 0.0
+        """The tracker's confidence in the last box (diagnostics, drawn beside it)."""
+        self._pending_roi: Box | None = None
+        self._ref_height = 0.0
+        self._vector: Vector | None = None
+
+    # ---- contract -------------------------------------------------------------------------------
+    def photo_processing(self, frame: np.ndarray) -> None:
+        """Start or update the tracker on ``frame``, prepare the vector and draw the overlay on it in place."""
+        if self._pending_roi is not None:
+            roi, self._pending_roi = self._clip(self._pending_roi, frame), None
+            if roi is not None and self._start(frame, roi):
+                self._ref_height = roi[3]
+        elif self.selected:
+            self._track(frame)
+        box = self.box
+        self._vector = self.steering.vector(box, (frame.shape[1], frame.shape[0]), self._ref_height) if box else None
+        self._draw(frame, box)
+
+    def catch_cmd(self, roi: tuple[int, int, int, int]) -> None:
+        """Select the target: ``roi`` = (x, y, w, h) in frame pixels; tracking starts on the next frame."""
+        x, y, w, h = (float(v) for v in roi)
+        if w < MIN_ROI or h < MIN_ROI:
+            logger.warning("%s: ROI %s too small, ignored", type(self).__name__, roi)
+            return
+        self._pending_roi = (x, y, w, h)
+
+    def customize_processing(self, id: int) -> None:  # noqa: A002 - published name
+        """F1 drop target, F2 search now, F3 gain up, F4 gain down."""
+        if id == 1:
+            self._drop()
+            self._vector = None
+            logger.info("%s: target dropped", type(self).__name__)
+        elif id == 2:
+            self._search_now()
+        elif id == 3:
+            self.steering.scale_gain(1.25)
+        elif id == 4:
+            self.steering.scale_gain(1 / 1.25)
+
+    def getPreparedVector(self) -> Vector | None:
+        """(vx, vy, t) towards the target, or None when there is no tracked target."""
+        return self._vector
+
+    # ---- state ----------------------------------------------------------------------------------
+    @property
+    def box(self) -> Box | None:
+        """Tracked box (x, y, w, h) in full-frame pixels, None when lost or idle."""
+        raise NotImplementedError
+
+    @property
+    def selected(self) -> bool:
+        """True while a target is selected (tracked or lost)."""
+        raise NotImplementedError
+
+    @property
+    def lost(self) -> bool:
+        """True while a target is selected but not currently tracked."""
+        return self.selected and self.box is None
+
+    # ---- hooks ----------------------------------------------------------------------------------
+    def _start(self, frame: np.ndarray, roi: Box) -> bool:
+        raise NotImplementedError
+
+    def _track(self, frame: np.ndarray) -> None:
+        raise NotImplementedError
+
+    def _drop(self) -> None:
+        raise NotImplementedError
+
+    def _search_now(self) -> None:
+        raise NotImplementedError
+
+    # ---- internals ------------------------------------------------------------------------------
+    def _clip(self, roi: Box, frame: np.ndarray) -> Box | None:
+        fh, fw = frame.shape[:2]
+        x0, y0 = max(roi[0], 0.0), max(roi[1], 0.0)
+        x1, y1 = min(roi[0] + roi[2], float(fw)), min(roi[1] + roi[3], float(fh))
+        if x1 - x0 < MIN_ROI or y1 - y0 < MIN_ROI:
+            logger.warning("%s: ROI %s is outside the %dx%d frame, ignored", type(self).__name__, roi, fw, fh)
+            return None
+        return x0, y0, x1 - x0, y1 - y0
+
+    def _draw(self, frame: np.ndarray, box: Box | None) -> None:
+        if box is not None:
+            draw_target(frame, box, self._vector, (0, 255, 0), f"{self.score:.2f}")
+        elif self.selected:
+            cv2.putText(frame, "LOST - searching", (8, 20), cv2.FONT_HERSHEY_SIMPLEX, 0.6, (0, 0, 255), 2)
