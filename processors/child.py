@@ -8,7 +8,7 @@ a segfault or a leak here cannot freeze or kill the flight path.
 
 Messages, platform -> child (pickled tuples, ``Connection.send``)::
 
-    ("load", spec, kwargs, memory_mb, save_images)  first message: cap memory, construct the processor
+    ("load", spec, kwargs, memory_mb, save_images, save_max_hz)  first message: cap memory, construct the processor
     ("call", call_id, method, args)                 catch_cmd / customize_processing
     ("forget", [slot, ...])                         the platform freed these slots: unmap them
 
@@ -25,6 +25,8 @@ attached to it) and answers with a ``result`` for that offer's ``gen``.
 ``saves`` are the ``tmMgr.save(frame, **extra)`` calls made meanwhile: ``(image, extra)``, the image
 copied at the call (what is drawn afterwards must not reach the dataset), so it is pickled. When the
 platform does not record (``save_images`` false) the image is None: nothing is copied or sent for it.
+``tmMgr`` is a :class:`~processors.frame_telemetry.FrameTelemetry`: its snapshot is the offer's seq and capture
+times with the telemetry attached to it; saves beyond ``save_max_hz`` are dropped here, before any copy.
 The processor's log records go to stderr one per line, as ``LOG_TAG level name "json text"``, so the
 platform logs them as its own (escaped and redacted like every record); anything else the process
 prints is forwarded line by line, escaped.
@@ -58,7 +60,6 @@ from collections.abc import Iterator
 from multiprocessing import resource_tracker
 from multiprocessing.connection import Connection
 from multiprocessing.shared_memory import SharedMemory
-from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -67,6 +68,7 @@ from processors import load_processor
 from processors.base import read_box
 from processors.errors import ProcessorLoadError
 from processors.frame_mailbox import FrameMailbox, Offer, attach_untracked
+from processors.frame_telemetry import DEFAULT_SAVE_MAX_HZ, FrameTelemetry
 
 LOG_LEVEL_ENV = "UAV_TUI_PROCESSOR_LOG_LEVEL"
 """The platform's log level, for the child's root logger."""
@@ -104,37 +106,6 @@ def parse_log_line(line: str) -> tuple[int, str, str] | None:
         return int(level), name, str(json.loads(text))
     except ValueError:
         return None
-
-
-class FrameTelemetry:
-    """``self.tmMgr`` inside the child: the telemetry the platform attached to the frame being processed."""
-
-    def __init__(self, *, images: bool = True) -> None:
-        self.current: SimpleNamespace = SimpleNamespace()
-        self.saves: list[tuple[np.ndarray | None, dict[str, Any]]] = []
-        self.images = images
-        """Send each saved image (False: the platform does not record, so only the call and its columns go)."""
-
-    def snapshot(self) -> SimpleNamespace:
-        """The telemetry at the capture of the frame being processed (fields as in ``controllers.base.Telemetry``)."""
-        return self.current
-
-    def link_alive(self, max_age_s: float = 1.5) -> bool:
-        """True when the autopilot's heartbeat was younger than ``max_age_s`` when the frame was handed over."""
-        age = getattr(self.current, "heartbeat_age_s", None)
-        return age is not None and age < max_age_s
-
-    def save(self, frame: Any, **extra: Any) -> None:
-        """Store ``frame`` with the telemetry of its capture and ``extra`` columns (sent with the result)."""
-        image = getattr(frame, "image", frame)
-        if not isinstance(image, np.ndarray) or image.ndim not in (2, 3):
-            raise TypeError(f"tmMgr.save(frame, **extra): frame must be an image array, got {type(image).__name__}")
-        # A copy: the image as it is now, not with what photo_processing draws on it afterwards.
-        self.saves.append((np.array(image) if self.images else None, {k: _picklable(v) for k, v in extra.items()}))
-
-    def take_saves(self) -> list[tuple[np.ndarray | None, dict[str, Any]]]:
-        saves, self.saves = self.saves, []
-        return saves
 
 
 class Slots:
@@ -243,12 +214,16 @@ def _die_with_parent() -> None:
 class ChildRunner:
     """Serves one processor: calls as they arrive, the newest frame whenever no call waits; one at a time."""
 
-    def __init__(self, conn: Connection, mailbox: FrameMailbox, loaded: Any, *, save_images: bool = True) -> None:
+    def __init__(self, conn: Connection, mailbox: FrameMailbox, loaded: Any, *, save_images: bool = True,
+                 save_max_hz: float = DEFAULT_SAVE_MAX_HZ) -> None:
         self.conn = conn
         self.mailbox = mailbox
         self.loaded = loaded
         self.instance = loaded.instance
-        self.telemetry = FrameTelemetry(images=save_images)
+        self.saves: list[tuple[np.ndarray | None, dict[str, Any]]] = []
+        """The ``tmMgr.save`` calls since the last message (sent with the next result or reply)."""
+        self.save_images = save_images
+        self.telemetry = FrameTelemetry(self._keep_save, save_max_hz=save_max_hz)
         self.instance.tmMgr = self.telemetry
         self.slots = Slots()
         self.has_vector = "getPreparedVector" in loaded.info.capabilities
@@ -291,7 +266,7 @@ class ChildRunner:
     def process(self, offer: Offer) -> tuple[Any, ...]:
         if offer.telemetry != self._telemetry[0]:
             self._telemetry = (offer.telemetry, pickle.loads(offer.telemetry) if offer.telemetry else {})
-        self.telemetry.current = SimpleNamespace(**self._telemetry[1], heartbeat_age_s=offer.heartbeat_age_s)
+        self.telemetry.begin(offer.seq, offer.t_mono_ns, offer.t_wall_ns, self._telemetry[1], offer.heartbeat_age_s)
         image = self.slots.view(offer.slot, offer.shape)
         vector, box, error, t_vector = None, None, None, 0
         start = time.monotonic_ns()
@@ -308,8 +283,17 @@ class ChildRunner:
             end = time.monotonic_ns()
             error = traceback.format_exc()
         del image
-        return ("result", offer.gen, start, end, t_vector, vector, box, error, self.telemetry.take_saves(),
+        return ("result", offer.gen, start, end, t_vector, vector, box, error, self._take_saves(),
                 self.slots.released())
+
+    def _keep_save(self, image: np.ndarray, extra: dict[str, Any]) -> None:
+        # A copy: the image as it is now, not with what photo_processing draws on it afterwards.
+        kept = np.array(image) if self.save_images else None
+        self.saves.append((kept, {key: _picklable(value) for key, value in extra.items()}))
+
+    def _take_saves(self) -> list[tuple[np.ndarray | None, dict[str, Any]]]:
+        saves, self.saves = self.saves, []
+        return saves
 
     def call(self, call_id: int, method: str, args: tuple[Any, ...]) -> tuple[Any, ...]:
         taken = time.monotonic_ns()
@@ -319,7 +303,7 @@ class ChildRunner:
             raise
         except Exception as exc:  # noqa: BLE001 - handed to the operator as the command's error
             value, ok = f"{type(exc).__name__}: {exc}", False
-        return ("reply", call_id, ok, value, taken, self.telemetry.take_saves(), self.slots.released())
+        return ("reply", call_id, ok, value, taken, self._take_saves(), self.slots.released())
 
 
 def main(fd: int, mailbox_address: str) -> int:
@@ -329,7 +313,7 @@ def main(fd: int, mailbox_address: str) -> int:
     _start_resource_tracker()
     conn = Connection(fd)
     mailbox = FrameMailbox.attach(mailbox_address)
-    _, spec, kwargs, memory_mb, save_images = conn.recv()
+    _, spec, kwargs, memory_mb, save_images, save_max_hz = conn.recv()
     try:
         _limit_memory(memory_mb)
         try:
@@ -338,7 +322,7 @@ def main(fd: int, mailbox_address: str) -> int:
             send_message(conn, ("load_error", str(exc), exc.path, exc.class_name, exc.missing))
             return 0
         send_message(conn, ("ready", loaded.info))
-        ChildRunner(conn, mailbox, loaded, save_images=save_images).serve()
+        ChildRunner(conn, mailbox, loaded, save_images=save_images, save_max_hz=save_max_hz).serve()
     except MemoryError:
         traceback.print_exc()
         print(f"processor_memory_mb = {memory_mb:g} MB reached", file=sys.stderr, flush=True)

@@ -4,13 +4,13 @@ from __future__ import annotations
 
 import logging
 import math
-import time
 from typing import Any
 
 import cv2
 import numpy as np
 
 from processors import sift_match
+from processors.frame_telemetry import frame_time_s
 from processors.steering import Vector, draw_vector, velocity_toward
 
 logger = logging.getLogger(__name__)
@@ -28,7 +28,8 @@ class SIFTPositionHold:
 
     F1 stores the next frame as the reference (the spot is the frame centre: hold here);
     ``catch_cmd(roi)`` does the same with the spot at the ROI centre (go and hold over that spot).
-    Then, at its own rate (``interval_s``; frames in between are skipped, each estimate compares
+    Then, at its own rate (``interval_s`` of the frames' capture time, ``tmMgr.snapshot().frame_t_ns``, so a
+    replay at any speed estimates on the same frames; frames in between are skipped, each estimate compares
     the newest frame with the reference, so skipped frames change nothing), it fits a homography
     reference -> current, maps the spot into the current frame and converts its offset from the
     frame centre into metres: ground metres per pixel = 2 * altitude * tan(hfov / 2) / width,
@@ -120,8 +121,8 @@ class SIFTPositionHold:
             spot = (work.shape[1] / 2.0, work.shape[0] / 2.0) if sx < 0 else (sx * scale, sy * scale)
             self._store_reference(work, spot, at_centre=sx < 0)
             self._pending_spot = None
-        elif self._ref_gray is not None and time.monotonic() - self._last_estimate >= self._cfg["interval_s"]:
-            self._last_estimate = time.monotonic()
+        elif self._ref_gray is not None and frame_time_s(self.tmMgr) - self._last_estimate >= self._cfg["interval_s"]:
+            self._last_estimate = frame_time_s(self.tmMgr)
             self._estimate(self._work(frame, scale), frame)
         self._draw(frame, scale)
 

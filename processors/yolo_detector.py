@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import dataclasses
 import logging
-import time
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -13,6 +12,7 @@ import numpy as np
 
 from processors.detection import Detection, DetectorConfig, load_backend
 from processors.detection.flow import shift_boxes
+from processors.frame_telemetry import frame_time_s
 from processors.steering import Box, Steering, Vector, draw_target
 
 logger = logging.getLogger(__name__)
@@ -138,7 +138,7 @@ class YoloDetector:
         self._vector = self.steering.vector(self.followed.box, size, self._ref_height) if following else None
         self._draw(frame)
         if keyframe and self.detections and self.tmMgr is not None:
-            now = time.monotonic()
+            now = frame_time_s(self.tmMgr)  # the frame's capture time: a replay saves the same frames
             if now - self._last_save >= self.save_interval_s:
                 self._last_save = now
                 labels = ";".join(f"{d.label}:{d.score:.2f}" for d in self.detections)

@@ -1,9 +1,11 @@
-"""Parsing of camera URIs such as ``file:flight.mp4?realtime=0`` or ``usb:/dev/video2?width=1280``."""
+"""Parsing of camera URIs such as ``file:flight.mp4?realtime=0`` or ``usb:/dev/video2?width=1280``, and
+:func:`redact`, the one function that hides the credentials in URIs wherever they are shown or recorded."""
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
-from urllib.parse import parse_qsl, urlsplit, urlunsplit
+from urllib.parse import parse_qsl
 
 from sources.errors import SourceUriError
 
@@ -87,11 +89,61 @@ class SourceUri:
         return SourceUriError(f"camera URI {self.text!r}: {name}={value!r} must be {expected}", key="source")
 
 
-def redact(url: str) -> str:
-    """``url`` with any password replaced by ``***``."""
-    parts = urlsplit(url)
-    if parts.password is None:
-        return url
-    host = parts.hostname or ""
-    netloc = f"{parts.username}:***@{host}" + (f":{parts.port}" if parts.port else "")
-    return urlunsplit(parts._replace(netloc=netloc))
+SECRET_PARAMETERS = ("password", "passwd", "pass", "pwd", "pw", "token", "auth", "authorization", "key", "apikey",
+                     "secret", "signature", "sig", "credential", "credentials", "session", "sessionid")
+"""Query parameters whose value is hidden, also after a prefix (``access_token``, ``api_key``, ``x-auth``)."""
+
+_URI_START = re.compile(r"\b[a-zA-Z][a-zA-Z0-9+.-]*://")
+_URI_END = re.compile(r"[\s\"'<>]")
+"""Where a URI ends in text (a space, a quote in JSON, a bracket in HTML)."""
+_HOST_AFTER = re.compile(r"(?:\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9._~%-]+)(?::\d*)?(?:[/?#]|$)")
+"""What follows the ``@`` that ends a password: a host (name, IPv4 or [IPv6]), a port, then the path or the end."""
+_SECRET_VALUE = re.compile(
+    r"(?P<name>[?&;](?:[\w.-]*?[_.-])?(?:" + "|".join(sorted(SECRET_PARAMETERS, key=len, reverse=True)) +
+    r")=)[^&;#\s\"'<>]+", re.IGNORECASE)
+
+
+def redact(text: str) -> str:
+    """``text`` with the password of every URI in it and the value of every secret parameter replaced by ``***``.
+
+    A password may hold any character, ``/``, ``@``, ``#`` and ``?`` included (``rtsp://admin:P@ss/#1@host/``):
+    it runs from the first ``:`` after the user name to the last ``@`` that a host name follows, so a path
+    or query holding an ``@`` is hidden with it rather than a part of a password shown. Query parameters named in
+    :data:`SECRET_PARAMETERS` (``?pwd=``, ``&token=``, ``;password=``, ``?api_key=``) keep their name only.
+    """
+    if "://" in text and "@" in text:
+        text = _hide_passwords(text)
+    if "=" in text:
+        text = _SECRET_VALUE.sub(r"\g<name>***", text)
+    return text
+
+
+def _hide_passwords(text: str) -> str:
+    parts, done = [], 0
+    for match in _URI_START.finditer(text):
+        start = match.end()
+        if start <= done:  # a scheme inside a URI already handled
+            continue
+        end_match = _URI_END.search(text, start)
+        end = end_match.start() if end_match else len(text)
+        parts += [text[done:start], _without_password(text[start:end])]
+        done = end
+    return "".join([*parts, text[done:]])
+
+
+def _without_password(rest: str) -> str:
+    """``user:***@host/path`` for ``rest``, a URI after its ``scheme://``; ``rest`` itself when it has no password."""
+    colon = rest.find(":")
+    at = rest.find("@", colon + 1)
+    if colon < 0 or at < 0 or any(c in rest[:colon] for c in "/?#"):
+        return rest
+    if 0 <= rest.find("?") < at and rest[colon + 1:_first(rest, "/?#", colon)].isdigit():
+        return rest  # host:port, and the @ is in the query
+    ats = [i for i in range(at, len(rest)) if rest[i] == "@"]
+    host = next((i for i in reversed(ats) if _HOST_AFTER.match(rest, i + 1)), ats[-1])
+    return rest[:colon] + ":***@" + rest[host + 1:]
+
+
+def _first(text: str, chars: str, start: int) -> int:
+    """Where the first of ``chars`` is in ``text`` from ``start`` on (``len(text)`` when none is)."""
+    return min((i for i in (text.find(c, start) for c in chars) if i >= 0), default=len(text))

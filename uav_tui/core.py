@@ -179,11 +179,12 @@ class UavCore:
         if config.isolation == "thread":
             processor = await asyncio.get_running_loop().run_in_executor(
                 None, functools.partial(load_processor, config.processor, config.processor_args))
-            return ProcessorWorker(processor, self._on_result)
+            return ProcessorWorker(processor, self._on_result, save_max_hz=config.recording.save_max_hz)
         return await ProcessWorker.start(
             config.processor, config.processor_args, self._on_result, events=self.events,
             on_fault=self._on_processor_fault, timeout_s=config.processor_timeout,
-            memory_mb=config.processor_memory_mb or None, save_images=config.recording.record)
+            memory_mb=config.processor_memory_mb or None, save_images=config.recording.record,
+            save_max_hz=config.recording.save_max_hz)
 
     def _on_processor_fault(self, reason: str) -> None:
         """The processor's process died or was killed: autonomy off, and hold if a vector flies."""

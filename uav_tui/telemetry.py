@@ -1,4 +1,9 @@
-"""TelemetryManager: the newest telemetry, readable from any thread; what processors see as ``self.tmMgr``."""
+"""TelemetryManager: the newest telemetry (and a few seconds of it), readable from any thread.
+
+Processors do not see it directly: their ``self.tmMgr`` is a :class:`processors.frame_telemetry.FrameTelemetry`
+whose snapshot the host fills from :meth:`TelemetryManager.at` (the telemetry at the frame's capture) and whose
+saves it stores through :meth:`TelemetryManager.save`.
+"""
 
 from __future__ import annotations
 
@@ -7,6 +12,7 @@ import logging
 import math
 import threading
 import time
+from collections import deque
 from collections.abc import Callable
 from typing import Any
 
@@ -22,6 +28,8 @@ _FIELDS = frozenset(TELEMETRY_FIELDS)
 _UPDATABLE = _FIELDS - {"t_mono_ns", "t_wall_ns", "heartbeat_age_s"}
 """Fields a controller update may set; receive stamps and heartbeat age are set here (a replayed
 update brings its recorded receive stamps)."""
+HISTORY = 1024
+"""Updates kept for :meth:`TelemetryManager.at` (several seconds: MAVSDK sends a few hundred a second)."""
 
 
 class TelemetryManager:
@@ -29,12 +37,6 @@ class TelemetryManager:
 
     ``run()`` runs on the event loop; ``snapshot()``, ``link_alive()`` and ``save()`` may be called
     from any thread (processors call them from the processor thread).
-
-    Example (inside a processor)::
-
-        t = self.tmMgr.snapshot()
-        if t.rel_alt_m is not None and t.rel_alt_m > 2.0:
-            self.tmMgr.save(frame, target_px=(x, y))
 
     Args:
         controller: where telemetry comes from; None (``--fc none``) gives an all-None Telemetry.
@@ -52,6 +54,7 @@ class TelemetryManager:
         """Exceptions raised by listeners (each listener's first one is logged)."""
         self._lock = threading.Lock()
         self._latest = Telemetry()
+        self._history: deque[Telemetry] = deque(maxlen=HISTORY)
         self._listeners: list[Listener] = []
         self._warned: set[str] = set()
 
@@ -84,6 +87,7 @@ class TelemetryManager:
                 heartbeat_age_s=self._heartbeat_age(),
             )
             latest = self._latest
+            self._history.append(latest)
         self.updates += 1
         for listener in list(self._listeners):
             try:
@@ -108,6 +112,20 @@ class TelemetryManager:
         with self._lock:
             latest = self._latest
         return latest, self._heartbeat_age()
+
+    def at(self, t_mono_ns: int) -> tuple[Telemetry, float | None]:
+        """The telemetry as it was at ``t_mono_ns`` (a frame's capture) and the heartbeat age as of now. Thread-safe.
+
+        That is the newest update received at or before ``t_mono_ns`` (its receive stamp; a replay's are the
+        recorded ones), an all-None Telemetry when none was, or the oldest kept when the instant is older than
+        :data:`HISTORY` updates.
+        """
+        with self._lock:
+            found = next((item for item in reversed(self._history) if item.t_mono_ns <= t_mono_ns), None)
+            if found is None:
+                full = len(self._history) == self._history.maxlen
+                found = self._history[0] if full else Telemetry()
+        return found, self._heartbeat_age()
 
     def add_listener(self, callback: Listener) -> None:
         """Call ``callback(telemetry)`` on the event loop for every update (the recorder writes a row)."""

@@ -5,7 +5,8 @@ the CSV writer, ``run.json``, the headless terminal):
 
 - :func:`escape` shows control characters as escapes (``\\x1b``, ``\\n``), so nothing from outside
   can move the cursor, clear the screen or start a line of its own;
-- :func:`redact` hides passwords in URIs (``rtsp://admin:***@host``) and ``token=`` values;
+- :func:`redact` (from :mod:`sources.uri`, the one redaction function) hides passwords in URIs
+  (``rtsp://admin:***@host``) and secret query parameters (``?pwd=***``);
 - :func:`describe` renders any untrusted value (a vector of a million numbers, say) in at most N
   characters, escaped; :func:`shorten` cuts long text (a processor's exception message);
 - :class:`SafeFormatter` applies them to every log record on the terminal.
@@ -18,13 +19,15 @@ import re
 import reprlib
 from typing import Any
 
+from sources.uri import redact
+
+__all__ = ["DESCRIBE_CHARS", "SafeFormatter", "describe", "escape", "redact", "safe", "shorten"]
+
 DESCRIBE_CHARS = 80
 """The longest description of an untrusted value."""
 
 _CONTROL = re.compile("[\x00-\x1f\x7f-\x9f\u061c\u200e\u200f\u2028\u2029\u202a-\u202e\u2066-\u2069]")
 """C0/C1 controls, DEL, Unicode line breaks and the invisible characters that reorder text on screen."""
-_CREDENTIALS = re.compile(r"(?P<user>\b[a-zA-Z][a-zA-Z0-9+.-]*://[^\s/?#@:\"']*):[^\s/?#\"']*@")
-_TOKEN = re.compile(r"(?P<key>[?&](?:token|access_token|password)=)[^&\s#\"']+", re.IGNORECASE)
 _SHORT = reprlib.Repr()  # keyword arguments need Python 3.12
 _SHORT.maxlevel, _SHORT.maxstring, _SHORT.maxlong, _SHORT.maxother = 2, DESCRIBE_CHARS, 24, DESCRIBE_CHARS
 _SHORT.maxtuple = _SHORT.maxlist = _SHORT.maxdict = _SHORT.maxset = _SHORT.maxfrozenset = _SHORT.maxdeque = 4
@@ -44,15 +47,6 @@ def escape(text: str, *, multiline: bool = False) -> str:
     if not _CONTROL.search(text):
         return text
     return _CONTROL.sub(_escape_one, text)
-
-
-def redact(text: str) -> str:
-    """``text`` with the password of every URI in it and every ``token=`` value replaced by ``***``."""
-    if "://" in text:
-        text = _CREDENTIALS.sub(r"\g<user>:***@", text)
-    if "=" in text:
-        text = _TOKEN.sub(r"\g<key>***", text)
-    return text
 
 
 def safe(text: str, *, multiline: bool = False) -> str:

@@ -15,8 +15,10 @@ from concurrent.futures import Future
 from dataclasses import dataclass, field
 from typing import Any
 
+from controllers.base import TELEMETRY_FIELDS, Telemetry
 from processors import LoadedProcessor, load_processor
 from processors.base import Box, ProcessorInfo, read_box
+from processors.frame_telemetry import DEFAULT_SAVE_MAX_HZ, FrameTelemetry
 from sources.buffer import Frame, FrameBuffer
 from uav_tui.stats import PipelineStats, RollingStats
 from uav_tui.telemetry import TelemetryManager
@@ -99,8 +101,13 @@ class ProcessorWorker:
 
     isolation = "thread"
 
-    def __init__(self, processor: LoadedProcessor, on_result: Callable[[ProcessedFrame], None]) -> None:
+    def __init__(self, processor: LoadedProcessor, on_result: Callable[[ProcessedFrame], None], *,
+                 save_max_hz: float = DEFAULT_SAVE_MAX_HZ) -> None:
         self.processor = processor
+        self.save_max_hz = save_max_hz
+        self.telemetry: TelemetryManager | None = None
+        self._fields: tuple[Telemetry | None, dict[str, Any]] = (None, {})
+        """The telemetry last given to the processor and its fields as a dict (telemetry changes slower than frames)."""
         self.stats = RollingStats()
         self.current: ProcessedFrame | None = None
         """The frame being processed (read on the processor thread by ``tmMgr.save``); None between frames."""
@@ -119,8 +126,10 @@ class ProcessorWorker:
     # -- loop side -------------------------------------------------------------------------------
 
     def bind_telemetry(self, telemetry: TelemetryManager) -> None:
-        """Give the processor its ``tmMgr``."""
-        self.processor.instance.tmMgr = telemetry
+        """Give the processor its ``tmMgr``: the telemetry at each frame's capture; ``telemetry`` stores saves."""
+        self.telemetry = telemetry
+        self.processor.instance.tmMgr = FrameTelemetry(lambda image, extra: telemetry.save(image, **extra),
+                                                       save_max_hz=self.save_max_hz)
 
     def attach(self, buffer: FrameBuffer) -> None:
         """Take frames from ``buffer`` from now on (a new source)."""
@@ -255,6 +264,7 @@ class ProcessorWorker:
         self._busy_since_ns = start
         result = ProcessedFrame(frame=frame, t_start_ns=start)
         self.current = result
+        self._begin(instance, frame)
         try:
             instance.photo_processing(frame.image)
             result.t_end_ns = time.monotonic_ns()
@@ -272,6 +282,18 @@ class ProcessorWorker:
             self._busy_since_ns = None
             self.current = None
         return result
+
+
+    def _begin(self, instance: Any, frame: Frame) -> None:
+        """Tell the processor's ``tmMgr`` which frame it is processing and the telemetry at its capture."""
+        tm = getattr(instance, "tmMgr", None)
+        if self.telemetry is None or not isinstance(tm, FrameTelemetry):
+            return
+        telemetry, heartbeat_age = self.telemetry.at(frame.t_mono_ns)
+        if telemetry is not self._fields[0]:
+            self._fields = (telemetry, {name: getattr(telemetry, name) for name in TELEMETRY_FIELDS
+                                        if name != "heartbeat_age_s"})
+        tm.begin(frame.seq, frame.t_mono_ns, frame.t_wall_ns, self._fields[1], heartbeat_age)
 
 
 def _run_job(job: Callable[[], Any], future: Future[Any]) -> None:

@@ -55,3 +55,14 @@ class BoxOnEvenFrames:
     def photo_processing(self, frame):
         self.count += 1
         self.box = (self.count, 2 * self.count, 10.4, 20) if self.count % 2 == 0 else None
+
+
+class FrameClock:
+    """Saves every frame with what ``tmMgr.snapshot()`` says of it: its number and capture time."""
+
+    def __init__(self):
+        self.tmMgr = None
+
+    def photo_processing(self, frame):
+        seen = self.tmMgr.snapshot()
+        self.tmMgr.save(frame, clock_seq=seen.frame_seq, clock_t_ns=seen.frame_t_ns, clock_wall_ns=seen.frame_t_wall_ns)

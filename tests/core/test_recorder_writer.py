@@ -54,7 +54,8 @@ class FullDisk(DiskWriter):
 async def test_a_slow_disk_drops_frames_but_never_slows_processing(tmp_path, monkeypatch):
     monkeypatch.setattr(recorder_module, "DiskWriter", functools.partial(ThrottledWriter, max_image_bytes=8 * MB))
     config = with_overrides(Config(), source="synthetic:?fps=30", runs_dir=str(tmp_path), record_video=False,
-                            processor="tests.core.recorder_processors:SaveEveryFrame")  # JPEGs alone: drops match rows
+                            processor="tests.core.recorder_processors:SaveEveryFrame",  # JPEGs alone: drops match rows
+                            save_max_hz=0)  # every frame's save reaches the disk
     core = UavCore(config)
     await core.start()
     await asyncio.sleep(2.5)

@@ -33,11 +33,25 @@ def test_multiline_keeps_lines_but_none_starts_at_the_margin() -> None:
 
 @pytest.mark.parametrize(("raw", "shown"), [
     ("source rtsp://admin:Hunter2pw@192.0.2.1:554/s", "source rtsp://admin:***@192.0.2.1:554/s"),
-    ("rtsp://u:p@ss@host/a@b", "rtsp://u:***@host/a@b"),
+    ("rtsp://u:p@ss@host/a", "rtsp://u:***@host/a"),
+    ("rtsp://admin:Leak2/pw@host/live", "rtsp://admin:***@host/live"),
+    ("rtsp://admin:Le@k/2?#x@host:554/live?x=1", "rtsp://admin:***@host:554/live?x=1"),
+    ("rtsp://admin:P@ss#1@[2001:db8::1]:554/s", "rtsp://admin:***@[2001:db8::1]:554/s"),
+    ("rtsp://me@mail.example:pw@host/live", "rtsp://me@mail.example:***@host/live"),
+    ("rtsp://u:p@host/a@b", "rtsp://u:***@b"),  # an @ in the path: hidden with the password, never a password shown
     ("http://192.0.2.1:8080/?token=abc&x=1", "http://192.0.2.1:8080/?token=***&x=1"),
+    ("rtsp://h/live?pwd=1&pass=2&passwd=3&password=4&channel=1", "rtsp://h/live?pwd=***&pass=***&passwd=***&password=***"
+                                                                 "&channel=1"),
+    ("http://h/s?api_key=1&access_token=2&x-auth=3&secret=4&sig=5&monkey=6", "http://h/s?api_key=***&access_token=***"
+                                                                           "&x-auth=***&secret=***&sig=***&monkey=6"),
     ('{"uri": "rtsp://a:b@h", "other": "x@y"}', '{"uri": "rtsp://a:***@h", "other": "x@y"}'),
     ("rtsp://host/stream and usb:0 and mail@example.org", "rtsp://host/stream and usb:0 and mail@example.org"),
-], ids=["uri", "at-in-password", "token", "json", "nothing-secret"])
+    ("rtsp://192.0.2.1:554/s?user=me@mail.example", "rtsp://192.0.2.1:554/s?user=me@mail.example"),
+    ("rtsp://admin:1234/x@host/s", "rtsp://admin:***@host/s"),
+], ids=["uri", "at-in-password", "slash-in-password", "any-character", "at-in-user", "ipv6",
+        "at-in-path", "token",
+        "password-parameters", "prefixed-parameters", "json", "nothing-secret", "at-in-query",
+        "digits-and-slash"])
 def test_redact(raw: str, shown: str) -> None:
     assert redact(raw) == shown
 

@@ -167,7 +167,8 @@ async def test_saved_images_are_sent_only_when_the_platform_records(save_images:
     assert source.open()
     try:
         worker = await ProcessWorker.start("tests.core.recorder_processors:SaveEveryFrame", {}, results.append,
-                                           events=EventLog(), on_fault=print, save_images=save_images)
+                                           events=EventLog(), on_fault=print, save_images=save_images,
+                                           save_max_hz=0)
         try:
             worker.bind_telemetry(telemetry)
             worker.attach(source.buffer)

@@ -101,6 +101,31 @@ async def test_passwords_and_the_token_stay_out_of_outputs_and_records(tmp_path:
     assert f"web page: http://127.0.0.1:{core.web.port}/?token={TOKEN}" in printed  # only there, for the operator
 
 
+async def test_passwords_with_any_character_and_secret_parameters_stay_out_of_outputs(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Issue 42 point 4: the usual secret query parameters, and a password holding a ``/``, through every output."""
+    server = RtspTestServer()
+    server.start()
+    try:
+        query_uri = f"rtsp://127.0.0.1:{server.port}/live?pwd=Leak3&pass=Leak4&passwd=Leak5&api_key=Leak6&channel=1"
+        slash_uri = f"rtsp://admin:Leak2/pw@127.0.0.1:{server.port}/live"  # FFmpeg cannot open it: said in errors
+        script = [(1, parse("wait 1.0")), (2, parse(f"source {slash_uri}"))]
+        runner, out, task = await start_headless({"runs_dir": str(tmp_path), "source": query_uri}, script)
+        core = runner.core
+        status = json.dumps(core.status().as_dict(), default=str)  # what the web page, --json and the TUI show
+        assert await asyncio.wait_for(task, 60) == 1  # the script's source command failed
+    finally:
+        server.stop()
+    printed, recorded = out.getvalue() + capsys.readouterr().err, events_csv(core)
+    run_json = (core.recorder.run_dir / "run.json").read_text()
+    assert "source rtsp://admin:***@127.0.0.1" in printed and "source rtsp://admin:***@127.0.0.1" in recorded
+    assert "?pwd=***&pass=***&passwd=***&api_key=***&channel=1" in run_json
+    assert "pwd=***" in status and "pwd=***" in recorded
+    for text in (printed, recorded, run_json, status):
+        for secret in ("Leak2", "pw@", "Leak3", "Leak4", "Leak5", "Leak6"):
+            assert secret not in text
+
+
 # -- 9: a token worth guessing, and guessing slowed -------------------------------------------------
 
 

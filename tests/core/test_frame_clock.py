@@ -1,0 +1,60 @@
+"""The frame's clock in ``tmMgr.snapshot()`` and the ``tmMgr.save`` rate, through the real platform in both
+isolations; the telemetry "at the frame's capture" that every host gives."""
+
+from __future__ import annotations
+
+import asyncio
+
+import pytest
+
+from controllers.base import Telemetry
+from uav_tui import dataset
+from uav_tui.config import Config, with_overrides
+from uav_tui.core import UavCore
+from uav_tui.telemetry import TelemetryManager
+
+CLOCK = "tests.core.recorder_processors:FrameClock"
+EVERY_FRAME = "tests.core.recorder_processors:SaveEveryFrame"
+
+
+async def _record(tmp_path, processor: str, isolation: str, seconds: float, **changes) -> dataset.Dataset:
+    config = with_overrides(Config(), source="synthetic:?fps=30&width=160&height=120", runs_dir=str(tmp_path),
+                            processor=processor, isolation=isolation, record_video=False, **changes)
+    core = UavCore(config)
+    await core.start()
+    try:
+        await asyncio.sleep(seconds)
+    finally:
+        await core.stop()
+    return dataset.load(core.recorder.run_dir)
+
+
+@pytest.mark.parametrize("isolation", ["thread", "process"])
+async def test_the_processor_sees_each_frames_number_and_capture_time(tmp_path, isolation: str) -> None:
+    run = await _record(tmp_path, CLOCK, isolation, 1.5, save_max_hz=0)
+    frames = run.frames.dropna(subset=["clock_seq"])
+    assert len(frames) >= 20 and len(frames) == len(run.frames)
+    assert frames["clock_seq"].astype("int64").tolist() == frames["seq"].tolist()
+    assert frames["clock_t_ns"].astype("int64").tolist() == frames["t_mono_ns"].tolist()
+    assert frames["clock_wall_ns"].astype("int64").tolist() == frames["t_wall_ns"].tolist()
+
+
+@pytest.mark.parametrize("isolation", ["thread", "process"])
+async def test_saves_above_the_rate_are_dropped_by_frame_time(tmp_path, isolation: str) -> None:
+    run = await _record(tmp_path, EVERY_FRAME, isolation, 3.0, save_max_hz=2)
+    frames = run.frames
+    seconds = (frames["t_mono_ns"].iloc[-1] - frames["t_mono_ns"].iloc[0]) / 1e9
+    saved = frames[frames["saved"]]
+    assert len(frames) >= 45 and seconds >= 1.5
+    assert 2 * seconds - 1 <= len(saved) <= 2 + 2 * seconds + 1  # a burst of 2, then 2 a second
+    gaps = saved["t_mono_ns"].diff().dropna().iloc[2:] / 1e9
+    assert (gaps >= 0.4).all(), gaps.tolist()
+
+
+def test_the_telemetry_at_a_capture_is_the_newest_update_received_by_then() -> None:
+    telemetry = TelemetryManager(None)
+    assert telemetry.at(5)[0] == Telemetry()  # nothing received yet
+    for t_ns, altitude in ((100, 1.0), (200, 2.0), (300, 3.0)):
+        telemetry.apply({"t_mono_ns": t_ns, "t_wall_ns": t_ns, "rel_alt_m": altitude})
+    assert telemetry.at(99)[0] == Telemetry()  # captured before the first update
+    assert [telemetry.at(t)[0].rel_alt_m for t in (100, 150, 299, 300, 10**12)] == [1.0, 1.0, 2.0, 3.0, 3.0]
