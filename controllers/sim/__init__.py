@@ -1,4 +1,5 @@
-"""Built-in simulated vehicle: a PX4-like quadrotor speaking MAVLink 2 on loopback.
+"""Built-in simulated vehicle: a PX4-like quadrotor speaking MAVLink 2 on loopback (or, with
+``--autopilot ardupilot``, an ArduCopter-like one: see :mod:`controllers.sim.dialect`).
 
 Run it with ``python -m controllers.sim`` (or ``uav-tui sim``); start it from code with
 :class:`controllers.sim.launcher.SimVehicle`; connect MAVSDK with ``udpin://127.0.0.1:MAVLINK_PORT``
@@ -12,7 +13,8 @@ Requests (the simulator replies to the sender with one JSON object; an "id" in t
     {"cmd": "state"}          -> {"ok": true, "state": TRUTH}
     {"cmd": "set_wind", "n": N, "e": E}                       -> {"ok": true}
     {"cmd": "teleport", "n": N, "e": E, "d": D, "yaw": DEG}   -> {"ok": true, "state": TRUTH}
-    {"cmd": "rc_mode", "mode": M}  -> {"ok": true, "state": TRUTH}; M in POSCTL, HOLD, RTL, LAND, as an RC pilot
+    {"cmd": "rc_mode", "mode": M}  -> {"ok": true, "state": TRUTH}; M in POSCTL, HOLD, RTL, LAND, LOITER, as an RC pilot
+    {"cmd": "rc_throttle", "pwm": P}  -> {"ok": true, "state": TRUTH}; the RC throttle (ardupilot dialect), 800..2200
     {"cmd": "setpoints", "since_mono_ns": T}  -> {"ok": true, "records": [REC, ...], "more": bool}
     anything else             -> {"ok": false, "error": "..."}
 
@@ -22,9 +24,10 @@ TRUTH (streamed datagrams carry no "id" and no "ok"):
     n, e, d, vn, ve, vd       local NED position (m, origin at home, d = 0 on the ground) and velocity (m/s)
     roll, pitch, yaw          degrees, yaw from north clockwise
     armed, in_air             booleans
-    mode                      MANUAL, POSCTL, HOLD, TAKEOFF, LAND, RTL, OFFBOARD or ORBIT
+    mode                      MANUAL, POSCTL, HOLD, TAKEOFF, LAND, RTL, OFFBOARD or ORBIT; GUIDED, LOITER (ardupilot)
     lat, lon, alt             degrees, degrees, metres AMSL
     battery, wind_n, wind_e   remaining fraction 0..1, steady wind m/s
+    rc_throttle               the RC throttle input in the ardupilot dialect (default 1000, SITL's), else null
 
 REC (one per SET_POSITION_TARGET_LOCAL_NED received, oldest first, at most 400 per reply):
     t_mono_ns                 time.monotonic_ns() when the simulator read the datagram

@@ -1,4 +1,5 @@
-"""COMMAND_LONG / COMMAND_INT and the parameter protocol, answered the way PX4 answers them.
+"""COMMAND_LONG / COMMAND_INT and the parameter protocol, answered the way PX4 (or, in the ``ardupilot``
+dialect, ArduCopter) answers them.
 
 Every command gets a COMMAND_ACK: ACCEPTED, DENIED, TEMPORARILY_REJECTED, or UNSUPPORTED for
 commands the simulator does not implement.
@@ -13,7 +14,6 @@ from typing import TYPE_CHECKING
 
 from pymavlink.dialects.v20 import common as mavlink
 
-from controllers.sim import px4_modes
 from controllers.sim.guidance import OFFBOARD_LOSS_ACTIONS, Mode, Orbit
 from controllers.sim.params import Param, ParamStore, encode_value
 from controllers.sim.physics import CommandRefused
@@ -77,7 +77,7 @@ class CommandHandler:
         """Messages a command asked for, sent right after its COMMAND_ACK."""
 
     def _param_list(self) -> list[Param]:
-        cfg, pc = self.s.cfg, self.v.cfg
+        cfg, pc, stick = self.s.cfg, self.v.cfg, self.v.guidance.stick
 
         def bind(name: str, obj: object, attr: str) -> Param:
             return Param(
@@ -87,6 +87,12 @@ class CommandHandler:
                 lambda value: setattr(obj, attr, value),
             )
 
+        if stick is not None:  # the ArduCopter dialect: the parameters it simulates
+            return [
+                bind("GUID_TIMEOUT", cfg, "guided_timeout_s"),
+                bind("PILOT_SPD_UP", stick, "speed_up_ms"),
+                bind("PILOT_SPD_DN", stick, "speed_dn_ms"),
+            ]
         return [
             bind("MIS_TAKEOFF_ALT", pc, "takeoff_alt_m"),
             bind("RTL_RETURN_ALT", pc, "rtl_alt_m"),
@@ -164,7 +170,12 @@ class CommandHandler:
         return ACCEPTED
 
     def _takeoff(self, cmd: Cmd) -> int:
-        alt = cmd.z - self.s.cfg.home.alt_m if math.isfinite(cmd.z) else None
+        if self.s.dialect.takeoff_above_home:  # ArduCopter: metres above home, in GUIDED only
+            if self.v.mode != Mode.GUIDED:
+                raise CommandRefused(f"takeoff: not in GUIDED (in {self.v.mode})")
+            alt = cmd.z if math.isfinite(cmd.z) else None
+        else:
+            alt = cmd.z - self.s.cfg.home.alt_m if math.isfinite(cmd.z) else None
         self.v.takeoff(alt)
         self.s.client_took_over()
         return ACCEPTED
@@ -172,12 +183,13 @@ class CommandHandler:
     def _set_mode(self, cmd: Cmd) -> int:
         if not math.isfinite(cmd.p[0]) or not int(cmd.p[0]) & M.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED:
             return DENIED
-        mode = px4_modes.mode_from_px4(int(cmd.p[1]), int(cmd.p[2]))
+        modes = self.s.dialect.modes
+        mode = modes.mode_from_command(int(cmd.p[1]), int(cmd.p[2]))
         g = self.v.guidance
         if mode is None or mode == Mode.ORBIT:
             return DENIED
-        if mode == self.v.mode and mode != Mode.OFFBOARD:
-            pass  # already there: PX4 does not restart the mode
+        if mode != Mode.OFFBOARD and modes.custom_mode(mode) == modes.custom_mode(self.v.mode):
+            pass  # already there: neither autopilot restarts the mode (ArduCopter's take-off is GUIDED)
         elif mode == Mode.OFFBOARD:
             if not self.s.setpoint_fresh():
                 raise CommandRefused("offboard: no setpoints streaming")
@@ -188,6 +200,10 @@ class CommandHandler:
             g.land()
         elif mode == Mode.RTL:
             g.rtl()
+        elif mode == Mode.GUIDED:
+            g.guided()
+        elif mode == Mode.LOITER:
+            g.loiter()
         else:
             g.hold(mode)
         self.s.client_took_over()

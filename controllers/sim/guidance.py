@@ -3,6 +3,8 @@
 Modes follow PX4's behaviour: HOLD brakes to a stop and keeps that position, TAKEOFF climbs to the
 takeoff altitude and then holds, LAND descends and disarms on touchdown, RTL climbs to the RTL
 altitude, flies home and lands, ORBIT circles a centre, OFFBOARD follows the newest setpoint.
+Two are ArduCopter's (the ``ardupilot`` dialect): GUIDED follows the newest setpoint and otherwise
+holds its stopping point, LOITER holds its position but climbs or sinks with the RC throttle stick.
 """
 
 from __future__ import annotations
@@ -29,6 +31,8 @@ class Mode(StrEnum):
     RTL = "RTL"
     OFFBOARD = "OFFBOARD"
     ORBIT = "ORBIT"
+    GUIDED = "GUIDED"
+    LOITER = "LOITER"
 
 
 @dataclass(frozen=True, slots=True)
@@ -57,6 +61,33 @@ class Orbit:
     speed: float
 
 
+@dataclass(slots=True)
+class ThrottleStick:
+    """An RC throttle stick read the way ArduCopter reads it (``Copter::get_pilot_desired_climb_rate``).
+
+    ArduCopter SITL's default RC input holds the throttle at 1000 (its minimum); a transmitter left at
+    idle does the same. Attributes are ArduCopter's parameters in SI units.
+    """
+
+    pwm: int = 1000
+    speed_up_ms: float = 2.5
+    """PILOT_SPD_UP."""
+    speed_dn_ms: float = 0.0
+    """PILOT_SPD_DN; 0 means PILOT_SPD_UP."""
+    deadzone: int = 100
+    """THR_DZ, in the 0..1000 throttle range around mid-stick (500)."""
+
+    def climb_rate(self) -> float:
+        """The climb rate (m/s, up positive) the stick asks for in LOITER."""
+        throttle = min(max(self.pwm - 1000, 0), 1000)
+        bottom, top = 500 - self.deadzone, 500 + self.deadzone
+        if throttle < bottom:
+            return (self.speed_dn_ms or self.speed_up_ms) * (throttle - bottom) / bottom
+        if throttle > top:
+            return self.speed_up_ms * (throttle - top) / (1000 - top)
+        return 0.0
+
+
 OFFBOARD_LOSS_ACTIONS = {0: "hold", 3: "rtl", 4: "land", 5: "hold"}
 """PX4's COM_OBL_RC_ACT values the simulator honours -> :class:`Guidance` method: 0 Position mode (no
 sticks: it holds, shown as HOLD), 3 Return, 4 Land, 5 Hold. PX4's others (Altitude, Manual, Terminate,
@@ -78,6 +109,10 @@ class Guidance:
         self.setpoint: OffboardSetpoint | None = None
         self.rtl_phase = "climb"
         self._yaw_goal: float | None = None
+        self.stick: ThrottleStick | None = None
+        """The RC throttle (ArduCopter dialect); None: no RC, as the PX4 dialect is flown."""
+        self.hold_mode = Mode.HOLD
+        """What a finished takeoff holds in: PX4 switches to HOLD, ArduCopter stays in GUIDED."""
 
     # ------------------------------------------------------------ transitions
     def _enter(self, mode: Mode) -> None:
@@ -97,6 +132,22 @@ class Guidance:
         self._enter(mode)
         self.target = self._stopping_point()
         self.target_speed = None
+
+    def guided(self) -> None:
+        """ArduCopter GUIDED without a target: brake and keep the stopping point (``ModeGuided::init``)."""
+        self.hold(Mode.GUIDED)
+        self.setpoint = None
+
+    def follow(self, setpoint: OffboardSetpoint) -> None:
+        """A GUIDED target (velocity or position); it replaces a take-off under way, as in ArduCopter."""
+        if self.mode != Mode.GUIDED:
+            self._enter(Mode.GUIDED)
+            self.target = self.v.pos.copy()
+        self.setpoint = setpoint
+
+    def loiter(self) -> None:
+        """ArduCopter LOITER: hold the stopping point; the throttle stick moves the altitude."""
+        self.hold(Mode.LOITER)
 
     def goto(self, north: float, east: float, down: float, speed: float | None = None) -> None:
         """Fly to a local point and hold there (DO_REPOSITION); shows as HOLD like PX4."""
@@ -128,7 +179,7 @@ class Guidance:
         self.setpoint = setpoint
 
     def on_touchdown(self) -> None:
-        if self.mode in (Mode.HOLD, Mode.POSCTL, Mode.MANUAL, Mode.ORBIT):
+        if self.mode in (Mode.HOLD, Mode.POSCTL, Mode.MANUAL, Mode.ORBIT, Mode.GUIDED, Mode.LOITER):
             self.target = self.v.pos.copy()
 
     # ----------------------------------------------------------------- demand
@@ -140,6 +191,8 @@ class Guidance:
             Mode.RTL: self._rtl,
             Mode.ORBIT: self._orbit,
             Mode.OFFBOARD: self._offboard,
+            Mode.GUIDED: self._guided,
+            Mode.LOITER: self._loiter,
         }.get(self.mode, self._hold)
         return handler()
 
@@ -162,12 +215,26 @@ class Guidance:
         vel = self._toward(self.target, speed, cfg.takeoff_speed_ms * 2, cfg.fast_descent_ms)
         return vel, self._yaw_goal, None
 
+    def _guided(self) -> Demand:
+        return self._hold() if self.setpoint is None else self._offboard()
+
+    def _loiter(self) -> Demand:
+        rate = self.stick.climb_rate() if self.stick is not None else 0.0
+        if rate:  # the altitude target follows the stick: where the vehicle would stop
+            vz = float(self.v.vel[2])
+            self.target[2] = self.v.pos[2] + vz * abs(vz) / (2.0 * self.v.cfg.max_accel_ms2)
+        vel, yaw, _ = self._hold()
+        if rate:
+            vel[2] = -rate
+        return vel, yaw, None
+
     def _takeoff(self) -> Demand:
         cfg = self.v.cfg
         vel = self._toward(self.target, cfg.cruise_speed_ms, cfg.takeoff_speed_ms, cfg.fast_descent_ms)
         if abs(self.v.pos[2] - self.target[2]) < 0.1:
             goal = self.target
-            self.hold()  # PX4 switches to HOLD at the takeoff altitude
+            self.hold(self.hold_mode)  # PX4 switches to HOLD at the takeoff altitude, ArduCopter stays GUIDED
+            self.setpoint = None
             self.target = goal
         return vel, self._yaw_goal, None
 

@@ -83,6 +83,7 @@ class SimVehicle:
         seed: random seed for the noise.
         noise: add sensor noise to the telemetry.
         extra_args: more ``python -m controllers.sim`` options, e.g. ``("--rtl-alt", "20")``.
+        autopilot: the dialect it speaks, ``"px4"`` or ``"ardupilot"`` (see :mod:`controllers.sim.dialect`).
     """
 
     def __init__(
@@ -92,11 +93,12 @@ class SimVehicle:
         seed: int = 0,
         extra_args: Sequence[str] = (),
         noise: bool = False,
+        autopilot: str = "px4",
     ) -> None:
         self.home = Home(*home) if isinstance(home, tuple) else (home or Home())
         self.wind = wind or (0.0, 0.0)
         self.seed = seed
-        self.extra_args = (*(("--noise",) if noise else ()), *extra_args)
+        self.extra_args = (*(("--noise",) if noise else ()), "--autopilot", autopilot, *extra_args)
         self.mavlink_port = 0
         self.truth_port = 0
         self._proc: subprocess.Popen[bytes] | None = None

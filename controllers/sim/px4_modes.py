@@ -28,7 +28,7 @@ def custom_mode(mode: Mode) -> int:
     return (main << 16) | (sub << 24)
 
 
-def mode_from_px4(main: int, sub: int) -> Mode | None:
+def mode_from_command(main: int, sub: int) -> Mode | None:
     """The mode DO_SET_MODE asks for (param2 main, param3 sub), or None if the sim lacks it."""
     if (main == MAIN_POSCTL and sub == 0) or main == MAIN_MANUAL:
         return _FROM_PX4[(main, 0)]

@@ -10,7 +10,7 @@ from collections.abc import Callable
 import numpy as np
 from pymavlink.dialects.v20 import common as mavlink
 
-from controllers.sim import px4_modes
+from controllers.sim.dialect import DIALECTS, Dialect
 from controllers.sim.geo import Home
 from controllers.sim.guidance import Mode
 from controllers.sim.physics import Multicopter
@@ -50,19 +50,6 @@ _SENSORS = (
 )
 _GPS = M.MAV_SYS_STATUS_SENSOR_GPS
 _PREARM = M.MAV_SYS_STATUS_PREARM_CHECK
-CAPABILITIES = (
-    M.MAV_PROTOCOL_CAPABILITY_MISSION_FLOAT
-    | M.MAV_PROTOCOL_CAPABILITY_PARAM_FLOAT
-    | M.MAV_PROTOCOL_CAPABILITY_MISSION_INT
-    | M.MAV_PROTOCOL_CAPABILITY_COMMAND_INT
-    | M.MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_BYTEWISE
-    | M.MAV_PROTOCOL_CAPABILITY_SET_ATTITUDE_TARGET
-    | M.MAV_PROTOCOL_CAPABILITY_SET_POSITION_TARGET_LOCAL_NED
-    | M.MAV_PROTOCOL_CAPABILITY_MAVLINK2
-)
-"""AUTOPILOT_VERSION.capabilities, as PX4 reports them (bytewise parameter encoding)."""
-FLIGHT_SW_VERSION = (1 << 24) | (16 << 16) | (0 << 8) | 255
-"""PX4 v1.16.0 release, in PX4's version encoding."""
 
 
 def landed_state(v: Multicopter) -> int:
@@ -80,8 +67,9 @@ class TelemetryStreams:
     """Builds telemetry messages from a :class:`Multicopter` and decides which are due."""
 
     def __init__(self, encoder: mavlink.MAVLink, vehicle: Multicopter, home: Home, *,
-                 gps_clock_offset_s: float = 0.0) -> None:
+                 gps_clock_offset_s: float = 0.0, dialect: Dialect = DIALECTS["px4"]) -> None:
         self.enc = encoder
+        self.dialect = dialect
         self.v = vehicle
         self.home = home
         self.gps_clock_offset_s = gps_clock_offset_s
@@ -156,9 +144,9 @@ class TelemetryStreams:
         status = M.MAV_STATE_ACTIVE if v.armed else M.MAV_STATE_STANDBY
         return self.enc.heartbeat_encode(
             M.MAV_TYPE_QUADROTOR,
-            M.MAV_AUTOPILOT_PX4,
-            px4_modes.base_mode(v.mode, v.armed),
-            px4_modes.custom_mode(v.mode),
+            self.dialect.autopilot,
+            self.dialect.modes.base_mode(v.mode, v.armed),
+            self.dialect.modes.custom_mode(v.mode),
             status,
         )
 
@@ -295,8 +283,8 @@ class TelemetryStreams:
 
     def autopilot_version(self) -> mavlink.MAVLink_message:
         return self.enc.autopilot_version_encode(
-            CAPABILITIES,
-            FLIGHT_SW_VERSION,
+            self.dialect.capabilities,
+            self.dialect.sw_version,
             0,
             0,
             0,

@@ -51,6 +51,7 @@ def truth_dict(v: Multicopter, server: SimVehicleServer) -> dict[str, Any]:
         "battery": v.battery,
         "wind_n": float(v.wind[0]),
         "wind_e": float(v.wind[1]),
+        "rc_throttle": v.guidance.stick.pwm if v.guidance.stick is not None else None,
     }
 
 
@@ -61,7 +62,7 @@ def teleport(v: Multicopter, north: float, east: float, down: float, yaw_deg: fl
     if yaw_deg is not None:
         v.yaw = math.radians(yaw_deg)
     v.in_air = bool(v.pos[2] < -0.1)
-    if v.mode in (Mode.HOLD, Mode.POSCTL, Mode.MANUAL):
+    if v.mode in (Mode.HOLD, Mode.POSCTL, Mode.MANUAL, Mode.LOITER, Mode.GUIDED):
         v.guidance.hold(v.mode)
 
 
@@ -70,6 +71,7 @@ RC_MODES = {
     "HOLD": lambda guidance: guidance.hold(),
     "RTL": lambda guidance: guidance.rtl(),
     "LAND": lambda guidance: guidance.land(),
+    "LOITER": lambda guidance: guidance.loiter(),
 }
 """Modes an RC pilot (or an onboard failsafe) can switch to behind the ground station's back."""
 
@@ -163,6 +165,14 @@ class TruthServer:
             if cmd == "rc_mode":  # the pilot flips the RC mode switch: no MAVLink client is involved
                 RC_MODES[str(req.get("mode"))](v.guidance)
                 return {"ok": True, "cmd": "rc_mode", "state": self.snapshot()}
+            if cmd == "rc_throttle":  # the pilot moves the throttle stick (ArduCopter dialect)
+                if v.guidance.stick is None:
+                    return {"ok": False, "error": "rc_throttle: no RC in the px4 dialect (--autopilot ardupilot)"}
+                pwm = int(req.get("pwm", 1000))
+                if not 800 <= pwm <= 2200:
+                    return {"ok": False, "error": f"rc_throttle: pwm {pwm} outside 800..2200"}
+                v.guidance.stick.pwm = pwm
+                return {"ok": True, "cmd": "rc_throttle", "state": self.snapshot()}
             if cmd == "setpoints":
                 since = int(req.get("since_mono_ns", 0))
                 records = [r.as_dict() for r in s.setpoint_log if r.t_mono_ns > since]

@@ -1,5 +1,6 @@
 """The simulated vehicle process: physics at a fixed real-time step, MAVLink in and out, offboard
-supervision (PX4's setpoint-stream rule and loss failsafe) and the ground-truth side channel."""
+supervision (PX4's setpoint-stream rule and loss failsafe, ArduCopter's GUID_TIMEOUT) and the
+ground-truth side channel."""
 
 from __future__ import annotations
 
@@ -13,8 +14,9 @@ from dataclasses import dataclass, field
 from pymavlink.dialects.v20 import common as mavlink
 
 from controllers.sim.commands import CommandHandler
+from controllers.sim.dialect import DIALECTS
 from controllers.sim.geo import Home
-from controllers.sim.guidance import OFFBOARD_LOSS_ACTIONS, Mode, OffboardSetpoint
+from controllers.sim.guidance import OFFBOARD_LOSS_ACTIONS, Mode, OffboardSetpoint, ThrottleStick
 from controllers.sim.link import MavlinkLink
 from controllers.sim.physics import Multicopter, PhysicsConfig
 from controllers.sim.setpoints import SetpointRecord, parse_local_ned
@@ -29,6 +31,8 @@ class ServerConfig:
     """Process-level options of the simulator (see ``python -m controllers.sim --help``)."""
 
     mavlink_port: int = 14540
+    autopilot: str = "px4"
+    """The dialect spoken (:data:`controllers.sim.dialect.DIALECTS`): ``px4`` or ``ardupilot``."""
     truth_port: int = 14600
     home: Home = field(default_factory=Home)
     wind: tuple[float, float] = (0.0, 0.0)
@@ -39,6 +43,11 @@ class ServerConfig:
     """PX4's COM_OBL_RC_ACT: what the offboard-loss failsafe does (see :data:`OFFBOARD_LOSS_ACTIONS`)."""
     offboard_stream_window_s: float = 0.5
     failsafe_land_after_s: float = 10.0
+    guided_timeout_s: float = 3.0
+    """ArduCopter's GUID_TIMEOUT: a GUIDED velocity target older than this lapses into a hold (a position
+    target does not)."""
+    rc_throttle_pwm: int = 1000
+    """ArduCopter dialect: the RC throttle input (SITL's default, the stick's minimum); LOITER follows it."""
     parent_pid: int | None = None
     """Exit when this process is no longer our parent (the launcher died without stopping us)."""
     gps_clock_offset_s: float = 0.0
@@ -53,10 +62,14 @@ class SimVehicleServer:
     def __init__(self, config: ServerConfig) -> None:
         self.cfg = config
         self.lock = threading.RLock()
+        self.dialect = DIALECTS[config.autopilot]
         self.vehicle = Multicopter(config.physics, wind=config.wind, seed=config.seed)
+        if self.dialect.ardupilot:
+            self.vehicle.guidance.stick = ThrottleStick(config.rc_throttle_pwm)
+            self.vehicle.guidance.hold_mode = Mode.GUIDED
         self.link = MavlinkLink(config.mavlink_port)
         self.streams = TelemetryStreams(self.link.encoder, self.vehicle, config.home,
-                                        gps_clock_offset_s=config.gps_clock_offset_s)
+                                        gps_clock_offset_s=config.gps_clock_offset_s, dialect=self.dialect)
         self.commands = CommandHandler(self)
         self.truth = TruthServer(self, config.truth_port)
         self.setpoint: OffboardSetpoint | None = None
@@ -81,6 +94,11 @@ class SimVehicleServer:
 
     def _supervise_offboard(self, now_ns: int) -> None:
         v = self.vehicle
+        if v.mode == Mode.GUIDED:
+            sp = v.guidance.setpoint
+            if sp is not None and sp.position is None and now_ns - self.setpoint_ns > self.cfg.guided_timeout_s * 1e9:
+                v.guidance.guided()  # ArduCopter zeroes a lapsed velocity target: it stops and holds
+            return
         if v.mode == Mode.OFFBOARD and v.armed:
             if now_ns - self.setpoint_ns > self.cfg.offboard_loss_timeout_s * 1e9:
                 action = OFFBOARD_LOSS_ACTIONS[self.cfg.offboard_loss_action]
@@ -130,6 +148,8 @@ class SimVehicleServer:
         self.setpoint, self.setpoint_ns = setpoint, t_ns
         if self.vehicle.mode == Mode.OFFBOARD:
             self.vehicle.guidance.offboard(setpoint)
+        elif self.dialect.ardupilot and self.vehicle.mode in (Mode.GUIDED, Mode.TAKEOFF):  # in_guided_mode()
+            self.vehicle.guidance.follow(setpoint)
 
     def _reader(self) -> None:
         while not self._stop.is_set():
