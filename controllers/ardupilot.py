@@ -18,6 +18,7 @@ from controllers.mavlink_commands import (
     CommandAckError,
     command_long,
     send_command,
+    velocity_body_setpoint,
 )
 
 logger = logging.getLogger(__name__)
@@ -67,9 +68,24 @@ async def set_mode(direct: MavlinkDirectAsync, target_system: int, mode: str) ->
     """Switch ArduCopter to ``mode``; raises CommandAckError with the autopilot's answer.
 
     Fact: re-arming after RTL/land through MAVSDK 4 fails ("Brake mode not armable") unless the
-    mode is changed to GUIDED first; MAVSDK's hold is PX4-specific, so holding is LOITER here.
+    mode is changed to GUIDED first.
     """
     await send_command(direct, set_mode_command(target_system, mode))
+
+
+async def hold(direct: MavlinkDirectAsync, target_system: int) -> None:
+    """Stop and hold position, altitude and heading whatever the RC sticks say: GUIDED, zero velocity.
+
+    Fact: LOITER flies the RC throttle stick; at its minimum (SITL's default
+    input, a transmitter left at idle) it descends at the pilot's maximum rate (measured 9.98 m -> 6.6 m
+    at up to 2.31 m/s). GUIDED ignores the sticks: entering it, or a zero velocity target, brakes to a
+    stop and keeps that point and altitude (ArduCopter's own ``ModeGuided::hold_position``), and a target
+    that lapses after GUID_TIMEOUT is zeroed, which holds too. GUIDED also keeps re-arming possible
+    (BRAKE would hold, but MAVSDK 4 cannot arm from it). Switching to GUIDED when already there changes
+    nothing, so the zero target is what stops a take-off or a vector.
+    """
+    await set_mode(direct, target_system, "GUIDED")
+    await direct.send_message(velocity_body_setpoint(target_system, 0.0, 0.0))
 
 
 def takeoff_command(target_system: int, altitude_m: float) -> MavlinkMessage:

@@ -323,9 +323,9 @@ class MavsdkController:
             await self._command("set_fly_vector", lambda: send_command(self._direct, command))
 
     async def stop_offboard(self) -> None:
-        if self.autopilot == "ardupilot":
-            await self._ardupilot_mode("LOITER", "hold")
-        else:
+        if self.autopilot == "ardupilot":  # not LOITER: it flies the RC throttle (see ardupilot.hold)
+            await self._command("hold", lambda: ardupilot.hold(self._direct, self._sysid))
+        else:  # PX4 HOLD (Auto Loiter): automatic, the sticks only matter when a pilot moves them to take over
             await self._command("hold", self._action.hold)
 
     # ---- telemetry -------------------------------------------------------------------------------

@@ -36,7 +36,7 @@ class OffboardPort(Protocol):
         ...
 
     async def stop_offboard(self) -> None:
-        """Leave velocity control into a holding mode (PX4 HOLD, ArduCopter LOITER)."""
+        """Leave velocity control into a hold that ignores the sticks (PX4 HOLD, ArduCopter GUIDED at zero)."""
         ...
 
     def flight_mode_since(self, t_mono: float) -> str | None:

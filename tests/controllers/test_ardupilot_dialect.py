@@ -2,7 +2,8 @@
 
 No ArduPilot SITL runs here, so :class:`FakeAutopilot` plays an ArduCopter: these tests check what
 the controller sends (streams requested, GUIDED before arming, NAV_TAKEOFF altitude, CIRCLE for
-orbits, LOITER for hold), not how ArduCopter reacts to it.
+orbits, GUIDED at zero velocity for hold, never LOITER), not how ArduCopter reacts to it (the
+simulator's ``ardupilot`` dialect and ``test_ardupilot_hold.py`` check that).
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ from controllers.mavsdk_controller import MavsdkController
 from controllers.sim.launcher import free_udp_port
 from tests.controllers.fake_autopilot import FakeAutopilot, UdpLink, mavlink
 
-GUIDED, LOITER, CIRCLE = 4, 5, 7
+GUIDED, CIRCLE = 4, 7
 
 
 @pytest_asyncio.fixture
@@ -57,13 +58,13 @@ async def test_guided_before_arming_and_takeoff_altitude(copter: tuple[MavsdkCon
     assert takeoff[6] == 4.0
 
 
-async def test_vector_in_guided_then_loiter(copter: tuple[MavsdkController, FakeAutopilot]) -> None:
+async def test_vector_in_guided_then_held_in_guided(copter: tuple[MavsdkController, FakeAutopilot]) -> None:
     fc, fake = copter
     await fc.set_fly_vector(0.5, 0.25, 0.5)
     async with asyncio.timeout(10):  # a 0.5 s vector; a stream that never ends fails here, not at the suite timeout
         while fc.vector_active:
             await asyncio.sleep(0.05)
-    assert set_modes(fake)[-2:] == [GUIDED, LOITER]
+    assert set_modes(fake)[-2:] == [GUIDED, GUIDED]  # LOITER would fly the RC throttle stick
     setpoints = fake.of_type("SET_POSITION_TARGET_LOCAL_NED")
     moving = [s for s in setpoints if (s.vx, s.vy) == (0.5, 0.25)]
     assert len(moving) >= 8  # 0.5 s at 20 Hz, well within GUID_TIMEOUT
@@ -72,7 +73,7 @@ async def test_vector_in_guided_then_loiter(copter: tuple[MavsdkController, Fake
     assert fc.last_vector_end == "completed"
 
 
-async def test_orbit_is_circle_mode_and_hold_is_loiter(copter: tuple[MavsdkController, FakeAutopilot]) -> None:
+async def test_orbit_is_circle_mode_and_hold_is_guided(copter: tuple[MavsdkController, FakeAutopilot]) -> None:
     fc, fake = copter
     await fc.do_orbit(5.0, 2.0)
     params = {
@@ -84,4 +85,9 @@ async def test_orbit_is_circle_mode_and_hold_is_loiter(copter: tuple[MavsdkContr
     assert set_modes(fake)[-1] == CIRCLE
     assert not [c for c, _ in fake.commands() if c == mavlink.MAV_CMD_DO_ORBIT]
     await fc.hold()
-    assert set_modes(fake)[-1] == LOITER
+    assert set_modes(fake)[-1] == GUIDED
+    async with asyncio.timeout(5):  # the target is sent without an answer: wait for it to arrive
+        while not fake.of_type("SET_POSITION_TARGET_LOCAL_NED"):
+            await asyncio.sleep(0.02)
+    (target,) = fake.of_type("SET_POSITION_TARGET_LOCAL_NED")
+    assert (target.vx, target.vy, target.vz, target.yaw_rate) == (0.0, 0.0, 0.0, 0.0)
