@@ -4,22 +4,31 @@ from __future__ import annotations
 
 import argparse
 import datetime
+import shlex
 import sys
+from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 from typing import Any
 
 from rich.console import Console
+from rich.markup import escape
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
 from uav_tui.config import parse_processor_args
 from uav_tui.errors import KNOWN_ERRORS, ConfigError
-from uav_tui.evaluation import TrackerSpec, evaluate, find_sequences
-from uav_tui.evaluation.report import summary, table, write_json, write_plots
+from uav_tui.evaluation import JobResult, TrackerSpec, evaluate, find_sequences, journal
+from uav_tui.evaluation.report import failures, summary, table, write_json, write_plots
 
 EXAMPLE = """examples:
   uav-tui eval ../shared/data/aerial-tracking --processor csrt --processor cv:csrt
   uav-tui eval data/ --processor csrt --processor-arg mode=paper --processor ~/algos/mine.py:MyTracker
   uav-tui eval data/ --processor cv:kcf --cluster tcp://10.0.0.5:8786
+  uav-tui eval data/ --processor csrt --out eval-results/csrt      # interrupted (Ctrl-C, a crash)? go on:
+  uav-tui eval data/ --processor csrt --resume eval-results/csrt
+
+Each job's result is written as it finishes (jobs.jsonl, eval.json), so an interrupted evaluation keeps what is
+done and --resume runs only the rest. A processor that raises fails its job alone (the table says where and
+why); the exit status is then 1. tmMgr.save writes into DIR/saves/ (at most 100 images a job).
 
 --processor-arg applies to the --processor before it. cv:NAME is a plain OpenCV tracker; this OpenCV has:
   {trackers}"""
@@ -61,32 +70,79 @@ def build_parser() -> argparse.ArgumentParser:
                         "(tcp://HOST:8786; needs the cluster extra)")
     parser.add_argument("--out", type=Path, metavar="DIR", help="where eval.json and the plots go "
                         "(default: eval-results/<UTC time>)")
+    parser.add_argument("--resume", type=Path, metavar="DIR", help="go on with the evaluation in DIR (an earlier "
+                        "--out): the jobs already there are not run again")
+    parser.add_argument("--threads", type=int, default=1, metavar="N", help="OpenCV and ONNX Runtime threads of "
+                        "each job (default 1, so that ms/frame compares across trackers)")
     return parser
 
 
 def main(argv: list[str]) -> int:
     args = build_parser().parse_args(argv)
     console = Console(highlight=False, width=None if sys.stdout.isatty() else 160)
+    results: list[JobResult] = []
+    out = args.resume or args.out or Path("eval-results") / datetime.datetime.now(datetime.UTC).strftime(
+        "%Y-%m-%dT%H-%M-%SZ")
     try:
         trackers = [TrackerSpec(spec, parse_processor_args(items)) for spec, items in args.processors]
-        if args.workers is not None and args.workers < 1:
-            raise ConfigError("--workers must be at least 1", key="workers")
+        _check_numbers(args)
         for tracker in trackers:
             tracker.load()  # a wrong name or argument fails here, before any job starts
         sequences = find_sequences(args.data)
-        out = args.out or Path("eval-results") / datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%dT%H-%M-%SZ")
+        done = journal.read(out, sequences, args.threads) if args.resume else []
+        if not args.resume and (out / journal.JOURNAL).exists():
+            raise ConfigError(f"{out} already holds an evaluation ({journal.JOURNAL}): go on with it with --resume "
+                              f"{out}, or give another --out", key="out")
         out.mkdir(parents=True, exist_ok=True)
+        total, sources = len(sequences) * len(trackers), [str(p) for p in args.data]
+        wanted = {(s.name, t.label) for s in sequences for t in trackers}
+        results.extend(r for r in done if r.key in wanted)
+        if results:
+            console.print(f"resuming: {len(results)} of {total} jobs already done in {out}")
+
+        def finished(result: JobResult) -> None:
+            journal.append(out, result)
+            results.append(result)
+            write_json(summary(results, sources, total_jobs=total), out / "eval.json")
+
         with Progress(TextColumn("eval"), BarColumn(), MofNCompleteColumn(), TextColumn("jobs"),
                       TimeElapsedColumn(), console=console, transient=True) as progress:
-            task = progress.add_task("eval", total=len(sequences) * len(trackers))
-            results = evaluate(sequences, trackers, workers=args.workers, cluster=args.cluster,
-                               progress=lambda done, total: progress.update(task, completed=done))
+            task = progress.add_task("eval", total=total)
+            results = evaluate(sequences, trackers, workers=args.workers, cluster=args.cluster, threads=args.threads,
+                               saves_dir=out / "saves", done=results, on_result=finished,
+                               progress=lambda count, _: progress.update(task, completed=count))
     except KNOWN_ERRORS as exc:
         print(f"uav-tui eval: {exc}", file=sys.stderr)
         return 2
+    except (KeyboardInterrupt, BrokenProcessPool) as exc:
+        why = "interrupted" if isinstance(exc, KeyboardInterrupt) else f"a worker process died ({exc})"
+        print(f"uav-tui eval: {why}; the {len(results)} finished jobs are in {out / 'eval.json'}; go on with: "
+              f"{_resume_command(argv, out)}", file=sys.stderr)
+        return 130 if isinstance(exc, KeyboardInterrupt) else 1
     console.print(table(results))
-    written = [write_json(summary(results, [str(p) for p in args.data]), out / "eval.json"),
-               *write_plots(results, out)]
+    for line in failures(results):
+        console.print(f"[red]{escape(line)}[/red]")
+    written = [write_json(summary(results, sources, total_jobs=total), out / "eval.json"), *write_plots(results, out)]
     for path in written:
         console.print(f"wrote {path}")
-    return 0
+    failed = sum(r.failed for r in results)
+    if failed:
+        console.print(f"[red]{failed} of {total} jobs failed[/red] (eval.json has their tracebacks)")
+    return 1 if failed else 0
+
+
+def _check_numbers(args: argparse.Namespace) -> None:
+    if args.workers is not None and args.workers < 1:
+        raise ConfigError("--workers must be at least 1", key="workers")
+    if args.threads < 1:
+        raise ConfigError("--threads must be at least 1", key="threads")
+    if args.resume and args.out and args.out.resolve() != args.resume.resolve():
+        raise ConfigError(f"--resume {args.resume} writes into that folder: leave out --out {args.out}", key="out")
+
+
+def _resume_command(argv: list[str], out: Path) -> str:
+    """The command line that goes on with this evaluation."""
+    given = list(argv)
+    if "--resume" not in given:
+        given += ["--resume", str(out)]
+    return "uav-tui eval " + " ".join(shlex.quote(a) for a in given)

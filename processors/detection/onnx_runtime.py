@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import ast
 import logging
+import os
 from pathlib import Path
 
 import cv2
@@ -13,6 +14,9 @@ from processors.detection import Detection, DetectorConfig
 from processors.detection.postprocess import COCO_NAMES, letterbox, select
 
 logger = logging.getLogger(__name__)
+
+THREADS_ENV = "UAV_TUI_ONNX_THREADS"
+"""When set (``uav-tui eval --threads N`` sets it), the threads of each ONNX Runtime session (else its default)."""
 
 
 def decode(output: np.ndarray, n_classes: int) -> tuple[np.ndarray, np.ndarray]:
@@ -49,6 +53,8 @@ class OnnxBackend:
         options = ort.SessionOptions()
         # Its threads sleep between runs instead of spinning: the camera decodes on the same cores meanwhile.
         options.add_session_config_entry("session.intra_op.allow_spinning", "0")
+        if os.environ.get(THREADS_ENV, "").isdigit():
+            options.intra_op_num_threads = int(os.environ[THREADS_ENV])
         self.session = ort.InferenceSession(str(path), options, providers=["CPUExecutionProvider"])
         inp = self.session.get_inputs()[0]
         self.input_name = inp.name

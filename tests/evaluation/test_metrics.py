@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -36,10 +38,19 @@ def test_a_box_shifted_by_half_its_width() -> None:
     assert scores.norm_precision == pytest.approx(1 / 51)
 
 
-def test_what_is_reported_on_a_hidden_frame_does_not_count() -> None:
+def test_what_is_reported_on_a_hidden_frame_counts_only_as_not_reported_lost() -> None:
     pred = GT.copy()
     pred[2] = [100, 100, 5, 5]
-    assert score_sequence(pred, GT, TIMES) == score_sequence(GT.copy(), GT, TIMES)
+    boxed, lost = score_sequence(pred, GT, TIMES), score_sequence(GT.copy(), GT, TIMES)
+    assert (boxed.absent_frames, boxed.absent_lost, boxed.absent_lost_share) == (1, 0, 0.0)
+    assert (lost.absent_frames, lost.absent_lost, lost.absent_lost_share) == (1, 1, 1.0)
+    assert dataclasses.replace(boxed, absent_lost=1, absent_lost_share=1.0) == lost
+
+
+def test_without_absent_frames_there_is_no_share() -> None:
+    scores = score_sequence(GT[[0, 1, 3]], GT[[0, 1, 3]], TIMES[:3])
+    assert (scores.absent_frames, scores.absent_lost, scores.absent_lost_share) == (0, 0, None)
+    assert summarise([scores], TIMES[:3]).absent_lost_share is None
 
 
 def test_overall_scores_average_the_sequences_and_add_the_frames() -> None:

@@ -4,11 +4,13 @@
 * :mod:`.trackers` names what is scored (any processor with ``catch_cmd`` and ``box``, or ``cv:NAME``);
 * :mod:`.metrics` turns boxes into success / precision curves;
 * :mod:`.runner` runs one sequence x tracker job (one-pass protocol) and all jobs through :mod:`uav_tui.jobs`;
-* :mod:`.report` prints the table and writes the JSON and the plots.
+* :mod:`.report` prints the table and writes the JSON and the plots;
+* :mod:`.journal` appends each finished job to ``jobs.jsonl`` and reads them back for ``--resume``.
 """
 
 from __future__ import annotations
 
+from uav_tui.evaluation import journal
 from uav_tui.evaluation.metrics import Scores, score_sequence, summarise
 from uav_tui.evaluation.runner import Job, JobResult, evaluate, run_job
 from uav_tui.evaluation.sequences import Sequence, SequenceError, find_sequences, load_sequence
@@ -16,5 +18,5 @@ from uav_tui.evaluation.trackers import TrackerSpec
 
 __all__ = [
     "Job", "JobResult", "Scores", "Sequence", "SequenceError", "TrackerSpec", "evaluate", "find_sequences",
-    "load_sequence", "run_job", "score_sequence", "summarise",
+    "journal", "load_sequence", "run_job", "score_sequence", "summarise",
 ]

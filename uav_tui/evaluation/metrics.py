@@ -5,11 +5,13 @@
 * precision: fraction of frames whose centre error is at most d px, d = 0..50; reported at 20 px;
 * normalised precision: the centre error divided by the gt box size per axis, thresholds 0..0.5;
   its mean is reported;
-* frames lost: frames with a gt box where the tracker reported none (no box scores IoU 0 and an
-  infinite centre error).
+* frames lost (lost while visible): frames with a gt box where the tracker reported none (no box scores
+  IoU 0 and an infinite centre error);
+* absent reported lost: of the frames whose gt is NaN (target not visible), the share where the tracker
+  reported no box (what a loss signal is for).
 
-Frames whose gt is NaN (target not visible) are skipped. Overall scores average the per-sequence
-curves (as the benchmarks' toolkits do) and add up frame counts.
+Frames whose gt is NaN are skipped by every other score. Overall scores average the per-sequence
+curves and shares (as the benchmarks' toolkits do) and add up frame counts.
 """
 
 from __future__ import annotations
@@ -36,6 +38,7 @@ class Scores:
     scored: int
     """Frames with a gt box."""
     frames_lost: int
+    """Lost while visible: frames with a gt box where the tracker reported none."""
     success_auc: float
     precision_20: float
     norm_precision: float
@@ -46,6 +49,13 @@ class Scores:
     success_curve: list[float]
     precision_curve: list[float]
     norm_precision_curve: list[float]
+    absent_frames: int = 0
+    """Frames whose gt is NaN (target not visible)."""
+    absent_lost: int = 0
+    """Of those, frames where the tracker reported no box."""
+    absent_lost_share: float | None = None
+    """``absent_lost / absent_frames`` (overall: the mean over the sequences that have absent frames); None
+    without absent frames."""
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -76,6 +86,8 @@ def centre_error(pred: np.ndarray, gt: np.ndarray, normalised: bool = False) -> 
 def score_sequence(pred: np.ndarray, gt: np.ndarray, times_ms: np.ndarray) -> Scores:
     """Scores of predicted boxes ``pred`` (NaN rows = no box) against ``gt`` (NaN rows skipped)."""
     visible = ~np.isnan(gt).any(axis=1)
+    absent_lost = int((np.isnan(pred).any(axis=1) & ~visible).sum())
+    absent = int((~visible).sum())
     pred, gt = pred[visible], gt[visible]
     overlap = iou(pred, gt)
     error = centre_error(pred, gt)
@@ -88,7 +100,8 @@ def score_sequence(pred: np.ndarray, gt: np.ndarray, times_ms: np.ndarray) -> Sc
         success_auc=float(np.mean(success)), precision_20=float(precision[PRECISION_AT_PX]),
         norm_precision=float(np.mean(norm_precision)), **_timing(times_ms),
         success_curve=success.tolist(), precision_curve=precision.tolist(),
-        norm_precision_curve=norm_precision.tolist(),
+        norm_precision_curve=norm_precision.tolist(), absent_frames=absent, absent_lost=absent_lost,
+        absent_lost_share=absent_lost / absent if absent else None,
     )
 
 
@@ -96,6 +109,7 @@ def summarise(per_sequence: list[Scores], times_ms: np.ndarray) -> Scores:
     """Overall scores: curves averaged over sequences, frame counts added, timing over all frames."""
     curves = {name: np.mean([getattr(s, name) for s in per_sequence], axis=0)
               for name in ("success_curve", "precision_curve", "norm_precision_curve")}
+    shares = [s.absent_lost_share for s in per_sequence if s.absent_lost_share is not None]
     return Scores(
         frames=sum(s.frames for s in per_sequence), scored=sum(s.scored for s in per_sequence),
         frames_lost=sum(s.frames_lost for s in per_sequence),
@@ -103,6 +117,8 @@ def summarise(per_sequence: list[Scores], times_ms: np.ndarray) -> Scores:
         precision_20=float(curves["precision_curve"][PRECISION_AT_PX]),
         norm_precision=float(np.mean(curves["norm_precision_curve"])), **_timing(times_ms),
         **{name: curve.tolist() for name, curve in curves.items()},
+        absent_frames=sum(s.absent_frames for s in per_sequence), absent_lost=sum(s.absent_lost for s in per_sequence),
+        absent_lost_share=float(np.mean(shares)) if shares else None,
     )
 
 

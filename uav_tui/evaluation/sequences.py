@@ -7,7 +7,11 @@ Two layouts are read:
   ``SEQ/img/``) with ``SEQ.txt`` beside the folder.
 
 Ground truth is one ``x,y,w,h`` line per frame (commas, tabs or spaces), (x, y) the top-left corner in
-pixels; ``NaN`` (or a zero-size box) marks a frame where the target is not visible. Frame 0 must have a box.
+pixels; ``NaN`` (or a zero-size box) marks a frame where the target is not visible. Frame 0 must have a box,
+and it must overlap the frame (the tracker starts from it).
+
+A sequence's frames are ``fps`` apart in its own time: the video's frame rate, or
+:data:`IMAGE_SEQUENCE_FPS` for images (OTB's and UAV123's rate; UAV123@10fps is sampled from it).
 """
 
 from __future__ import annotations
@@ -26,6 +30,7 @@ from uav_tui.errors import UavError
 VIDEO_NAME, VIDEO_GT = "video.mp4", "gt.txt"
 OTB_IMAGES, OTB_GT = "img", "groundtruth_rect.txt"
 IMAGE_SUFFIXES = (".jpg", ".jpeg", ".png", ".bmp")
+IMAGE_SEQUENCE_FPS = 30.0
 
 
 class SequenceError(UavError):
@@ -45,6 +50,8 @@ class Sequence:
     """``N x 4`` float array ``x, y, w, h`` per frame; a row of NaN where the target is not visible."""
     video: Path | None = None
     images: tuple[Path, ...] = ()
+    fps: float = IMAGE_SEQUENCE_FPS
+    """Frames per second of the sequence's own time (what ``tmMgr.snapshot().frame_t_ns`` counts in)."""
 
     def __len__(self) -> int:
         return len(self.gt)
@@ -114,9 +121,15 @@ def load_sequence(folder: Path) -> Sequence:
         if not gt_path.is_file():
             raise SequenceError(f"{gt_path} is missing: a sequence needs one gt row per frame of {video}")
         gt = read_ground_truth(gt_path)
-        frames = int(cv2.VideoCapture(str(video)).get(cv2.CAP_PROP_FRAME_COUNT))
+        capture = cv2.VideoCapture(str(video))
+        frames = int(capture.get(cv2.CAP_PROP_FRAME_COUNT))
+        size = (int(capture.get(cv2.CAP_PROP_FRAME_WIDTH)), int(capture.get(cv2.CAP_PROP_FRAME_HEIGHT)))
+        fps = capture.get(cv2.CAP_PROP_FPS)
+        capture.release()
         _check_count(gt_path, gt, frames, video)
-        return Sequence(folder.name, gt_path, gt, video=video)
+        _check_first_box(gt_path, gt, size)
+        return Sequence(folder.name, gt_path, gt, video=video,
+                        fps=fps if math.isfinite(fps) and fps > 0 else IMAGE_SEQUENCE_FPS)
     image_dir = folder / OTB_IMAGES if (folder / OTB_IMAGES).is_dir() else folder
     images = tuple(sorted(p for p in image_dir.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES))
     if not images:
@@ -128,6 +141,10 @@ def load_sequence(folder: Path) -> Sequence:
                             "row per image")
     gt = read_ground_truth(gt_path)
     _check_count(gt_path, gt, len(images), image_dir)
+    first = cv2.imread(str(images[0]), cv2.IMREAD_UNCHANGED)
+    if first is None:
+        raise SequenceError(f"{images[0]}: cannot be read as an image")
+    _check_first_box(gt_path, gt, (first.shape[1], first.shape[0]))
     return Sequence(folder.name, gt_path, gt, images=images)
 
 
@@ -157,6 +174,16 @@ def _check_count(gt_path: Path, gt: np.ndarray, frames: int, source: Path) -> No
     if frames != len(gt):
         raise SequenceError(f"{gt_path} has {len(gt)} rows but {source} has {frames} frames; give one gt row "
                             "per frame")
+
+
+def _check_first_box(gt_path: Path, gt: np.ndarray, size: tuple[int, int]) -> None:
+    """The first box must overlap the frame: a tracker cannot start from a box outside it."""
+    x, y, w, h = gt[0]
+    width, height = size
+    if width > 0 and height > 0 and not (x < width and y < height and x + w > 0 and y + h > 0):
+        raise SequenceError(f"{gt_path}:1: the first box ({x:g}, {y:g}, {w:g}, {h:g}) is outside the {width}x{height} "
+                            "frame; the tracker starts from it: give the target's box in frame 1's pixels (x, y of "
+                            "its top-left corner, then width, height)")
 
 
 def _is_sequence(folder: Path) -> bool:
