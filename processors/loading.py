@@ -95,6 +95,13 @@ def _check_arguments(cls: type, kwargs: dict[str, Any], where: str | None) -> No
         parameters = list(inspect.signature(cls).parameters.values())
     except (TypeError, ValueError):  # no signature to read (some extension types): let the call decide
         return
+    needed = [p.name for p in parameters if p.default is inspect.Parameter.empty and p.name not in kwargs
+              and p.kind in (inspect.Parameter.POSITIONAL_OR_KEYWORD, inspect.Parameter.KEYWORD_ONLY)]
+    if needed:
+        given = " ".join(f"--processor-arg {name}=..." for name in needed)
+        raise ProcessorLoadError(f"{cls.__name__} ({where}) needs the constructor argument{'s' * (len(needed) > 1)} "
+                                 f"{', '.join(needed)}: give {given} (or [processor_args] in uav.toml)",
+                                 path=where, class_name=cls.__name__, missing=needed[0])
     if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in parameters):
         return
     accepted = [p.name for p in parameters if p.kind in (inspect.Parameter.POSITIONAL_OR_KEYWORD,

@@ -13,6 +13,7 @@ import logging
 import sys
 from pathlib import Path
 
+from uav_tui.arguments import ArgumentParser
 from uav_tui.commands import help_text
 from uav_tui.config import add_config_flags, find_config_file, load_config, overrides_from_args
 from uav_tui.errors import CONFIG_ERRORS, error_line
@@ -23,8 +24,8 @@ TOOLS = ("sim", "runs", "report", "replay", "eval")
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
-        prog="uav-tui",
+    parser = ArgumentParser(
+        prog="uav-tui", suggest=TOOLS,
         description="Camera -> your algorithm -> flight controller, with an operator dashboard.",
         epilog=f"tools: uav-tui sim | runs | report [RUN] | replay RUN... | eval DATA (each has --help)\n\n"
                f"commands (keys, --script, web):\n{help_text()}",
@@ -84,7 +85,7 @@ def _run_tool(name: str, argv: list[str]) -> int:
     if name == "sim":
         from controllers.sim.__main__ import main as sim_main
 
-        return sim_main(argv)
+        return sim_main(argv, parser_class=ArgumentParser)
     if name == "replay":
         from uav_tui.replay.cli import main as replay_main
 

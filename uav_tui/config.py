@@ -163,6 +163,7 @@ _FLAG_GROUPS = {Config: "camera, processor, flight controller (top of uav.toml)"
 """``--help`` group titles: what the flags set and where the same keys go in ``uav.toml``."""
 
 _TOP_LEVEL = tuple(f.name for f in fields(Config) if f.name not in SECTIONS)
+_ALL_KEYS = (*_TOP_LEVEL, *(f.name for cls in SECTIONS.values() for f in fields(cls)))
 
 
 def default_config_paths() -> list[Path]:
@@ -286,8 +287,11 @@ def _check(cls: type, key: str, value: Any, name: str, where: str) -> Any:
     known = {f.name: f for f in fields(cls) if cls is not Config or f.name not in SECTIONS}
     f = known.get(key)
     if f is None:
-        close = difflib.get_close_matches(key, known, n=1)
-        hint = f"; did you mean {close[0]!r}?" if close else f"; known keys: {', '.join(known)}"
+        if key in _ALL_KEYS:
+            raise ConfigError(f"{where}: {name!r} belongs {_place_of(key)}", key=name)
+        close = difflib.get_close_matches(key, known, n=1) or difflib.get_close_matches(key, _ALL_KEYS, n=1)
+        elsewhere = f" ({_place_of(close[0])})" if close and close[0] not in known else ""
+        hint = f"; did you mean {close[0]!r}{elsewhere}?" if close else f"; known keys: {', '.join(known)}"
         raise ConfigError(f"{where}: unknown key {name!r}{hint}", key=name)
     expected = {"bool": bool, "int": int, "float": (int, float), "str": str}.get(f.type, dict)
     if isinstance(value, bool) and f.type != "bool" or not isinstance(value, expected):
@@ -312,6 +316,12 @@ def _check(cls: type, key: str, value: Any, name: str, where: str) -> Any:
     if key == "isolation" and value not in ISOLATION_MODES:
         raise ConfigError(f"{where}: {name} must be one of {', '.join(ISOLATION_MODES)}, got {value!r}", key=name)
     return value
+
+
+def _place_of(key: str) -> str:
+    """Where a known key goes in uav.toml, as said in an error."""
+    section = section_of(key)
+    return f"under [{section}]" if section else "at the top of the file, before any [section]"
 
 
 def _convert_flag(type_name: str, text: Any, key: str) -> Any:

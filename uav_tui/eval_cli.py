@@ -14,6 +14,7 @@ from rich.console import Console
 from rich.markup import escape
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
+from uav_tui.arguments import ArgumentParser
 from uav_tui.config import parse_processor_args
 from uav_tui.errors import KNOWN_ERRORS, ConfigError
 from uav_tui.evaluation import JobResult, TrackerSpec, evaluate, find_sequences, journal
@@ -53,7 +54,7 @@ class _Processor(argparse.Action):
 def build_parser() -> argparse.ArgumentParser:
     from processors.opencv_tracker import available_trackers
 
-    parser = argparse.ArgumentParser(
+    parser = ArgumentParser(
         prog="uav-tui eval", formatter_class=argparse.RawDescriptionHelpFormatter,
         description="Score processors on annotated video: catch_cmd(frame 0's gt box), then photo_processing on "
                     "every frame; the processor's box is compared with the gt (success AUC, precision@20px, "

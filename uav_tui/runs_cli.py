@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-import argparse
 import datetime
 import json
 import sys
 from pathlib import Path
 from typing import Any
 
+from uav_tui.arguments import ArgumentParser
 from uav_tui.config import find_config_file, load_config
 from uav_tui.errors import KNOWN_ERRORS, UavError, error_line
 from uav_tui.recording.crash import crash_summary
@@ -17,7 +17,7 @@ from uav_tui.text import redact
 
 def main(name: str, argv: list[str]) -> int:
     """Run the tool ``name`` (``runs`` or ``report``) with its arguments; returns the exit code."""
-    parser = argparse.ArgumentParser(prog=f"uav-tui {name}")
+    parser = ArgumentParser(prog=f"uav-tui {name}")
     parser.add_argument("--runs-dir", metavar="DIR", help="folder holding the runs (default: runs_dir of the "
                         "configuration, 'runs')")
     parser.add_argument("--config", metavar="PATH", help="TOML file to take runs_dir from")

@@ -31,8 +31,8 @@ def _home(text: str) -> Home:
         raise argparse.ArgumentTypeError(str(exc)) from exc
 
 
-def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
+def build_parser(parser_class: type[argparse.ArgumentParser] = argparse.ArgumentParser) -> argparse.ArgumentParser:
+    p = parser_class(
         prog="uav-tui sim",
         description="Simulated PX4-like quadrotor speaking MAVLink 2 on loopback. "
         "Connect MAVSDK with udpin://127.0.0.1:MAVLINK_PORT.",
@@ -107,9 +107,13 @@ def config_from_args(args: argparse.Namespace) -> ServerConfig:
     )
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    """Run the simulator; prints one ``ready`` line on stdout, returns 0 after SIGTERM/SIGINT."""
-    args = build_parser().parse_args(argv)
+def main(argv: Sequence[str] | None = None,
+         parser_class: type[argparse.ArgumentParser] = argparse.ArgumentParser) -> int:
+    """Run the simulator; prints one ``ready`` line on stdout, returns 0 after SIGTERM/SIGINT.
+
+    ``parser_class``: ``uav-tui sim`` passes the platform's, whose errors suggest the flag meant.
+    """
+    args = build_parser(parser_class).parse_args(argv)
     sys.setswitchinterval(0.001)  # the MAVLink reader gets the interpreter promptly when a command arrives
     logging.basicConfig(
         level=args.log_level.upper(),

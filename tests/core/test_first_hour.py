@@ -140,3 +140,54 @@ def test_a_headless_run_without_vehicle_or_web_page_imports_nothing_heavy(tmp_pa
                             capture_output=True, text=True, timeout=60)
     assert result.returncode == 0, result.stderr
     assert result.stdout.splitlines()[-1] == "[]"
+
+
+def test_error_lines_point_at_the_fix(tmp_path: Path) -> None:
+    (tmp_path / "top.toml").write_text("max_speed = 2\n")
+    (tmp_path / "typo.toml").write_text("[safety]\nmax_sped = 2\n")
+    (tmp_path / "gain.py").write_text("class Gain:\n    def __init__(self, gain, offset=0):\n        pass\n\n"
+                                      "    def photo_processing(self, frame):\n        pass\n")
+    fc_hint = ("is not a name uav-tui knows: use 'sim' for the built-in simulated vehicle, 'none' for no vehicle, "
+               "or a MAVLink connection string (a PX4 SITL: udpin://0.0.0.0:14540")
+    cases = {
+        ("--config", "top.toml"): "uav-tui: error: top.toml: 'max_speed' belongs under [safety]",
+        ("--config", "typo.toml"): "uav-tui: error: typo.toml: unknown key 'safety.max_sped'; did you mean "
+                                   "'max_speed'?",
+        ("--fc", "simulator"): f"uav-tui: error: flight controller 'simulator' {fc_hint}",
+        ("--fc", "px4"): f"uav-tui: error: flight controller 'px4' {fc_hint}",
+        ("--max-sped", "2"): "uav-tui: error: unrecognized arguments: --max-sped 2; did you mean --max-speed?",
+        ("--processor", "gain.py:Gain"): "uav-tui: error: Gain (" + str(tmp_path / "gain.py") + ") needs the "
+                                         "constructor argument gain: give --processor-arg gain=... (or "
+                                         "[processor_args] in uav.toml)",
+        ("replay", "run", "--procesor"): "uav-tui replay: error: unrecognized arguments: --procesor; did you mean "
+                                         "--processor?",
+        ("sim", "--mavlink-prt", "1"): "uav-tui sim: error: unrecognized arguments: --mavlink-prt 1; did you mean "
+                                       "--mavlink-port?",
+        ("repaly",): "uav-tui: error: unrecognized arguments: repaly; did you mean uav-tui replay?",
+    }
+    for args, expected in cases.items():
+        flags = ("--no-ui", "--no-record", "--duration", "5") if args[:1] not in (("replay",), ("sim",)) else ()
+        result = uav(*args, *flags, cwd=tmp_path)
+        assert result.returncode == 2, (args, result.stdout)
+        (line,) = result.stderr.splitlines()  # one line, no usage
+        assert line.startswith(expected), (args, line)
+
+
+def test_the_demo_counts_its_start_up_from_uav_tuis_start_not_from_its_setup(tmp_path: Path) -> None:
+    """scripts/demo.sh sets up first (a minute on a fresh clone); the time to the first frame is uav-tui's own."""
+    (tmp_path / "scripts").mkdir()
+    (tmp_path / "scripts" / "demo.sh").write_bytes((ROOT / "scripts" / "demo.sh").read_bytes())
+    (tmp_path / "scripts" / "setup.sh").write_text("sleep 10\ndate +%s.%N > setup-done\n")  # a slow setup
+    (tmp_path / ".venv" / "bin").mkdir(parents=True)
+    (tmp_path / ".venv" / "bin" / "uav-tui").write_text(f"#!/bin/sh\nexec {sys.executable} -m uav_tui \"$@\"\n")
+    (tmp_path / ".venv" / "bin" / "uav-tui").chmod(0o755)
+    (tmp_path / "empty.txt").write_text("")
+    result = subprocess.run(["bash", str(tmp_path / "scripts" / "demo.sh"), "--no-ui", "--json", "--duration", "2",
+                             "--no-record", "--fc", "none", "--source", "synthetic:", "--processor", "template",
+                             "--script", str(tmp_path / "empty.txt")],
+                            env={**os.environ, "PYTHONPATH": str(ROOT)}, capture_output=True, text=True, timeout=90)
+    since_setup_s = time.time() - float((tmp_path / "setup-done").read_text())
+    assert result.returncode == 0, result.stderr
+    startup = [json.loads(line)["startup_s"] for line in result.stdout.splitlines() if '"startup_s"' in line]
+    # The first frame came after the setup, so uav-tui's start-up fits in the time since (before: 10 s more).
+    assert 0 < [s for s in startup if s is not None][-1] < since_setup_s

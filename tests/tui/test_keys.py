@@ -95,6 +95,9 @@ async def test_help_key_shows_the_keys(make_app):
         await pilot.press("question_mark")
         await pilot.pause(0.1)
         assert app.screen.query("HelpPanel")
+        await pilot.press("escape")
+        await pilot.pause(0.1)
+        assert not app.screen.query("HelpPanel")  # Esc closes it, as it closes every other panel
 
 
 async def test_quit_key_stops_the_core_and_exits(make_app):

@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 from controllers.replay_timeline import parse_speed
+from uav_tui.arguments import ArgumentParser
 from uav_tui.config import find_config_file, load_config, overrides_from_args
 from uav_tui.errors import KNOWN_ERRORS
 from uav_tui.jobs import run_jobs
@@ -15,7 +16,7 @@ from uav_tui.runs_cli import find_run
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = ArgumentParser(
         prog="uav-tui replay",
         description="Replay recorded runs (their video and telemetry, at the recorded times) through a processor. "
                     "Each replay is written as a new run whose run.json names the source run; vectors are judged "

@@ -104,6 +104,7 @@ class UavApp(App[None]):
         Binding("colon", "prompt", "Command"),
         Binding("q", "quit", "Quit"),
         Binding("question_mark", "help", "Help"),
+        Binding("escape", "hide_help_panel", "Close help", show=False),
     ]
 
     def __init__(self, core: UavCore, *, status: Callable[[], CoreStatus] | None = None,
