@@ -38,7 +38,7 @@ from uav_tui.replay.gate import ReplayGate
 from uav_tui.replay.operator import CommandReplay, recorded_commands
 from uav_tui.status import CoreStatus
 from uav_tui.telemetry import TelemetryManager
-from uav_tui.text import shorten
+from uav_tui.text import last_line, shorten
 from uav_tui.worker import ProcessedFrame, ProcessorWorker
 
 if TYPE_CHECKING:  # aiortc and pymavlink are imported only when the side channels are switched on
@@ -346,9 +346,9 @@ class UavCore:
             self.events.emit("info", "platform", f"first frame processed {self.startup_s:.1f} s after the "
                              "process started")
         if result.error:
-            last_line = shorten(result.error.strip().splitlines()[-1], 500)
-            self._processor_errors.report(last_line, f"frame {result.frame.seq}: {result.error.strip()}")
-            self.processor_error = last_line
+            exception = shorten(last_line(result.error), 500)
+            self._processor_errors.report(exception, f"frame {result.frame.seq}: {result.error.strip()}")
+            self.processor_error = exception
         self.gate.consider(result)
         for listener in tuple(self._frame_listeners):
             listener(result)

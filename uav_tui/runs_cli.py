@@ -12,7 +12,7 @@ from uav_tui.arguments import ArgumentParser
 from uav_tui.config import find_config_file, load_config
 from uav_tui.errors import KNOWN_ERRORS, UavError, error_line
 from uav_tui.recording.crash import crash_summary
-from uav_tui.text import redact
+from uav_tui.text import escape, redact, safe
 
 
 def main(name: str, argv: list[str]) -> int:
@@ -34,7 +34,7 @@ def main(name: str, argv: list[str]) -> int:
             return _report(find_run(runs_dir, args.run))
         return _list(runs_dir)
     except KNOWN_ERRORS as exc:
-        print(error_line(exc, f"uav-tui {name}"), file=sys.stderr)
+        print(safe(error_line(exc, f"uav-tui {name}"), multiline=True), file=sys.stderr)
         return 2
 
 
@@ -64,7 +64,7 @@ def list_runs(runs_dir: Path) -> list[dict[str, Any]]:
 def _list(runs_dir: Path) -> int:
     runs = list_runs(runs_dir)
     if not runs:
-        print(f"no recorded runs in {runs_dir}")
+        print(safe(f"no recorded runs in {runs_dir}"))
         return 0
     print(f"{'run':<24} {'start (UTC)':<20} {'duration':>9} {'frames':>7} {'size':>9}  {'processor':<24} source")
     for run in runs:
@@ -93,9 +93,9 @@ def _report(run_dir: Path) -> int:
     from uav_tui.report import write_report  # matplotlib is only imported when a report is drawn
 
     paths, text = write_report(run_dir)
-    print(text)
+    print(text)  # safe already
     for path in paths:
-        print(f"wrote {path}")
+        print(safe(f"wrote {path}"))
     return 0
 
 
@@ -107,8 +107,8 @@ def _spec(part: Any, key: str = "spec") -> str:
 
 
 def _cell(text: str, width: int) -> str:
-    """``text`` safe for a terminal (no control characters) and at most ``width`` characters."""
-    text = "".join(c if c.isprintable() else "?" for c in str(text))
+    """``text`` safe for a terminal (control characters escaped) and at most ``width`` characters."""
+    text = escape(text)
     return text if len(text) <= width else text[: width - 1] + "…"
 
 

@@ -2,17 +2,23 @@
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, fields, replace
 from typing import Any
 
 from controllers.base import Telemetry
 from uav_tui.stats import PipelineStats
+from uav_tui.text import safe
 from uav_tui.worker import ProcessorState
 
 
 @dataclass(frozen=True)
 class CoreStatus:
-    """What the TUI, the headless status line and the web page show."""
+    """What the TUI, the headless status line and the web page show.
+
+    Its text is safe to show as it is: every string in it (the processor's name and last exception, the
+    camera's URI and properties, the recorder's paths, the host's state) is passed through :func:`safe`
+    when the snapshot is made, so no interface can forget to: passwords hidden, control characters escaped.
+    """
 
     telemetry: Telemetry
     pipeline: PipelineStats
@@ -42,6 +48,17 @@ class CoreStatus:
     """Why the vehicle cannot come back (e.g. the built-in simulator's process was killed), or ""."""
     box: tuple[int, int, int, int] | None = None
     """The processor's ``box`` on the newest processed frame (frame pixels), None when it tracks nothing."""
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if isinstance(value, str):
+                object.__setattr__(self, f.name, safe(value))
+            elif isinstance(value, dict):
+                object.__setattr__(self, f.name, {k: safe(v) if isinstance(v, str) else v for k, v in value.items()})
+        if self.processor_state is not None:
+            object.__setattr__(self, "processor_state", replace(self.processor_state,
+                                                                state=safe(self.processor_state.state)))
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready form (for ``--json`` and the web page)."""

@@ -8,7 +8,8 @@ the CSV writer, ``run.json``, the headless terminal):
 - :func:`redact` (from :mod:`sources.uri`, the one redaction function) hides passwords in URIs
   (``rtsp://admin:***@host``) and secret query parameters (``?pwd=***``);
 - :func:`describe` renders any untrusted value (a vector of a million numbers, say) in at most N
-  characters, escaped; :func:`shorten` cuts long text (a processor's exception message);
+  characters, escaped; :func:`shorten` cuts long text (a processor's exception message), :func:`last_line`
+  takes a traceback's exception line;
 - :class:`SafeFormatter` applies them to every log record on the terminal.
 """
 
@@ -21,7 +22,7 @@ from typing import Any
 
 from sources.uri import redact
 
-__all__ = ["DESCRIBE_CHARS", "SafeFormatter", "describe", "escape", "redact", "safe", "shorten"]
+__all__ = ["DESCRIBE_CHARS", "SafeFormatter", "describe", "escape", "last_line", "redact", "safe", "shorten"]
 
 DESCRIBE_CHARS = 80
 """The longest description of an untrusted value."""
@@ -52,6 +53,12 @@ def escape(text: str, *, multiline: bool = False) -> str:
 def safe(text: str, *, multiline: bool = False) -> str:
     """:func:`redact` then :func:`escape`: what every boundary applies to outside text."""
     return escape(redact(text if isinstance(text, str) else str(text)), multiline=multiline)
+
+
+def last_line(text: str) -> str:
+    """The last line of a traceback: its exception. Only ``\n`` ends a line here; a ``\r`` or ``\x85`` inside the
+    exception's message is part of it (``str.splitlines`` would show what follows it as the whole message)."""
+    return text.strip().rsplit("\n", 1)[-1]
 
 
 def shorten(text: str, limit: int) -> str:

@@ -16,7 +16,7 @@ from controllers.base import TELEMETRY_FIELDS, Telemetry
 from uav_tui.events import Event
 from uav_tui.recording.interpolate import FIELDS, TelemetryHistory
 from uav_tui.recording.writer import Row
-from uav_tui.text import shorten
+from uav_tui.text import last_line, shorten
 from uav_tui.worker import ProcessedFrame
 
 TELEMETRY_COLUMNS: tuple[str, ...] = TELEMETRY_FIELDS
@@ -84,7 +84,7 @@ def frame_record(result: ProcessedFrame, frame_id: int, image: str, extra_json: 
     """The own columns of a processed frame (:data:`FRAME_OWN_COLUMNS` minus ``telemetry``)."""
     frame = result.frame
     vx, vy, vt = _vector(result.vector)
-    error = shorten(result.error.strip().splitlines()[-1], MAX_ERROR_CHARS) if result.error else ""
+    error = shorten(last_line(result.error), MAX_ERROR_CHARS) if result.error else ""
     box = result.box or (None, None, None, None)
     values = [frame_id, frame.seq, frame.t_wall_ns, frame.t_mono_ns, result.t_start_ns, result.t_end_ns,
               result.t_vector_ns or None, vx, vy, vt, *box, result.decision, error, bool(image), image, extra_json]

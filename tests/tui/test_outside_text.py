@@ -1,0 +1,69 @@
+"""Text from a processor reaches the operator escaped (issue 42 point 3): the dashboard's err row in a real
+terminal (tmux), and ``uav-tui report`` with its summary.txt for a processor whose path holds escapes."""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from tests.tui.test_tmux import ROOT, Tmux, wait
+
+HOSTILE = "boom\\r\\x1b]2;pwned\\x07\\x1b[7mINVERTED"
+"""Python source for an exception message that retitles the terminal and inverts what follows, after a CR."""
+
+RAISING = f'''
+class Raising:
+    def __init__(self):
+        self.tmMgr = None
+
+    def photo_processing(self, frame):
+        raise RuntimeError("{HOSTILE}")
+'''
+
+
+@pytest.fixture
+def tmux(tmp_path: Path) -> Iterator[Tmux]:
+    session = Tmux(tmp_path)
+    yield session
+    session.kill()
+
+
+@pytest.mark.skipif(shutil.which("tmux") is None, reason="tmux is not installed")
+@pytest.mark.parametrize("isolation", ["process", "thread"])
+def test_the_err_row_shows_an_exception_escaped(tmux: Tmux, tmp_path: Path, isolation: str) -> None:
+    (tmp_path / "raising.py").write_text(RAISING)
+    tmux.start("--fc", "none", "--processor", f"{tmp_path / 'raising.py'}:Raising", "--isolation", isolation,
+               tmp_path=tmp_path)
+    wait(lambda: re.search(r"^ err +[1-9]\d* +\S", tmux.screen(), re.MULTILINE), 30, "the exception in the err row")
+    time.sleep(0.5)  # a few more frames, each raising
+    screen = tmux.screen()
+    assert "pwned" not in tmux.tmux("display-message", "-p", "#{pane_title}")
+    row = next(line for line in screen.splitlines() if line.startswith(" err"))
+    assert "RuntimeError: boom\\r\\x1b]2;pw" in row, screen  # the whole last line, its controls shown (not obeyed)
+
+
+def test_report_of_a_processor_whose_path_holds_escapes(tmp_path: Path) -> None:
+    folder = tmp_path / "algos\x1b]2;pwned\x07\x1b[2J"
+    folder.mkdir()
+    (folder / "mean.py").write_text((ROOT / "processors/template.py").read_text())
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    run = subprocess.run([sys.executable, "-m", "uav_tui", "--no-ui", "--fc", "none", "--source", "synthetic:",
+                          "--processor", f"{folder / 'mean.py'}:MeanBrightnessProcessor", "--duration", "2",
+                          "--runs-dir", str(tmp_path / "runs")], cwd=tmp_path, env=env, capture_output=True,
+                         text=True, timeout=120)
+    assert run.returncode == 0, run.stderr
+    report = subprocess.run([sys.executable, "-m", "uav_tui", "report", "--runs-dir", str(tmp_path / "runs")],
+                            cwd=tmp_path, env=env, capture_output=True, text=True, timeout=120)
+    assert report.returncode == 0, report.stderr
+    summary = next((tmp_path / "runs").glob("*/summary.txt")).read_text()
+    for text in (run.stdout, run.stderr, report.stdout, report.stderr, summary):
+        assert "\x1b" not in text and "\x07" not in text
+    assert "algos\\x1b]2;pwned\\x07\\x1b[2J" in summary and "algos\\x1b]2;pwned" in report.stdout
