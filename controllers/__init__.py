@@ -45,15 +45,15 @@ async def connect_controller(address: str, *, heartbeat_timeout: float = 10.0,
         raise ConnectError(f"flight controller {address!r}: did you mean {key[:-1]!r} (without the colon)?")
     if key == "none":
         return None
+    if key == "sim":
+        from controllers.sim_controller import start_sim_controller
+
+        return await start_sim_controller(heartbeat_timeout=heartbeat_timeout, **(sim_vehicle or {}))
     if key.isidentifier():  # a bare name (simulator, px4, ardupilot): not a connection string
         raise ConnectError(f"flight controller {address!r} is not a name uav-tui knows: use 'sim' for the built-in "
                            "simulated vehicle, 'none' for no vehicle, or a MAVLink connection string "
                            "(a PX4 SITL: udpin://0.0.0.0:14540; a flight controller on the Pi's UART: "
                            "serial:///dev/ttyAMA0:57600)")
-    if key == "sim":
-        from controllers.sim_controller import start_sim_controller
-
-        return await start_sim_controller(heartbeat_timeout=heartbeat_timeout, **(sim_vehicle or {}))
     if key.startswith("replay:"):
         from controllers.replay import ReplayController
 
