@@ -29,8 +29,9 @@ class FrameProcessor(Protocol):
         customize_processing(id)  operator pressed F1..F4 (id 1..4)
         getPreparedVector()       (vx, vy, t): body-frame m/s, vx forward, vy right, t seconds; or None
 
-    ``tmMgr`` is set by the platform after construction (the TelemetryManager:
-    ``snapshot()``, ``save(frame, **extra)``). All calls come from one thread.
+    ``tmMgr`` is set by the platform after construction (a :class:`~processors.frame_telemetry.FrameTelemetry`:
+    ``snapshot()``, the telemetry at the frame's capture with its ``frame_seq`` and ``frame_t_ns``, the clock
+    to pace by; ``save(frame, **extra)``). All calls come from one thread.
 
     One optional read-only attribute, ``box``: ``(x, y, w, h)`` in frame pixels of what the processor
     tracks now, or ``None`` (nothing selected, or lost). The platform reads it after every frame.

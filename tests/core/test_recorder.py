@@ -53,7 +53,7 @@ async def test_ids_stay_unique_across_a_camera_switch_and_every_nth_frame_is_sav
 
 
 async def test_run_json_describes_the_run_and_its_end(tmp_path):
-    core = UavCore(_config(tmp_path, processor_args={"save_every": 3}))
+    core = UavCore(_config(tmp_path, processor_args={"save_every": 3}, save_max_hz=0))  # 10 saves a second
     await core.start()
     await _frames_after(core, 9)
     await core.stop()

@@ -75,7 +75,7 @@ async def _arm_when_ready(core: UavCore, timeout: float = 20.0) -> None:
 
 async def test_recorded_flight_matches_simulator_truth(tmp_path):
     config = with_overrides(Config(), source="synthetic:?fps=30", fc="sim", runs_dir=str(tmp_path),
-                            processor="tests.core.recorder_processors:SaveEveryFifth")
+                            processor="tests.core.recorder_processors:SaveEveryFifth", save_max_hz=0)  # 6 a second
     core = UavCore(config)
     await core.start()
     truth = TruthRecorder(core.controller.sim.truth())

@@ -31,7 +31,7 @@ WIDTH, HEIGHT = 160, 120
 
 
 async def _fly(tmp_path: Path) -> Path:
-    async with flying_core(tmp_path, processor=BRIGHTNESS, record=True, runs_dir=str(tmp_path / "runs"),
+    async with flying_core(tmp_path, processor=BRIGHTNESS, record=True, runs_dir=str(tmp_path / "runs"), save_max_hz=0,
                            source=f"synthetic:?width={WIDTH}&height={HEIGHT}&fps=30") as core:
         await core.execute("autonomy on")
         await wait_until(lambda: core.gate.executed >= 10, 15, "vectors flown under autonomy")
@@ -50,7 +50,7 @@ def flight(tmp_path_factory) -> Path:
 
 
 def _replay(run: Path, processor: str, out: Path, speed: str = "max"):
-    config = load_config(None, {"processor": processor, "runs_dir": str(out)})
+    config = load_config(None, {"processor": processor, "runs_dir": str(out), "save_max_hz": 0})  # saves every frame
     return replay_run(ReplayJob(str(run), config, speed))
 
 
