@@ -19,18 +19,29 @@ from uav_tui.text import describe
 MAX_WAIT_S = 24 * 3600.0
 """The longest ``wait`` in a script."""
 
+MIN_ORBIT_RADIUS_M = 1.0
+"""The smallest ``orbit R``: PX4 flies no smaller orbit (the built-in vehicle refuses one too)."""
+
+MIN_ORBIT_SPEED_MS = 0.1
+"""The slowest ``orbit R V``, |V| (V < 0 circles the other way): anything slower is no orbit."""
+
+# Argument converters: each returns the value or raises ValueError saying what the value must be.
+
 
 def _finite(text: str) -> float:
-    value = float(text)
+    try:
+        value = float(text)
+    except ValueError:
+        raise ValueError("not a number") from None
     if not math.isfinite(value):
-        raise ValueError("not finite")
+        raise ValueError("not a finite number")
     return value
 
 
 def _positive(text: str) -> float:
     value = _finite(text)
     if value <= 0:
-        raise ValueError("not > 0")
+        raise ValueError("must be > 0")
     return value
 
 
@@ -49,9 +60,22 @@ def _pixels(text: str) -> int:
 
 
 def _button(text: str) -> int:
-    value = int(text)
-    if not 1 <= value <= 4:
+    if text not in ("1", "2", "3", "4"):
         raise ValueError("not 1..4")
+    return int(text)
+
+
+def _orbit_radius(text: str) -> float:
+    value = _finite(text)
+    if value < MIN_ORBIT_RADIUS_M:
+        raise ValueError(f"below {MIN_ORBIT_RADIUS_M:g} m, the smallest orbit radius")
+    return value
+
+
+def _orbit_speed(text: str) -> float:
+    value = _finite(text)
+    if abs(value) < MIN_ORBIT_SPEED_MS:
+        raise ValueError(f"|V| below {MIN_ORBIT_SPEED_MS:g} m/s is no orbit (a negative V circles the other way)")
     return value
 
 
@@ -90,7 +114,7 @@ COMMANDS: dict[str, CommandSpec] = {
     "rtl": CommandSpec("rtl", "return to launch and land"),
     "hold": CommandSpec("hold", "stop and hold position"),
     "orbit": CommandSpec("orbit R V", "orbit the current position at radius R m and speed V m/s",
-                         (_positive, _finite), limits=("max_orbit_radius", "max_orbit_speed")),
+                         (_orbit_radius, _orbit_speed), limits=("max_orbit_radius", "max_orbit_speed")),
     "vector": CommandSpec("vector VX VY T", "fly body-frame velocity VX (forward) VY (right) m/s for T s",
                           (_finite, _finite, _positive)),
     "autonomy": CommandSpec("autonomy on|off|toggle", "let the processor's vectors fly the vehicle", (_switch,)),
@@ -139,11 +163,14 @@ def parse(line: str) -> Command | None:
         raise CommandError(f"{describe(text)}: {exc}; usage: {spec.usage}", key="command") from None
     if not len(spec.args) - spec.optional <= len(words) <= len(spec.args):
         raise CommandError(f"{describe(text)}: wrong number of arguments; usage: {spec.usage}", key="command")
-    try:
-        args = tuple(convert(word) for convert, word in zip(spec.args, words, strict=False))
-    except (ValueError, OverflowError):  # float("1e999") is inf, int(inf) overflows
-        raise CommandError(f"{describe(text)}: bad argument; usage: {spec.usage}", key="command") from None
-    return Command(word, args)
+    args = []
+    for convert, name, value in zip(spec.args, spec.arg_names, words, strict=False):
+        try:
+            args.append(convert(value))
+        except ValueError as exc:
+            raise CommandError(f"{describe(text)}: bad argument {name} = {describe(value)}: {exc}; usage: "
+                               f"{spec.usage}", key="command") from None
+    return Command(word, tuple(args))
 
 
 def check_limits(command: Command, safety: SafetyConfig) -> None:

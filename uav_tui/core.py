@@ -19,7 +19,6 @@ import psutil
 from controllers import connect_controller
 from controllers.base import FlightController
 from controllers.replay_timeline import ReplayTimeline
-from processors import load_processor
 from sources import CameraSource, open_source, warm_up_source
 from sources.pose import PoseTrack
 from uav_tui import pose_feed
@@ -28,18 +27,19 @@ from uav_tui.clock_check import ClockCheck
 from uav_tui.commands import VEHICLE_COMMANDS, Command, parse
 from uav_tui.config import Config
 from uav_tui.errors import KNOWN_ERRORS, NoVehicle, SourceError, UavError
-from uav_tui.events import EventLog, Repeats
+from uav_tui.events import EventLog
 from uav_tui.link import LinkWatch
 from uav_tui.malloc_tuning import tune_this_process
 from uav_tui.operations import Operations
-from uav_tui.process_worker import ProcessWorker
+from uav_tui.process_worker import LOAD_TIMEOUT_S, ProcessWorker
+from uav_tui.processor_errors import ProcessorErrors
 from uav_tui.recording import Recorder, describe
 from uav_tui.replay.gate import ReplayGate
 from uav_tui.replay.operator import CommandReplay, recorded_commands
 from uav_tui.status import CoreStatus
 from uav_tui.telemetry import TelemetryManager
 from uav_tui.text import last_line, shorten
-from uav_tui.worker import ProcessedFrame, ProcessorWorker
+from uav_tui.worker import ProcessedFrame, ProcessorWorker, load_in_thread
 
 if TYPE_CHECKING:  # aiortc and pymavlink are imported only when the side channels are switched on
     from uav_tui.web import WebServer
@@ -49,6 +49,9 @@ logger = logging.getLogger(__name__)
 
 Worker = ProcessorWorker | ProcessWorker
 """The two hosts of a processor (``isolation = "thread" | "process"``); they have one public surface."""
+
+LOADING_NOTICE_S = 5.0
+"""How often a processor still loading is said to be (``loading processor X ... (10 s)``)."""
 
 LEFT_ALONE_AT_EXIT = frozenset({"LAND", "RETURN_TO_LAUNCH", "MISSION", "MANUAL", "STABILIZED", "ALTCTL", "ACRO",
                                 "RATTITUDE"})
@@ -95,7 +98,7 @@ class UavCore:
         self._frame_listeners: list[Callable[[ProcessedFrame], None]] = []
         self._tasks: list[asyncio.Task[Any]] = []
         self._told_not_recording = False
-        self._processor_errors = Repeats(self.events, "error", "processor")
+        self._processor_errors = ProcessorErrors(self.events)
         self._operations = Operations(self)
         self.web: WebServer | None = None
         """The web page's WebServer (``web.url`` has the token) when ``web`` is on, else None."""
@@ -127,7 +130,11 @@ class UavCore:
         # The camera's one-off preparation (the sim: camera's ground) overlaps loading and connecting.
         camera_ready = loop.run_in_executor(None, warm_up_source, self.config.source)
         try:
-            self.worker = await self._start_worker()
+            notices = asyncio.create_task(self._say_loading(), name="loading notices")
+            try:
+                self.worker = await self._start_worker()
+            finally:
+                notices.cancel()
             self.controller = await connect_controller(self.config.fc, heartbeat_timeout=self.config.connect_timeout,
                                                        sim_vehicle=self.config.sim.vehicle())
             self.telemetry = TelemetryManager(self.controller)
@@ -177,14 +184,22 @@ class UavCore:
         """Load the processor where ``isolation`` says: its own process (default) or a thread of this one."""
         config = self.config
         if config.isolation == "thread":
-            processor = await asyncio.get_running_loop().run_in_executor(
-                None, functools.partial(load_processor, config.processor, config.processor_args))
+            processor = await load_in_thread(config.processor, config.processor_args)
             return ProcessorWorker(processor, self._on_result, save_max_hz=config.recording.save_max_hz)
         return await ProcessWorker.start(
             config.processor, config.processor_args, self._on_result, events=self.events,
             on_fault=self._on_processor_fault, timeout_s=config.processor_timeout,
             memory_mb=config.processor_memory_mb or None, save_images=config.recording.record,
             save_max_hz=config.recording.save_max_hz)
+
+    async def _say_loading(self) -> None:
+        """While the processor loads, say so every :data:`LOADING_NOTICE_S` (a slow ``__init__`` is not silence)."""
+        started = time.monotonic()
+        limit = f"; given up at {LOAD_TIMEOUT_S:g} s" if self.config.isolation == "process" else ""
+        while True:
+            await asyncio.sleep(LOADING_NOTICE_S)
+            self.events.emit("info", "processor", f"loading processor {self.config.processor} ... "
+                             f"({time.monotonic() - started:.0f} s{limit})")
 
     def _on_processor_fault(self, reason: str) -> None:
         """The processor's process died or was killed: autonomy off, and hold if a vector flies."""
@@ -227,6 +242,7 @@ class UavCore:
         """
         if self.state is CoreState.STOPPED:
             return
+        self._processor_errors.flush()
         self.events.emit("info", "platform", f"stopping: {reason}")
         await self.gate.disable("platform", reason if self.gate.enabled else "operator", hold=False)
         vehicle = self.telemetry.snapshot()
@@ -347,7 +363,7 @@ class UavCore:
                              "process started")
         if result.error:
             exception = shorten(last_line(result.error), 500)
-            self._processor_errors.report(exception, f"frame {result.frame.seq}: {result.error.strip()}")
+            self._processor_errors.report(result.error, exception, result.frame.seq)
             self.processor_error = exception
         self.gate.consider(result)
         for listener in tuple(self._frame_listeners):

@@ -161,13 +161,17 @@ class HeadlessRunner:
                                 "tmux or screen, stop with Ctrl-C")
         self.core.events.add_listener(self._print_event)  # before start: what it finds at connect is printed
         try:
-            await self.core.start()
+            started = await self._start()
         except KNOWN_ERRORS as exc:
             self._flush_native_lines()  # what FFmpeg said of it ("Connection refused") comes first
             self._error(str(exc))
             return EXIT_START_FAILED
         try:
             await self._serve(loop)
+        if not started:
+            self._say(json.dumps({"stopped": self._reason}) if self.json_lines else f"stopped: {self._reason}, "
+                      "while starting")
+            return self.exit_code
         except BaseException as exc:  # a bug here, or the loop cancelled: the vehicle is held all the same
             self._reason = f"unhandled error: {exc!r}"
             raise
@@ -184,6 +188,20 @@ class HeadlessRunner:
         """From a started core until something asks to stop; sets the reason and the exit code."""
         if self.core.web is not None:
             url = self.core.web.url
+    async def _start(self) -> bool:
+        """Start the core; False when a stop was asked first (Ctrl-C, SIGTERM: while a processor loads, say), which
+        cancels the start and releases what it had opened."""
+        start = asyncio.create_task(self.core.start(), name="start")
+        stop = asyncio.create_task(self._stop.wait())
+        await asyncio.wait([start, stop], return_when=asyncio.FIRST_COMPLETED)
+        stop.cancel()
+        if not start.done():
+            start.cancel()
+            await asyncio.gather(start, return_exceptions=True)
+            return False
+        start.result()
+        return True
+
             self._say(json.dumps({"web_url": url}) if self.json_lines else f"web page: {url}", redact=False)
         started = time.monotonic()
         tasks = [self._watched(self._print_status(started), "status line")]

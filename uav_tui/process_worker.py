@@ -275,11 +275,11 @@ class ProcessWorker:
         try:
             await asyncio.wait_for(asyncio.shield(child.ready), LOAD_TIMEOUT_S)
         except TimeoutError:
-            child.kill("killed")
+            _abandon(child)
             raise ProcessorLoadError(f"{self.spec} did not finish loading within {LOAD_TIMEOUT_S:g} s",
                                      class_name=self.spec.rpartition(":")[2]) from None
         except BaseException:
-            child.kill("killed")
+            _abandon(child)
             raise
         return child
 
@@ -654,4 +654,17 @@ def _call_soon(loop: asyncio.AbstractEventLoop, callback: Callable[..., None], *
     """``callback(*args)`` on ``loop``, from any thread; nothing once the loop is closed."""
     with contextlib.suppress(RuntimeError):
         loop.call_soon_threadsafe(callback, *args)
+
+def _abandon(child: ChildProcess) -> None:
+    """Kill a child whose loading nobody waits for any more (timed out, or the start was cancelled: a stop, a quit).
+
+    Its ``ready`` is cancelled, so that its end does not set an exception no one will retrieve (asyncio would log
+    "Future exception was never retrieved").
+    """
+    child.kill("killed")
+    if not child.ready.done():
+        child.ready.cancel()
+    elif not child.ready.cancelled():
+        child.ready.exception()  # retrieved: what it says is reported by whoever started it, if anyone
+
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import functools
 import logging
 import os
@@ -294,6 +295,33 @@ class ProcessorWorker:
             self._fields = (telemetry, {name: getattr(telemetry, name) for name in TELEMETRY_FIELDS
                                         if name != "heartbeat_age_s"})
         tm.begin(frame.seq, frame.t_mono_ns, frame.t_wall_ns, self._fields[1], heartbeat_age)
+
+
+async def load_in_thread(spec: str, kwargs: dict[str, Any]) -> LoadedProcessor:
+    """``load_processor`` on a daemon thread of its own: when the wait is cancelled (Ctrl-C or SIGTERM while a slow
+    ``__init__`` runs), the thread is left behind and does not hold the process's exit, as an executor's would."""
+    loop = asyncio.get_running_loop()
+    future: asyncio.Future[LoadedProcessor] = loop.create_future()
+
+    def run() -> None:
+        try:
+            outcome: tuple[LoadedProcessor | None, BaseException | None] = (load_processor(spec, kwargs), None)
+        except BaseException as exc:  # noqa: BLE001 - handed to the awaiting caller
+            outcome = (None, exc)
+        with contextlib.suppress(RuntimeError):  # the loop is closed: nobody waits
+            loop.call_soon_threadsafe(_settle, future, *outcome)
+
+    threading.Thread(target=run, name="processor-loader", daemon=True).start()
+    return await future
+
+
+def _settle(future: asyncio.Future[Any], result: Any, error: BaseException | None) -> None:
+    if future.done():  # cancelled
+        return
+    if error is not None:
+        future.set_exception(error)
+    else:
+        future.set_result(result)
 
 
 def _run_job(job: Callable[[], Any], future: Future[Any]) -> None:

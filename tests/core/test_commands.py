@@ -96,8 +96,38 @@ def test_arguments_within_their_limits_pass(line: str) -> None:
 @pytest.mark.parametrize("line", ["roi inf 0 1 1", "roi 1e999 0 1 1", "takeoff inf", "orbit 5 nan", "wait 1e9",
                                   "vector 1e999 0 1"])
 def test_non_finite_and_absurd_values_are_refused(line: str) -> None:
-    with pytest.raises(CommandError, match="bad argument; usage"):
+    with pytest.raises(CommandError, match="bad argument .*; usage"):
         parse(line)
+
+
+@pytest.mark.parametrize(("line", "reason"), [
+    ("orbit 1e-300 1", "bad argument R = '1e-300': below 1 m, the smallest orbit radius"),
+    ("orbit 0.5 1", "bad argument R = '0.5': below 1 m"),
+    ("orbit 5 1e-300", "bad argument V = '1e-300': |V| below 0.1 m/s"),
+    ("orbit 5 -0", "bad argument V = '-0': |V| below 0.1 m/s"),
+    ("orbit 5 nan", "bad argument V = 'nan': not a finite number"),
+    ("orbit five 1", "bad argument R = 'five': not a number"),
+    ("f 9", "bad argument N = '9': not 1..4"),
+], ids=lambda v: v)
+def test_a_bad_argument_is_named_with_what_it_must_be(line: str, reason: str) -> None:
+    with pytest.raises(CommandError) as refused:
+        parse(line)
+    assert reason in str(refused.value) and str(refused.value).endswith(f"; usage: {COMMANDS[line.split()[0]].usage}")
+
+
+async def test_an_orbit_no_autopilot_flies_never_reaches_the_vehicle() -> None:
+    settings = {"fc": "sim", "source": "synthetic:?width=160&height=120", "record": False}
+    core = UavCore(load_config(None, settings))
+    await core.start()
+    try:
+        await core.execute("arm")
+        for line in ("orbit 1e-300 1", "orbit 5 1e-300"):
+            with pytest.raises(CommandError, match="bad argument"):
+                await core.execute(line)
+        assert not [e for e in core.events.recent if "orbit" in e.message]  # nothing was sent, nothing refused
+        assert core.telemetry.snapshot().flight_mode != "ORBIT"
+    finally:
+        await core.stop("test finished")
 
 
 def test_a_config_may_raise_the_limits_but_not_set_takeoff_alt_above_them() -> None:

@@ -232,7 +232,7 @@ async def test_impossible_values_are_400_with_a_clear_message(web_core: UavCore,
             base(web_core) + "/api/command", params={"token": TOKEN}, data=body) as response:
         assert response.status == 400
         text = await response.text()
-        assert "bad argument; usage: roi X Y W H" in text or "not a JSON object" in text
+        assert "not a finite number; usage: roi X Y W H" in text or "not a JSON object" in text
     async with aiohttp.ClientSession() as http, http.post(
             base(web_core) + "/api/command", params={"token": TOKEN}, json={"command": "f 4"}) as response:
         assert response.status == 200  # and the page still works
