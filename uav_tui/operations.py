@@ -9,6 +9,7 @@ from uav_tui.autonomy import check_vector
 from uav_tui.commands import VEHICLE_COMMANDS, Command, check_limits
 from uav_tui.errors import CommandError, ProcessorLoadError, UavError
 from uav_tui.process_worker import ProcessorRaised
+from uav_tui.processor_calls import ProcessorCalls
 from uav_tui.text import describe, shorten
 
 if TYPE_CHECKING:
@@ -42,6 +43,7 @@ class Operations:
 
     def __init__(self, core: UavCore) -> None:
         self.core = core
+        self._processor_calls = ProcessorCalls()
 
     async def run(self, command: Command, origin: str) -> Outcome:
         check_limits(command, self.core.config.safety)
@@ -133,23 +135,21 @@ class Operations:
         return self.core.controller
 
     async def _call_processor(self, method: str, *args: Any) -> int:
-        """Call the processor's ``method``; returns when it began the call (monotonic ns)."""
+        """Call the processor's ``method`` (in order, bounded: :class:`ProcessorCalls`); returns when it began the
+        call (monotonic ns)."""
         worker = self.core.worker
         assert worker is not None
         loaded = worker.processor
         if method not in loaded.info.capabilities:
             raise UavError(f"processor {loaded.info.name} has no {method}() method")
-        timeout = self.core.config.processor_call_timeout
+        what = f"{loaded.info.name}.{method}{describe(args)}"
         try:
-            answer = await asyncio.wait_for(worker.call(method, *args), timeout)
-        except TimeoutError:
-            raise UavError(f"{loaded.info.name}.{method}{describe(args)} did not return within {timeout:g} s "
-                           "(processor_call_timeout); the processor may be hung") from None
+            answer = await self._processor_calls.call(what, lambda: worker.call(method, *args),
+                                                      self.core.config.processor_call_timeout)
         except UavError:
             raise
         except ProcessorRaised as exc:
-            raise UavError(f"{loaded.info.name}.{method}{describe(args)} raised {shorten(str(exc), 500)}") from exc
+            raise UavError(f"{what} raised {shorten(str(exc), 500)}") from exc
         except Exception as exc:  # the researcher's code raised (thread isolation): report it, keep running
-            raise UavError(f"{loaded.info.name}.{method}{describe(args)} raised {type(exc).__name__}: "
-                           f"{shorten(str(exc), 500)}") from exc
+            raise UavError(f"{what} raised {type(exc).__name__}: {shorten(str(exc), 500)}") from exc
         return answer.t_taken_ns
