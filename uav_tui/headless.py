@@ -166,12 +166,12 @@ class HeadlessRunner:
             self._flush_native_lines()  # what FFmpeg said of it ("Connection refused") comes first
             self._error(str(exc))
             return EXIT_START_FAILED
-        try:
-            await self._serve(loop)
         if not started:
             self._say(json.dumps({"stopped": self._reason}) if self.json_lines else f"stopped: {self._reason}, "
                       "while starting")
             return self.exit_code
+        try:
+            await self._serve(loop)
         except BaseException as exc:  # a bug here, or the loop cancelled: the vehicle is held all the same
             self._reason = f"unhandled error: {exc!r}"
             raise
@@ -184,10 +184,6 @@ class HeadlessRunner:
             self._say(json.dumps({"run_dir": str(self.core.recorder.run_dir)}) if self.json_lines else note)
         return EXIT_ABANDONED if self.core.abandoned_calls else self.exit_code
 
-    async def _serve(self, loop: asyncio.AbstractEventLoop) -> None:
-        """From a started core until something asks to stop; sets the reason and the exit code."""
-        if self.core.web is not None:
-            url = self.core.web.url
     async def _start(self) -> bool:
         """Start the core; False when a stop was asked first (Ctrl-C, SIGTERM: while a processor loads, say), which
         cancels the start and releases what it had opened."""
@@ -202,6 +198,10 @@ class HeadlessRunner:
         start.result()
         return True
 
+    async def _serve(self, loop: asyncio.AbstractEventLoop) -> None:
+        """From a started core until something asks to stop; sets the reason and the exit code."""
+        if self.core.web is not None:
+            url = self.core.web.url
             self._say(json.dumps({"web_url": url}) if self.json_lines else f"web page: {url}", redact=False)
         started = time.monotonic()
         tasks = [self._watched(self._print_status(started), "status line")]
