@@ -43,6 +43,7 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import errno
 import faulthandler
 import json
 import logging
@@ -59,7 +60,6 @@ import weakref
 from collections.abc import Iterator
 from multiprocessing import resource_tracker
 from multiprocessing.connection import Connection
-from multiprocessing.shared_memory import SharedMemory
 from typing import Any
 
 import numpy as np
@@ -67,7 +67,7 @@ import numpy as np
 from processors import load_processor
 from processors.base import read_box
 from processors.errors import ProcessorLoadError
-from processors.frame_mailbox import FrameMailbox, Offer, attach_untracked
+from processors.frame_mailbox import FrameMailbox, Offer, Segment
 from processors.frame_telemetry import DEFAULT_SAVE_MAX_HZ, FrameTelemetry
 
 LOG_LEVEL_ENV = "UAV_TUI_PROCESSOR_LOG_LEVEL"
@@ -112,7 +112,7 @@ class Slots:
     """The shared-memory slots this process has mapped, and which of its frame views are still alive."""
 
     def __init__(self) -> None:
-        self._mapped: dict[str, SharedMemory] = {}
+        self._mapped: dict[str, Segment] = {}
         self._alive: dict[str, weakref.ref[np.ndarray]] = {}
 
     def view(self, name: str, shape: tuple[int, ...]) -> np.ndarray:
@@ -134,8 +134,13 @@ class Slots:
             if shm is not None and name not in self._alive:
                 shm.close()
 
-    def _attach(self, name: str) -> SharedMemory:
-        shm = self._mapped[name] = attach_untracked(name)
+    def _attach(self, name: str) -> Segment:
+        try:
+            shm = self._mapped[name] = Segment(name)
+        except OSError as exc:
+            if exc.errno == errno.ENOMEM:  # the address space is full: processor_memory_mb was reached
+                raise MemoryError(f"cannot map the frame ({exc.strerror})") from exc
+            raise
         return shm
 
 
@@ -160,11 +165,20 @@ def _picklable(value: Any) -> Any:
     return value
 
 
-def _limit_memory(memory_mb: float | None) -> None:
+def _limit_memory(memory_mb: float | None) -> str:
+    """Cap this process's address space at ``memory_mb``; or, when that is no more than it already uses (nothing
+    could be loaded), leave it and return why ("" when capped or no cap)."""
     if memory_mb:
         limit = int(memory_mb * 1024 * 1024)
+        with open("/proc/self/statm") as statm:
+            used = int(statm.read().split()[0]) * os.sysconf("SC_PAGE_SIZE")
+        if limit <= used:
+            return (f"processor_memory_mb = {memory_mb:g} MB is too small: the processor's process already uses "
+                    f"{used / 2**20:.0f} MB of address space before loading the processor; set processor_memory_mb "
+                    "(uav.toml, or --processor-memory-mb) well above that, or 0 for no cap")
         _, hard = resource.getrlimit(resource.RLIMIT_AS)
         resource.setrlimit(resource.RLIMIT_AS, (limit, hard if hard != resource.RLIM_INFINITY else limit))
+    return ""
 
 
 def _start_resource_tracker() -> None:
@@ -315,7 +329,9 @@ def main(fd: int, mailbox_address: str) -> int:
     mailbox = FrameMailbox.attach(mailbox_address)
     _, spec, kwargs, memory_mb, save_images, save_max_hz = conn.recv()
     try:
-        _limit_memory(memory_mb)
+        if too_small := _limit_memory(memory_mb):
+            send_message(conn, ("load_error", too_small, None, spec.rpartition(":")[2], None))
+            return 0
         try:
             loaded = load_processor(spec, kwargs)
         except ProcessorLoadError as exc:

@@ -17,12 +17,12 @@ from __future__ import annotations
 
 import contextlib
 import math
+import mmap
 import os
 import select
 import struct
 import threading
 import time
-from multiprocessing import resource_tracker
 from multiprocessing.shared_memory import SharedMemory
 from typing import NamedTuple
 
@@ -72,7 +72,7 @@ class SharedLock:
     """A lock two processes share: an eventfd used as a semaphore, 1 when free (``with lock:`` waits at most
     :data:`LOCK_TIMEOUT_S`). A class, not a generator context manager: it is taken several times a frame."""
 
-    def __init__(self, fd: int, shm: SharedMemory) -> None:
+    def __init__(self, fd: int, shm: SharedMemory | Segment) -> None:
         self.fd, self._shm = fd, shm
 
     def acquire(self, timeout_s: float = LOCK_TIMEOUT_S) -> None:
@@ -108,7 +108,7 @@ class SharedLock:
 class FrameMailbox:
     """One side of the mailbox: the platform creates it (:meth:`create`), the processor attaches (:meth:`attach`)."""
 
-    def __init__(self, shm: SharedMemory, lock_fd: int, wake_fd: int, claimed_fd: int, owner: bool) -> None:
+    def __init__(self, shm: SharedMemory | Segment, lock_fd: int, wake_fd: int, claimed_fd: int, owner: bool) -> None:
         self._shm, self._owner = shm, owner
         self.lock_fd, self.wake_fd, self.claimed_fd = lock_fd, wake_fd, claimed_fd
         self._lock = SharedLock(lock_fd, shm)
@@ -128,7 +128,7 @@ class FrameMailbox:
     def attach(cls, address: str) -> FrameMailbox:
         """The processor's side, from what :attr:`address` said (the descriptors are inherited)."""
         name, *fds = address.split()
-        return cls(attach_untracked(name), *map(int, fds), owner=False)
+        return cls(Segment(name), *map(int, fds), owner=False)
 
     @property
     def address(self) -> str:
@@ -265,15 +265,34 @@ def _drain(eventfd: int) -> None:
         os.eventfd_read(eventfd)
 
 
-def attach_untracked(name: str) -> SharedMemory:
-    """Map the platform's segment ``name`` without registering it with a resource tracker.
+SHM_DIR = "/dev/shm"
+"""Where Linux keeps POSIX shared memory (what ``shm_open`` opens)."""
 
-    Before Python 3.13 attaching registers the segment with a tracker that would unlink it when this
-    process exits; the platform owns every segment and unlinks it itself.
+
+class Segment:
+    """A shared-memory segment the platform created, mapped by the processor's process: ``buf``, ``close``.
+
+    Not :class:`~multiprocessing.shared_memory.SharedMemory`: attaching with it registers the segment with a
+    resource tracker that unlinks it when this process ends (before Python 3.13), and it *unlinks the segment*
+    when mapping fails, as it does once ``processor_memory_mb`` is reached: the platform's frame slot was gone,
+    the next processor could not map it and the platform failed to unlink it at the stop. The platform owns
+    every segment and unlinks it itself.
     """
-    try:
-        return SharedMemory(name, track=False)  # type: ignore[call-arg]  # Python >= 3.13
-    except TypeError:
-        shm = SharedMemory(name)
-        resource_tracker.unregister(shm._name, "shared_memory")  # type: ignore[attr-defined]
-        return shm
+
+    def __init__(self, name: str) -> None:
+        fd = os.open(os.path.join(SHM_DIR, name.lstrip("/")), os.O_RDWR)
+        try:
+            self._mmap = mmap.mmap(fd, os.fstat(fd).st_size)
+        finally:
+            os.close(fd)
+        self.name = name
+        self.buf: memoryview | None = memoryview(self._mmap)
+        """The mapped bytes; None once closed."""
+
+    def close(self) -> None:
+        """Unmap (raises BufferError while arrays made from ``buf`` are alive, as SharedMemory does). Idempotent."""
+        if self.buf is not None:
+            self.buf.release()
+            self.buf = None
+            self._mmap.close()
+

@@ -170,7 +170,8 @@ class FrameRing:
             ensure_resource_tracker()
         for slot in slots:
             self._slots.remove(slot)
-            slot.shm.unlink()
+            with contextlib.suppress(FileNotFoundError):  # gone already: a processor's code may unlink /dev/shm files
+                slot.shm.unlink()
             if slot.holds == 0:
                 slot.shm.close()
         self._on_unlink([s.name for s in slots])
