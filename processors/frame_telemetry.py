@@ -7,8 +7,9 @@ processor that paces itself by ``snapshot().frame_t_ns`` (never by ``time.monoto
 replay at any speed, and on ``eval``, as in flight.
 
 ``save(frame, **extra)`` hands the image and the fields to the host's store (the recorder; in eval the output
-folder) at most ``save_max_hz`` times a second of the frames' time; more calls are dropped, counted, and the
-first second of them is said once with the disk it would fill in an hour.
+folder) at most ``save_max_hz`` times a second of the frames' time; more calls are dropped (counted in
+``saves_throttled``; eval's table shows it) with one warning, once they have gone on for a second of frame time,
+that says how much disk saving them all would fill in an hour.
 """
 
 from __future__ import annotations
@@ -124,8 +125,8 @@ class FrameTelemetry:
             rate = calls / ((now - first) / 1e9)  # calls before this one, over the time since the first
             gb_per_hour = rate * 3600 * image.shape[0] * image.shape[1] * JPEG_BYTES_PER_PIXEL / 1e9
             logger.warning("tmMgr.save is called %.0f times a second (%dx%d frames): storing them all would fill about "
-                           "%.1f GB an hour; storing at most %g a second (save_max_hz), the rest are dropped and "
-                           "counted", rate, image.shape[1], image.shape[0], gb_per_hour, self.save_max_hz)
+                           "%.1f GB an hour; storing at most %g a second (save_max_hz in [recording]), the others "
+                           "are dropped", rate, image.shape[1], image.shape[0], gb_per_hour, self.save_max_hz)
         return False
 
 

@@ -79,8 +79,8 @@ class RecordingConfig:
     record_every: int = _key("also save every Nth raw frame (0 = only frames the processor saves)", minimum=0,
                              maximum=100000, default=0)
     jpeg_quality: int = _key("JPEG quality of saved frames", minimum=10, maximum=100, default=90)
-    save_max_hz: float = _key("tmMgr.save calls stored per second of the frames' time; more are dropped, counted "
-                              "and said once (0 = no limit)", minimum=0, maximum=1000,
+    save_max_hz: float = _key("tmMgr.save calls stored per second of the frames' time; more are dropped "
+                              "with one warning (0 = no limit)", minimum=0, maximum=1000,
                               default=DEFAULT_SAVE_MAX_HZ)
     max_disk_mb: float = _key("stop saving frames when the run folder reaches this size (0 = no cap)",
                               minimum=0, maximum=1e7, default=0)
