@@ -21,6 +21,7 @@ from controllers.sim.geo import Home, parse_wind
 from processors.frame_telemetry import DEFAULT_SAVE_MAX_HZ
 from uav_tui.errors import ConfigError
 from uav_tui.text import describe
+from uav_tui.token_strength import GENERATE_TOKEN, MIN_TOKEN_BITS, token_problem
 
 
 def _key(help: str, *, minimum: float | None = None, maximum: float | None = None, default: Any = MISSING,
@@ -29,10 +30,6 @@ def _key(help: str, *, minimum: float | None = None, maximum: float | None = Non
     if factory is not MISSING:
         return field(default_factory=factory, metadata=metadata)
     return field(default=default, metadata=metadata)
-
-
-MIN_TOKEN_CHARS = 16
-"""A shorter ``web_token`` can be guessed; generated tokens are 22 characters."""
 
 
 @dataclass(frozen=True)
@@ -95,8 +92,8 @@ class WebConfig:
     web: bool = _key("serve the WebRTC page", default=False)
     web_host: str = _key("address the page binds to", default="0.0.0.0")
     web_port: int = _key("port of the page", minimum=1, maximum=65535, default=8080)
-    web_token: str = _key(f"access token, at least {MIN_TOKEN_CHARS} characters (empty = a random one per start)",
-                          default="")
+    web_token: str = _key(f"access token with at least {MIN_TOKEN_BITS} bits of entropy (make one: {GENERATE_TOKEN}); "
+                          "empty = a random one per start", default="")
     web_origins: str = _key("other page origins allowed to send commands, comma-separated, e.g. "
                             "https://gcs.local:8443 (the page's own origin is always allowed)", default="")
     web_width: int = _key("width of the streamed video, px", minimum=64, maximum=4096, default=640)
@@ -310,9 +307,8 @@ def _check(cls: type, key: str, value: Any, name: str, where: str) -> Any:
             raise ConfigError(f"{where}: {name}: {exc}", key=name) from None
     if f.type == "str" and key in ("source", "processor", "fc") and not value.strip():
         raise ConfigError(f"{where}: {name} must not be empty", key=name)
-    if key == "web_token" and value and len(value) < MIN_TOKEN_CHARS:
-        raise ConfigError(f"{where}: {name} must be at least {MIN_TOKEN_CHARS} characters (it has {len(value)}); "
-                          "leave it empty for a random one per start", key=name)
+    if key == "web_token" and value and (problem := token_problem(value)):
+        raise ConfigError(f"{where}: {name} {problem}", key=name)
     if key == "isolation" and value not in ISOLATION_MODES:
         raise ConfigError(f"{where}: {name} must be one of {', '.join(ISOLATION_MODES)}, got {value!r}", key=name)
     return value

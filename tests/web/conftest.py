@@ -14,7 +14,8 @@ from controllers.sim.launcher import free_ports
 from uav_tui.config import load_config
 from uav_tui.core import UavCore
 
-TOKEN = "test-token-0123456789"
+TOKEN = "pYx3Qm-8Kd2vRw7TzL0bNc5Hj9Fs4GaE"
+"""A token the configuration accepts (as ``secrets.token_urlsafe(24)`` makes them)."""
 
 
 class RecordingProcessor:

@@ -6,6 +6,10 @@ import asyncio
 import csv
 import io
 import json
+import os
+import secrets
+import subprocess
+import sys
 from pathlib import Path
 
 import aiohttp
@@ -129,13 +133,31 @@ async def test_passwords_with_any_character_and_secret_parameters_stay_out_of_ou
 # -- 9: a token worth guessing, and guessing slowed -------------------------------------------------
 
 
-def test_a_short_token_is_a_config_error(tmp_path: Path) -> None:
-    (tmp_path / "uav.toml").write_text('[web]\nweb_token = "k7"\n')
-    with pytest.raises(ConfigError, match="web.web_token must be at least 16 characters"):
-        load_config(tmp_path / "uav.toml")
-    with pytest.raises(ConfigError, match="--web-token must be at least 16 characters"):
-        load_config(None, {"web_token": "k7"})
-    assert load_config(None, {"web_token": "x" * 16}).web.web_token == "x" * 16
+@pytest.mark.parametrize("token", ["k7", "a" * 16, "x" * 40, "test-token-0123456789", "password1234567890",
+                                   "abcdefghijklmnopqrstuvwxyz"], ids=["short", "one-letter", "long-one-letter",
+                                                                       "words-and-digits", "common", "sequence"])
+def test_a_guessable_token_is_a_config_error_saying_how_to_make_one(tmp_path: Path, token: str) -> None:
+    (tmp_path / "uav.toml").write_text(f'[web]\nweb_token = "{token}"\n')
+    for where, load in (("web.web_token", lambda: load_config(tmp_path / "uav.toml")),
+                        ("--web-token", lambda: load_config(None, {"web_token": token}))):
+        with pytest.raises(ConfigError, match="bits of entropy estimated, at least 96") as refused:
+            load()
+        assert f"{where} is too easy to guess" in str(refused.value) and "token_urlsafe(24)" in str(refused.value)
+
+
+def test_a_random_token_is_accepted() -> None:
+    for token in (TOKEN, secrets.token_urlsafe(24), secrets.token_hex(16)):
+        assert load_config(None, {"web_token": token}).web.web_token == token
+
+
+def test_uav_tui_refuses_to_serve_the_page_with_a_one_letter_token(tmp_path: Path) -> None:
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])}
+    run = subprocess.run([sys.executable, "-m", "uav_tui", "--no-ui", "--fc", "none", "--source", "synthetic:",
+                          "--no-record", "--web", "--web-host", "127.0.0.1", "--web-port", str(free_port()),
+                          "--web-token", "a" * 16, "--duration", "3"], cwd=tmp_path, env=env, capture_output=True,
+                         text=True, timeout=60)
+    assert run.returncode == 2 and "web page:" not in run.stdout
+    assert 'python3 -c "import secrets; print(secrets.token_urlsafe(24))"' in run.stderr, run.stderr
 
 
 def test_the_throttle_grows_is_bounded_and_forgets() -> None:

@@ -68,7 +68,7 @@ class WebServer:
     def __init__(self, core: Any, config: WebConfig) -> None:
         self.core = core
         self.config = config
-        self.token = config.web_token or secrets.token_urlsafe(16)
+        self.token = config.web_token or secrets.token_urlsafe(24)  # 192 bits (config refuses under 96)
         self.video = VideoHub(core, config.web_width, config.web_fps)
         self.port = config.web_port
         self._peers: set[RTCPeerConnection] = set()
