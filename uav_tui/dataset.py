@@ -16,6 +16,9 @@ Every table is indexed by capture / receive time (a UTC ``DatetimeIndex`` named 
 wall clock) and has ``t_s``, seconds since the run started on the monotonic clock (use it to compare
 rows: the wall clock may be stepped by NTP). Nanosecond columns are ``Int64``, flags ``boolean``,
 text ``string``; the ``tmMgr.save`` extras of ``frames.csv`` become one column each.
+
+A damaged run (power lost mid-write, a card copied half-way) loads with what can be read;
+``run.problems`` says, one line each, which file, which line and what was wrong.
 """
 
 from __future__ import annotations
@@ -30,6 +33,7 @@ import pandas as pd
 from uav_tui.errors import UavError
 from uav_tui.recording.interpolate import CONTINUOUS, DISCRETE
 from uav_tui.recording.rows import EVENT_COLUMNS, FRAME_OWN_COLUMNS, TELEMETRY_COLUMNS
+from uav_tui.run_files import Problem, read_json, read_table
 
 _TEXT = ("flight_mode", "gps_fix", "decision", "error", "image", "extra", "telemetry", "level", "kind", "origin",
          "message", "command")
@@ -50,6 +54,8 @@ class Dataset:
     """One row per processed frame, with the telemetry interpolated to its capture time."""
     events: pd.DataFrame
     """Operator commands, autonomy decisions, warnings and errors."""
+    problems: tuple[str, ...] = ()
+    """What could not be read, one line each (file, line, what is wrong); empty for an intact run."""
 
     @property
     def extra_columns(self) -> list[str]:
@@ -66,23 +72,37 @@ def load(run_dir: str | Path) -> Dataset:
     path = Path(run_dir).expanduser()
     if not (path / "run.json").is_file():
         raise UavError(f"{path} is not a recorded run (no run.json); `uav-tui runs` lists the runs")
-    info = json.loads((path / "run.json").read_text())
-    telemetry = _read(path / "telemetry.csv", TELEMETRY_COLUMNS)
-    frames = _read(path / "frames.csv", FRAME_OWN_COLUMNS + CONTINUOUS + DISCRETE)
-    events = _read(path / "events.csv", EVENT_COLUMNS)
-    frames, extra_columns = _expand_extra(frames)
-    starts = [t for t in (info.get("start_mono_ns"),) if t] or [
+    info, problems = read_json(path / "run.json")
+    info = _checked_info(info, path / "run.json", problems)
+    tables = []
+    for name, columns in (("telemetry", TELEMETRY_COLUMNS), ("frames", FRAME_OWN_COLUMNS + CONTINUOUS + DISCRETE),
+                          ("events", EVENT_COLUMNS)):
+        table, found = read_table(path / f"{name}.csv", columns, _dtype)
+        tables.append(table)
+        problems += found
+    telemetry, frames, events = tables
+    frames, extra_columns = _expand_extra(frames, path / "frames.csv", problems)
+    start = info.get("start_mono_ns")
+    starts = [start] if isinstance(start, int) and start > 0 else [
         int(df["t_mono_ns"].min()) for df in (telemetry, frames, events) if df["t_mono_ns"].notna().any()]
     start_mono = min(starts) if starts else 0
     info = {**info, "extra_columns": extra_columns}
-    return Dataset(path, info, *(_index(df, start_mono) for df in (telemetry, frames, events)))
+    return Dataset(path, info, *(_index(df, start_mono) for df in (telemetry, frames, events)),
+                   problems=tuple(str(problem) for problem in problems))
 
 
-def _read(csv_path: Path, columns: tuple[str, ...]) -> pd.DataFrame:
-    dtypes = {name: _dtype(name) for name in columns}
-    if not csv_path.is_file():
-        return pd.DataFrame({name: pd.Series(dtype=dtype) for name, dtype in dtypes.items()})
-    return pd.read_csv(csv_path, dtype=dtypes, keep_default_na=False, na_values=[""])
+_SECTIONS = ("config", "source", "processor", "controller", "recording", "replay_of", "video", "versions")
+"""The parts of run.json that are objects; anything else in their place is left out."""
+
+
+def _checked_info(info: dict[str, Any], path: Path, problems: list[Problem]) -> dict[str, Any]:
+    wrong = [key for key in _SECTIONS if key in info and not isinstance(info[key], dict)]
+    wrong += [key for key in ("start_wall_ns", "end_wall_ns", "start_mono_ns")
+              if key in info and (not isinstance(info[key], int) or isinstance(info[key], bool))]
+    if wrong:
+        problems.append(Problem(path, None, f"{', '.join(wrong)} {'is' if len(wrong) == 1 else 'are'} not what "
+                                "uav-tui writes (left out)"))
+    return {key: value for key, value in info.items() if key not in wrong}
 
 
 def _dtype(name: str) -> str:
@@ -97,9 +117,21 @@ def _dtype(name: str) -> str:
     return "float64"
 
 
-def _expand_extra(frames: pd.DataFrame) -> tuple[pd.DataFrame, list[str]]:
+def _expand_extra(frames: pd.DataFrame, path: Path, problems: list[Problem]) -> tuple[pd.DataFrame, list[str]]:
     """One column per ``tmMgr.save`` extra; names that clash with recorder columns get ``extra_``."""
-    parsed = [json.loads(text) if isinstance(text, str) and text else {} for text in frames["extra"]]
+    parsed, bad = [], []
+    for frame_id, text in zip(frames["frame_id"], frames["extra"], strict=True):
+        try:
+            fields = json.loads(text) if isinstance(text, str) and text else {}
+        except ValueError:
+            fields = None
+        if not isinstance(fields, dict):
+            bad.append(frame_id)
+            fields = {}
+        parsed.append(fields)
+    if bad:
+        problems.append(Problem(path, None, f"the extra of frame_id {bad[0]} is not a JSON object (left empty)"
+                                + (f" (and {len(bad) - 1} more such)" if len(bad) > 1 else "")))
     keys = list(dict.fromkeys(key for fields in parsed for key in fields))
     if not keys:
         return frames, []

@@ -26,7 +26,7 @@ from uav_tui.config import SafetyConfig
 from uav_tui.dataset import Dataset, load
 from uav_tui.recording.crash import CRASH_FILE, crash_summary
 from uav_tui.report_replay import REPLAY_PLOT, replay_figure
-from uav_tui.text import safe
+from uav_tui.text import redact
 
 logger = logging.getLogger(__name__)
 
@@ -88,7 +88,7 @@ def _html(title: str, text: str, images: dict[str, bytes]) -> str:
 
 
 def summary(run: Dataset) -> str:
-    """A few lines: duration, frames, rates, latency, vectors, telemetry, distance, problems (each one :func:`safe`)."""
+    """A few lines: duration, frames, rates, latency, vectors, telemetry, distance, problems."""
     frames, telemetry, events = run.frames, run.telemetry, run.events
     duration = _duration_s(run)
     latency = _latency_ms(frames)
@@ -97,7 +97,7 @@ def summary(run: Dataset) -> str:
     with_vector = int(frames["vx"].notna().sum())
     lines = [
         f"run {run.path.name}: {duration:.1f} s, processor {run.info.get('processor', {}).get('name', '?')}, "
-        f"source {run.info.get('source', {}).get('uri', '?')}, "
+        f"source {redact(str(run.info.get('source', {}).get('uri', '?')))}, "
         f"fc {run.info.get('controller', {}).get('fc', '?')}",
         f"frames: {len(frames)} processed ({len(frames) / duration if duration else 0:.1f}/s), "
         f"{int(frames['saved'].fillna(False).sum())} saved, {int(frames['error'].notna().sum())} with errors",
@@ -123,7 +123,8 @@ def summary(run: Dataset) -> str:
                      "last flush")
     elif run.info.get("end_wall_ns") is None:
         lines.append("the run did not end cleanly (no end time in run.json): data up to the last flush")
-    return "\n".join(safe(line) for line in lines)  # names, paths and URIs from the run: escaped, redacted
+    lines += [f"damaged run: {problem}" for problem in run.problems]  # read around, drawn without
+    return "\n".join(lines)
 
 
 def _track(run: Dataset, figure: Figure) -> None:
@@ -131,7 +132,8 @@ def _track(run: Dataset, figure: Figure) -> None:
     ax.set_title("Ground track (NED, relative to home)")
     ax.set_xlabel("east, m")
     ax.set_ylabel("north, m")
-    track = run.telemetry[["t_s", "north_m", "east_m"]].dropna()
+    track = run.telemetry[["t_s", "north_m", "east_m"]].astype("float64")
+    track = track[np.isfinite(track).all(axis=1)]
     if track.empty:
         _nothing(ax, "no position telemetry in this run")
         return
@@ -205,7 +207,8 @@ def commanded_vectors(run: Dataset) -> pd.DataFrame:
     replaces it."""
     frames = run.frames[run.frames["decision"].fillna("").str.startswith("executed")]
     proposed = [(t, (vx, vy, vt)) for t, vx, vy, vt in frames[["t_s", "vx", "vy", "vt"]].itertuples(index=False)]
-    operator = run.events[(run.events["kind"] == "command") & run.events["message"].str.match(r"vector \S+ \S+ \S+$")]
+    operator = run.events[(run.events["kind"] == "command").fillna(False)
+                          & run.events["message"].str.match(r"vector \S+ \S+ \S+$", na=False)]
     for t, message in operator[["t_s", "message"]].itertuples(index=False):
         proposed.append((t, tuple(float(word) for word in message.split()[1:])))
     try:
@@ -223,7 +226,7 @@ def commanded_vectors(run: Dataset) -> pd.DataFrame:
 def autonomy_spans(run: Dataset) -> list[tuple[float, float]]:
     """(start, end) seconds of every stretch with autonomy on (a run that ended with it on: to the end)."""
     spans, since = [], None
-    switches = run.events[run.events["kind"] == "autonomy"]
+    switches = run.events[(run.events["kind"] == "autonomy").fillna(False)].dropna(subset=["message"])
     for t, message in switches[["t_s", "message"]].itertuples(index=False):
         if message == "autonomy ON" and since is None:
             since = t
@@ -266,19 +269,34 @@ def processing_rate(t_s: pd.Series, done_s: pd.Series) -> tuple[np.ndarray, np.n
 
 
 def _extra(run: Dataset, figure: Figure) -> None:
-    numeric = [name for name in run.extra_columns if pd.api.types.is_numeric_dtype(run.frames[name])
-               and not pd.api.types.is_bool_dtype(run.frames[name])]
-    if not numeric:
+    """Each numeric ``tmMgr.save`` field that changes, over time on its own axis; the others named in one line."""
+    varying, steady = [], []
+    for name in run.extra_columns:
+        column = run.frames[name]
+        if not pd.api.types.is_numeric_dtype(column) or pd.api.types.is_bool_dtype(column):
+            continue
+        values = column.astype("float64").to_numpy()
+        values = values[np.isfinite(values)]
+        with np.errstate(over="ignore"):
+            span = float(np.ptp(values)) if len(values) else 0.0
+        if len(values) > 1 and 0 < span < np.inf:
+            varying.append(name)
+        else:
+            steady.append(f"{name} = {values[0]:.6g}" if len(values) and span == 0 and len(values) > 1 else
+                          f"{name} ({len(values)} finite value{'s' * (len(values) != 1)})")
+    note = f"not drawn (constant or too few values): {', '.join(steady)}" if steady else ""
+    if not varying:
         ax = figure.add_subplot()
         ax.set_title("Processor fields saved with tmMgr.save")
-        _nothing(ax, "the processor saved no numeric fields")
+        _nothing(ax, "the processor saved no numeric field that changes" + (f"\n{note}" if note else ""))
         return
-    figure.set_size_inches(8, max(3.0, 1.6 * len(numeric) + 0.8))
-    axes = figure.subplots(len(numeric), 1, sharex=True, squeeze=False)[:, 0]
+    figure.set_size_inches(8, max(3.0, 1.6 * len(varying) + 0.8))
+    axes = figure.subplots(len(varying), 1, sharex=True, squeeze=False)[:, 0]
     axes[0].set_title("Processor fields saved with tmMgr.save (each on its own scale)")
-    axes[-1].set_xlabel("time since start, s")
-    for ax, name in zip(axes, numeric, strict=True):
-        rows = run.frames[["t_s", name]].dropna()
+    axes[-1].set_xlabel("time since start, s" + (f"\n{note}" if note else ""))
+    for ax, name in zip(axes, varying, strict=True):
+        rows = run.frames[["t_s", name]].astype("float64")
+        rows = rows[np.isfinite(rows).all(axis=1)]
         ax.plot(rows["t_s"], rows[name], ".-", markersize=3, linewidth=0.8)
         ax.set_ylabel(name, fontsize="small")
         ax.grid(True, alpha=0.3)
