@@ -7,23 +7,29 @@ bury what the operator needs to read (nor cost the loop a line each).
 from __future__ import annotations
 
 import asyncio
+import math
+import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
+from typing import Generic, TypeVar
 
 BURST_LINES = 20
 """Lines shown at once before the rate applies."""
 LINES_PER_S = 1.0
 """Lines a second shown in a flood; the others are counted and the count is said."""
 
+T = TypeVar("T")
 
-class LineBudget:
+
+class LineBudget(Generic[T]):
     """Passes lines to ``say_line`` within the budget and says how many it left out with ``say_left_out``.
 
     The count is said before the next line that fits, or ``1 / per_s`` seconds after the first line left
-    out, or at :meth:`close`. Call it on the event loop's thread.
+    out, or at :meth:`close`. Create it on the event loop's thread (its timer says the count there); lines may
+    come from any thread, and the callbacks are called on the thread that gave the line (the timer's on the loop).
     """
 
-    def __init__(self, say_line: Callable[[str], None], say_left_out: Callable[[int], None], *,
+    def __init__(self, say_line: Callable[[T], None], say_left_out: Callable[[int], None], *,
                  burst: int = BURST_LINES, per_s: float = LINES_PER_S) -> None:
         self._say_line = say_line
         self._say_left_out = say_left_out
@@ -33,36 +39,79 @@ class LineBudget:
         self._refilled = time.monotonic()
         self.left_out = 0
         """Lines not shown and not yet counted aloud."""
+        self._lock = threading.Lock()
+        self._loop = asyncio.get_running_loop()
         self._count_due: asyncio.TimerHandle | None = None
+        self._arming = False
+        """A thread asked the loop to start the count's timer."""
+        self._closed = False
+        self._said_at = -math.inf
+        """When (monotonic s) a count was last said: the timer says none sooner than ``1 / per_s`` after it."""
 
-    def line(self, text: str) -> None:
-        if not self._take():
-            self.left_out += 1
-            if self._count_due is None:
-                self._count_due = asyncio.get_running_loop().call_later(1 / self._per_s, self._count)
-            return
-        self._count()
-        self._say_line(text)
+    def line(self, text: T) -> None:
+        self.lines((text,))
+
+    def lines(self, lines: Sequence[T]) -> None:
+        """Pass on the first of ``lines`` that fit the budget, count the others: a flood costs no more than its
+        length (nothing is done with a line left out)."""
+        with self._lock:
+            shown = self._take(len(lines))
+            counted = self._take_count() if shown else 0
+            self.left_out += len(lines) - shown
+            arm = self.left_out > 0 and self._count_due is None and not self._arming
+            self._arming = self._arming or arm
+        if counted:
+            self._say_left_out(counted)
+        for text in lines[:shown]:
+            self._say_line(text)
+        if arm:
+            self._loop.call_soon_threadsafe(self._arm)
 
     def close(self) -> None:
-        """Say the count now."""
-        self._count()
+        """Say the count now; no count is said after this. Call it on the loop."""
+        with self._lock:
+            self._closed = True
+            counted = self._take_count()
+            if self._count_due is not None:
+                self._count_due.cancel()
+                self._count_due = None
+        if counted:
+            self._say_left_out(counted)
 
-    def _take(self) -> bool:
+    def _take(self, count: int) -> int:
+        """How many of ``count`` lines fit now (they are taken)."""
         now = time.monotonic()
         self._tokens = min(self._burst, self._tokens + (now - self._refilled) * self._per_s)
         self._refilled = now
-        if self._tokens < 1:
-            return False
-        self._tokens -= 1
-        return True
+        taken = min(count, int(self._tokens))
+        self._tokens -= taken
+        return taken
+
+    def _take_count(self) -> int:
+        """The count to say now (it is then zero). It takes no share of the budget: a steady stream at the rate would
+        starve it, and it comes at most once per line shown or per ``1 / per_s`` seconds anyway. A timer armed for
+        it is left to fire (it may have been armed by another thread) and says what was left out since, if anything.
+        """
+        counted, self.left_out = self.left_out, 0
+        if counted:
+            self._said_at = time.monotonic()
+        return counted
+
+    def _arm(self) -> None:
+        """On the loop: say the count ``1 / per_s`` seconds from now (if it was not said meanwhile)."""
+        with self._lock:
+            self._arming = False
+            if self.left_out and self._count_due is None and not self._closed:
+                self._count_due = self._loop.call_later(1 / self._per_s, self._count)
 
     def _count(self) -> None:
-        """Say how many lines were left out. It takes no share of the budget: a steady stream at the rate would
-        starve it, and it comes at most once per line shown or per ``1 / per_s`` seconds anyway."""
-        if self._count_due is not None:
-            self._count_due.cancel()
+        with self._lock:
             self._count_due = None
-        if self.left_out:
-            self._say_left_out(self.left_out)
-            self.left_out = 0
+            wait = self._said_at + 1 / self._per_s - time.monotonic()
+            if self._closed or wait > 0:  # a line said a count meanwhile: the next one is said a period after it
+                if self.left_out and not self._closed:
+                    self._count_due = self._loop.call_later(wait, self._count)
+                return
+            counted = self._take_count()
+        if counted:
+            self._say_left_out(counted)

@@ -40,7 +40,8 @@ from sources.buffer import Frame, FrameBuffer
 from uav_tui.errors import UavError
 from uav_tui.events import EventLog
 from uav_tui.frame_ring import FrameRing
-from uav_tui.processor_process import ChildProcess, Offered, PendingCall, describe_exit, rss_mb, spawn
+from uav_tui.line_budget import LineBudget
+from uav_tui.processor_process import ChildProcess, Offered, PendingCall, describe_exit, rss_mb, say_output, spawn
 from uav_tui.stats import PipelineStats, RollingStats
 from uav_tui.telemetry import TelemetryManager
 from uav_tui.worker import Answer, ProcessedFrame, ProcessorState
@@ -139,6 +140,8 @@ class ProcessWorker:
         # Children are started from this one long-lived thread: the child's parent-death signal
         # (PR_SET_PDEATHSIG) fires when the *thread* that started it ends, not only the process.
         self._spawner = ThreadPoolExecutor(1, thread_name_prefix="processor-spawner")
+        self._output: LineBudget[bytes] = LineBudget(say_output, self._say_left_out)
+        """What the processor prints or logs (any of its children): a burst, then a line a second, and a count."""
         threading.Thread(target=self._feed, name=f"processor-feeder({spec})", daemon=True).start()
 
     @classmethod
@@ -262,12 +265,13 @@ class ProcessWorker:
                 child.mailbox.close()
         self._ring.close()
         self._spawner.shutdown(wait=False)
+        self._output.close()
 
     # -- children --------------------------------------------------------------------------------
 
     async def _start_child(self) -> ChildProcess:
         loop = self._loop = asyncio.get_running_loop()
-        child = await loop.run_in_executor(self._spawner, spawn, loop.create_future())
+        child = await loop.run_in_executor(self._spawner, spawn, loop.create_future(), self._output.lines)
         self._all_children.append(child)
         child.watch_exit(functools.partial(_call_soon, loop, self._ended, child))
         loop.add_reader(child.inbox.fileno(), self._on_readable, child)
@@ -282,6 +286,10 @@ class ProcessWorker:
             _abandon(child)
             raise
         return child
+
+    def _say_left_out(self, count: int) -> None:
+        self.events.emit("warning", "processor", f"{count} more lines of the processor's output left out (too many at "
+                         "once; the crash report has the last ones)")
 
     def _adopt(self, child: ChildProcess) -> None:
         info = child.ready.result()
@@ -597,7 +605,7 @@ class ProcessWorker:
             child.offered.clear()
             child.mailbox.close()
         self._release(child, list(child.held))
-        tail = "\n".join(child.tail)
+        tail = child.last_output()
         if not child.ready.done():
             output = f"; its output:\n{tail}" if tail else ""
             child.ready.set_exception(ProcessorLoadError(
@@ -650,11 +658,6 @@ class ProcessWorker:
                              "process it started left its group" if child.ended.is_set() else "did not exit")
 
 
-def _call_soon(loop: asyncio.AbstractEventLoop, callback: Callable[..., None], *args: Any) -> None:
-    """``callback(*args)`` on ``loop``, from any thread; nothing once the loop is closed."""
-    with contextlib.suppress(RuntimeError):
-        loop.call_soon_threadsafe(callback, *args)
-
 def _abandon(child: ChildProcess) -> None:
     """Kill a child whose loading nobody waits for any more (timed out, or the start was cancelled: a stop, a quit).
 
@@ -667,4 +670,9 @@ def _abandon(child: ChildProcess) -> None:
     elif not child.ready.cancelled():
         child.ready.exception()  # retrieved: what it says is reported by whoever started it, if anyone
 
+
+def _call_soon(loop: asyncio.AbstractEventLoop, callback: Callable[..., None], *args: Any) -> None:
+    """``callback(*args)`` on ``loop``, from any thread; nothing once the loop is closed."""
+    with contextlib.suppress(RuntimeError):
+        loop.call_soon_threadsafe(callback, *args)
 

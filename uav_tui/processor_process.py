@@ -38,6 +38,11 @@ from uav_tui.text import safe, shorten
 TAIL_LINES = 30
 """Lines of the child's output kept for the crash report (a faulthandler dump fits)."""
 LINE_CHARS = 300
+"""A longer line of output is cut (on the terminal and in the crash report)."""
+READ_BYTES = 64 * 1024
+"""The child's output is read in chunks this big: a flood costs the platform little, and the child never waits."""
+MAX_LINE_BYTES = 64 * 1024
+"""A line still unfinished after this many bytes is taken as it is: memory stays bounded whatever is printed."""
 
 
 @dataclass(slots=True)
@@ -68,7 +73,8 @@ class ChildProcess:
     conn: Connection
     mailbox: FrameMailbox
     ready: asyncio.Future[ProcessorInfo]
-    tail: deque[str] = field(default_factory=lambda: deque(maxlen=TAIL_LINES))
+    tail: deque[bytes] = field(default_factory=lambda: deque(maxlen=TAIL_LINES))
+    """The last lines of its output as read, cut to a few times :data:`LINE_CHARS` (see :meth:`last_output`)."""
     offered: dict[int, Offered] = field(default_factory=dict)
     """By offer gen: the frame on offer, and those the child claimed whose result is not back."""
     last_claim: tuple[int, int] = (0, 0)
@@ -96,6 +102,11 @@ class ChildProcess:
     @property
     def pid(self) -> int:
         return self.proc.pid
+
+    def last_output(self) -> str:
+        """The last lines it printed (log records left out), escaped, each cut to :data:`LINE_CHARS`."""
+        lines = (raw.decode("utf-8", "replace").rstrip("\r") for raw in self.tail)
+        return "\n".join(shorten(safe(line), LINE_CHARS) for line in lines if parse_log_line(line) is None)
 
     def busy_since_ns(self) -> int | None:
         """When the oldest frame or call still unanswered was sent (None when idle)."""
@@ -252,8 +263,9 @@ class Inbox:
         self._sock.close()
 
 
-def spawn(ready: asyncio.Future[ProcessorInfo]) -> ChildProcess:
-    """Start ``python -m processors.child`` with a pipe and a frame mailbox; its output is read on a thread.
+def spawn(ready: asyncio.Future[ProcessorInfo], output: Callable[[list[bytes]], None]) -> ChildProcess:
+    """Start ``python -m processors.child`` with a pipe and a frame mailbox; its output is read on a thread and its
+    lines given to ``output`` (a :class:`~uav_tui.line_budget.LineBudget`'s ``lines``: see :func:`say_output`).
 
     The child has a process group of its own: a terminal's Ctrl-C, Ctrl-Z and hang-up (sent to every process of
     the job) reach only the platform, which decides what happens to the processor. Not a session of its own: the
@@ -277,26 +289,53 @@ def spawn(ready: asyncio.Future[ProcessorInfo]) -> ChildProcess:
     finally:
         theirs.close()
     child = ChildProcess(proc, ours, mailbox, ready)
-    child.output_reader = threading.Thread(target=_read_output, args=(child,), name=f"processor-{proc.pid}-output",
+    child.output_reader = threading.Thread(target=_read_output, args=(child, output),
+                                           name=f"processor-{proc.pid}-output",
                                            daemon=True)
     child.output_reader.start()
     return child
 
 
-def _read_output(child: ChildProcess) -> None:
+def _read_output(child: ChildProcess, output: Callable[[list[bytes]], None]) -> None:
+    """Read the child's output (stdout and stderr) in big chunks until every process holding it ended; give its lines
+    to ``output`` and keep the last ones in ``child.tail``. Lines are never decoded here: a flood of them costs
+    a split and a count."""
     assert child.proc.stdout is not None
-    with child.proc.stdout as output:
-        for raw in output:
-            line = raw.decode("utf-8", "replace").rstrip("\n")
-            if record := parse_log_line(line):
-                level, name, text = record
-                logging.getLogger(name).log(level, "%s", shorten(text, 4000))
-                continue
-            line = shorten(safe(line), LINE_CHARS)
-            child.tail.append(line)
-            with contextlib.suppress(OSError, ValueError):  # one write: a line is dropped whole, or kept
-                sys.stdout.write(line + "\n")
-                sys.stdout.flush()
+    with child.proc.stdout as pipe:
+        partial = b""
+        while chunk := _read(pipe.fileno()):
+            *lines, partial = (partial + chunk).split(b"\n")
+            if len(partial) >= MAX_LINE_BYTES:  # a line that does not end is taken in pieces
+                lines.append(partial)
+                partial = b""
+            if lines:
+                child.tail.extend(line[:4 * LINE_CHARS] for line in lines[-TAIL_LINES:])
+                output(lines)
+        if partial:
+            child.tail.append(partial[:4 * LINE_CHARS])
+            output([partial])
+
+
+def _read(fd: int) -> bytes:
+    """What the pipe has (waits for something); empty at its end."""
+    try:
+        return os.read(fd, READ_BYTES)
+    except OSError:
+        return b""
+
+
+def say_output(raw: bytes) -> None:
+    """One line of the child's output, as the platform says it: a log record is logged here (through the platform's
+    escaping handlers), anything else is printed on stdout escaped and cut, as ``print()`` would with thread
+    isolation. Called on the output reader's thread, within the worker's line budget."""
+    line = raw.decode("utf-8", "replace").rstrip("\r")
+    if record := parse_log_line(line):
+        level, name, text = record
+        logging.getLogger(name).log(level, "%s", shorten(text, 4000))
+        return
+    with contextlib.suppress(OSError, ValueError):  # one write: a line is dropped whole, or kept
+        sys.stdout.write(shorten(safe(line), LINE_CHARS) + "\n")
+        sys.stdout.flush()
 
 
 def describe_exit(returncode: int, memory_mb: float | None) -> str:

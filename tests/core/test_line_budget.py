@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import threading
 
 from uav_tui.line_budget import LineBudget
 
@@ -19,3 +20,20 @@ async def test_a_steady_stream_at_the_rate_does_not_starve_the_count() -> None:
     assert said[:3] == ["flood 0", "flood 1", "8 left out"]
     budget.close()
     assert sum("left out" in line for line in said) <= 1 + sum(line.startswith("steady") for line in said)
+
+
+async def test_a_flood_from_another_thread_costs_a_count_said_on_the_loop() -> None:
+    said: list[str] = []
+    counted_on: list[int] = []
+
+    def left_out(count: int) -> None:
+        said.append(f"{count} left out")
+        counted_on.append(threading.get_ident())
+
+    budget = LineBudget(said.append, left_out, burst=3, per_s=10.0)
+    reader = threading.Thread(target=budget.lines, args=([f"line {n}" for n in range(100_000)],))
+    reader.start()
+    reader.join()
+    assert said == ["line 0", "line 1", "line 2"]
+    await asyncio.sleep(0.3)  # the count is said 1 / per_s after the first line left out, by the loop
+    assert said[3:] == ["99997 left out"] and counted_on == [threading.get_ident()]
