@@ -31,6 +31,8 @@ CLOSE_TIMEOUT_S = 1.0
 """How long the end of a run waits for a stalled terminal to take the last of its output."""
 
 EXIT_OK, EXIT_SCRIPT_FAILED, EXIT_START_FAILED, EXIT_UNHANDLED_ERROR, EXIT_ABANDONED = 0, 1, 2, 3, 4
+EXIT_RECORDING_INCOMPLETE = 5
+"""The run went on, but a disk error (full, failing) kept part of its recording from the disk."""
 
 
 def load_script(path: Path, safety: SafetyConfig | None = None) -> list[tuple[int, Command]]:
@@ -179,6 +181,8 @@ class HeadlessRunner:
             await self.core.stop(self._reason)
         if self.core.failure is not None and not self.exit_code:  # also a bug met while stopping
             self.exit_code = EXIT_UNHANDLED_ERROR
+        if self.core.recorder is not None and self.core.recorder.incomplete and not self.exit_code:
+            self.exit_code = EXIT_RECORDING_INCOMPLETE
         self._say(json.dumps({"stopped": self._reason}) if self.json_lines else f"stopped: {self._reason}")
         if note := saved_run_note(self.core):
             self._say(json.dumps({"run_dir": str(self.core.recorder.run_dir)}) if self.json_lines else note)

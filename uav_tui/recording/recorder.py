@@ -61,6 +61,10 @@ logger = logging.getLogger(__name__)
 
 PENDING = ".pending"
 """Run sub-folder for images saved before their frame id was known."""
+RESERVE = ".reserved-for-run.json"
+"""A file that holds disk space from the start of the run to its end: freed then, so that the final ``run.json`` is
+written on a disk that filled up meanwhile."""
+RESERVE_BYTES = 256 * 1024
 
 
 @dataclass(slots=True)
@@ -131,6 +135,7 @@ class Recorder:
                 info["video"] = describe_video()
             recorder = cls(run_dir, config, info, telemetry_expected=telemetry_expected, **kwargs)
             write_json(run_dir / "run.json", recorder.info)
+            (run_dir / RESERVE).write_bytes(bytes(RESERVE_BYTES))
         except OSError as exc:
             raise UavError(f"cannot create the run folder under {config.runs_dir}: {exc.strerror or exc}; "
                            "choose another with --runs-dir, or run with --no-record") from exc
@@ -252,7 +257,7 @@ class Recorder:
         return {"run_dir": str(self.run_dir), "frames": self.frames, "frames_saved": writer.images_written,
                 "rows_written": dict(writer.rows_written), "bytes": writer.bytes_written,
                 "video_frames": self.video.frames_encoded if self.video is not None else None,
-                "dropped": writer.dropped_total, "drops": dict(writer.dropped)}
+                "dropped": writer.dropped_total, "drops": dict(writer.dropped), "lost": dict(writer.lost)}
 
     def close(self, end: dict[str, Any] | None = None) -> None:
         """Write everything queued, then finish ``run.json`` with the end time and counts. Blocks."""
@@ -261,14 +266,30 @@ class Recorder:
         self.writer.close()
         # Images of frames whose results never arrived (in flight at the stop) have no row: drop them.
         shutil.rmtree(self.run_dir / PENDING, ignore_errors=True)
+        (self.run_dir / RESERVE).unlink(missing_ok=True)
         self.info.update(end or {}, end_wall_ns=time.time_ns(), recording=self.status())
         try:
             write_json(self.run_dir / "run.json", self.info)
         except OSError as exc:
             logger.error("Recorder(%s): cannot finish run.json: %s", self.run_dir, exc)
+        if self.incomplete:
+            self._emit("error", f"the run is incomplete: {describe_lost(self.writer.lost)} could not be written (the "
+                       f"disk was full or failing); what was written is intact, run.json counts the losses")
         if self.crash is not None:
             self.crash.close()
+
+    @property
+    def incomplete(self) -> bool:
+        """True when a disk error (full, failing) kept something from the run (not the limits set)."""
+        return bool(self.writer.lost)
 
     def _problem(self, reason: str, message: str) -> None:
         logger.warning("Recorder(%s): %s", self.run_dir, message)
         self._emit("error" if reason in ("disk_full", "write_error") else "warning", message)
+
+
+def describe_lost(lost: dict[str, int]) -> str:
+    """``120 frame images, 340 frames.csv rows and 5.2 MB of video``."""
+    parts = [f"{amount / 1e6:.1f} MB of video" if what == "video bytes" else f"{amount} {what}"
+             for what, amount in lost.items()]
+    return ", ".join(parts[:-1]) + (" and " if len(parts) > 1 else "") + parts[-1]

@@ -75,8 +75,12 @@ def versions() -> dict[str, str]:
 def write_json(path: Path, data: dict[str, Any]) -> None:
     """Replace ``path`` atomically (a reader never sees half a file); passwords in URIs are redacted."""
     temporary = path.with_name(path.name + ".tmp")
-    temporary.write_text(redact(json.dumps(data, indent=2, default=str)) + "\n")
-    os.replace(temporary, path)
+    try:
+        temporary.write_text(redact(json.dumps(data, indent=2, default=str)) + "\n")
+        os.replace(temporary, path)
+    except OSError:
+        temporary.unlink(missing_ok=True)  # a full disk left it empty, or cut
+        raise
 
 
 def _plain(value: Any) -> Any:

@@ -145,16 +145,17 @@ class VideoStage:
         return self._release(self._newest_ns - UNPROCESSED_AFTER_NS) if self._waiting else []
 
     def drain(self) -> Iterable[Row]:
-        if self._stream is not None:
-            for packet in self._stream.encode():
-                self._container.mux(packet)
-            self._container.close()
-            self._container = self._stream = None
-        rows = self._release(None)
-        if self._fd is not None:
-            os.close(self._fd)
-            self._fd = None
-        return rows
+        try:
+            if self._stream is not None:
+                for packet in self._stream.encode():
+                    self._container.mux(packet)
+                self._container.close()
+                self._container = self._stream = None
+            return self._release(None)
+        finally:
+            if self._fd is not None:
+                os.close(self._fd)
+                self._fd = None
 
     def _release(self, before_ns: int | None) -> list[Row]:
         """Index rows of frames captured before ``before_ns`` (all: None), after their bytes are on disk."""
@@ -203,9 +204,11 @@ class VideoStage:
         try:
             while written < len(data):
                 written += os.write(self._fd, data[written:])
+        except OSError as exc:  # a full disk: the bytes are lost (the stream resumes with the next ones that fit)
+            self._writer.lose(exc, "video bytes", len(data) - written, f"{VIDEO_FILE}: {exc}")
         finally:
-            del data[:written]
             self._writer.bytes_written += written
+            del data[:]
 
 
 def _video_frame(image: np.ndarray, pix_fmt: str) -> Any:

@@ -98,6 +98,8 @@ PROBLEMS = {
     "write_error": "a write failed",
 }
 """Drop reason -> what the operator is told the first time it happens."""
+DISK_ERRORS = frozenset({"disk_full", "write_error"})
+"""Drop reasons that leave the run incomplete against the operator's settings (the disk failed it)."""
 
 
 class DiskWriter:
@@ -135,6 +137,10 @@ class DiskWriter:
         """Everything this writer put on disk (run folder size, apart from run.json)."""
         self.dropped: dict[str, int] = {}
         """Drop reason -> items dropped."""
+        self.lost: dict[str, int] = {}
+        """What a disk error (full, failing) kept from the disk: ``frame images``, ``<table>.csv rows``, ``video bytes``
+        ... -> how many. Empty when the run is complete (drops at the limits set, ``max_disk_mb`` or ``min_free_mb``,
+        and drops of a queue that could not keep up are not errors of the disk)."""
         self._on_problem = on_problem
         self._queue: queue.Queue[Any] = queue.Queue(max_items)
         self._lock = threading.Lock()
@@ -233,10 +239,17 @@ class DiskWriter:
             if self._thread.is_alive():
                 logger.warning("DiskWriter(%s): writer still busy after %.0f s; abandoning it", self.run_dir, timeout)
 
-    def _drop(self, reason: str, count: int = 1, detail: str = "") -> None:
+    def lose(self, exc: OSError, what: str, amount: int, detail: str) -> None:
+        """A stage could not write ``amount`` of ``what`` (``video bytes``): one drop, reported as the writer's own."""
+        self._drop(_reason(exc), 1, detail, what, amount)
+
+    def _drop(self, reason: str, count: int = 1, detail: str = "", what: str = "items", amount: int | None = None
+              ) -> None:
         with self._lock:
             first = reason not in self.dropped
             self.dropped[reason] = self.dropped.get(reason, 0) + count
+            if reason in DISK_ERRORS:
+                self.lost[what] = self.lost.get(what, 0) + (count if amount is None else amount)
         if reason == "closed":
             return
         logger.debug("DiskWriter(%s): dropped %d (%s) %s", self.run_dir, count, reason, detail)
@@ -295,15 +308,25 @@ class DiskWriter:
                 self._collect(stage.handle, item)
                 self._collect(stage.due, time.monotonic_ns())
         except Exception as exc:  # noqa: BLE001 - the writer must outlive any bad item
-            logger.exception("DiskWriter(%s): cannot write %r", self.run_dir, type(item).__name__)
-            self._drop("write_error", detail=f"{type(item).__name__}: {exc!r}")
+            self._failed(type(item).__name__, exc)
         finally:
             if isinstance(item, Pixels):
                 self._image_done(item.image.nbytes)
 
     def _collect(self, produce: Callable[..., Iterable[Row]], *args: Any) -> None:
-        for row in produce(*args):
-            self._pending[row.table].append(row.values)
+        try:
+            for row in produce(*args):
+                self._pending[row.table].append(row.values)
+        except Exception as exc:  # noqa: BLE001 - the writer must outlive a failing stage (a video write, say)
+            self._failed(produce.__qualname__, exc)
+
+    def _failed(self, what: str, exc: Exception) -> None:
+        """``what`` could not be written: counted; a full disk is said once by its drop, and any other failure's
+        traceback is logged the first time only (it would come again with every item)."""
+        reason = _reason(exc)
+        if reason == "write_error" and reason not in self.dropped:
+            logger.error("DiskWriter(%s): cannot write %s (logged once)", self.run_dir, what, exc_info=exc)
+        self._drop(reason, detail=f"{what}: {exc!r}")
 
     def _write_image(self, item: _Image) -> None:
         reason = self.image_refused()
@@ -322,7 +345,7 @@ class DiskWriter:
             os.replace(temporary, path)
         except OSError as exc:
             temporary.unlink(missing_ok=True)
-            self._drop("disk_full" if exc.errno == errno.ENOSPC else "write_error", detail=f"{item.name}: {exc}")
+            self._drop(_reason(exc), detail=f"{item.name}: {exc}", what="frame images")
             return
         self.images_written += 1
         self.bytes_written += len(data)
@@ -354,7 +377,7 @@ class DiskWriter:
         try:
             fd, size = self._files.get(table) or (self._open(table), 0)
         except OSError as exc:
-            self._drop("disk_full" if exc.errno == errno.ENOSPC else "write_error", len(rows), f"{table}.csv: {exc}")
+            self._drop(_reason(exc), len(rows), f"{table}.csv: {exc}", f"{table}.csv rows")
             return
         self._files[table] = (fd, size)
         written = 0
@@ -368,7 +391,7 @@ class DiskWriter:
             if size == 0:  # not even the header made it: write it again next time
                 del self._files[table]
                 os.close(fd)
-            self._drop("disk_full" if exc.errno == errno.ENOSPC else "write_error", len(rows), f"{table}.csv: {exc}")
+            self._drop(_reason(exc), len(rows), f"{table}.csv: {exc}", f"{table}.csv rows")
             return
         self._files[table] = (fd, size + written)
         self.rows_written[table] += len(rows)
@@ -386,3 +409,8 @@ class DiskWriter:
             return shutil.disk_usage(self.run_dir).free
         except OSError:
             return 0
+
+
+def _reason(exc: BaseException) -> str:
+    """``disk_full`` for a disk (or quota) that is full, else ``write_error``."""
+    return "disk_full" if isinstance(exc, OSError) and exc.errno in (errno.ENOSPC, errno.EDQUOT) else "write_error"

@@ -23,7 +23,14 @@ from uav_tui.commands import Command
 from uav_tui.config import Config
 from uav_tui.core import CoreState, UavCore
 from uav_tui.events import EventLog
-from uav_tui.headless import EXIT_ABANDONED, EXIT_SCRIPT_FAILED, EXIT_UNHANDLED_ERROR, run_script, saved_run_note
+from uav_tui.headless import (
+    EXIT_ABANDONED,
+    EXIT_RECORDING_INCOMPLETE,
+    EXIT_SCRIPT_FAILED,
+    EXIT_UNHANDLED_ERROR,
+    run_script,
+    saved_run_note,
+)
 from uav_tui.native_stderr import native_stderr_as_events
 from uav_tui.tui._terminal import CHECK_PERIOD_S, TerminalWatch, driver_for
 from uav_tui.tui.app import LOG_ORIGIN, UavApp
@@ -100,6 +107,8 @@ class TuiSession:
                 loop.remove_signal_handler(signum)
         if self.core.failure is not None:  # also a bug met while stopping
             self.exit_code = self.exit_code or EXIT_UNHANDLED_ERROR
+        if self.core.recorder is not None and self.core.recorder.incomplete:
+            self.exit_code = self.exit_code or EXIT_RECORDING_INCOMPLETE
         return self.app.return_code or self.exit_code or (EXIT_ABANDONED if self.core.abandoned_calls else 0)
 
     def request_stop(self, reason: str, exit_code: int = 0) -> None:
