@@ -50,20 +50,25 @@ def test_the_err_row_shows_an_exception_escaped(tmux: Tmux, tmp_path: Path, isol
     assert "RuntimeError: boom\\r\\x1b]2;pw" in row, screen  # the whole last line, its controls shown (not obeyed)
 
 
-def test_report_of_a_processor_whose_path_holds_escapes(tmp_path: Path) -> None:
+def test_report_runs_and_replay_of_a_processor_whose_path_holds_escapes(tmp_path: Path) -> None:
     folder = tmp_path / "algos\x1b]2;pwned\x07\x1b[2J"
     folder.mkdir()
     (folder / "mean.py").write_text((ROOT / "processors/template.py").read_text())
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    run = subprocess.run([sys.executable, "-m", "uav_tui", "--no-ui", "--fc", "none", "--source", "synthetic:",
-                          "--processor", f"{folder / 'mean.py'}:MeanBrightnessProcessor", "--duration", "2",
-                          "--runs-dir", str(tmp_path / "runs")], cwd=tmp_path, env=env, capture_output=True,
-                         text=True, timeout=120)
-    assert run.returncode == 0, run.stderr
-    report = subprocess.run([sys.executable, "-m", "uav_tui", "report", "--runs-dir", str(tmp_path / "runs")],
-                            cwd=tmp_path, env=env, capture_output=True, text=True, timeout=120)
-    assert report.returncode == 0, report.stderr
-    summary = next((tmp_path / "runs").glob("*/summary.txt")).read_text()
-    for text in (run.stdout, run.stderr, report.stdout, report.stderr, summary):
+    runs = tmp_path / "runs\x1b[7m"
+
+    def uav(*args: str) -> subprocess.CompletedProcess[str]:
+        done = subprocess.run([sys.executable, "-m", "uav_tui", *args, "--runs-dir", str(runs)], cwd=tmp_path,
+                              env={**os.environ, "PYTHONPATH": str(ROOT)}, capture_output=True, text=True, timeout=120)
+        assert done.returncode == 0, done.stderr
+        return done
+
+    run = uav("--no-ui", "--fc", "none", "--source", "synthetic:", "--processor",
+              f"{folder / 'mean.py'}:MeanBrightnessProcessor", "--duration", "2")
+    name = next(runs.iterdir()).name
+    report, listed, replay = uav("report"), uav("runs"), uav("replay", name, "--speed", "max")
+    summary = (runs / name / "summary.txt").read_text()
+    for text in (run.stdout, run.stderr, report.stdout, report.stderr, listed.stdout, replay.stdout, replay.stderr,
+                 summary):
         assert "\x1b" not in text and "\x07" not in text
     assert "algos\\x1b]2;pwned\\x07\\x1b[2J" in summary and "algos\\x1b]2;pwned" in report.stdout
+    assert "runs\\x1b[7m" in report.stdout and "runs\\x1b[7m" in replay.stdout

@@ -13,6 +13,7 @@ from uav_tui.errors import KNOWN_ERRORS
 from uav_tui.jobs import run_jobs
 from uav_tui.replay.runner import ReplayJob, replay_run, summary_line
 from uav_tui.runs_cli import find_run
+from uav_tui.text import safe
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -52,8 +53,8 @@ def main(argv: list[str]) -> int:
         results = run_jobs(replay_run, jobs, workers=args.workers, cluster=args.cluster,
                            progress=lambda done, total: print(f"replayed {done}/{total}", file=sys.stderr))
     except KNOWN_ERRORS as exc:
-        print(f"uav-tui replay: {exc}", file=sys.stderr)
+        print(safe(f"uav-tui replay: {exc}", multiline=True), file=sys.stderr)
         return 2
     for result in results:
-        print(summary_line(result))
+        print(safe(summary_line(result)))  # run folders and paths: escaped
     return 0
