@@ -72,7 +72,9 @@ class FlightController(Protocol):
     in a holding mode itself. A new vector replaces the running one.
 
     Optional: ``pose_samples()``, an async iterator of timestamped position and attitude samples
-    (:class:`controllers.mavsdk_pose.PoseSample`), which the ``sim:`` camera is drawn from.
+    (:class:`controllers.mavsdk_pose.PoseSample`), which the ``sim:`` camera is drawn from; ``own_modes``,
+    the flight modes its vectors and holds leave the vehicle in (default HOLD and OFFBOARD; any other is
+    a pilot's, a mission's or a failsafe's, which autonomy and the hold at exit leave alone).
     """
 
     description: str

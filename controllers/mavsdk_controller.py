@@ -158,6 +158,15 @@ class MavsdkController:
         except TimeoutError:
             logger.warning("telemetry rates: no answer within %.0f s; keeping the current rates", SETUP_TIMEOUT_S)
 
+    @property
+    def own_modes(self) -> frozenset[str]:
+        """Flight modes (MAVSDK's names) this controller's vectors and holds leave the vehicle in.
+
+        ArduCopter's hold is GUIDED (OFFBOARD), never LOITER or BRAKE (HOLD): a vehicle in HOLD there
+        was put there by a pilot or a failsafe.
+        """
+        return frozenset({"OFFBOARD"}) if self.autopilot == "ardupilot" else frozenset({"HOLD", "OFFBOARD"})
+
     def heartbeat_age_s(self) -> float:
         """Seconds since the last heartbeat from the autopilot (inf before the first)."""
         return self._link.heartbeat_age_s() if self._link is not None else math.inf

@@ -30,8 +30,19 @@ logger = logging.getLogger(__name__)
 WATCHDOG_PERIOD_S = 0.1
 
 AUTONOMY_MODES = frozenset({"HOLD", "OFFBOARD"})
-"""Flight modes autonomy may fly from: the hold it leaves behind and offboard itself (GUIDED/LOITER on
-ArduCopter read as these). Any other mode means a pilot, a mission or a failsafe has the vehicle."""
+"""Flight modes autonomy may fly from unless the controller says otherwise (:func:`own_modes`): the hold
+the platform leaves behind and offboard itself. Any other mode means a pilot, a mission or a failsafe has
+the vehicle."""
+
+
+def own_modes(controller: FlightController | None) -> frozenset[str]:
+    """The flight modes (MAVSDK's names) the platform's own vectors and holds leave the vehicle in.
+
+    A controller may say (``own_modes``): on ArduCopter the platform holds in GUIDED (OFFBOARD), so
+    HOLD there is LOITER or BRAKE, a pilot's or a failsafe's. Otherwise :data:`AUTONOMY_MODES`.
+    """
+    modes = getattr(controller, "own_modes", None)
+    return modes if isinstance(modes, frozenset) else AUTONOMY_MODES
 
 Vector = tuple[float, float, float]
 
@@ -142,7 +153,7 @@ class AutonomyGate:
             return "not executed: vehicle not armed"
         if not snapshot.in_air:
             return "not executed: vehicle not in the air"
-        if snapshot.flight_mode not in AUTONOMY_MODES:
+        if snapshot.flight_mode not in own_modes(self.controller):
             return f"not executed: vehicle in {snapshot.flight_mode} mode"
         age = self.controller.heartbeat_age_s()
         if age >= self.safety.link_timeout:
@@ -201,7 +212,7 @@ class AutonomyGate:
         if errors >= s.max_processor_errors:
             return f"processor raised {errors} times in a row"
         mode = self.telemetry.snapshot().flight_mode
-        if self._flown and mode is not None and mode not in AUTONOMY_MODES:
+        if self._flown and mode is not None and mode not in own_modes(self.controller):
             return f"vehicle switched to {mode}: the pilot, a mission or a failsafe took over"
         if self.controller is not None and self._taken_over():
             return self._taken_over()

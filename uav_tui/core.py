@@ -22,7 +22,7 @@ from controllers.replay_timeline import ReplayTimeline
 from sources import CameraSource, open_source, warm_up_source
 from sources.pose import PoseTrack
 from uav_tui import pose_feed
-from uav_tui.autonomy import AutonomyGate
+from uav_tui.autonomy import AutonomyGate, own_modes
 from uav_tui.clock_check import ClockCheck
 from uav_tui.commands import VEHICLE_COMMANDS, Command, parse
 from uav_tui.config import Config
@@ -258,8 +258,8 @@ class UavCore:
         vectors fly the vehicle again.
         """
         mode = self.telemetry.snapshot().flight_mode
-        if mode in LEFT_ALONE_AT_EXIT:
-            return mode
+        if mode in LEFT_ALONE_AT_EXIT or (mode == "HOLD" and mode not in own_modes(self.controller)):
+            return mode  # HOLD not of the platform's making: ArduCopter's LOITER or BRAKE, a pilot's
         if self.handed_over is not None and not (self.controller is not None and self.controller.vector_active):
             return self.handed_over
         return None

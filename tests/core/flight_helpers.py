@@ -119,8 +119,8 @@ async def take_off(core: UavCore, truth: TruthClient, altitude: float = 3.0) -> 
     """Arm and take off through the core's commands; returns once the vehicle holds at ``altitude``."""
     await core.execute("arm")
     await core.execute(f"takeoff {altitude}")
-    await wait_until(lambda: (s := truth.latest()) and -s["d"] > altitude - 0.3 and s["mode"] == "HOLD",
-                     30, f"takeoff to {altitude} m")
+    await wait_until(lambda: (s := truth.latest()) and -s["d"] > altitude - 0.3 and s["mode"] in ("HOLD", "GUIDED"),
+                     30, f"takeoff to {altitude} m")  # GUIDED: the simulator playing ArduCopter
     await wait_until(lambda: core.telemetry.snapshot().in_air, 5, "in-air telemetry")
 
 
