@@ -272,3 +272,24 @@ async def test_an_impossible_selection_is_400_and_selecting_still_works(web_core
                              json={"point": [0.5, 0.5]}) as response:
             assert response.status == 200
     assert processor_of(web_core).rois == [(296, 216, 48, 48)]
+
+
+async def test_a_handler_bug_is_a_500_logged_once_and_the_page_goes_on(
+        web_core: UavCore, monkeypatch: pytest.MonkeyPatch, caplog: pytest.LogCaptureFixture) -> None:
+    def bug(*args: object) -> None:
+        raise RuntimeError("a bug in the route")
+
+    monkeypatch.setattr("uav_tui.web.server.roi_from_message", bug)
+    async with aiohttp.ClientSession() as http:
+        for _ in range(5):
+            async with http.post(base(web_core) + "/api/roi", params={"token": TOKEN},
+                                 json={"point": [0.5, 0.5]}) as response:
+                assert response.status == 500 and "a bug, logged" in await response.text()
+        monkeypatch.undo()
+        async with http.post(base(web_core) + "/api/roi", params={"token": TOKEN},
+                             json={"point": [0.5, 0.5]}) as response:
+            assert response.status == 200
+    assert processor_of(web_core).rois == [(296, 216, 48, 48)]
+    assert len([r for r in caplog.records if r.exc_info and "a bug in the route" in str(r.exc_info[1])]) == 1
+    said = [e.message for e in web_core.events.recent if "a bug in the route" in e.message]
+    assert len(said) == 3 and said[0].startswith("web page: POST '/api/roi' from web:127.0.0.1 failed")
