@@ -1,11 +1,14 @@
-"""``uav-tui eval`` on the whole aerial-tracking set: csrt fast, csrt paper and plain OpenCV trackers; prints JSON.
+"""``uav-tui eval`` on the whole aerial-tracking set: the trackers of issue 37 and its goals, as JSON.
 
-    .venv/bin/python scripts/bench_tracking.py [--data DIR] [--workers N] [--out DIR]
+    .venv/bin/python scripts/bench_tracking.py [--data DIR] [--workers N] [--threads N] [--out DIR]
 
-The summary has each tracker's overall scores (success AUC, precision@20px, normalised precision,
-frames lost, ms/frame) and, for each csrt mode, its AUC and mean ms/frame relative to plain CSRT's
-measured in the same run. The default data folder is ``aerial-tracking`` in the shared data folder
-(``$UAV_TUI_DATA_DIR``, else ``shared/data`` beside the repository).
+Trackers: ``nanotrack``, ``csrt`` (fast and paper), and plain OpenCV's ``cv:nano``, ``cv:csrt``, ``cv:kcf``.
+Per tracker the summary has its overall success AUC, precision@20px, frames lost while the target is
+visible, the share of absent-target frames (gt ``NaN``) it reported lost, and ms/frame; then each goal,
+as a ratio measured within this one run, with ``pass`` true or false (null when a tracker it needs is
+missing or failed). A tracker that cannot be loaded is left out and named under ``missing``; a job
+that raised is named under ``failed``. The default data folder is ``aerial-tracking`` in the shared
+data folder (``$UAV_TUI_DATA_DIR``, else ``shared/data`` beside the repository).
 """
 
 from __future__ import annotations
@@ -14,18 +17,106 @@ import argparse
 import json
 import sys
 import tempfile
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
+
+import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from processors.detection import find_data_dir  # noqa: E402
-from uav_tui.evaluation import TrackerSpec, evaluate, find_sequences  # noqa: E402
-from uav_tui.evaluation.report import headline, summary, write_json, write_plots  # noqa: E402
+from uav_tui.evaluation import JobResult, TrackerSpec, evaluate, find_sequences  # noqa: E402
+from uav_tui.evaluation.report import headline, summary, write_json  # noqa: E402
+from uav_tui.evaluation.sequences import Sequence  # noqa: E402
 
-TRACKERS = [TrackerSpec("csrt", {"mode": "fast"}), TrackerSpec("csrt", {"mode": "paper"}), TrackerSpec("cv:csrt"),
-            TrackerSpec("cv:kcf"), TrackerSpec("cv:mil")]
-BASELINE = "cv:csrt"
+NANOTRACK, CSRT_FAST = "nanotrack", "csrt mode=fast"
+PLAIN_NANO, PLAIN_CSRT = "cv:nano", "cv:csrt"
+TRACKERS = [TrackerSpec("nanotrack"), TrackerSpec("csrt", {"mode": "fast"}), TrackerSpec("csrt", {"mode": "paper"}),
+            TrackerSpec("cv:nano"), TrackerSpec("cv:csrt"), TrackerSpec("cv:kcf")]
+
+
+def loadable(trackers: list[TrackerSpec]) -> tuple[list[TrackerSpec], dict[str, str]]:
+    """The trackers that construct here, and label -> why for those that do not."""
+    found, missing = [], {}
+    for tracker in trackers:
+        try:
+            tracker.load()
+        except Exception as exc:  # noqa: BLE001 - any reason a tracker cannot load is reported, not fatal
+            missing[tracker.label] = f"{type(exc).__name__}: {exc}"
+        else:
+            found.append(tracker)
+    return found, missing
+
+
+def absence(results: list[JobResult], sequences: list[Sequence]) -> dict[str, dict[str, Any]]:
+    """Per tracker: frames lost while the target is visible, and absent-target frames it reported lost."""
+    gt = {sequence.name: sequence.gt for sequence in sequences}
+    counts: dict[str, np.ndarray] = {}
+    for result in results:
+        absent = np.isnan(gt[result.sequence]).any(axis=1)
+        none = np.isnan(result.boxes).any(axis=1)
+        row = np.array([(none & ~absent).sum(), (~absent).sum(), (none & absent).sum(), absent.sum()])
+        counts[result.tracker] = counts.get(result.tracker, 0) + row
+    return {label: {"lost_while_visible": int(lost), "lost_while_visible_share": _share(lost, visible),
+                    "absent_frames": int(absent), "absent_reported_lost": int(reported),
+                    "absent_reported_lost_share": _share(reported, absent)}
+            for label, (lost, visible, reported, absent) in counts.items()}
+
+
+Measure = Callable[[dict[str, dict[str, Any]]], float | None]
+
+GOALS: list[tuple[str, str, tuple[str, ...], Measure, str, float]] = [
+    (NANOTRACK, "success AUC minus cv:nano's", (NANOTRACK, PLAIN_NANO),
+     lambda t: t[NANOTRACK]["success_auc"] - t[PLAIN_NANO]["success_auc"], ">=", 0.02),
+    (NANOTRACK, "precision@20 minus cv:nano's", (NANOTRACK, PLAIN_NANO),
+     lambda t: t[NANOTRACK]["precision_20"] - t[PLAIN_NANO]["precision_20"], ">=", 0.0),
+    (NANOTRACK, "share of visible frames lost", (NANOTRACK,), lambda t: t[NANOTRACK]["lost_while_visible_share"],
+     "<=", 0.03),
+    (NANOTRACK, "share of absent frames reported lost", (NANOTRACK,),
+     lambda t: t[NANOTRACK]["absent_reported_lost_share"], ">=", 0.5),
+    (NANOTRACK, "ms/frame over cv:nano's", (NANOTRACK, PLAIN_NANO),
+     lambda t: t[NANOTRACK]["ms_mean"] / t[PLAIN_NANO]["ms_mean"], "<=", 1.2),
+    (CSRT_FAST, "success AUC minus cv:csrt's", (CSRT_FAST, PLAIN_CSRT),
+     lambda t: t[CSRT_FAST]["success_auc"] - t[PLAIN_CSRT]["success_auc"], ">=", 0.0),
+    (CSRT_FAST, "ms/frame over cv:csrt's", (CSRT_FAST, PLAIN_CSRT),
+     lambda t: t[CSRT_FAST]["ms_mean"] / t[PLAIN_CSRT]["ms_mean"], "<=", 0.5),
+]
+"""Issue 37's goals: (tracker, what is measured, trackers it needs, how, comparison, bound)."""
+
+
+def goals(trackers: dict[str, dict[str, Any]], unusable: set[str]) -> dict[str, dict[str, Any]]:
+    """Each goal measured on this run's overall scores: value, bound and ``pass`` (None when it cannot be told)."""
+    verdicts: dict[str, dict[str, Any]] = {}
+    for owner, name, needs, measure, comparison, bound in GOALS:
+        gone = [label for label in needs if label in unusable or label not in trackers]
+        value = None if gone else measure(trackers)
+        verdict: dict[str, Any] = {"goal": f"{comparison} {bound:g}"}
+        if value is None:
+            verdict.update(value=None, why=f"{', '.join(gone)} missing or failed" if gone else "nothing to measure",
+                           **{"pass": None})
+        else:
+            verdict.update(value=round(value, 4), **{"pass": value >= bound if comparison == ">=" else value <= bound})
+        verdicts.setdefault(owner, {})[name] = verdict
+    return verdicts
+
+
+def run(data: Path, trackers: list[TrackerSpec], workers: int, threads: int, out: Path) -> dict[str, Any]:
+    """Evaluate ``trackers`` on every sequence under ``data``; the benchmark's JSON document."""
+    sequences = find_sequences([data])
+    usable, missing = loadable(trackers)
+    results = evaluate(sequences, usable, workers=workers) if usable else []
+    document = summary(results, [str(data)])
+    out.mkdir(parents=True, exist_ok=True)
+    write_json(document, out / "eval.json")
+    overall = {label: {key: scores[key] for key in ("success_auc", "precision_20", "ms_mean", "frames", "scored")}
+               for label, scores in headline(document).items()}
+    for label, extra in absence(results, sequences).items():
+        overall[label].update(extra)
+    return {"data": str(data), "sequences": len(sequences), "workers": workers, "threads": threads,
+            "trackers": overall, "missing": missing, "failed": {}, "goals": goals(overall, set(missing)),
+            "written": str(out)}
 
 
 def main() -> None:
@@ -33,25 +124,15 @@ def main() -> None:
     parser.add_argument("--data", type=Path, default=find_data_dir() / "aerial-tracking")
     parser.add_argument("--workers", type=int, default=1,
                         help="jobs at once (default 1: a tracker's ms/frame is not measured beside another's)")
-    parser.add_argument("--out", type=Path, help="also write eval.json and the plots here")
+    parser.add_argument("--threads", type=int, default=1, help="OpenCV/ONNX threads of each job (default 1)")
+    parser.add_argument("--out", type=Path, help="also keep eval.json here (default: a temporary folder)")
     args = parser.parse_args()
-    sequences = find_sequences([args.data])
-    results = evaluate(sequences, TRACKERS, workers=args.workers)
-    document = summary(results, [str(args.data)])
     out = args.out or Path(tempfile.mkdtemp(prefix="bench_tracking-"))
-    out.mkdir(parents=True, exist_ok=True)
-    write_json(document, out / "eval.json")
-    write_plots(results, out)
-    overall = headline(document)
-    base = overall[BASELINE]
-    ratios = {label: {"auc_minus_plain_csrt": round(scores["success_auc"] - base["success_auc"], 4),
-                      "auc_ratio": round(scores["success_auc"] / base["success_auc"], 3),
-                      "ms_ratio": round(scores["ms_mean"] / base["ms_mean"], 3),
-                      "frames_lost_vs_plain": f"{scores['frames_lost']} vs {base['frames_lost']}"}
-              for label, scores in overall.items() if label.startswith("csrt")}
-    print(json.dumps({"data": str(args.data), "sequences": len(sequences),
-                      "frames": base["frames"], "workers": args.workers, "trackers": overall,
-                      "versus_plain_csrt": ratios, "written": str(out)}, indent=1))
+    print(json.dumps(run(args.data, TRACKERS, args.workers, args.threads, out), indent=1))
+
+
+def _share(part: int, whole: int) -> float | None:
+    return round(float(part) / float(whole), 4) if whole else None
 
 
 if __name__ == "__main__":
