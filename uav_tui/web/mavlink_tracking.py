@@ -15,7 +15,8 @@ event loop: a datagram endpoint, MAVLink 2 packing with pymavlink's generated di
 
 Anyone on the network can send to it, unauthenticated: every field is checked before use (a bad one is
 DENIED, with a warning event), a message whose handling still raises is FAILED and reported
-(:class:`HandlerFailures`), and commands beyond the queue are dropped and counted within a line budget.
+(:class:`HandlerFailures`), and commands beyond a rate (a ground station's clicks come far slower) or beyond
+the queue are dropped and counted, the count said at most once a second.
 """
 
 from __future__ import annotations
@@ -43,6 +44,11 @@ STATUS_PERIOD_S = 1.0
 
 QUEUE_COMMANDS = 16
 """Commands waiting to be handled; more are dropped (and counted)."""
+
+COMMANDS_PER_S = 5.0
+COMMAND_BURST = 10
+"""Commands taken at once, then a second; more are dropped (and counted): a flood costs the processor and the
+event log no more than this."""
 
 MAX_MESSAGE_ID = 2**24 - 1
 """MAVLink 2 message ids are 24 bits."""
@@ -108,8 +114,9 @@ class CameraTracking:
         self._tasks: list[asyncio.Task[None]] = []
         self.failures = HandlerFailures(core.events, f"CameraTracking({address})")
         self.dropped = 0
-        """Commands dropped because the queue was full."""
-        self._drops: LineBudget | None = None
+        """Commands dropped: beyond the rate, or the queue full."""
+        self._admit: LineBudget[Any] | None = None
+        self._drops: LineBudget[int] | None = None
 
     async def start(self) -> None:
         loop = asyncio.get_running_loop()
@@ -121,7 +128,8 @@ class CameraTracking:
             raise UavError(f"camera_mavlink {self.address}: {exc.strerror}; is another program using the "
                            "port? pick another one") from exc
         self.core.add_frame_listener(self._on_frame)
-        self._drops = LineBudget(lambda _: self._say_dropped(1), self._say_dropped, burst=1, per_s=1.0)
+        self._admit = LineBudget(self._enqueue, self._dropped, burst=COMMAND_BURST, per_s=COMMANDS_PER_S)
+        self._drops = LineBudget(self._say_dropping, self._say_dropped, burst=1, per_s=1.0)
         self._tasks = [asyncio.create_task(self._handle_commands(), name="camera-commands"),
                        asyncio.create_task(self._report(), name="camera-status")]
         logger.info("CameraTracking(%s) started", self.address)
@@ -133,8 +141,9 @@ class CameraTracking:
             task.cancel()
         await asyncio.gather(*self._tasks, return_exceptions=True)
         self._tasks = []
-        if self._drops is not None:
-            self._drops.close()
+        for budget in (self._admit, self._drops):
+            if budget is not None:
+                budget.close()
         self.failures.close()
         if self.transport is not None:
             self.transport.close()
@@ -162,18 +171,29 @@ class CameraTracking:
             if message.target_system not in (0, self.mav.srcSystem) or \
                     message.target_component not in (0, self.mav.srcComponent):
                 continue
-            if self._commands.full():
-                self.dropped += 1
-                if self._drops is not None:
-                    self._drops.line("")
-            else:
-                self._commands.put_nowait(message)
+            if self._admit is not None:
+                self._admit.line(message)
+
+    def _enqueue(self, message: Any) -> None:
+        """A command within the rate: queued, or dropped (counted) when the queue is full."""
+        if self._commands.full():
+            self._dropped(1)
+        else:
+            self._commands.put_nowait(message)
+
+    def _dropped(self, count: int) -> None:
+        self.dropped += count
+        if self._drops is not None:
+            self._drops.lines(range(count))  # one item per command: the first said, the rest counted
+
+    def _say_dropping(self, _: int) -> None:
+        self.core.events.emit("warning", "web", f"camera component: dropping commands beyond {COMMANDS_PER_S:g} a "
+                              f"second (or a full queue): is something flooding {self.address}? (counted once a "
+                              "second)")
 
     def _say_dropped(self, count: int) -> None:
-        """Within the line budget: a drop, or the count of the drops since the last one said."""
-        self.core.events.emit("warning", "web", f"camera component: command queue full, dropped {count} "
-                              f"command{'s' if count != 1 else ''} ({self.dropped} in all; is something flooding "
-                              f"{self.address}?)")
+        self.core.events.emit("warning", "web", f"camera component: dropped {count} more command"
+                              f"{'s' if count != 1 else ''} ({self.dropped} in all)")
 
     async def _handle_commands(self) -> None:
         while True:
