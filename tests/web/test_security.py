@@ -293,3 +293,16 @@ async def test_a_handler_bug_is_a_500_logged_once_and_the_page_goes_on(
     assert len([r for r in caplog.records if r.exc_info and "a bug in the route" in str(r.exc_info[1])]) == 1
     said = [e.message for e in web_core.events.recent if "a bug in the route" in e.message]
     assert len(said) == 3 and said[0].startswith("web page: POST '/api/roi' from web:127.0.0.1 failed")
+
+
+async def test_a_flood_of_bad_requests_is_counted_not_logged_each(web_core: UavCore) -> None:
+    async with aiohttp.ClientSession() as http:
+        for _ in range(200):
+            async with http.post(base(web_core) + "/api/command", params={"token": TOKEN}, data=b"{") as response:
+                assert response.status == 400
+    await web_core.web.stop()  # says the count
+    said = [e.message for e in web_core.events.recent if e.kind == "web" and e.level == "warning"]
+    refused = [m for m in said if "not a JSON object" in m]
+    assert 1 <= len(refused) <= 25
+    counted = sum(int(m.split()[0]) for m in said if m.endswith("more bad requests refused"))
+    assert len(refused) + counted == 200

@@ -37,6 +37,7 @@ from uav_tui.config import WebConfig
 from uav_tui.core import CoreState
 from uav_tui.errors import KNOWN_ERRORS, CommandError, UavError
 from uav_tui.events import Event
+from uav_tui.line_budget import LineBudget
 from uav_tui.text import describe, shorten
 from uav_tui.web.failures import HandlerFailures
 from uav_tui.web.mdns import adopt_mdns_resolver
@@ -79,6 +80,8 @@ class WebServer:
         self._origins = frozenset(o.strip().rstrip("/").lower() for o in config.web_origins.split(",") if o.strip())
         self._runner: web.AppRunner | None = None
         self.failures = HandlerFailures(core.events, "web page")
+        self._refusals: LineBudget[tuple[str, str]] | None = None
+        """Events for bad requests (made on the loop, at the first one)."""
 
     @property
     def url(self) -> str:
@@ -116,6 +119,8 @@ class WebServer:
             runner, self._runner = self._runner, None
             await runner.cleanup()
         self.failures.close()
+        if self._refusals is not None:
+            self._refusals.close()
 
     # -- access ----------------------------------------------------------------------------------
 
@@ -306,8 +311,13 @@ class WebServer:
         return body
 
     def _bad_request(self, origin: str, message: str) -> web.HTTPBadRequest:
-        """Log a refused request as an event and return the 400 to raise; nothing else changes."""
-        self.core.events.emit("warning", "web", message, origin)
+        """Log a refused request as an event (within a line budget: a flood is counted) and return the 400 to
+        raise; nothing else changes."""
+        if self._refusals is None:
+            self._refusals = LineBudget(lambda said: self.core.events.emit("warning", "web", *said),
+                                        lambda count: self.core.events.emit(
+                                            "warning", "web", f"{count} more bad requests refused"))
+        self._refusals.line((message, origin))
         return web.HTTPBadRequest(text=message)
 
     async def _on_shutdown(self, app: web.Application) -> None:
