@@ -19,14 +19,17 @@ from uav_tui.config import Config, SafetyConfig
 from uav_tui.core import UavCore
 from uav_tui.errors import KNOWN_ERRORS, CommandError, error_line
 from uav_tui.events import Event
+from uav_tui.line_budget import BudgetedText
 from uav_tui.native_stderr import native_stderr_as_events
 from uav_tui.status import CoreStatus
 from uav_tui.terminal_output import TerminalOutput
-from uav_tui.text import escape, safe
+from uav_tui.text import escape, safe, shorten
 
 OUTPUT_BACKLOG_CHARS = 64 * 1024
 """Lines not yet taken by a stalled terminal beyond which new ones are dropped (half a minute of ``--json``
 status): once it takes output again, the operator reads the present, told how much was skipped."""
+PRINTED_CHARS = 300
+"""A longer line printed by a processor in this process (thread isolation) is cut."""
 CLOSE_TIMEOUT_S = 1.0
 """How long the end of a run waits for a stalled terminal to take the last of its output."""
 
@@ -138,16 +141,28 @@ class HeadlessRunner:
                                           name="stdout")
             self._stderr = TerminalOutput(sys.stderr, self._dropped, _gone, max_backlog=OUTPUT_BACKLOG_CHARS,
                                           name="stderr")
+            # print() too, the processor's for one; with --json stdout is only JSON, so prints go to stderr.
+            printed = [self._printed(self._stderr if self.json_lines else self._stdout), self._printed(self._stderr)]
             try:
-                # print() too, the processor's for one; with --json stdout is only JSON, so prints go to stderr.
-                with (_logging_to(self._stderr), contextlib.redirect_stdout(self._stderr if self.json_lines else
-                                                                            self._stdout),
-                      contextlib.redirect_stderr(self._stderr)):
+                with (_logging_to(self._stderr), contextlib.redirect_stdout(printed[0]),
+                      contextlib.redirect_stderr(printed[1])):
                     return await self._run()
             finally:
+                for stream in printed:
+                    if isinstance(stream, BudgetedText):
+                        stream.close()
                 deadline = time.monotonic() + CLOSE_TIMEOUT_S
                 for output in (self._stdout, self._stderr):
                     output.close(max(0.0, deadline - time.monotonic()))
+
+    def _printed(self, output: TerminalOutput) -> TerminalOutput | BudgetedText:
+        """Where ``print()`` goes: ``output``; with thread isolation, where the processor prints in this process,
+        within a line budget (with process isolation its output has one already: ``ProcessWorker``)."""
+        if self.core.config.isolation != "thread":
+            return output
+        return BudgetedText(output, lambda line: output.write(shorten(safe(line), PRINTED_CHARS) + "\n"),
+                            lambda count: self.core.events.emit("warning", "processor", f"{count} more lines of the "
+                                                                "processor's output left out (too many at once)"))
 
     async def _run(self) -> int:
         loop = asyncio.get_running_loop()

@@ -11,7 +11,7 @@ import math
 import threading
 import time
 from collections.abc import Callable, Sequence
-from typing import Generic, TypeVar
+from typing import Any, Generic, TypeVar
 
 BURST_LINES = 20
 """Lines shown at once before the rate applies."""
@@ -115,3 +115,51 @@ class LineBudget(Generic[T]):
             counted = self._take_count()
         if counted:
             self._say_left_out(counted)
+
+
+class BudgetedText:
+    """A stand-in for ``sys.stdout`` (any thread): what is written is cut into lines, none longer than
+    ``max_line`` characters (one that never ends is taken in pieces), and passed to ``say_line`` within a
+    :class:`LineBudget`; the count of the rest goes to ``say_left_out``. Create it on the event loop.
+
+    Other file attributes (``encoding``, ``isatty``) are those of ``file``.
+    """
+
+    def __init__(self, file: Any, say_line: Callable[[str], None], say_left_out: Callable[[int], None], *,
+                 max_line: int = 64 * 1024) -> None:
+        self._file = file
+        self._budget: LineBudget[str] = LineBudget(say_line, say_left_out)
+        self._max_line = max_line
+        self._partial: list[str] = []
+        """The unfinished line's pieces (joined only when it ends: a print at a time would copy it each time)."""
+        self._partial_chars = 0
+        self._lock = threading.Lock()
+
+    def write(self, text: str) -> int:
+        with self._lock:
+            if "\n" not in text and self._partial_chars + len(text) < self._max_line:
+                self._partial.append(text)
+                self._partial_chars += len(text)
+                return len(text)
+            *lines, rest = ("".join(self._partial) + text).split("\n")
+            if len(rest) >= self._max_line:
+                lines.append(rest)
+                rest = ""
+            self._partial, self._partial_chars = [rest], len(rest)
+        if lines:
+            self._budget.lines(lines)
+        return len(text)
+
+    def flush(self) -> None:
+        """Nothing to do: lines are passed on as they end."""
+
+    def close(self) -> None:
+        """Pass on the unfinished line and say the count. On the loop."""
+        with self._lock:
+            rest, self._partial, self._partial_chars = "".join(self._partial), [], 0
+        if rest:
+            self._budget.line(rest)
+        self._budget.close()
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._file, name)
