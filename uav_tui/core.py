@@ -34,7 +34,7 @@ from uav_tui.operations import Operations
 from uav_tui.process_worker import LOAD_TIMEOUT_S, ProcessWorker
 from uav_tui.processor_errors import ProcessorErrors
 from uav_tui.recording import Recorder, describe
-from uav_tui.replay.gate import ReplayGate
+from uav_tui.replay.gate import ReplayGate, on_replay_clock
 from uav_tui.replay.operator import CommandReplay, recorded_commands
 from uav_tui.status import CoreStatus
 from uav_tui.telemetry import TelemetryManager
@@ -143,6 +143,7 @@ class UavCore:
                 self.telemetry.add_listener(ClockCheck(self.events))
             if self.replay is not None:
                 self.gate = ReplayGate(self.config.safety, self.telemetry, self.events, self.controller)
+                self.worker.stage_clock = on_replay_clock
                 self.add_frame_listener(lambda result: self.replay.frame_done())
                 commands = recorded_commands(self.controller.run_dir)  # type: ignore[attr-defined]
                 self.replay.before_show = CommandReplay(self, loop, commands).before_show

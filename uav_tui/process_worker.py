@@ -96,6 +96,8 @@ class ProcessWorker:
                                          kwargs=self.kwargs)
         """What was loaded; ``instance`` is None: the object lives in the child."""
         self.stats = RollingStats()
+        self.stage_clock: Callable[[ProcessedFrame], None] | None = None
+        """Set in a replay: moves a result's stage times onto the replay's clock (before they are counted)."""
         self.current: ProcessedFrame | None = None
         """The frame whose ``tmMgr.save`` requests are being stored (None between frames)."""
         self.last: ProcessedFrame | None = None
@@ -554,6 +556,8 @@ class ProcessWorker:
             self.consecutive_errors += 1
         else:
             self.consecutive_errors = 0
+        if self.stage_clock is not None:
+            self.stage_clock(result)
         self.stats.add(result.frame.seq, result.frame.t_mono_ns, result.t_start_ns, result.t_end_ns,
                        result.t_vector_ns or result.t_end_ns)
         self.last = result

@@ -30,30 +30,35 @@ def replay_figure(run: Dataset) -> Figure | None:
 
 
 def paint_replay(joined: pd.DataFrame, figure: Figure, names: tuple[str, str]) -> None:
-    """Plot a :func:`uav_tui.dataset.compare` table: the original (``_a``) and the replay (``_b``)."""
-    has_box = all(f"{c}_{side}" in joined for c in BOX for side in "ab")
-    axes = figure.subplots(3 if has_box else 2, 1, sharex=True)
+    """Plot a :func:`uav_tui.dataset.compare` table: the flight (``_a``) and its replay (``_b``)."""
+    sides = (("a", f"flight ({names[0]})", "-", "x"), ("b", f"replay ({names[1]})", "--", "+"))
+    boxed = [side for side in sides if all(f"{c}_{side[0]}" in joined and joined[f"{c}_{side[0]}"].notna().any()
+                                           for c in BOX)]  # a run whose processor tracked no box has no panel
+    axes = figure.subplots(3 if boxed else 2, 1, sharex=True)
     t_s = joined["t_s_a"]
-    figure.suptitle(f"Original ({names[0]}) vs replayed ({names[1]}): {len(joined)} frames")
+    figure.suptitle(f"Flight vs replay: the vector of the {len(joined)} frames both processed")
     for ax, component in zip(axes, ("vx", "vy"), strict=False):
-        for side, name, style in (("a", names[0], "-"), ("b", names[1], "--")):
-            ax.plot(t_s, joined[f"{component}_{side}"], style, linewidth=1, label=f"{name}")
+        for side, label, style, marker in sides:
+            proposed = joined[f"{component}_{side}"].notna()  # vectors are sparse: join the frames that had one
+            ax.plot(t_s[proposed], joined.loc[proposed, f"{component}_{side}"], style, linewidth=1, label=label)
             executed = joined[f"decision_{side}"].fillna("").str.startswith("executed")
-            ax.plot(t_s[executed], joined.loc[executed, f"{component}_{side}"], "x" if side == "a" else "+",
-                    markersize=5, label=f"{name}: executed")
+            ax.plot(t_s[executed], joined.loc[executed, f"{component}_{side}"], marker, markersize=5,
+                    label=f"{label.split(' ')[0]}: executed")
         ax.set_ylabel(f"{component}, m/s")
         ax.legend(loc="best", fontsize="small")
         ax.grid(True, alpha=0.3)
-    if has_box:
+    if boxed:
         ax = axes[2]
-        for side, name, style in (("a", names[0], "-"), ("b", names[1], "--")):
-            ax.plot(t_s, joined[f"box_x_{side}"] + joined[f"box_w_{side}"] / 2, style, label=f"{name}: box centre x")
-            ax.plot(t_s, joined[f"box_y_{side}"] + joined[f"box_h_{side}"] / 2, style, label=f"{name}: box centre y")
-        ax.set_ylabel("px")
+        for side, label, style, _ in boxed:
+            ax.plot(t_s, joined[f"box_x_{side}"] + joined[f"box_w_{side}"] / 2, style, label=f"{label}: box centre x")
+            ax.plot(t_s, joined[f"box_y_{side}"] + joined[f"box_h_{side}"] / 2, style, label=f"{label}: box centre y")
+        ax.set_ylabel("box centre, px")
         ax.legend(loc="best", fontsize="small")
         ax.grid(True, alpha=0.3)
-    axes[-1].set_xlabel("time since the original run started, s")
+    axes[-1].set_xlabel("time since the flight started, s")
 
 
 def _processor_name(run: Dataset) -> str:
-    return run.info.get("processor", {}).get("name", "?")
+    """The processor as the user named it (``position_hold``, ``mine.py:Mine``)."""
+    processor = run.info.get("processor", {})
+    return str(processor.get("spec") or processor.get("name") or "?")

@@ -110,6 +110,8 @@ class ProcessorWorker:
         self._fields: tuple[Telemetry | None, dict[str, Any]] = (None, {})
         """The telemetry last given to the processor and its fields as a dict (telemetry changes slower than frames)."""
         self.stats = RollingStats()
+        self.stage_clock: Callable[[ProcessedFrame], None] | None = None
+        """Set in a replay: moves a result's stage times onto the replay's clock (before they are counted)."""
         self.current: ProcessedFrame | None = None
         """The frame being processed (read on the processor thread by ``tmMgr.save``); None between frames."""
         self.last: ProcessedFrame | None = None
@@ -216,6 +218,8 @@ class ProcessorWorker:
         return asyncio.wrap_future(future)
 
     def _deliver(self, result: ProcessedFrame) -> None:
+        if self.stage_clock is not None:
+            self.stage_clock(result)
         self.stats.add(result.frame.seq, result.frame.t_mono_ns, result.t_start_ns, result.t_end_ns,
                        result.t_vector_ns or result.t_end_ns)
         self.last = result

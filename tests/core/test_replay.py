@@ -11,17 +11,22 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from matplotlib.backends.backend_agg import FigureCanvasAgg
 
 from sources.run import read_video
 from sources.synthetic import SyntheticScene
 from uav_tui import dataset
 from uav_tui.cli import main
 from uav_tui.config import load_config
+from uav_tui.core import CoreState, UavCore
 from uav_tui.jobs import run_jobs
 from uav_tui.recording.interpolate import CONTINUOUS, DISCRETE
 from uav_tui.replay.operator import recorded_commands
-from uav_tui.replay.runner import ReplayJob, replay_run
+from uav_tui.replay.runner import ReplayJob, replay_config, replay_run
 from uav_tui.report import write_report
+from uav_tui.report_replay import replay_figure
+from uav_tui.tui.app import UavApp
+from uav_tui.tui.screens.confirm import ConfirmScreen
 
 from .flight_helpers import flying_core, wait_until
 
@@ -237,3 +242,52 @@ def test_a_paced_replay_shows_recorded_frames_at_their_recorded_times(flight, tm
     assert len(frames) > 20 and set(frames["t_mono_ns"]) <= recorded  # a slow processor may skip some
     assert frames["t_mono_ns"].is_monotonic_increasing
     assert frames["decision"].str.startswith("executed").any()  # autonomy was on for part of the flight
+
+
+def test_replay_without_processor_uses_the_runs_own_and_times_are_on_the_replays_clock(flight, tmp_path, capsys):
+    """``uav-tui replay RUN``: the run's processor and arguments (it used to be ``template``), said on stderr;
+    latency and processing times as in the flight, not this computer's uptime minus the recorded one."""
+    assert main(["replay", str(flight), "--runs-dir", str(tmp_path), "--speed", "max", "--workers", "1"]) == 0
+    out, err = capsys.readouterr()
+    assert f"replaying {flight.name} through {BRIGHTNESS} (its own processor)" in err.splitlines()
+    assert f"frames through {BRIGHTNESS} in " in out
+    replay = dataset.load(Path(out.strip().splitlines()[-1].rsplit("-> ", 1)[1]))
+    assert replay.info["processor"]["spec"] == BRIGHTNESS
+    frames = replay.frames
+    assert (frames["t_start_ns"] == frames["t_mono_ns"]).all()  # taken when shown, at its capture time
+    processing_s = (frames["t_end_ns"] - frames["t_start_ns"]) / 1e9
+    latency_s = (frames["t_vector_ns"] - frames["t_mono_ns"]) / 1e9
+    assert processing_s.between(0, 5).all() and latency_s.between(0, 5).all()
+    text = write_report(replay.path)[1]
+    p50 = float(text.split("latency capture->result: p50 ")[1].split(" ms")[0])
+    assert 0 <= p50 < 5000  # before: the hours between the flight and the replay
+
+
+def test_replay_png_labels_flight_and_replay_apart_and_keeps_its_title_inside(flight, tmp_path):
+    result = _replay(flight, DARKNESS, tmp_path)
+    figure = replay_figure(dataset.load(result.replay))
+    assert figure is not None
+    FigureCanvasAgg(figure).draw()
+    title = figure._suptitle.get_window_extent()
+    assert title.x0 >= 0 and title.x1 <= figure.bbox.width  # not clipped
+    labels = [text.get_text() for text in figure.axes[0].get_legend().get_texts()]
+    assert labels[0] == f"flight ({BRIGHTNESS})" and f"replay ({DARKNESS})" in labels
+    box = figure.axes[2]  # both processors report a box: its centre is drawn, not an empty panel
+    assert box.get_ylabel() == "box centre, px" and all(np.isfinite(line.get_ydata()).any() for line in box.lines)
+
+
+async def test_quitting_a_replay_in_the_dashboard_asks_nothing_about_the_recorded_vehicle(flight, tmp_path):
+    config = replay_config(ReplayJob(str(flight), load_config(None, {"processor": BRIGHTNESS,
+                                                                     "runs_dir": str(tmp_path)}), "1"))
+    app = UavApp(UavCore(config))
+    async with app.run_test(size=(80, 24)) as pilot:
+        deadline = asyncio.get_running_loop().time() + 30
+        while not (app.core.state is CoreState.RUNNING and app.core.telemetry.snapshot().armed):
+            assert asyncio.get_running_loop().time() < deadline, "the recorded vehicle never armed"
+            await pilot.pause(0.05)
+        await pilot.press("q")
+        await pilot.pause(0.3)
+        assert not isinstance(app.screen, ConfirmScreen)  # before: "The vehicle is ARMED. Quit? ..."
+        while app.core.state is not CoreState.STOPPED:
+            assert asyncio.get_running_loop().time() < deadline + 15, "the replay did not stop"
+            await pilot.pause(0.05)

@@ -11,7 +11,7 @@ from uav_tui.arguments import ArgumentParser
 from uav_tui.config import find_config_file, load_config, overrides_from_args
 from uav_tui.errors import KNOWN_ERRORS
 from uav_tui.jobs import run_jobs
-from uav_tui.replay.runner import ReplayJob, replay_run, summary_line
+from uav_tui.replay.runner import ReplayJob, processor_text, replay_config, replay_run, summary_line
 from uav_tui.runs_cli import find_run
 from uav_tui.text import safe
 
@@ -24,9 +24,9 @@ def build_parser() -> argparse.ArgumentParser:
                     "by the autonomy gate as in the recorded run (autonomy on when it was on) and never sent.")
     parser.add_argument("runs", nargs="+", metavar="RUN", help="run folder, or its name under the runs folder")
     parser.add_argument("--processor", help="processor: short name, module:Class or path/file.py:Class "
-                        "(default: the configuration's)")
+                        "(default: each run's own, with its constructor arguments, from its run.json)")
     parser.add_argument("--processor-arg", dest="processor_args", action="append", default=None,
-                        metavar="KEY=VALUE", help="processor constructor argument (TOML value), repeatable")
+                        metavar="KEY=VALUE", help="constructor argument of --processor (TOML value), repeatable")
     parser.add_argument("--speed", default="1", help="1 = real time (default), 4 = four times as fast, max = every "
                         "frame as fast as the processor goes, deterministic")
     parser.add_argument("--workers", type=int, metavar="N", help="replay N runs at once in local processes "
@@ -46,10 +46,17 @@ def main(argv: list[str]) -> int:
         parse_speed(args.speed)
     except ValueError as exc:
         parser.error(f"--speed: {exc}")
+    if args.processor_args and not args.processor:
+        parser.error("--processor-arg needs --processor (without it, each run is replayed with its own processor "
+                     "and arguments)")
     try:
         config = load_config(find_config_file(args.config), overrides_from_args(args))
         runs_dir = Path(config.recording.runs_dir).expanduser()
-        jobs = [ReplayJob(str(find_run(runs_dir, name)), config, args.speed) for name in args.runs]
+        jobs = [ReplayJob(str(find_run(runs_dir, name)), config, args.speed, own_processor=not args.processor)
+                for name in args.runs]
+        for job in jobs:
+            print(safe(f"replaying {Path(job.run).name} through {processor_text(replay_config(job))}"
+                       f"{' (its own processor)' if job.own_processor else ''}"), file=sys.stderr)
         results = run_jobs(replay_run, jobs, workers=args.workers, cluster=args.cluster,
                            progress=lambda done, total: print(f"replayed {done}/{total}", file=sys.stderr))
     except KNOWN_ERRORS as exc:

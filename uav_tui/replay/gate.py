@@ -29,6 +29,19 @@ def autonomy_switches(events_csv: Path) -> list[tuple[int, bool]]:
     return switches
 
 
+def on_replay_clock(result: ProcessedFrame) -> None:
+    """Move a replayed frame's stage times onto the replay's clock, where its capture time is.
+
+    A replay shows a frame at its recorded capture time and the processor takes it at once (lockstep
+    waits for it), so processing starts at the capture time and the stages keep their real durations:
+    latency and processing times read as in a live run, not as this computer's uptime minus the recorded one.
+    """
+    shift = result.frame.t_mono_ns - result.t_start_ns
+    result.t_start_ns += shift
+    result.t_end_ns += shift if result.t_end_ns else 0
+    result.t_vector_ns += shift if result.t_vector_ns else 0
+
+
 class ReplayGate(AutonomyGate):
     """Judges every replayed vector as the recorded run's gate would have, on the recorded clock.
 

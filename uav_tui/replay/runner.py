@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import asyncio
+import json
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 from uav_tui.config import Config, with_overrides
 from uav_tui.core import UavCore
@@ -24,6 +26,9 @@ class ReplayJob:
     """Processor, its arguments, runs_dir, safety limits ... (source and fc are set by the replay)."""
     speed: str = "1"
     """A positive factor of real time, or ``max`` (lockstep: every frame, deterministic)."""
+    own_processor: bool = False
+    """Replay through the processor and constructor arguments the run's ``run.json`` names, not ``config``'s
+    (``uav-tui replay`` without ``--processor``)."""
 
 
 @dataclass(frozen=True)
@@ -37,6 +42,8 @@ class ReplayResult:
     """Frames processed."""
     seconds: float
     """Time the replay took."""
+    processor: str = ""
+    """What the frames were processed by: the spec and its constructor arguments."""
 
 
 def replay_run(job: ReplayJob) -> ReplayResult:
@@ -49,8 +56,33 @@ def replay_config(job: ReplayJob) -> Config:
     run_dir = Path(job.run).expanduser()
     if not (run_dir / "run.json").is_file():
         raise UavError(f"{run_dir} is not a recorded run (no run.json); `uav-tui runs` lists them")
-    return with_overrides(job.config, source=f"run:{run_dir}", fc=f"replay:{run_dir}?speed={job.speed}",
+    config = job.config
+    if job.own_processor:
+        spec, kwargs = recorded_processor(run_dir)
+        config = with_overrides(config, processor=spec, processor_args=kwargs)
+    return with_overrides(config, source=f"run:{run_dir}", fc=f"replay:{run_dir}?speed={job.speed}",
                           record=True, record_video=False)
+
+
+def recorded_processor(run_dir: Path) -> tuple[str, dict[str, Any]]:
+    """The processor a run was flown with, as ``(spec, constructor arguments)`` (a file by its full path)."""
+    try:
+        processor = json.loads((run_dir / "run.json").read_text()).get("processor")
+    except (OSError, ValueError, AttributeError):
+        processor = None
+    if not isinstance(processor, dict) or not processor.get("spec"):
+        raise UavError(f"{run_dir}/run.json does not say which processor the run had: give --processor")
+    spec, path, name = str(processor["spec"]), processor.get("path"), str(processor.get("name", ""))
+    if ".py" in spec and path and Path(path).is_file():  # a file named relative to where the flight started
+        spec = f"{path}:{name.rpartition(':')[2]}"
+    kwargs = processor.get("kwargs")
+    return spec, kwargs if isinstance(kwargs, dict) else {}
+
+
+def processor_text(config: Config) -> str:
+    """``spec`` or ``spec (key=value, ...)``: what a replay processes with."""
+    kwargs = ", ".join(f"{key}={value!r}" for key, value in config.processor_args.items())
+    return f"{config.processor} ({kwargs})" if kwargs else config.processor
 
 
 async def replay(job: ReplayJob) -> ReplayResult:
@@ -67,7 +99,7 @@ async def replay(job: ReplayJob) -> ReplayResult:
     assert core.recorder is not None and core.source is not None
     return ReplayResult(run=str(Path(job.run).expanduser()), replay=str(core.recorder.run_dir),
                         content=core.source.get_properties()["content"], frames=core.recorder.frames,
-                        seconds=loop.time() - started)
+                        seconds=loop.time() - started, processor=processor_text(config))
 
 
 async def _until_finished(core: UavCore) -> None:
@@ -90,5 +122,5 @@ async def _until_finished(core: UavCore) -> None:
 def summary_line(result: ReplayResult) -> str:
     """One line per replayed run for the terminal."""
     note = " (no video in that run: its saved frames only)" if result.content != "video" else ""
-    return (f"{Path(result.run).name}: {result.frames} frames in {result.seconds:.1f} s "
+    return (f"{Path(result.run).name}: {result.frames} frames through {result.processor} in {result.seconds:.1f} s "
             f"({result.frames / result.seconds if result.seconds else 0:.0f}/s){note} -> {result.replay}")

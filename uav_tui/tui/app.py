@@ -285,7 +285,7 @@ class UavApp(App[None]):
             await self.shutdown("quit")
             return
         vehicle = self.core.telemetry.snapshot()
-        if vehicle.armed:
+        if vehicle.armed and self.core.replay is None:  # a replay's vehicle is a recording: nothing to put in hold
             mode = self.core.mode_left_at_exit()
             then = f"It is left in {mode} mode." if mode else "It is put in hold first."
             self.push_screen(ConfirmScreen(f"The vehicle is ARMED. Quit? {then}", "Quit"),
