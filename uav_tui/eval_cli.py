@@ -56,9 +56,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     parser = ArgumentParser(
         prog="uav-tui eval", formatter_class=argparse.RawDescriptionHelpFormatter,
-        description="Score processors on annotated video: catch_cmd(frame 0's gt box), then photo_processing on "
-                    "every frame; the processor's box is compared with the gt (success AUC, precision@20px, "
-                    "normalised precision, frames lost, ms/frame).",
+        description="Score processors on annotated video: catch_cmd(the first frame's gt box), then photo_processing "
+                    "on every frame; the processor's box is compared with the gt (success AUC, precision@20px, "
+                    "normalised precision, frames lost while visible, absent frames reported lost, ms/frame).",
         epilog=EXAMPLE.format(trackers=" ".join(f"cv:{name}" for name in sorted(available_trackers()))))
     parser.add_argument("data", nargs="+", type=Path, help="a sequence folder (video.mp4 + gt.txt, or img/ + "
                         "groundtruth_rect.txt, or images with <folder>.txt beside it), or a folder of them")
