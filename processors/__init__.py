@@ -14,6 +14,7 @@ from processors.loading import ENTRY_POINT_GROUP, LoadedProcessor, load
 
 BUILTINS: dict[str, str] = {
     "template": "processors.template:MeanBrightnessProcessor",
+    "nanotrack": "processors.nanotrack_tracker:NanoTrackProcessor",
     "csrt": "processors.csrt_tracker:CSRTTrackingProcessor",
     "position_hold": "processors.position_hold:SIFTPositionHold",
     "yolo": "processors.yolo_detector:YoloDetector",

@@ -46,7 +46,7 @@ def blend(old: np.ndarray, new: np.ndarray, rate: float) -> np.ndarray:
 
 
 def search(gray: np.ndarray, templates: list[np.ndarray], box: Box, radius: float,
-           scales: tuple[float, ...] = (1.0,)) -> Found | None:
+           scales: tuple[float, ...] = (1.0,), max_side: int = MAX_SIDE) -> Found | None:
     """Best match of any template around ``box``: shifted up to ``radius`` x its size, at each scale.
 
     Args:
@@ -55,6 +55,7 @@ def search(gray: np.ndarray, templates: list[np.ndarray], box: Box, radius: floa
         box: where the target was; its size times each scale is the size searched for.
         radius: how far the centre may move, in units of the box's longer side.
         scales: box sizes tried, relative to ``box``.
+        max_side: the target's longer side is resampled to at most this (smaller: coarser and cheaper).
 
     Returns:
         The best box and its score, or None when the window is off the image.
@@ -64,7 +65,7 @@ def search(gray: np.ndarray, templates: list[np.ndarray], box: Box, radius: floa
     best: Found | None = None
     for scale in scales:
         sw, sh = w * scale, h * scale
-        k = min(1.0, MAX_SIDE / max(sw, sh))  # resample: the target at most MAX_SIDE px
+        k = min(1.0, max_side / max(sw, sh))  # resample: the target at most max_side px
         reach = radius * max(sw, sh)
         x0, y0 = max(int(cx - sw / 2 - reach), 0), max(int(cy - sh / 2 - reach), 0)
         x1, y1 = min(int(np.ceil(cx + sw / 2 + reach)), gray.shape[1]), min(int(np.ceil(cy + sh / 2 + reach)),
