@@ -1,6 +1,7 @@
 """A recorded ``position_hold`` flight replayed at ``--speed max`` gives the same processor outputs frame by frame,
-also while another process loads every core: position_hold paces its estimates by the frame's clock
-(``tmMgr.snapshot().frame_t_ns``), not by this computer's."""
+also while another process loads every core, and in a platform thread as in its own process: position_hold paces
+its estimates by the frame's clock (``tmMgr.snapshot().frame_t_ns``), not by this computer's, and reads the
+telemetry at the frame's capture, whichever host runs it."""
 
 from __future__ import annotations
 
@@ -33,14 +34,15 @@ async def _fly(tmp_path: Path) -> Path:
     return run_dir
 
 
-def _replay(run: Path, out: Path) -> pd.DataFrame:
-    config = load_config(None, {"processor": "position_hold", "runs_dir": str(out), "save_max_hz": 0})
+def _replay(run: Path, out: Path, isolation: str = "process") -> pd.DataFrame:
+    config = load_config(None, {"processor": "position_hold", "runs_dir": str(out), "save_max_hz": 0,
+                                "isolation": isolation})
     result = replay_run(ReplayJob(str(run), config, "max"))
     frames = dataset.load(result.replay).frames
     return frames[OUTPUTS].reset_index(drop=True)
 
 
-def test_a_position_hold_replay_gives_the_same_outputs_under_load(tmp_path: Path) -> None:
+def test_a_position_hold_replay_gives_the_same_outputs_under_load_and_in_either_host(tmp_path: Path) -> None:
     flight = asyncio.run(_fly(tmp_path))
     quiet = _replay(flight, tmp_path / "quiet")
     hogs = [subprocess.Popen([sys.executable, "-c", "while True: pass"]) for _ in range(2)]  # both cores busy
@@ -54,3 +56,4 @@ def test_a_position_hold_replay_gives_the_same_outputs_under_load(tmp_path: Path
     assert len(quiet) > 100 and 10 < estimates.sum() < len(quiet) / 2  # 5 estimates a second of a 30 FPS camera
     assert quiet["vx"].notna().sum() == estimates.sum() and (quiet["vx"].abs() > 0.05).any()
     pd.testing.assert_frame_equal(quiet, loaded)
+    pd.testing.assert_frame_equal(quiet, _replay(flight, tmp_path / "thread", "thread"))
