@@ -1,6 +1,6 @@
-"""What the report's plots show: each extra field on its own scale, the track under its markers and on metre
-axes, commanded vs actual velocity with autonomy spans, a processing rate without a start-up spike, and
-one self-contained report.html."""
+"""What the report's plots show: each extra field on its own scale, executed vectors as a few arrows on metre
+axes, the tracked box over time, commanded vs actual velocity with autonomy spans, a processing rate without a
+start-up spike, and one self-contained report.html."""
 
 from __future__ import annotations
 
@@ -11,10 +11,11 @@ import time
 import numpy as np
 import pandas as pd
 import pytest
-from matplotlib.collections import LineCollection, PathCollection
+from matplotlib.collections import LineCollection
 from matplotlib.patches import Rectangle
+from matplotlib.quiver import Quiver
 
-from uav_tui import dataset
+from uav_tui import dataset, report
 from uav_tui.config import RecordingConfig
 from uav_tui.recording import Recorder
 from uav_tui.report import PLOTS, autonomy_spans, draw, processing_rate, write_report
@@ -26,6 +27,7 @@ def _frame(core: FakeCore, i: int, result) -> None:
     core.telemetry.save(result.frame.image, offset_m=0.001 * (i % 3), inliers=240 + i)
     result.vector = (0.6, -0.2, 0.5) if i % 5 == 0 else None
     result.decision = "executed" if result.vector else "no vector"
+    result.box = (10 + i, 20, 30, 40) if i < 30 else None  # tracked, then lost
 
 
 @pytest.fixture
@@ -58,12 +60,14 @@ def test_each_extra_field_gets_its_own_axis(hover_run):
     assert high - low < 0.01  # millimetres are not flattened by the inliers' scale of ~250
 
 
-def test_track_markers_leave_the_track_visible_and_a_hover_is_drawn_in_metres(hover_run):
+def test_executed_vectors_are_a_few_arrows_the_way_they_flew_and_a_hover_is_drawn_in_metres(hover_run,
+                                                                                             monkeypatch):
+    monkeypatch.setattr(report, "MAX_ARROWS", 5)
     ax = draw(dataset.load(hover_run))["track.png"].axes[0]
-    track, executed = (c for c in ax.collections if isinstance(c, PathCollection))
-    assert executed.get_label() == "vector executed"
-    assert executed.get_zorder() < track.get_zorder()
-    assert executed.get_facecolors().size == 0 or not executed.get_facecolors()[:, 3].any()  # open rings
+    (arrows,) = (c for c in ax.collections if isinstance(c, Quiver))
+    assert arrows.get_label() == "executed vectors (fastest 0.63 m/s), 5 of 12 shown"  # not one ring per frame
+    # heading east, 0.6 forward and 0.2 left: 0.6 east and 0.2 north
+    assert np.allclose(arrows.U, 0.6) and np.allclose(arrows.V, 0.2)
     for low, high in (ax.get_xlim(), ax.get_ylim()):
         assert high - low == pytest.approx(2.0)  # 2 mm of noise is not stretched over the whole plot
     assert ax.get_xlim()[0] < -1.0 < ax.get_xlim()[1] and ax.get_ylim()[0] < 3.0 < ax.get_ylim()[1]
@@ -85,6 +89,15 @@ def test_flight_shows_commanded_and_actual_velocity_and_autonomy_spans(hover_run
     assert (start, end) == (events[0], events[1])
     shaded = [patch for patch in altitude.patches if isinstance(patch, Rectangle)]
     assert len(shaded) == 1 and shaded[0].get_x() == pytest.approx(start)
+
+
+def test_box_shows_the_tracked_centre_and_size_over_time_with_a_gap_once_lost(hover_run):
+    centre, size = draw(dataset.load(hover_run))["box.png"].axes
+    x, y = (line.get_ydata() for line in centre.get_lines())
+    width, height = (line.get_ydata() for line in size.get_lines())
+    assert np.allclose(x[:30], 25 + np.arange(30)) and np.allclose(y[:30], 40)
+    assert np.allclose(width[:30], 30) and np.allclose(height[:30], 40)
+    assert np.isnan(x[30:]).all()  # lost: a gap, not a line to zero
 
 
 def test_processing_rate_has_no_start_up_spike():
