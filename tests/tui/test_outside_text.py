@@ -19,13 +19,16 @@ from tests.tui.test_tmux import ROOT, Tmux, wait
 HOSTILE = "boom\\r\\x1b]2;pwned\\x07\\x1b[7mINVERTED"
 """Python source for an exception message that retitles the terminal and inverts what follows, after a CR."""
 
-RAISING = f'''
+MARKUP = "oops [/] and [reverse]INVERTED[/reverse]"
+"""An exception message that is Rich markup, an invalid tag first (it froze the dashboard)."""
+
+RAISING = '''
 class Raising:
     def __init__(self):
         self.tmMgr = None
 
     def photo_processing(self, frame):
-        raise RuntimeError("{HOSTILE}")
+        raise RuntimeError("MESSAGE")
 '''
 
 
@@ -39,7 +42,7 @@ def tmux(tmp_path: Path) -> Iterator[Tmux]:
 @pytest.mark.skipif(shutil.which("tmux") is None, reason="tmux is not installed")
 @pytest.mark.parametrize("isolation", ["process", "thread"])
 def test_the_err_row_shows_an_exception_escaped(tmux: Tmux, tmp_path: Path, isolation: str) -> None:
-    (tmp_path / "raising.py").write_text(RAISING)
+    (tmp_path / "raising.py").write_text(RAISING.replace("MESSAGE", HOSTILE))
     tmux.start("--fc", "none", "--processor", f"{tmp_path / 'raising.py'}:Raising", "--isolation", isolation,
                tmp_path=tmp_path)
     wait(lambda: re.search(r"^ err +[1-9]\d* +\S", tmux.screen(), re.MULTILINE), 30, "the exception in the err row")
@@ -48,6 +51,15 @@ def test_the_err_row_shows_an_exception_escaped(tmux: Tmux, tmp_path: Path, isol
     assert "pwned" not in tmux.tmux("display-message", "-p", "#{pane_title}")
     row = next(line for line in screen.splitlines() if line.startswith(" err"))
     assert "RuntimeError: boom\\r\\x1b]2;pw" in row, screen  # the whole last line, its controls shown (not obeyed)
+
+
+@pytest.mark.skipif(shutil.which("tmux") is None, reason="tmux is not installed")
+def test_an_exception_that_is_markup_is_shown_as_text(tmux: Tmux, tmp_path: Path) -> None:
+    (tmp_path / "raising.py").write_text(RAISING.replace("MESSAGE", MARKUP))
+    tmux.start("--fc", "none", "--processor", f"{tmp_path / 'raising.py'}:Raising", tmp_path=tmp_path)
+    wait(lambda: re.search(r"^ err +[1-9]\d* +RuntimeError: oops \[/\] and \[", tmux.screen(), re.MULTILINE), 30,
+         "the exception in the err row")
+    wait(lambda: tmux.log_shows("[reverse]INVERTED[/reverse]"), 15, "the exception as text in a pop-up or the log")
 
 
 def test_report_runs_and_replay_of_a_processor_whose_path_holds_escapes(tmp_path: Path) -> None:

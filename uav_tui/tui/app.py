@@ -173,7 +173,7 @@ class UavApp(App[None]):
         if self._stopping:
             return
         self._stopping, self.stop_reason = True, reason
-        self.notify(f"stopping ({reason}): holding the vehicle if needed", timeout=10)
+        self.notify(f"stopping ({reason}): holding the vehicle if needed", timeout=10, markup=False)
         try:
             await self.core.stop(reason)
         finally:  # a bug in stopping must not leave the dashboard up on a terminal that may be gone
@@ -204,7 +204,7 @@ class UavApp(App[None]):
             return
         self.query_one(EventLogView).add_event(event)
         if event.level != "info" and event.origin not in (LOG_ORIGIN, NATIVE_ORIGIN):
-            self.notify(event.message, title=event.kind, severity=event.level, timeout=6)
+            self.notify(event.message, title=event.kind, severity=event.level, timeout=6, markup=False)
 
     def _newest_frame(self) -> tuple[int, object, tuple[int, int, int, int] | None] | None:
         last = self.core.worker.last if self.core.worker is not None else None
