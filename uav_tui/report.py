@@ -27,7 +27,7 @@ from uav_tui.config import SafetyConfig
 from uav_tui.dataset import Dataset, load
 from uav_tui.recording.crash import CRASH_FILE, crash_summary
 from uav_tui.report_replay import REPLAY_PLOT, replay_figure
-from uav_tui.text import redact
+from uav_tui.text import safe
 
 logger = logging.getLogger(__name__)
 
@@ -92,7 +92,7 @@ def _html(title: str, text: str, images: dict[str, bytes]) -> str:
 
 
 def summary(run: Dataset) -> str:
-    """A few lines: duration, frames, rates, latency, vectors, telemetry, distance, problems."""
+    """A few lines: duration, frames, rates, latency, vectors, telemetry, distance, problems (each one :func:`safe`)."""
     frames, telemetry, events = run.frames, run.telemetry, run.events
     duration = _duration_s(run)
     latency = _latency_ms(frames)
@@ -101,7 +101,7 @@ def summary(run: Dataset) -> str:
     with_vector = int(frames["vx"].notna().sum())
     lines = [
         f"run {run.path.name}: {duration:.1f} s, processor {run.info.get('processor', {}).get('name', '?')}, "
-        f"source {redact(str(run.info.get('source', {}).get('uri', '?')))}, "
+        f"source {run.info.get('source', {}).get('uri', '?')}, "
         f"fc {run.info.get('controller', {}).get('fc', '?')}",
         f"frames: {len(frames)} processed ({len(frames) / duration if duration else 0:.1f}/s), "
         f"{int(frames['saved'].fillna(False).sum())} saved, {int(frames['error'].notna().sum())} with errors",
@@ -128,7 +128,7 @@ def summary(run: Dataset) -> str:
     elif run.info.get("end_wall_ns") is None:
         lines.append("the run did not end cleanly (no end time in run.json): data up to the last flush")
     lines += [f"damaged run: {problem}" for problem in run.problems]  # read around, drawn without
-    return "\n".join(lines)
+    return "\n".join(safe(line) for line in lines)  # names, paths and URIs from the run: escaped, redacted
 
 
 def _track(run: Dataset, figure: Figure) -> None:
