@@ -15,11 +15,14 @@ from uav_tui.core import UavCore
 from uav_tui.errors import ControllerError
 from uav_tui.recording import image_name
 
-POSITION_BOUND_M = 0.08
-"""Largest distance between a frame's interpolated position and the simulator's truth at capture.
+POSITION_BOUND_M = (0.03, 0.08)
+"""Bounds on the median and the 95th percentile of the distance between a frame's interpolated position and
+the simulator's truth at its capture.
 
-Measured: about 0.01 m. At the ~1.2 m/s flown here 0.08 m is ~65 ms of travel, room for a loaded
-machine (telemetry is stamped when the loop receives it) but far below a 10 Hz sample step.
+Measured at load average 14 on the 2-core machine, 3 runs: median 0.002-0.003 m, p95 0.008-0.017 m, max
+0.012-0.045 m; a loaded CI run had p95 0.024 m and max 0.186 m: telemetry is stamped when the loop receives
+it, so one late sample moves a few frames. The median and p95 are what interpolation decides; a frame matched
+to the wrong sample (100 ms at the ~1.2 m/s flown here: 0.12 m) breaks them, a scheduling hiccup does not.
 """
 
 
@@ -117,7 +120,9 @@ async def test_recorded_flight_matches_simulator_truth(tmp_path):
     error = np.linalg.norm(recorded - expected, axis=1)
     travelled = np.ptp(expected[:, :2], axis=0).max()
     assert travelled > 1.5, "the vehicle must have moved for the comparison to mean anything"
-    assert error.max() < POSITION_BOUND_M, f"max {error.max():.3f} m, p95 {np.percentile(error, 95):.3f} m"
+    median, p95 = np.percentile(error, [50, 95])
+    assert median < POSITION_BOUND_M[0] and p95 < POSITION_BOUND_M[1], \
+        f"median {median:.3f} m, p95 {p95:.3f} m, max {error.max():.3f} m"
     # Attitude: 10 Hz samples of a vehicle that tilts by 15-20 degrees within a tick when a vector starts;
     # between such steps the interpolation follows the truth closely.
     for name in ("roll", "pitch"):
