@@ -4,11 +4,13 @@
 
 Trackers: ``nanotrack``, ``csrt`` (fast and paper), and plain OpenCV's ``cv:nano``, ``cv:csrt``, ``cv:kcf``.
 Per tracker the summary has its overall success AUC, precision@20px, frames lost while the target is
-visible, the share of absent-target frames (gt ``NaN``) it reported lost, and ms/frame; then each goal,
-as a ratio measured within this one run, with ``pass`` true or false (null when a tracker it needs is
-missing or failed). A tracker that cannot be loaded is left out and named under ``missing``; a job
-that raised is named under ``failed``. The default data folder is ``aerial-tracking`` in the shared
-data folder (``$UAV_TUI_DATA_DIR``, else ``shared/data`` beside the repository).
+visible, the share of absent-target frames (gt ``NaN``) it reported lost (as ``uav-tui eval``: the mean
+over the sequences that have such frames), and ms/frame; then each goal, as a difference or ratio
+measured within this one run, with ``pass`` true or false (null when a tracker it needs is missing or
+failed). A tracker that cannot be loaded is left out and named under ``missing``; a job that raised is
+named under ``failed`` (where and why) and left out of the scores. The default data folder is
+``aerial-tracking`` in the shared data folder (``$UAV_TUI_DATA_DIR``, else ``shared/data`` beside the
+repository).
 """
 
 from __future__ import annotations
@@ -21,15 +23,12 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from processors.detection import find_data_dir  # noqa: E402
-from uav_tui.evaluation import JobResult, TrackerSpec, evaluate, find_sequences  # noqa: E402
+from uav_tui.evaluation import TrackerSpec, evaluate, find_sequences  # noqa: E402
 from uav_tui.evaluation.report import headline, summary, write_json  # noqa: E402
-from uav_tui.evaluation.sequences import Sequence  # noqa: E402
 
 NANOTRACK, CSRT_FAST = "nanotrack", "csrt mode=fast"
 PLAIN_NANO, PLAIN_CSRT = "cv:nano", "cv:csrt"
@@ -48,21 +47,6 @@ def loadable(trackers: list[TrackerSpec]) -> tuple[list[TrackerSpec], dict[str, 
         else:
             found.append(tracker)
     return found, missing
-
-
-def absence(results: list[JobResult], sequences: list[Sequence]) -> dict[str, dict[str, Any]]:
-    """Per tracker: frames lost while the target is visible, and absent-target frames it reported lost."""
-    gt = {sequence.name: sequence.gt for sequence in sequences}
-    counts: dict[str, np.ndarray] = {}
-    for result in results:
-        absent = np.isnan(gt[result.sequence]).any(axis=1)
-        none = np.isnan(result.boxes).any(axis=1)
-        row = np.array([(none & ~absent).sum(), (~absent).sum(), (none & absent).sum(), absent.sum()])
-        counts[result.tracker] = counts.get(result.tracker, 0) + row
-    return {label: {"lost_while_visible": int(lost), "lost_while_visible_share": _share(lost, visible),
-                    "absent_frames": int(absent), "absent_reported_lost": int(reported),
-                    "absent_reported_lost_share": _share(reported, absent)}
-            for label, (lost, visible, reported, absent) in counts.items()}
 
 
 Measure = Callable[[dict[str, dict[str, Any]]], float | None]
@@ -106,17 +90,18 @@ def run(data: Path, trackers: list[TrackerSpec], workers: int, threads: int, out
     """Evaluate ``trackers`` on every sequence under ``data``; the benchmark's JSON document."""
     sequences = find_sequences([data])
     usable, missing = loadable(trackers)
-    results = evaluate(sequences, usable, workers=workers) if usable else []
+    results = evaluate(sequences, usable, workers=workers, threads=threads) if usable else []
     document = summary(results, [str(data)])
     out.mkdir(parents=True, exist_ok=True)
     write_json(document, out / "eval.json")
-    overall = {label: {key: scores[key] for key in ("success_auc", "precision_20", "ms_mean", "frames", "scored")}
-               for label, scores in headline(document).items()}
-    for label, extra in absence(results, sequences).items():
-        overall[label].update(extra)
+    overall = {label: _row(scores) for label, scores in headline(document).items()}
+    failed: dict[str, dict[str, str]] = {}
+    for result in results:
+        if result.failed:
+            failed.setdefault(result.tracker, {})[result.sequence] = f"{result.failed_at}: {result.error}"
     return {"data": str(data), "sequences": len(sequences), "workers": workers, "threads": threads,
-            "trackers": overall, "missing": missing, "failed": {}, "goals": goals(overall, set(missing)),
-            "written": str(out)}
+            "trackers": overall, "missing": missing, "failed": failed,
+            "goals": goals(overall, set(missing) | set(failed)), "written": str(out)}
 
 
 def main() -> None:
@@ -131,8 +116,15 @@ def main() -> None:
     print(json.dumps(run(args.data, TRACKERS, args.workers, args.threads, out), indent=1))
 
 
-def _share(part: int, whole: int) -> float | None:
-    return round(float(part) / float(whole), 4) if whole else None
+def _row(scores: dict[str, Any]) -> dict[str, Any]:
+    """What the benchmark prints of a tracker's overall scores (eval's names, and the issue's)."""
+    visible = scores["scored"]
+    return {"success_auc": scores["success_auc"], "precision_20": scores["precision_20"],
+            "visible_frames": visible, "lost_while_visible": scores["frames_lost"],
+            "lost_while_visible_share": round(scores["frames_lost"] / visible, 4) if visible else None,
+            "absent_frames": scores["absent_frames"], "absent_reported_lost": scores["absent_lost"],
+            "absent_reported_lost_share": scores["absent_lost_share"], "ms_mean": scores["ms_mean"],
+            "ms_p95": scores["ms_p95"]}
 
 
 if __name__ == "__main__":

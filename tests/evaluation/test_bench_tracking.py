@@ -30,23 +30,29 @@ def bench() -> Iterator[ModuleType]:
     del sys.modules[spec.name]
 
 
-def test_counts_per_tracker_and_a_missing_tracker_is_named_not_fatal(bench: ModuleType, video_sequence: Path,
-                                                                     tmp_path: Path) -> None:
+def test_counts_per_tracker_and_a_missing_or_failing_tracker_is_named_not_fatal(bench: ModuleType,
+                                                                                video_sequence: Path,
+                                                                                tmp_path: Path) -> None:
     replay = TrackerSpec(f"{TRACKERS}:ReplaysBoxes", {"boxes": str(video_sequence / "gt.txt")})
     never = TrackerSpec(f"{TRACKERS}:NeverFinds")
-    document = bench.run(video_sequence.parent, [replay, never, TrackerSpec("no_such_tracker")], 1, 1,
+    failing = TrackerSpec(f"{TRACKERS}:Failing", {"frame": 3})
+    document = bench.run(video_sequence.parent, [replay, never, failing, TrackerSpec("no_such_tracker")], 1, 1,
                          tmp_path / "out")
     assert list(document["missing"]) == ["no_such_tracker"]
     assert "no_such_tracker" in document["missing"]["no_such_tracker"]
+    assert list(document["failed"]) == [failing.label]
+    assert document["failed"][failing.label]["moving-box"].startswith("frame 3: ValueError: bad reshape on frame 3")
+    assert failing.label not in document["trackers"]
     # the gt has 5 visible frames and 1 absent one; the replay reports none exactly on the absent one
     assert document["trackers"][replay.label].items() >= {
-        "lost_while_visible": 0, "lost_while_visible_share": 0.0, "absent_frames": 1, "absent_reported_lost": 1,
-        "absent_reported_lost_share": 1.0}.items()
+        "visible_frames": 5, "lost_while_visible": 0, "lost_while_visible_share": 0.0, "absent_frames": 1,
+        "absent_reported_lost": 1, "absent_reported_lost_share": 1.0}.items()
     assert document["trackers"][replay.label]["success_auc"] == pytest.approx(20 / 21, abs=1e-4)
-    assert document["trackers"][never.label]["lost_while_visible"] == 5
+    assert document["trackers"][never.label]["lost_while_visible_share"] == 1.0
     assert document["trackers"][never.label]["success_auc"] == 0
     verdict = document["goals"]["csrt mode=fast"]["success AUC minus cv:csrt's"]
     assert verdict["pass"] is None and "missing" in verdict["why"]
+    assert bench.goals({}, {failing.label})["nanotrack"]["share of visible frames lost"]["pass"] is None
     assert (tmp_path / "out" / "eval.json").is_file()
 
 
