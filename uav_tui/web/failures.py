@@ -23,7 +23,7 @@ MAX_KINDS = 64
 
 BURST = 3
 PER_S = 0.1
-"""Failure events said at once, then a second (the rest are counted and the count is said)."""
+"""Failure events: 3 said at once, then one every 10 s; the rest are counted and the count is said."""
 
 
 class HandlerFailures:
