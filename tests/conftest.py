@@ -3,10 +3,34 @@
 from __future__ import annotations
 
 from collections.abc import Iterator
+from pathlib import Path
 
 import pytest
 
 from controllers.sim.launcher import SimVehicle
+
+ROOT = Path(__file__).resolve().parents[1]
+
+SERIAL = frozenset({
+    "tests/core/test_safety.py", "tests/core/test_autopilot_failsafe.py", "tests/core/test_link_loss_exit.py",
+    "tests/core/test_isolation.py", "tests/core/test_sim_camera_mavlink.py", "tests/processors/test_closed_loop.py",
+    "tests/tui/test_tmux.py",
+})
+"""Modules marked ``serial``: their tests hold real time to bounds (setpoints at 20 Hz, a failsafe within
+max_t, an exit within 3 s, a control loop closing) or drive a terminal; .ci/run runs them alone, after the
+others have run on both cores, so that a test on the other core cannot stretch them."""
+
+SOAK = frozenset({"tests/processors/test_csrt_real_video.py", "tests/processors/test_nanotrack_real_video.py"})
+"""Modules marked ``soak``: minutes of real video through the trackers; .ci/run runs them in a step of their own."""
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    for item in items:
+        module = item.path.relative_to(ROOT).as_posix()
+        if module in SERIAL:
+            item.add_marker(pytest.mark.serial)
+        if module in SOAK:
+            item.add_marker(pytest.mark.soak)
 
 
 @pytest.fixture
