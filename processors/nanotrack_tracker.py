@@ -56,16 +56,21 @@ class NanoTrackProcessor(TargetFollower):
       NanoTrack's score falls below its own running median by more than ``score_spread`` times its usual
       spread (1.4826 x the median absolute deviation: a standard deviation robust to the outliers it is
       looking for, at least :data:`_MIN_SPREAD`); at the frame's edge (a target leaving it, where correlation
-      sees half of it) the weak score alone is evidence; frames on which neither is weak update the medians,
-      the spread and the adapted template;
+      sees part of it) the weak score alone is evidence; frames on which the score is not weak update the
+      medians and the spread (the appearance's median only while the score is at least its median: a changing
+      target under a sure network), frames that match well the adapted template;
     * a step of the box that breaks the recent motion (more than ``jump`` box sizes and ``jump_factor`` times
       the recent steps) is checked against where the motion says the target is: if the appearance there is
       at least as good, NanoTrack restarts there (it had jumped to a look-alike), else the step stands.
 
-    While lost, NanoTrack keeps running (a target that comes back near it is taken back when both pieces of
-    evidence hold again: appearance ``accept_ratio`` of its median), a correlation search around the last position runs
-    every frame (a window that grows with the frames lost, bounded), and every ``wide_every`` lost frames a
-    coarse search of the whole frame; what they find is taken back on the same evidence and restarts NanoTrack.
+    While lost, NanoTrack keeps running: a target that comes back near it is taken back when both pieces of
+    evidence hold again (appearance ``accept_ratio`` of its median, score above the floor, away from the
+    frame's edge). Else a correlation search around the last position runs (a window that grows with the
+    frames lost, up to 3 target sizes), and every ``wide_every`` lost frames a coarse one of the whole frame;
+    a place further than the target could have gone since (its largest recent step + 1 size, per frame) is
+    ignored. The best place is tried with a NanoTrack holding the selected template
+    (:class:`~processors.nanotrack_template.SelectedTemplate`), taken on the same evidence: at most one
+    search and one extra NanoTrack update a lost frame.
 
     Frames are tracked shrunk by the largest whole factor that keeps the target at least
     :data:`_EXEMPLAR_PX` across (NanoTrack resamples its window to 255 px anyway); boxes are in full-frame
@@ -77,7 +82,7 @@ class NanoTrackProcessor(TargetFollower):
         loss_ratio, loss_score: appearance evidence: below both ``loss_ratio`` x the recent median and ``loss_score``.
         score_spread: NanoTrack-score evidence: this many spreads below its running median.
         jump, jump_factor: a step of the box (centre, in box sizes) that is checked against the motion.
-        lost_after: frames of evidence in a row that make the target lost.
+        lost_after: frames of evidence, with none showing the target between them, that make the target lost.
         accept_ratio: appearance score, relative to the median, that takes the target back.
         wide_every: lost frames between whole-frame searches.
     """
@@ -221,11 +226,12 @@ class NanoTrackProcessor(TargetFollower):
         spread = 1.4826 * statistics.median(abs(v - level) for v in self._levels)
         return level - self.score_spread * max(spread, _MIN_SPREAD)
 
-    def _is_target(self, look: float, score: float, box: Box, work: np.ndarray) -> bool:
-        """The same evidence that keeps a target takes it back: appearance near its median, score near its level,
-        away from the frame's edge (where half a target cannot be told from a patch of ground)."""
-        return (look >= max(self.accept_ratio * self._look_median(), _MIN_LOOK) and score >= self._score_floor()
-                and not _at_edge(box, work))
+    def _is_target(self, look: float, score: float | None, box: Box, work: np.ndarray) -> bool:
+        """The evidence that takes a target back: appearance near its median and, for a place that was searched
+        for (``score`` given: the best of many places correlates better than a chance one), NanoTrack's score
+        above its floor; away from the frame's edge (where part of a target cannot be told from the ground)."""
+        return (look >= max(self.accept_ratio * self._look_median(), _MIN_LOOK)
+                and (score is None or score >= self._score_floor()) and not _at_edge(box, work))
 
     def _update(self, work: np.ndarray) -> None:
         previous = self._work_box
@@ -287,7 +293,7 @@ class NanoTrackProcessor(TargetFollower):
         box, score = self._nano(work)
         match = self._appearance(work, box)
         self.look = match.score if match is not None else -1.0
-        if self._is_target(self.look, score, box, work):
+        if self._is_target(self.look, None, box, work):  # NanoTrack's own box: its score dips on a returning target
             logger.info("NanoTrackProcessor: back on the target (appearance %.2f, score %.2f)", self.look, score)
             self._tracking, self._evidence, self._work_box = True, 0, box
             self._steps.clear()
@@ -325,11 +331,10 @@ class NanoTrackProcessor(TargetFollower):
 
 
 def _at_edge(box: Box, work: np.ndarray) -> bool:
-    """The box is within a quarter of its size of the frame's edge: the target may be leaving it, and
-    correlation there sees part of it."""
+    """The box is within half its size of the frame's edge (its centre within one size): the target may be
+    leaving the frame, and correlation there sees part of it."""
     x, y, w, h = box
-    m = 0.25 * min(w, h)
-    return x <= m or y <= m or x + w >= work.shape[1] - m or y + h >= work.shape[0] - m
+    return x <= w / 2 or y <= h / 2 or x + 1.5 * w >= work.shape[1] or y + 1.5 * h >= work.shape[0]
 
 
 def _centre(box: Box) -> tuple[float, float]:
