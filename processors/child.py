@@ -11,6 +11,7 @@ Messages, platform -> child (pickled tuples, ``Connection.send``)::
     ("load", spec, kwargs, memory_mb, save_images, save_max_hz)  first message: cap memory, construct the processor
     ("call", call_id, method, args)                 catch_cmd / customize_processing
     ("forget", [slot, ...])                         the platform freed these slots: unmap them
+    ("camera", CameraModel | None)                  the source's camera model (``tmMgr.camera()``), at each change
 
 child -> platform (:func:`send_message`: pickle protocol 5, arrays out of band)::
 
@@ -276,6 +277,8 @@ class ChildRunner:
             send_message(self.conn, self.call(*message[1:]))
         elif kind == "forget":
             self.slots.forget(message[1])
+        elif kind == "camera":
+            self.telemetry.camera_model = message[1]
 
     def process(self, offer: Offer) -> tuple[Any, ...]:
         if offer.telemetry != self._telemetry[0]:

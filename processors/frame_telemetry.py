@@ -10,6 +10,10 @@ replay at any speed, and on ``eval``, as in flight.
 folder) at most ``save_max_hz`` times a second of the frames' time; more calls are dropped (counted in
 ``saves_throttled``; eval's table shows it) with one warning, once they have gone on for a second of frame time,
 that says how much disk saving them all would fill in an hour.
+
+``camera()`` is the source's camera model (:class:`sources.camera_model.CameraModel`: intrinsics and mounting), or
+None when there is none (no calibration file or field of view configured; eval's annotated video): the host sets it
+whenever the source changes.
 """
 
 from __future__ import annotations
@@ -18,9 +22,12 @@ import logging
 import time
 from collections.abc import Callable, Mapping
 from types import SimpleNamespace
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from sources.camera_model import CameraModel
 
 logger = logging.getLogger(__name__)
 
@@ -57,7 +64,8 @@ class Snapshot(SimpleNamespace):
 
 
 class FrameTelemetry:
-    """What a processor sees as ``self.tmMgr``: ``snapshot()``, ``link_alive()``, ``save(frame, **extra)``.
+    """What a processor sees as ``self.tmMgr``: ``snapshot()``, ``link_alive()``, ``save(frame, **extra)``,
+    ``camera()``.
 
     Args:
         store: called with each save that is not dropped.
@@ -73,6 +81,8 @@ class FrameTelemetry:
         self.saves_throttled = 0
         """Saves dropped for coming faster than ``save_max_hz``."""
         self.current = Snapshot(frame_seq=0, frame_t_ns=0, frame_t_wall_ns=0)
+        self.camera_model: CameraModel | None = None
+        """Set by the host: the model of the source the frames come from."""
         self._tokens = 0.0
         self._refilled_ns: int | None = None
         self._first_call: tuple[int, int] | None = None
@@ -88,6 +98,10 @@ class FrameTelemetry:
     def snapshot(self) -> Snapshot:
         """The telemetry at the capture of the frame being processed, with its ``frame_seq`` and ``frame_t_ns``."""
         return self.current
+
+    def camera(self) -> CameraModel | None:
+        """The camera model of the frames (pixel <-> ray, intrinsics, mounting); None: no camera model is known."""
+        return self.camera_model
 
     def link_alive(self, max_age_s: float = 1.5) -> bool:
         """True when the autopilot's heartbeat was younger than ``max_age_s`` when the frame was handed over."""

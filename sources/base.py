@@ -5,11 +5,14 @@ from __future__ import annotations
 import logging
 import threading
 import time
-from typing import Any, Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 import numpy as np
 
 from sources.buffer import FrameBuffer
+
+if TYPE_CHECKING:
+    from sources.camera_model import CameraModel
 
 logger = logging.getLogger(__name__)
 
@@ -131,6 +134,13 @@ class CaptureSource:
             "running": self._thread is not None,
             **self._extra_properties(),
         }
+
+    def camera_model(self) -> CameraModel | None:
+        """The camera model this source knows for itself (``sim:`` its renderer's); None: it cannot know.
+
+        The platform then takes the configured one (``[camera]``), or there is none.
+        """
+        return None
 
     # -- hooks ----------------------------------------------------------------------------------
 

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from sources.base import CaptureSource
+from sources.camera_model import CameraModel, Mount
 from sources.errors import SourceUriError
 from sources.ground import default_ground
 from sources.pacing import Pacer
@@ -82,6 +83,13 @@ class SimCameraSource(CaptureSource):
     def warm_up(uri: SourceUri) -> None:
         """Build the ground texture now (a second or more), e.g. while the simulated vehicle starts."""
         default_ground(uri.take_int("seed", 0) or 0)
+
+    def camera_model(self) -> CameraModel:
+        """The renderer's exact model: an ideal pinhole (no distortion) at the vehicle's centre, tilted as rendered."""
+        cam = self.camera
+        k = cam.intrinsics
+        return CameraModel(cam.width, cam.height, float(k[0, 0]), float(k[1, 1]), float(k[0, 2]), float(k[1, 2]), (),
+                           Mount(cam.tilt_deg), "sim: renderer (exact)")
 
     def _open_device(self) -> None:
         self._pacer = Pacer(self.fps, self._stop)

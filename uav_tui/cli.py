@@ -2,7 +2,8 @@
 
 ``uav-tui [options]`` runs; ``uav-tui sim`` starts the simulated vehicle on its own;
 ``uav-tui runs`` lists recorded runs; ``uav-tui report [RUN]`` draws a run's plots; ``uav-tui replay RUN...``
-replays recorded runs through a processor; ``uav-tui eval DATA`` scores processors on annotated video.
+replays recorded runs through a processor; ``uav-tui eval DATA`` scores processors on annotated video;
+``uav-tui calibrate`` writes a camera's calibration file from views of a chessboard.
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ from uav_tui.config import add_config_flags, find_config_file, load_config, over
 from uav_tui.errors import CONFIG_ERRORS, error_line
 from uav_tui.text import SafeFormatter, safe
 
-TOOLS = ("sim", "runs", "report", "replay", "eval")
+TOOLS = ("sim", "runs", "report", "replay", "eval", "calibrate")
 """Sub-commands; anything else on the command line configures a run."""
 
 
@@ -27,7 +28,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser = ArgumentParser(
         prog="uav-tui", suggest=TOOLS,
         description="Camera -> your algorithm -> flight controller, with an operator dashboard.",
-        epilog=f"tools: uav-tui sim | runs | report [RUN] | replay RUN... | eval DATA (each has --help)\n\n"
+        epilog=f"tools: uav-tui sim | runs | report [RUN] | replay RUN... | eval DATA | calibrate (each has --help)\n\n"
                f"commands (keys, --script, web):\n{help_text()}",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
@@ -94,6 +95,10 @@ def _run_tool(name: str, argv: list[str]) -> int:
         from uav_tui import eval_cli
 
         return eval_cli.main(argv)
+    if name == "calibrate":
+        from uav_tui import calibrate_cli
+
+        return calibrate_cli.main(argv)
     from uav_tui import runs_cli
 
     return runs_cli.main(name, argv)

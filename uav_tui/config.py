@@ -15,13 +15,16 @@ import tomllib
 from collections.abc import Callable
 from dataclasses import MISSING, dataclass, field, fields, replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from controllers.sim.geo import Home, parse_wind
 from processors.frame_telemetry import DEFAULT_SAVE_MAX_HZ
 from uav_tui.errors import ConfigError
 from uav_tui.text import describe
 from uav_tui.token_strength import GENERATE_TOKEN, MIN_TOKEN_BITS, token_problem
+
+if TYPE_CHECKING:
+    from sources.camera_model import CameraModel
 
 
 def _key(help: str, *, minimum: float | None = None, maximum: float | None = None, default: Any = MISSING,
@@ -122,6 +125,46 @@ class SimConfig:
         return {"home": _home(self.home), "wind": parse_wind(self.wind), "seed": self.seed, "noise": self.noise}
 
 
+def _calibration_file(path: str) -> None:
+    if path.strip():
+        from sources.calibration import read_calibration  # OpenCV: only when a file is configured
+
+        read_calibration(path)
+
+
+def _mount(mount: str, offset: str = "") -> Any:
+    from sources.camera_model import Mount
+
+    return Mount.parse(mount, offset)
+
+
+@dataclass(frozen=True)
+class CameraConfig:
+    """The camera model of a source that does not state its own (``sim:`` and ``run:`` do): file, or field of view."""
+
+    camera_calibration: str = _key("OpenCV calibration file (uav-tui calibrate writes one); empty: camera_hfov",
+                                   default="", parse=_calibration_file, metavar="FILE")
+    camera_hfov: float = _key("the camera's horizontal field of view, degrees, without a calibration file "
+                              "(0 = unknown: no camera model)", minimum=0, maximum=170, default=0.0)
+    camera_mount: str = _key("how the camera is mounted: down, forward, or its tilt below the nose in degrees",
+                             default="down", parse=_mount, metavar="down|forward|DEG")
+    camera_offset: str = _key("where the camera is from the vehicle's centre: forward, right, down in metres",
+                              default="0,0,0", parse=lambda text: _mount("down", text), metavar="F,R,D")
+
+    def model(self, width: int, height: int) -> CameraModel | None:
+        """The configured model for frames of ``width`` x ``height``; None when neither file nor hfov is given."""
+        from sources.calibration import load_model
+        from sources.camera_model import CameraModel
+
+        mount = _mount(self.camera_mount, self.camera_offset)
+        if self.camera_calibration.strip():
+            return load_model(self.camera_calibration, mount)
+        if self.camera_hfov > 0:
+            return CameraModel.from_hfov(width, height, self.camera_hfov, mount,
+                                         origin=f"camera_hfov {self.camera_hfov:g} deg (no distortion)")
+        return None
+
+
 @dataclass(frozen=True)
 class Config:
     """Everything uav-tui can be told. The first three keys are the three plug-in levels."""
@@ -146,17 +189,20 @@ class Config:
     recording: RecordingConfig = field(default_factory=RecordingConfig)
     web: WebConfig = field(default_factory=WebConfig)
     sim: SimConfig = field(default_factory=SimConfig)
+    camera: CameraConfig = field(default_factory=CameraConfig)
 
 
 ISOLATION_MODES = ("process", "thread")
 """Values of ``isolation``."""
 
-SECTIONS = {"safety": SafetyConfig, "recording": RecordingConfig, "web": WebConfig, "sim": SimConfig}
+SECTIONS = {"safety": SafetyConfig, "recording": RecordingConfig, "web": WebConfig, "sim": SimConfig,
+            "camera": CameraConfig}
 """TOML table name -> the dataclass its keys go to."""
 
 _FLAG_GROUPS = {Config: "camera, processor, flight controller (top of uav.toml)", SafetyConfig: "safety ([safety])",
                 RecordingConfig: "recording ([recording])", WebConfig: "web page ([web])",
-                SimConfig: "built-in simulated vehicle, --fc sim ([sim])"}
+                SimConfig: "built-in simulated vehicle, --fc sim ([sim])",
+                CameraConfig: "camera model, for sources that do not state one ([camera])"}
 """``--help`` group titles: what the flags set and where the same keys go in ``uav.toml``."""
 
 _TOP_LEVEL = tuple(f.name for f in fields(Config) if f.name not in SECTIONS)

@@ -20,6 +20,7 @@ from controllers import connect_controller
 from controllers.base import FlightController
 from controllers.replay_timeline import ReplayTimeline
 from sources import CameraSource, open_source, warm_up_source
+from sources.camera_model import CameraModel
 from sources.pose import PoseTrack
 from uav_tui import pose_feed
 from uav_tui.autonomy import AutonomyGate, own_modes
@@ -81,6 +82,8 @@ class UavCore:
         self.gate = AutonomyGate(config.safety, self.telemetry, self.events)
         self.controller: FlightController | None = None
         self.source: CameraSource | None = None
+        self.camera: CameraModel | None = None
+        """The source's camera model (its own, or the configured one; None: none known); ``tmMgr.camera()``."""
         self.worker: Worker | None = None
         self.recorder: Recorder | None = None
         """Writes the run's dataset (None with ``--no-record``)."""
@@ -152,6 +155,7 @@ class UavCore:
             self.worker.bind_telemetry(self.telemetry)
             await camera_ready
             self.source = await self.open_source(self.config.source)
+            self.camera = self.camera_model(self.source)
             if self.config.recording.record:
                 self.recorder = await loop.run_in_executor(None, functools.partial(
                     Recorder.open, self.config.recording, describe(self),
@@ -163,7 +167,7 @@ class UavCore:
         except BaseException:
             await self._release()
             raise
-        self.worker.attach(self.source.buffer)
+        self.worker.attach(self.source.buffer, self.camera)
         self._spawn(self.worker.run(), "processor")
         self._spawn(self.telemetry.run(), "telemetry")
         if self.controller is not None:
@@ -382,6 +386,20 @@ class UavCore:
         if uri.startswith("run:") and self.replay is not None:
             context["timeline"] = self.replay
         return await asyncio.get_running_loop().run_in_executor(None, functools.partial(open_source, uri, **context))
+
+    def camera_model(self, source: CameraSource) -> CameraModel | None:
+        """``source``'s own model (``sim:``), else the configured one (``[camera]``), said in the event log.
+
+        Raises CameraModelError when the model is for another frame size than the source gives.
+        """
+        own = getattr(source, "camera_model", None)
+        width, height = source.get_frame_size()
+        model = (own() if own is not None else None) or self.config.camera.model(width, height)
+        if model is not None and width and height:
+            model.check_size(width, height)
+        self.events.emit("info", "source", f"camera model: {model.describe()}" if model is not None else
+                         "no camera model: set camera_calibration or camera_hfov ([camera]) to give processors one")
+        return model
 
     async def _vehicle_pose(self) -> PoseTrack:
         """The pose track fed from the controller's telemetry, started on first use (any MAVLink autopilot)."""

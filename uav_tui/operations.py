@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 
 from uav_tui.autonomy import check_vector
 from uav_tui.commands import VEHICLE_COMMANDS, Command, check_limits
-from uav_tui.errors import CommandError, ProcessorLoadError, UavError
+from uav_tui.errors import CommandError, ProcessorLoadError, SourceError, UavError
 from uav_tui.process_worker import ProcessorRaised
 from uav_tui.processor_calls import ProcessorCalls
 from uav_tui.text import describe, shorten
@@ -114,10 +114,15 @@ class Operations:
         core = self.core
         assert core.worker is not None
         new = await core.open_source(uri)
-        old, core.source = core.source, new
+        try:
+            camera = core.camera_model(new)
+        except SourceError:
+            await asyncio.get_running_loop().run_in_executor(None, new.close)
+            raise
+        old, core.source, core.camera = core.source, new, camera
         if core.recorder is not None:
             core.recorder.watch(new)
-        core.worker.attach(new.buffer)
+        core.worker.attach(new.buffer, camera)
         if old is not None:
             await asyncio.get_running_loop().run_in_executor(None, old.close)
         width, height = new.get_frame_size()

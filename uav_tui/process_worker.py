@@ -26,7 +26,7 @@ import time
 from collections import deque
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -45,6 +45,9 @@ from uav_tui.processor_process import ChildProcess, Offered, PendingCall, descri
 from uav_tui.stats import PipelineStats, RollingStats
 from uav_tui.telemetry import TelemetryManager
 from uav_tui.worker import Answer, ProcessedFrame, ProcessorState
+
+if TYPE_CHECKING:
+    from sources.camera_model import CameraModel
 
 logger = logging.getLogger(__name__)
 
@@ -125,6 +128,8 @@ class ProcessWorker:
         self._to_forget: list[str] = []
         self._child: ChildProcess | None = None
         self._buffer: FrameBuffer | None = None
+        self._camera: CameraModel | None = None
+        """The camera model of ``_buffer``'s source, sent to each child (``tmMgr.camera()``)."""
         self._picked: tuple[FrameBuffer | None, int] = (None, 0)
         """The newest frame taken for an offer (each frame is offered once)."""
         self._offered: tuple[FrameBuffer | None, int, int] = (None, 0, 0)
@@ -165,12 +170,15 @@ class ProcessWorker:
         """Attach the telemetry at each frame's capture to it as it is handed over; store ``tmMgr.save`` through it."""
         self.telemetry = telemetry
 
-    def attach(self, buffer: FrameBuffer) -> None:
-        """Take frames from ``buffer`` from now on (a new source)."""
+    def attach(self, buffer: FrameBuffer, camera: CameraModel | None = None) -> None:
+        """Take frames from ``buffer`` from now on (a new source, with ``camera`` its model for ``tmMgr.camera()``)."""
         with self._lock:
             if self._buffer is not None:
                 self._detach(self._buffer)
-            self._buffer = buffer
+            self._buffer, self._camera, child = buffer, camera, self._child
+        if child is not None:
+            self._send(child, ("camera", camera))  # before the first frame of the new source is offered
+        with self._lock:
             buffer.set_allocator(self._ring.capture_view)  # cameras that can decode into shared memory do
             buffer.set_read_waiter(functools.partial(self._wait_claimed, buffer))
             buffer.add_listener(self._on_frame)
@@ -299,6 +307,8 @@ class ProcessWorker:
         with self._lock:
             self._child = child
             self._picked, self._offered = (None, 0), (None, 0, 0)
+        if self._camera is not None:
+            self._send(child, ("camera", self._camera))
         self.state_text = "running"
         self._nudge()
 

@@ -14,7 +14,7 @@ from collections import deque
 from collections.abc import Callable
 from concurrent.futures import Future
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from controllers.base import TELEMETRY_FIELDS, Telemetry
 from processors import LoadedProcessor, load_processor
@@ -23,6 +23,9 @@ from processors.frame_telemetry import DEFAULT_SAVE_MAX_HZ, FrameTelemetry
 from sources.buffer import Frame, FrameBuffer
 from uav_tui.stats import PipelineStats, RollingStats
 from uav_tui.telemetry import TelemetryManager
+
+if TYPE_CHECKING:
+    from sources.camera_model import CameraModel
 
 logger = logging.getLogger(__name__)
 
@@ -134,8 +137,11 @@ class ProcessorWorker:
         self.processor.instance.tmMgr = FrameTelemetry(lambda image, extra: telemetry.save(image, **extra),
                                                        save_max_hz=self.save_max_hz)
 
-    def attach(self, buffer: FrameBuffer) -> None:
-        """Take frames from ``buffer`` from now on (a new source)."""
+    def attach(self, buffer: FrameBuffer, camera: CameraModel | None = None) -> None:
+        """Take frames from ``buffer`` from now on (a new source, with ``camera`` its model for ``tmMgr.camera()``)."""
+        tm = getattr(self.processor.instance, "tmMgr", None)
+        if isinstance(tm, FrameTelemetry):
+            tm.camera_model = camera
         with self._wake:
             if self._buffer is not None:
                 self._buffer.remove_listener(self._on_frame)

@@ -1,0 +1,73 @@
+"""``tmMgr.camera()`` through the real platform: the source's own model (sim:) or the configured one, the same in
+both isolations and after a source switch; a calibration for another frame size stops the start with what to do."""
+
+from __future__ import annotations
+
+import asyncio
+import math
+from pathlib import Path
+
+import pytest
+
+from sources.camera_model import CameraModelError
+from tests.core.flight_helpers import wait_until
+from tests.sources.test_camera_model import SAMPLE_YAML
+from uav_tui import dataset
+from uav_tui.config import Config, with_overrides
+from uav_tui.core import UavCore
+
+PROCESSOR = "tests.sources.camera_processor:CameraSeen"
+
+
+@pytest.mark.timeout(90)
+@pytest.mark.parametrize("isolation", ["thread", "process"])
+async def test_the_processor_reads_the_camera_model_of_each_source(tmp_path: Path, isolation: str) -> None:
+    config = with_overrides(Config(), source="sim:?width=320&height=240&hfov=70&mount=forward", fc="sim",
+                            processor=PROCESSOR, isolation=isolation, runs_dir=str(tmp_path), record_video=False,
+                            save_max_hz=0, camera_hfov=90.0)
+    core = UavCore(config)
+    await core.start()
+    try:
+        await wait_until(lambda: core.worker.stats.frames_processed >= 10, 20, "frames from sim:")
+        await core.execute("source synthetic:?width=160&height=120")
+        processed = core.worker.stats.frames_processed
+        await wait_until(lambda: core.worker.stats.frames_processed >= processed + 10, 20, "frames from synthetic:")
+    finally:
+        await core.stop()
+    frames = dataset.load(core.recorder.run_dir).frames
+    sim, synthetic = frames[frames["width"] == 320], frames[frames["width"] == 160]
+    assert len(sim) >= 10 and len(synthetic) >= 10 and len(sim) + len(synthetic) == len(frames)
+    # sim: states its own model, whatever [camera] says; synthetic: cannot, so the configured one
+    assert set(sim["camera"]) == {"sim: renderer (exact)"} and set(sim["tilt"]) == {0.0}
+    assert sim["fx"].to_numpy() == pytest.approx(160 / math.tan(math.radians(35)))
+    assert set(synthetic["camera"]) == {"camera_hfov 90 deg (no distortion)"} and set(synthetic["tilt"]) == {90.0}
+    assert synthetic["fx"].to_numpy() == pytest.approx(80.0)
+    assert frames["round_trip_px"].max() < 1e-9
+    said = [event.message for event in core.events.recent if event.message.startswith("camera model:")]
+    assert len(said) == 2 and "sim: renderer (exact)" in said[0] and "camera_hfov 90 deg" in said[1]
+
+
+async def test_without_a_model_the_processor_is_told_so(tmp_path: Path) -> None:
+    config = with_overrides(Config(), source="synthetic:?width=160&height=120", processor=PROCESSOR,
+                            isolation="thread", runs_dir=str(tmp_path), record_video=False, save_max_hz=0)
+    core = UavCore(config)
+    await core.start()
+    try:
+        await wait_until(lambda: core.worker.stats.frames_processed >= 5, 20, "frames")
+    finally:
+        await core.stop()
+    assert set(dataset.load(core.recorder.run_dir).frames["camera"]) == {"none"}
+    assert any(event.message.startswith("no camera model: set camera_calibration or camera_hfov")
+               for event in core.events.recent)
+
+
+async def test_a_calibration_for_another_frame_size_stops_the_start(tmp_path: Path) -> None:
+    calibration = tmp_path / "camera.yaml"
+    calibration.write_text(SAMPLE_YAML)  # 640x480
+    config = with_overrides(Config(), source="synthetic:?width=160&height=120", isolation="thread", record=False,
+                            camera_calibration=str(calibration))
+    core = UavCore(config)
+    with pytest.raises(CameraModelError, match="is for 640x480 frames but the camera gives 160x120"):
+        await core.start()
+    await asyncio.sleep(0)
+    assert core.source is None or not core.source.get_properties()["running"]
