@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -124,6 +125,24 @@ class CameraModel:
         f = (width / 2) / math.tan(math.radians(hfov_deg) / 2)
         return cls(width, height, f, f, width / 2, height / 2, (), mount or Mount(),
                    origin or f"horizontal field of view {hfov_deg:g} deg (no distortion)")
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain numbers and text (``run.json``); :meth:`from_dict` reads it back."""
+        return {"width": self.width, "height": self.height, "fx": self.fx, "fy": self.fy, "cx": self.cx,
+                "cy": self.cy, "distortion": list(self.distortion), "tilt_deg": self.mount.tilt_deg,
+                "offset_m": list(self.mount.offset_m), "origin": self.origin, "rms_px": self.rms_px}
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any], origin: str | None = None) -> CameraModel:
+        """The model :meth:`to_dict` wrote; CameraModelError when a value is missing or wrong."""
+        try:
+            mount = Mount(float(data["tilt_deg"]), tuple(float(v) for v in data["offset_m"]))  # type: ignore[arg-type]
+            rms = data.get("rms_px")
+            return cls(int(data["width"]), int(data["height"]), float(data["fx"]), float(data["fy"]),
+                       float(data["cx"]), float(data["cy"]), tuple(float(c) for c in data["distortion"]), mount,
+                       str(data["origin"]) if origin is None else origin, None if rms is None else float(rms))
+        except (KeyError, TypeError, ValueError) as exc:
+            raise CameraModelError(f"camera model: a value is missing or wrong ({exc})") from None
 
     # -- what the numbers are ---------------------------------------------------------------------
 

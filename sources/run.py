@@ -12,6 +12,7 @@ by ``speed``, or with ``speed=max`` one at a time as fast as the reader takes th
 from __future__ import annotations
 
 import csv
+import json
 import logging
 import threading
 import time
@@ -23,6 +24,7 @@ import cv2
 import numpy as np
 
 from sources.base import CaptureSource
+from sources.camera_model import CameraModel
 from sources.errors import SourceError
 from sources.uri import SourceUri
 
@@ -98,6 +100,17 @@ class RunSource(CaptureSource):
         source = cls(uri.text, uri.target, speed=speed, timeline=timeline)
         uri.finish()
         return source
+
+    def camera_model(self) -> CameraModel | None:
+        """The camera model the run was recorded with (``camera`` in its ``run.json``); None if it had none."""
+        try:
+            recorded = json.loads((self.run_dir / "run.json").read_text(encoding="utf-8")).get("camera")
+            if not isinstance(recorded, dict):
+                return None
+            return CameraModel.from_dict(recorded, f"recorded in {self.run_dir.name}: {recorded.get('origin', '')}")
+        except (OSError, ValueError, AttributeError) as exc:  # CameraModelError is a ValueError
+            logger.warning("%r: the camera model in run.json is unreadable (%s): none", self, exc)
+            return None
 
     def _open_device(self) -> None:
         if not (self.run_dir / "run.json").is_file():

@@ -15,6 +15,7 @@ from tests.sources.test_camera_model import SAMPLE_YAML
 from uav_tui import dataset
 from uav_tui.config import Config, with_overrides
 from uav_tui.core import UavCore
+from uav_tui.replay.runner import ReplayJob, replay_run
 
 PROCESSOR = "tests.sources.camera_processor:CameraSeen"
 
@@ -71,3 +72,24 @@ async def test_a_calibration_for_another_frame_size_stops_the_start(tmp_path: Pa
         await core.start()
     await asyncio.sleep(0)
     assert core.source is None or not core.source.get_properties()["running"]
+
+
+@pytest.mark.timeout(120)
+async def test_a_replay_gives_the_processor_the_camera_model_the_run_was_recorded_with(tmp_path: Path) -> None:
+    config = with_overrides(Config(), source="sim:?width=320&height=240&hfov=70&mount=forward", fc="sim",
+                            processor=PROCESSOR, isolation="thread", runs_dir=str(tmp_path / "runs"), save_max_hz=0)
+    core = UavCore(config)
+    await core.start()
+    try:
+        await wait_until(lambda: core.worker.stats.frames_processed >= 15, 20, "frames from sim:")
+    finally:
+        await core.stop()
+    run = core.recorder.run_dir
+    replay_config = with_overrides(Config(), processor=PROCESSOR, runs_dir=str(tmp_path / "replays"), save_max_hz=0)
+    result = await asyncio.get_running_loop().run_in_executor(None, replay_run, ReplayJob(str(run), replay_config,
+                                                                                          "max"))
+    frames = dataset.load(Path(result.replay)).frames
+    assert len(frames) >= 10
+    assert set(frames["camera"]) == {f"recorded in {run.name}: sim: renderer (exact)"}
+    assert frames["fx"].to_numpy() == pytest.approx(160 / math.tan(math.radians(35)))
+    assert set(frames["tilt"]) == {0.0} and set(frames["width"]) == {320}

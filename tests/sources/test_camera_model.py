@@ -4,6 +4,8 @@ and calibration on a chessboard rendered with the sim: camera's intrinsics."""
 from __future__ import annotations
 
 import argparse
+import dataclasses
+import json
 import math
 from pathlib import Path
 
@@ -226,3 +228,14 @@ def test_uav_tui_calibrate_says_what_to_do_when_it_sees_no_board(tmp_path: Path,
 def test_uav_tui_calibrate_refuses_a_bad_board(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["calibrate", "--source", "synthetic:", "--board", "9by6"]) == 2
     assert "--board '9by6' must be COLSxROWS inner corners" in capsys.readouterr().err
+
+
+def test_a_model_round_trips_through_run_json_and_a_damaged_one_is_none(tmp_path: Path) -> None:
+    model = CameraModel(640, 480, 505.1, 504.9, 318.7, 242.1, BARREL, Mount(30.0, (0.1, 0.0, 0.05)), "file x", 0.2)
+    (tmp_path / "run.json").write_text(json.dumps({"camera": model.to_dict()}))
+    recorded = create_source(f"run:{tmp_path}").camera_model()
+    assert recorded == dataclasses.replace(model, origin=f"recorded in {tmp_path.name}: file x")
+    (tmp_path / "run.json").write_text(json.dumps({"camera": {**model.to_dict(), "fx": "wide"}}))
+    assert create_source(f"run:{tmp_path}").camera_model() is None
+    (tmp_path / "run.json").write_text(json.dumps({"camera": None}))  # recorded without a model
+    assert create_source(f"run:{tmp_path}").camera_model() is None

@@ -53,6 +53,7 @@ def describe(core: UavCore) -> dict[str, Any]:
         "config": config,
         "versions": versions(),
         "source": {"uri": core.config.source, **{k: _plain(v) for k, v in source.items()}},
+        "camera": core.camera.to_dict() if core.camera is not None else None,
         "processor": {} if processor is None else {
             "name": processor.info.name, "spec": processor.spec, "path": processor.info.path,
             "capabilities": sorted(processor.info.capabilities), "kwargs": _plain(processor.kwargs)},
