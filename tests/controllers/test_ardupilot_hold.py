@@ -71,6 +71,7 @@ def truth_altitude(truth: TruthClient) -> Callable[[], float]:
 async def test_the_simulated_loiter_follows_the_throttle_stick(copter: tuple[MavsdkController, TruthClient]) -> None:
     """The model: in LOITER the stick at 1000 sinks at PILOT_SPD_UP (2.5 m/s); at mid-stick it holds."""
     _, truth = copter
+    truth.request({"cmd": "teleport", "d": -20.0})  # room to sink (GUIDED holds the new point)
     state = truth.request({"cmd": "rc_mode", "mode": "LOITER"})["state"]  # the pilot flips the mode switch
     assert (state["mode"], state["rc_throttle"]) == ("LOITER", 1000)
     await asyncio.sleep(1.5)
