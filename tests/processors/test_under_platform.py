@@ -29,7 +29,7 @@ def _write_video(path: Path, frames: list[np.ndarray]) -> Path:
 
 
 def _frames(kind: str) -> list[np.ndarray]:
-    if kind == "csrt":
+    if kind in ("csrt", "nanotrack"):
         return tracking_sequence((320, 240), 40).frames
     if kind == "yolo":
         return detection_sequence((320, 240), 40)[0]
@@ -41,10 +41,11 @@ def _frames(kind: str) -> list[np.ndarray]:
     ("processor", "script", "args"),
     [
         ("csrt", "wait 0.2\nroi 138 123 44 52\nwait 3\n", []),
+        ("nanotrack", "wait 0.2\nroi 138 123 44 52\nwait 3\n", []),
         ("position_hold", "wait 0.2\nf 1\nwait 3\n", []),
         ("yolo", "wait 3\n", ["--processor-arg", 'follow="person"']),
     ],
-    ids=["csrt", "position_hold", "yolo"],
+    ids=["csrt", "nanotrack", "position_hold", "yolo"],
 )
 def test_runs_under_platform_with_file_source(processor: str, script: str, args: list[str], tmp_path: Path) -> None:
     video = _write_video(tmp_path / "in.avi", _frames(processor))
