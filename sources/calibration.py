@@ -1,4 +1,4 @@
-"""OpenCV camera calibration files and chessboard calibration, as OpenCV's calibration samples do them.
+"""OpenCV camera calibration files and calibration from board views, as OpenCV's calibration samples do them.
 
 The file is what ``cv2.FileStorage`` writes (YAML, JSON or XML by its extension) with the sample's keys:
 ``image_width``, ``image_height``, ``camera_matrix``, ``distortion_coefficients`` and
@@ -17,13 +17,11 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from sources.calibration_boards import Board, View
 from sources.camera_model import CameraModel, CameraModelError, Mount
 
 MAX_FILE_BYTES = 1_000_000
 """A calibration file is a few hundred bytes; anything far larger is not one."""
-_SUBPIX_WINDOW = (5, 5)
-"""Half-size of cornerSubPix's search window, px: under half a square of a board a few metres away."""
-_SUBPIX_CRITERIA = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 30, 0.001)
 MAKE_ONE = "make one with: uav-tui calibrate --source URI --out FILE"
 
 
@@ -93,7 +91,7 @@ def read_calibration(path: str | Path) -> Calibration:
     return calibration
 
 
-def write_calibration(path: str | Path, calibration: Calibration, *, board: tuple[int, int], square_m: float) -> None:
+def write_calibration(path: str | Path, calibration: Calibration, board: Board) -> None:
     """Write ``calibration`` as OpenCV's sample does (format by the extension: .yaml/.yml, .json or .xml)."""
     path = Path(path).expanduser()
     partial = path.with_name(f".{path.stem}.partial{path.suffix}")
@@ -103,9 +101,8 @@ def write_calibration(path: str | Path, calibration: Calibration, *, board: tupl
         storage.write("nr_of_frames", calibration.views)
         storage.write("image_width", calibration.width)
         storage.write("image_height", calibration.height)
-        storage.write("board_width", board[0])
-        storage.write("board_height", board[1])
-        storage.write("square_size", square_m)
+        for name, value in board.file_fields().items():
+            storage.write(name, value)
         storage.write("camera_matrix", calibration.matrix)
         storage.write("distortion_coefficients", calibration.distortion.reshape(-1, 1))
         if calibration.rms_px is not None:
@@ -115,35 +112,18 @@ def write_calibration(path: str | Path, calibration: Calibration, *, board: tupl
     os.replace(partial, path)
 
 
-def board_points(board: tuple[int, int], square_m: float) -> np.ndarray:
-    """The inner corners of a chessboard of ``board`` = (columns, rows) inner corners, metres on its plane (z = 0)."""
-    columns, rows = board
-    grid = np.mgrid[0:columns, 0:rows].T.reshape(-1, 2) * square_m
-    return np.column_stack([grid, np.zeros(len(grid))]).astype(np.float32)
-
-
-def find_corners(image: np.ndarray, board: tuple[int, int]) -> np.ndarray | None:
-    """The chessboard's inner corners (N x 1 x 2, float32, sub-pixel) in ``image``, or None when not all are seen.
-
-    As OpenCV's sample: ``findChessboardCorners`` (a fast check first: a frame without a board costs ~10 ms on a
-    PC), then ``cornerSubPix``.
-    """
-    gray = cv2.cvtColor(image, cv2.COLOR_BGR2GRAY) if image.ndim == 3 else image
-    found, corners = cv2.findChessboardCorners(gray, board, flags=cv2.CALIB_CB_ADAPTIVE_THRESH |
-                                               cv2.CALIB_CB_NORMALIZE_IMAGE | cv2.CALIB_CB_FAST_CHECK)
-    if not found:
-        return None
-    return cv2.cornerSubPix(gray, corners, _SUBPIX_WINDOW, (-1, -1), _SUBPIX_CRITERIA)
-
-
-def calibrate(views: list[np.ndarray], board: tuple[int, int], square_m: float, size: tuple[int, int]) -> Calibration:
-    """``cv2.calibrateCamera`` over the corners of ``views`` (each from :func:`find_corners`) for frames of ``size``.
+def calibrate(views: list[View], size: tuple[int, int]) -> Calibration:
+    """``cv2.calibrateCamera`` over ``views`` (each from a board's ``find``) of frames of ``size`` = (width, height).
 
     Fits k1, k2, p1, p2 (k3 fixed at 0, as the samples advise for ordinary lenses: it overfits with few views).
     """
     if len(views) < 3:
         raise CameraModelError(f"calibration needs at least 3 views of the board, got {len(views)}")
-    objects = [board_points(board, square_m)] * len(views)
-    rms, matrix, distortion, _, _ = cv2.calibrateCamera(objects, views, size, None, None,
-                                                        flags=cv2.CALIB_FIX_K3)
+    objects, points = [objects for objects, _ in views], [points for _, points in views]
+    try:
+        rms, matrix, distortion, _, _ = cv2.calibrateCamera(objects, points, size, None, None, flags=cv2.CALIB_FIX_K3)
+    except cv2.error:
+        raise CameraModelError(f"cv2.calibrateCamera found no solution in {len(views)} views: show the board in "
+                               "different places and tilts (not all square to the camera), then calibrate "
+                               "again") from None
     return Calibration(size[0], size[1], matrix, distortion.ravel(), float(rms), len(views))

@@ -14,10 +14,10 @@ import numpy as np
 import pytest
 
 from sources import create_source
-from sources.calibration import calibrate, find_corners, load_model, read_calibration, write_calibration
+from sources.calibration import calibrate, load_model, read_calibration, write_calibration
 from sources.camera_model import CameraModel, CameraModelError, Mount
 from sources.sim_geometry import Pose, project_ground_point, rotation_world_body
-from tests.sources.chessboard import BOARD, SQUARE_M, render_views
+from tests.sources.chessboard import CHARUCO, CHESSBOARD, render_views
 from uav_tui.cli import main
 from uav_tui.config import add_config_flags, load_config, overrides_from_args
 from uav_tui.errors import ConfigError
@@ -94,11 +94,13 @@ def test_the_sim_camera_model_follows_its_uri() -> None:
     assert create_source("synthetic:").camera_model() is None  # cannot know: the configured one, or none
 
 
-def test_calibration_on_a_rendered_chessboard_recovers_the_sim_cameras_intrinsics() -> None:
+@pytest.mark.parametrize("charuco", [False, True], ids=["chessboard", "charuco"])
+def test_calibration_on_a_rendered_board_recovers_the_sim_cameras_intrinsics(charuco: bool) -> None:
     truth = sim_model()
-    views = [find_corners(image, BOARD) for image in render_views(truth, 12)]
-    assert all(corners is not None for corners in views)
-    found = calibrate(views, BOARD, SQUARE_M, (truth.width, truth.height)).model()
+    board = CHARUCO if charuco else CHESSBOARD
+    views = [board.find(image) for image in render_views(truth, 12, charuco=charuco)]
+    assert all(view is not None for view in views)
+    found = calibrate(views, (truth.width, truth.height)).model()
     for name in ("fx", "fy", "cx", "cy"):
         assert getattr(found, name) == pytest.approx(getattr(truth, name), rel=0.01), name
     assert found.rms_px < 0.5
@@ -106,10 +108,10 @@ def test_calibration_on_a_rendered_chessboard_recovers_the_sim_cameras_intrinsic
 
 @pytest.mark.parametrize("suffix", [".yaml", ".json", ".xml"])
 def test_a_written_calibration_file_reads_back(tmp_path: Path, suffix: str) -> None:
-    views = [find_corners(image, BOARD) for image in render_views(sim_model(), 5)]
-    calibration = calibrate(views, BOARD, SQUARE_M, (640, 480))
+    views = [CHESSBOARD.find(image) for image in render_views(sim_model(), 5)]
+    calibration = calibrate(views, (640, 480))
     path = tmp_path / f"camera{suffix}"
-    write_calibration(path, calibration, board=BOARD, square_m=SQUARE_M)
+    write_calibration(path, calibration, CHESSBOARD)
     model = load_model(path, Mount.parse("forward", "0.1,0,0.05"))
     assert (model.width, model.height, model.rms_px) == (640, 480, pytest.approx(calibration.rms_px))
     assert np.allclose(model.matrix, calibration.matrix) and np.allclose(model.distortion, calibration.distortion)
@@ -220,7 +222,7 @@ def test_uav_tui_calibrate_says_what_to_do_when_it_sees_no_board(tmp_path: Path,
     assert main(["calibrate", "--source", "synthetic:?width=160&height=120", "--views", "3", "--timeout", "6",
                  "--out", str(out)]) == 1
     printed = capsys.readouterr().out
-    assert "no 9x6 board found for 5 s: show the whole board, flat, well lit" in printed
+    assert "no board found for 5 s: show the whole board, flat, well lit" in printed
     assert "--board is its inner corners: 9x6 for a board of 10x7 squares" in printed
     assert "gave up after 6 s with 0 of 3 views: nothing written" in printed and not out.exists()
 
@@ -239,3 +241,25 @@ def test_a_model_round_trips_through_run_json_and_a_damaged_one_is_none(tmp_path
     assert create_source(f"run:{tmp_path}").camera_model() is None
     (tmp_path / "run.json").write_text(json.dumps({"camera": None}))  # recorded without a model
     assert create_source(f"run:{tmp_path}").camera_model() is None
+
+
+def test_uav_tui_calibrate_with_a_charuco_board(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """A board printed by --write-board, seen in part or whole, calibrates the camera as well."""
+    printed_board = tmp_path / "board.png"
+    assert main(["calibrate", "--charuco", "--write-board", str(printed_board)]) == 0
+    assert cv2.imread(str(printed_board), cv2.IMREAD_GRAYSCALE).shape == (500, 700)
+    truth = sim_model()
+    video = _board_video(tmp_path / "board.avi", render_views(truth, 12, seed=2, charuco=True))
+    out = tmp_path / "camera.json"
+    assert main(["calibrate", "--charuco", "--source", f"file:{video}?realtime=0", "--views", "10", "--interval", "0",
+                 "--out", str(out)]) == 0
+    assert "looking for a 7x5 ChArUco board (DICT_4X4_50)" in capsys.readouterr().out
+    model = load_model(out)
+    for name in ("fx", "fy", "cx", "cy"):
+        assert getattr(model, name) == pytest.approx(getattr(truth, name), rel=0.01), name
+    assert cv2.FileStorage(str(out), cv2.FILE_STORAGE_READ).getNode("board_type").string() == "charuco"
+
+
+def test_uav_tui_calibrate_refuses_an_unknown_dictionary(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["calibrate", "--charuco", "--dictionary", "DICT_9X9_1"]) == 2
+    assert "unknown ArUco dictionary 'DICT_9X9_1'; OpenCV's are DICT_4X4_100" in capsys.readouterr().err
