@@ -259,7 +259,19 @@ def load_config(path: Path | None, overrides: dict[str, Any] | None = None) -> C
                                  "command line")
     config = Config(**top, **{name: cls(**sections[name]) for name, cls in SECTIONS.items()})
     _check_sim_settings(config, where)
+    _check_camera_settings(config.camera, where)
     return config
+
+
+def _check_camera_settings(camera: CameraConfig, where: str) -> None:
+    """A mounting without a model to mount would be silently ignored: say so."""
+    if camera.camera_calibration.strip() or camera.camera_hfov > 0:
+        return
+    for f in fields(CameraConfig):
+        if f.name in ("camera_mount", "camera_offset") and getattr(camera, f.name) != f.default:
+            raise ConfigError(f"{where}: {f.name} places the configured camera model, but there is none: set "
+                              "camera_calibration or camera_hfov too (a sim: camera is placed by its URI, e.g. "
+                              "sim:?mount=forward&tilt=30)", key=f.name)
 
 
 def _check_sim_settings(config: Config, where: str) -> None:

@@ -171,7 +171,8 @@ def test_the_camera_configuration_forms_parse(tmp_path: Path) -> None:
                     'camera_offset = "0.12, 0, 0.04"\n')
     model = load_config(path).camera.model(640, 480)
     assert model == load_model(calibration, Mount(0.0, (0.12, 0.0, 0.04)))
-    hfov = load_config(None, cli("--camera-hfov", "90", "--camera-mount", "45")).camera.model(160, 120)
+    hfov = load_config(None, cli("--camera-hfov", "90", "--camera-mount", "45", "--camera-offset", "0,0,0.1")
+                       ).camera.model(160, 120)
     assert (hfov.fx, hfov.cx, hfov.mount.tilt_deg, hfov.origin) == (pytest.approx(80.0), 80.0, 45.0,
                                                                      "camera_hfov 90 deg (no distortion)")
     assert load_config(None).camera.model(640, 480) is None  # nothing configured: no camera model
@@ -182,6 +183,8 @@ def test_the_camera_configuration_forms_parse(tmp_path: Path) -> None:
     (("--camera-offset", "0.1,0"), "--camera-offset: offset '0.1,0' must be F,R,D in metres"),
     (("--camera-hfov", "200"), "--camera-hfov = 200.0 is out of range"),
     (("--camera-calibration", "/nonexistent/camera.yaml"), "does not exist; make one with: uav-tui calibrate"),
+    (("--camera-mount", "forward"), "camera_mount places the configured camera model, but there is none: set "
+                                    "camera_calibration or camera_hfov too"),
 ])
 def test_bad_camera_settings_name_the_key_and_what_to_do(argv: tuple[str, ...], problem: str) -> None:
     with pytest.raises(ConfigError, match=problem):
