@@ -304,11 +304,11 @@ class ProcessWorker:
     def _adopt(self, child: ChildProcess) -> None:
         info = child.ready.result()
         self.processor = LoadedProcessor(instance=None, info=info, spec=self.spec, kwargs=self.kwargs)
+        if self._camera is not None:  # before it can be offered a frame
+            self._send(child, ("camera", self._camera))
         with self._lock:
             self._child = child
             self._picked, self._offered = (None, 0), (None, 0, 0)
-        if self._camera is not None:
-            self._send(child, ("camera", self._camera))
         self.state_text = "running"
         self._nudge()
 

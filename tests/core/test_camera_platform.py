@@ -93,3 +93,25 @@ async def test_a_replay_gives_the_processor_the_camera_model_the_run_was_recorde
     assert set(frames["camera"]) == {f"recorded in {run.name}: sim: renderer (exact)"}
     assert frames["fx"].to_numpy() == pytest.approx(160 / math.tan(math.radians(35)))
     assert set(frames["tilt"]) == {0.0} and set(frames["width"]) == {320}
+
+
+@pytest.mark.timeout(90)
+async def test_a_restarted_processor_process_has_the_camera_model_from_its_first_frame(tmp_path: Path) -> None:
+    config = with_overrides(Config(), source="synthetic:?width=160&height=120", isolation="process",
+                            processor="tests.sources.camera_processor:CameraSeenCrashingOnce",
+                            processor_args={"flag": str(tmp_path / "crashed")}, runs_dir=str(tmp_path),
+                            record_video=False, save_max_hz=0, camera_hfov=90.0)
+    core = UavCore(config)
+    await core.start()
+    try:
+        await wait_until(lambda: (tmp_path / "crashed").exists(), 20, "the processor's process to die")
+        pid = core.worker.state().pid
+        await wait_until(lambda: core.worker.state().pid not in (None, pid) and core.worker.stats.frames_processed
+                         >= 10, 30, "frames from the restarted process")
+        processed = core.worker.stats.frames_processed
+        await wait_until(lambda: core.worker.stats.frames_processed >= processed + 5, 20, "more frames")
+    finally:
+        await core.stop()
+    frames = dataset.load(core.recorder.run_dir).frames.dropna(subset=["camera"])
+    assert len(frames) >= 9  # 4 before the crash, the rest after the restart
+    assert set(frames["camera"]) == {"camera_hfov 90 deg (no distortion)"}

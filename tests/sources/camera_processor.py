@@ -13,3 +13,21 @@ class CameraSeen:
         u, v = camera.ray_to_pixel(camera.pixel_to_ray(10.0, 20.0))
         self.tmMgr.save(frame, camera=camera.origin, fx=camera.fx, width=camera.width, tilt=camera.mount.tilt_deg,
                         round_trip_px=abs(u - 10.0) + abs(v - 20.0))
+
+
+class CameraSeenCrashingOnce(CameraSeen):
+    """As CameraSeen, but its process dies at its 5th frame the first time (``flag`` is the file that says so)."""
+
+    def __init__(self, flag):
+        super().__init__()
+        self.flag, self.frames = flag, 0
+
+    def photo_processing(self, frame):
+        import os
+        from pathlib import Path
+
+        self.frames += 1
+        if self.frames == 5 and not Path(self.flag).exists():
+            Path(self.flag).touch()
+            os._exit(3)
+        super().photo_processing(frame)
