@@ -5,6 +5,7 @@ from __future__ import annotations
 import asyncio
 import csv
 import dataclasses
+import json
 import shutil
 from pathlib import Path
 
@@ -19,10 +20,11 @@ from uav_tui import dataset
 from uav_tui.cli import main
 from uav_tui.config import load_config
 from uav_tui.core import CoreState, UavCore
+from uav_tui.errors import UavError
 from uav_tui.jobs import run_jobs
 from uav_tui.recording.interpolate import CONTINUOUS, DISCRETE
 from uav_tui.replay.operator import recorded_commands
-from uav_tui.replay.runner import ReplayJob, replay_config, replay_run
+from uav_tui.replay.runner import ReplayJob, recorded_processor, replay_config, replay_run
 from uav_tui.report import write_report
 from uav_tui.report_replay import replay_figure
 from uav_tui.tui.app import UavApp
@@ -291,3 +293,17 @@ async def test_quitting_a_replay_in_the_dashboard_asks_nothing_about_the_recorde
         while app.core.state is not CoreState.STOPPED:
             assert asyncio.get_running_loop().time() < deadline + 15, "the replay did not stop"
             await pilot.pause(0.05)
+
+
+def test_the_runs_own_processor_is_found_by_its_full_path_and_its_absence_is_said(tmp_path):
+    mine = tmp_path / "algos" / "mine.py"
+    mine.parent.mkdir()
+    mine.write_text("")
+    run = tmp_path / "run"
+    run.mkdir()
+    (run / "run.json").write_text(json.dumps({"processor": {"spec": "algos/mine.py:Mine", "path": str(mine),
+                                                            "name": "uav_tui_user_mine:Mine", "kwargs": {"gain": 2}}}))
+    assert recorded_processor(run) == (f"{mine}:Mine", {"gain": 2})  # the flight started in another folder
+    (run / "run.json").write_text("{}")
+    with pytest.raises(UavError, match="does not say which processor the run had: give --processor"):
+        recorded_processor(run)
