@@ -192,10 +192,11 @@ class NanoTrackProcessor(TargetFollower):
         self._velocity = (0.0, 0.0)
 
     def _nano(self, work: np.ndarray) -> tuple[Box, float]:
-        _, found = self._tracker.update(work)
-        self._nano_box = tuple(float(v) for v in found)  # type: ignore[assignment]
+        assert self._tracker is not None  # a target is selected
+        _, (x, y, w, h) = self._tracker.update(work)
+        box = self._nano_box = (float(x), float(y), float(w), float(h))
         self.score = float(self._tracker.getTrackingScore())
-        return self._nano_box, self.score  # type: ignore[return-value]
+        return box, self.score
 
     def _appearance(self, work: np.ndarray, box: Box, radius: float = 0.25,
                     scales: tuple[float, ...] = (1.0,)) -> target_search.Found | None:
@@ -233,6 +234,7 @@ class NanoTrackProcessor(TargetFollower):
 
     def _update(self, work: np.ndarray) -> None:
         previous = self._work_box
+        assert previous is not None  # set whenever tracking starts
         box, score = self._nano(work)
         step = _step(previous, box)
         usual = statistics.median(self._steps) if self._steps else 0.0
@@ -295,7 +297,8 @@ class NanoTrackProcessor(TargetFollower):
     def _search(self, work: np.ndarray, whole: bool) -> None:
         """Correlation search near the last position (a window growing with the frames lost) or of the whole frame;
         the best place is tried with a NanoTrack holding the selected template, and taken on the same evidence."""
-        last = self._work_box
+        last, selected = self._work_box, self._selected
+        assert last is not None and selected is not None  # a target was selected and tracked
         if whole:
             radius = max(work.shape[:2]) / max(last[2], last[3])
             coarse = target_search.search(cv2.cvtColor(work, cv2.COLOR_BGR2GRAY), self._templates, last, radius,
@@ -307,7 +310,7 @@ class NanoTrackProcessor(TargetFollower):
             return
         if _step(last, found.box) > self._lost_frames * (self._speed + 1.0):
             return  # further than the target could have gone since it was lost
-        probe = self._selected.tracker_at(work, found.box)
+        probe = selected.tracker_at(work, found.box)
         _, placed = probe.update(work)
         box, score = tuple(float(v) for v in placed), float(probe.getTrackingScore())
         match = self._appearance(work, box)  # type: ignore[arg-type]

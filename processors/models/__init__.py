@@ -30,7 +30,7 @@ def nanotrack_files() -> dict[str, str]:
 
 def create_nanotrack() -> cv2.TrackerNano:
     """A new ``cv2.TrackerNano`` on the shipped NanoTrack v2 models (OpenCV's default backend, CPU)."""
-    params = cv2.TrackerNano_Params()
+    params = cv2.TrackerNano.Params()
     for key, value in nanotrack_files().items():
         setattr(params, key, value)
-    return cv2.TrackerNano_create(params)
+    return cv2.TrackerNano.create(params)
