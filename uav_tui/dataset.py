@@ -14,8 +14,10 @@ Example::
 
 Every table is indexed by capture / receive time (a UTC ``DatetimeIndex`` named ``time``, from the
 wall clock) and has ``t_s``, seconds since the run started on the monotonic clock (use it to compare
-rows: the wall clock may be stepped by NTP). Nanosecond columns are ``Int64``, flags ``boolean``,
-text ``string``; the ``tmMgr.save`` extras of ``frames.csv`` become one column each.
+rows: the wall clock may be stepped by NTP). Frames carry the target's ground position (``target_lat_deg``,
+``target_lon_deg``, ``target_alt_m``, ``target_uncertainty_m``, ``target_status``: see
+:data:`uav_tui.recording.rows.GEO_COLUMNS`; empty in runs recorded before). Nanosecond columns are
+``Int64``, flags ``boolean``, text ``string``; the ``tmMgr.save`` extras of ``frames.csv`` become one column each.
 
 A damaged run (power lost mid-write, a card copied half-way) loads with what can be read;
 ``run.problems`` says, one line each, which file, which line and what was wrong.
@@ -31,12 +33,11 @@ from typing import Any
 import pandas as pd
 
 from uav_tui.errors import UavError
-from uav_tui.recording.interpolate import CONTINUOUS, DISCRETE
-from uav_tui.recording.rows import EVENT_COLUMNS, FRAME_OWN_COLUMNS, TELEMETRY_COLUMNS
+from uav_tui.recording.rows import EVENT_COLUMNS, FRAME_COLUMNS, TELEMETRY_COLUMNS
 from uav_tui.run_files import Problem, read_json, read_table
 
 _TEXT = ("flight_mode", "gps_fix", "decision", "error", "image", "extra", "telemetry", "level", "kind", "origin",
-         "message", "command")
+         "message", "command", "target_status")
 _FLAGS = ("armed", "in_air", "health_ok", "saved")
 _INTEGERS = ("fc_boot_ms", "fc_clock_offset_ms", "satellites", "frame_id", "seq", "box_x", "box_y", "box_w", "box_h")
 
@@ -75,7 +76,7 @@ def load(run_dir: str | Path) -> Dataset:
     info, problems = read_json(path / "run.json")
     info = _checked_info(info, path / "run.json", problems)
     tables = []
-    for name, columns in (("telemetry", TELEMETRY_COLUMNS), ("frames", FRAME_OWN_COLUMNS + CONTINUOUS + DISCRETE),
+    for name, columns in (("telemetry", TELEMETRY_COLUMNS), ("frames", FRAME_COLUMNS),
                           ("events", EVENT_COLUMNS)):
         table, found = read_table(path / f"{name}.csv", columns, _dtype)
         tables.append(table)

@@ -26,6 +26,7 @@ class FakeCore:
         self.telemetry = TelemetryManager(None)
         self.worker = _Worker()
         self.source = None
+        self.camera = None
         self._listeners: list[Callable[[ProcessedFrame], None]] = []
 
     def add_frame_listener(self, listener: Callable[[ProcessedFrame], None]) -> None:

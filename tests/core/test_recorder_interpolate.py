@@ -6,7 +6,7 @@ import pytest
 
 from controllers.base import Telemetry
 from uav_tui.recording.interpolate import FIELDS, TelemetryHistory
-from uav_tui.recording.rows import FRAME_COLUMNS, FrameAligner, FrameRecord, TelemetrySample
+from uav_tui.recording.rows import FRAME_COLUMNS, FRAME_OWN_COLUMNS, FrameAligner, FrameRecord, TelemetrySample
 
 MS = 1_000_000
 
@@ -80,7 +80,7 @@ def test_history_forgets_old_samples_but_keeps_one_before_the_window():
 
 
 def _record(frame_id: int, t_ms: int) -> FrameRecord:
-    own = len(FRAME_COLUMNS) - len(FIELDS) - 1
+    own = len(FRAME_OWN_COLUMNS) - 1
     return FrameRecord([frame_id, *[None] * (own - 1)], t_ms * MS)
 
 

@@ -3,7 +3,8 @@
 Threads: ``save`` runs on the processor thread (it is ``tmMgr.saver``; with process isolation the
 child's saves are replayed on the event loop, just before their frame's result); ``on_frame``,
 ``on_telemetry``, ``on_event`` and ``snapshot`` on the event loop; all of them only queue work. The
-writer thread encodes, interpolates and writes. ``open`` and ``close`` block: run them in an executor.
+writer thread encodes, interpolates, geo-locates the box and writes. ``open`` and ``close`` block: run
+them in an executor.
 
 Frame ids count processed frames from 1 for the whole run, in processing order, so they stay unique
 when the camera is switched (a new source's ``seq`` starts at 1 again). An id is given on the loop
@@ -55,6 +56,7 @@ from uav_tui.worker import ProcessedFrame
 
 if TYPE_CHECKING:
     from sources import CameraSource, Frame
+    from sources.camera_model import CameraModel
     from uav_tui.core import UavCore
 
 logger = logging.getLogger(__name__)
@@ -101,6 +103,7 @@ class Recorder:
         """Where a crash of this process writes its stacks while the run is open (set by :meth:`open`)."""
         self._emit: Callable[[str, str], None] = lambda level, message: None
         self._current: Callable[[], ProcessedFrame | None] = lambda: None
+        self._camera: Callable[[], CameraModel | None] = lambda: None
         self._ids = itertools.count(1)
         self._provisional = itertools.count(1)
         self._saves: dict[int, _Save] = {}
@@ -149,6 +152,7 @@ class Recorder:
         self._emit = lambda level, message: core.events.emit(level, "recorder", message)  # type: ignore[arg-type]
         # The worker's ``current`` is the frame whose saves are being made, None between frames.
         self._current = lambda: core.worker.current if core.worker is not None else None
+        self._camera = lambda: core.camera  # the model of the source the frames come from (it follows a switch)
         core.telemetry.saver = self.save
         core.telemetry.add_listener(self.on_telemetry)
         for event in core.events.recent:  # what happened before the recorder existed (e.g. a source warning)
@@ -224,7 +228,7 @@ class Recorder:
                 image = name
         self.frames += 1
         self._last = (result, frame_id)
-        self.writer.put(frame_record(result, frame_id, image, extra))
+        self.writer.put(frame_record(result, frame_id, image, extra, self._camera()))
         if self.video is not None:
             self.writer.put(FrameLink(result.frame.t_mono_ns, frame_id))
 

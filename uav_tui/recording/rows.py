@@ -8,16 +8,20 @@ from collections import deque
 from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from controllers.base import TELEMETRY_FIELDS, Telemetry
 from uav_tui.events import Event
+from uav_tui.geolocate import GeoFix, locate_row
 from uav_tui.recording.interpolate import FIELDS, TelemetryHistory
 from uav_tui.recording.writer import Row
 from uav_tui.text import last_line, shorten
 from uav_tui.worker import ProcessedFrame
+
+if TYPE_CHECKING:
+    from sources.camera_model import CameraModel
 
 TELEMETRY_COLUMNS: tuple[str, ...] = TELEMETRY_FIELDS
 """telemetry.csv: one row per telemetry update; ``t_mono_ns``/``t_wall_ns`` are when it was received."""
@@ -36,13 +40,20 @@ decision, the last line of an exception, whether and where the image was saved, 
 extras as JSON, and how the telemetry columns were obtained (``interpolated``, ``held``, ``before``,
 ``none``; see :meth:`TelemetryHistory.at`)."""
 
-FRAME_COLUMNS: tuple[str, ...] = FRAME_OWN_COLUMNS + FIELDS
-"""frames.csv: the frame's own columns, then the telemetry interpolated to the capture time."""
+GEO_COLUMNS: tuple[str, ...] = ("target_lat_deg", "target_lon_deg", "target_alt_m", "target_uncertainty_m",
+                                 "target_status")
+"""frames.csv, last: where the centre of ``box`` is on the ground (:mod:`uav_tui.geolocate`, from the camera
+model and the telemetry at the capture): latitude, longitude, ground altitude AMSL, 1-sigma uncertainty in
+metres, and the status (``ok``; empty without a box; else why there is no position)."""
+
+FRAME_COLUMNS: tuple[str, ...] = FRAME_OWN_COLUMNS + FIELDS + GEO_COLUMNS
+"""frames.csv: the frame's own columns, the telemetry interpolated to the capture time, the target's position."""
 
 MAX_ERROR_CHARS = 500
 """The ``error`` column keeps this much of an exception's last line."""
 
 _SAVED = FRAME_OWN_COLUMNS.index("saved")  # followed by "image"
+_BOX = FRAME_OWN_COLUMNS.index("box_x")  # then box_y, box_w, box_h
 
 TABLES: dict[str, tuple[str, ...]] = {"telemetry": TELEMETRY_COLUMNS, "frames": FRAME_COLUMNS, "events": EVENT_COLUMNS}
 
@@ -58,6 +69,8 @@ class FrameRecord:
 
     values: list[Any]
     t_mono_ns: int
+    camera: CameraModel | None = None
+    """The frame's camera model (geo-locates ``box`` once the telemetry is known)."""
 
     @property
     def frame_id(self) -> int:
@@ -80,15 +93,16 @@ class MarkSaved:
     image: str
 
 
-def frame_record(result: ProcessedFrame, frame_id: int, image: str, extra_json: str) -> FrameRecord:
-    """The own columns of a processed frame (:data:`FRAME_OWN_COLUMNS` minus ``telemetry``)."""
+def frame_record(result: ProcessedFrame, frame_id: int, image: str, extra_json: str,
+                 camera: CameraModel | None = None) -> FrameRecord:
+    """The own columns of a processed frame (:data:`FRAME_OWN_COLUMNS` minus ``telemetry``) and its camera model."""
     frame = result.frame
     vx, vy, vt = _vector(result.vector)
     error = shorten(last_line(result.error), MAX_ERROR_CHARS) if result.error else ""
     box = result.box or (None, None, None, None)
     values = [frame_id, frame.seq, frame.t_wall_ns, frame.t_mono_ns, result.t_start_ns, result.t_end_ns,
               result.t_vector_ns or None, vx, vy, vt, *box, result.decision, error, bool(image), image, extra_json]
-    return FrameRecord(values, frame.t_mono_ns)
+    return FrameRecord(values, frame.t_mono_ns, camera)
 
 
 def event_row(event: Event) -> Row:
@@ -202,7 +216,17 @@ class FrameAligner:
         if image and self.run_dir is not None and not (self.run_dir / image).is_file():
             record.values[_SAVED:_SAVED + 2] = [False, ""]
         values, how = self.history.at(record.t_mono_ns)
-        return Row("frames", [*record.values, how, *(_finite(values[name]) for name in FIELDS)])
+        box = record.values[_BOX:_BOX + 4]
+        fix = locate_row(record.camera, None if box[0] is None else box, values)  # type: ignore[arg-type]
+        return Row("frames", [*record.values, how, *(_finite(values[name]) for name in FIELDS), *_geo(fix)])
+
+
+def _geo(fix: GeoFix) -> tuple[Any, ...]:
+    """The :data:`GEO_COLUMNS` of a fix (coordinates to 1e-8 degrees, ~1 mm)."""
+    if fix.lat_deg is None or fix.lon_deg is None or fix.uncertainty_m is None:
+        return None, None, None, None, fix.status
+    alt = None if fix.alt_m is None else round(fix.alt_m, 3)
+    return round(fix.lat_deg, 8), round(fix.lon_deg, 8), alt, round(fix.uncertainty_m, 3), fix.status
 
 
 def _finite(value: Any) -> Any:
