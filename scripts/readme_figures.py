@@ -1,0 +1,78 @@
+"""Write the README's measured figures from the benchmarks' JSON, so that no number in it is typed by hand.
+
+    .venv/bin/python scripts/bench_tracking.py > scripts/results/tracking.json
+    .venv/bin/python scripts/readme_figures.py           # rewrites the marked blocks of README.md
+    .venv/bin/python scripts/readme_figures.py --check   # exit 1 when README.md differs from the JSON
+
+Each block ``<!-- bench:NAME -->`` ... ``<!-- /bench:NAME -->`` in README.md is made from
+``scripts/results/NAME.json`` by the renderer of that name in :data:`RENDERERS`; the JSON is the
+benchmark's own output, committed beside this script.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import re
+import sys
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parents[1]
+README = ROOT / "README.md"
+RESULTS = ROOT / "scripts" / "results"
+BLOCK = re.compile(r"(<!-- bench:(?P<name>[\w-]+) -->\n)(?P<body>.*?)(<!-- /bench:(?P=name) -->)", re.DOTALL)
+
+
+def tracking(result: dict[str, Any]) -> str:
+    """``bench_tracking.py``: one row per tracker, then its goals."""
+    rows = ["| tracker | success AUC | precision@20 px | visible frames lost | ms/frame |",
+            "| --- | --- | --- | --- | --- |"]
+    for label, scores in result["trackers"].items():
+        lost = scores.get("lost_while_visible")
+        share = scores.get("lost_while_visible_share")
+        rows.append(f"| `{label}` | {scores['success_auc']:.3f} | {scores['precision_20']:.3f} | "
+                    f"{'-' if lost is None else lost}{'' if share is None else f' ({share:.1%})'} | "
+                    f"{scores['ms_mean']:.1f} |")
+    goals = [f"{owner}: {name} {verdict['value']} ({verdict['goal']}: "
+             f"{ {True: 'met', False: 'not met', None: verdict.get('why', 'unknown')}[verdict['pass']] })"
+             for owner, named in result.get("goals", {}).items() for name, verdict in named.items()]
+    missing = [f"{label} not measured: {why}" for label, why in result.get("missing", {}).items()]
+    notes = [f"{result['sequences']} sequences of `{Path(result['data']).name}`, {result['workers']} job(s) at a time, "
+             f"{result['threads']} OpenCV/ONNX thread(s) each.", *(f"- {line}" for line in goals + missing)]
+    return "\n".join([*rows, "", *notes]) + "\n"
+
+
+RENDERERS: dict[str, Callable[[dict[str, Any]], str]] = {"tracking": tracking}
+"""Block name -> how its JSON (``scripts/results/NAME.json``) is written into the README."""
+
+
+def render(text: str, results: Path = RESULTS) -> str:
+    """``text`` with every marked block rewritten from its JSON."""
+    def block(match: re.Match[str]) -> str:
+        name = match["name"]
+        if name not in RENDERERS:
+            raise SystemExit(f"README.md: no renderer for the block bench:{name}; known: {', '.join(RENDERERS)}")
+        data = json.loads((results / f"{name}.json").read_text())
+        return f"{match.group(1)}{RENDERERS[name](data)}{match.group(4)}"
+    return BLOCK.sub(block, text)
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--check", action="store_true", help="only say whether README.md is up to date (exit 1 if not)")
+    args = parser.parse_args()
+    text = README.read_text()
+    new = render(text)
+    if args.check:
+        if new != text:
+            print("README.md differs from scripts/results/*.json: run scripts/readme_figures.py", file=sys.stderr)
+            return 1
+        return 0
+    README.write_text(new)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

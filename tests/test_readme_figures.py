@@ -1,0 +1,40 @@
+"""The README's measured figures are what ``scripts/readme_figures.py`` writes from the committed benchmark JSON."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+from pathlib import Path
+from types import ModuleType
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _figures() -> ModuleType:
+    spec = importlib.util.spec_from_file_location("readme_figures", ROOT / "scripts" / "readme_figures.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_the_readme_figures_are_the_ones_the_committed_json_gives() -> None:
+    text = (ROOT / "README.md").read_text()
+    assert "<!-- bench:tracking -->" in text
+    assert _figures().render(text) == text, "README.md is stale: run .venv/bin/python scripts/readme_figures.py"
+
+
+def test_a_block_is_rewritten_from_its_json_and_nothing_else_moves(tmp_path: Path) -> None:
+    result = {"data": "/x/aerial-tracking", "sequences": 19, "workers": 1, "threads": 1, "missing": {},
+              "trackers": {"csrt mode=fast": {"success_auc": 0.50612, "precision_20": 0.7, "ms_mean": 6.31,
+                                              "lost_while_visible": 4, "lost_while_visible_share": 0.0013}},
+              "goals": {"csrt mode=fast": {"ms/frame over cv:csrt's": {"goal": "<= 0.5", "value": 0.41,
+                                                                      "pass": True}}}}
+    (tmp_path / "tracking.json").write_text(json.dumps(result))
+    text = "before\n<!-- bench:tracking -->\nfast csrt 0.528, 1 frame lost\n<!-- /bench:tracking -->\nafter\n"
+    written = _figures().render(text, tmp_path)
+    assert written.startswith("before\n<!-- bench:tracking -->\n| tracker |")
+    assert written.endswith("<!-- /bench:tracking -->\nafter\n") and "0.528" not in written
+    assert "| `csrt mode=fast` | 0.506 | 0.700 | 4 (0.1%) | 6.3 |" in written
+    assert "- csrt mode=fast: ms/frame over cv:csrt's 0.41 (<= 0.5: met)" in written
+    assert "19 sequences of `aerial-tracking`, 1 job(s) at a time" in written
