@@ -66,3 +66,24 @@ class FrameClock:
     def photo_processing(self, frame):
         seen = self.tmMgr.snapshot()
         self.tmMgr.save(frame, clock_seq=seen.frame_seq, clock_t_ns=seen.frame_t_ns, clock_wall_ns=seen.frame_t_wall_ns)
+
+
+class RedCar:
+    """Reports the box of the largest red blob: the sim: camera's car (a detector that cannot lose it)."""
+
+    def __init__(self):
+        self.tmMgr = None
+        self.box = None
+
+    def photo_processing(self, frame):
+        import cv2
+
+        b, g, r = frame[..., 0].astype(np.int16), frame[..., 1].astype(np.int16), frame[..., 2].astype(np.int16)
+        mask = ((r - np.maximum(b, g)) > 90).astype(np.uint8)
+        mask = cv2.morphologyEx(mask, cv2.MORPH_CLOSE, np.ones((5, 5), np.uint8))  # across the roof's white lines
+        count, _, stats, _ = cv2.connectedComponentsWithStats(mask)
+        if count < 2:
+            self.box = None
+            return
+        x, y, w, h, _ = stats[1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))]
+        self.box = (int(x), int(y), int(w), int(h))
