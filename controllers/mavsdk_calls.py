@@ -60,10 +60,11 @@ class AbandoningExecutor(ThreadPoolExecutor):
             key = threading.get_ident()
             with self._running_lock:
                 self._running[key] = name
+            error: BaseException | None = None
             try:
-                result, error = fn(*args, **kwargs), None
+                result = fn(*args, **kwargs)
             except BaseException as exc:  # noqa: BLE001 - handed to the awaiting side
-                result, error = None, exc
+                error = exc
             finally:
                 # Off the list before the caller wakes: it may ask what is still running at once.
                 with self._running_lock:

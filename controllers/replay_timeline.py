@@ -123,7 +123,10 @@ class ReplayTimeline:
             return
         loop = asyncio.get_running_loop()
         moved = asyncio.Event()
-        waker = lambda: loop.call_soon_threadsafe(moved.set)  # noqa: E731 - called from the camera thread
+
+        def waker() -> None:  # called from the camera thread
+            loop.call_soon_threadsafe(moved.set)
+
         with self._cond:
             self._wakers.append(waker)
         try:

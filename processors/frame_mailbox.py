@@ -119,16 +119,17 @@ class FrameMailbox:
     @classmethod
     def create(cls) -> FrameMailbox:
         shm = SharedMemory(create=True, size=SIZE)
-        shm.buf[:_TELEMETRY_AT] = bytes(_TELEMETRY_AT)
         lock = os.eventfd(1, os.EFD_SEMAPHORE | os.EFD_NONBLOCK | os.EFD_CLOEXEC)
         wake, claimed = (os.eventfd(0, os.EFD_NONBLOCK | os.EFD_CLOEXEC) for _ in range(2))
-        return cls(shm, lock, wake, claimed, owner=True)
+        mailbox = cls(shm, lock, wake, claimed, owner=True)
+        mailbox._buf[:_TELEMETRY_AT] = bytes(_TELEMETRY_AT)
+        return mailbox
 
     @classmethod
     def attach(cls, address: str) -> FrameMailbox:
         """The processor's side, from what :attr:`address` said (the descriptors are inherited)."""
-        name, *fds = address.split()
-        return cls(Segment(name), *map(int, fds), owner=False)
+        name, lock, wake, claimed = address.split()
+        return cls(Segment(name), int(lock), int(wake), int(claimed), owner=False)
 
     @property
     def address(self) -> str:
@@ -139,6 +140,13 @@ class FrameMailbox:
     def fds(self) -> tuple[int, int, int]:
         """The descriptors the processor's process inherits."""
         return self.lock_fd, self.wake_fd, self.claimed_fd
+
+    @property
+    def _buf(self) -> memoryview:
+        """The mapped bytes; raises MailboxGone once unmapped."""
+        if (buf := self._shm.buf) is None:
+            raise MailboxGone("the frame mailbox is closed")
+        return buf
 
     def fileno(self) -> int:
         """Readable when a frame was offered since :meth:`clear_wake` (for ``select``/``poll``)."""
@@ -158,12 +166,12 @@ class FrameMailbox:
                              f"slot name {len(name)} bytes (at most {_NAME_BYTES})")
         shape = (*offer.shape, 0)[:3]
         with self._lock:
-            claimed = _CLAIM.unpack_from(self._shm.buf)[0]
-            gen = _OFFER.unpack_from(self._shm.buf, _OFFER_AT)[0]
-            _OFFER.pack_into(self._shm.buf, _OFFER_AT, offer.gen, offer.seq, offer.t_mono_ns, offer.t_wall_ns,
+            claimed = _CLAIM.unpack_from(self._buf)[0]
+            gen = _OFFER.unpack_from(self._buf, _OFFER_AT)[0]
+            _OFFER.pack_into(self._buf, _OFFER_AT, offer.gen, offer.seq, offer.t_mono_ns, offer.t_wall_ns,
                              *shape, name, math.nan if offer.heartbeat_age_s is None else offer.heartbeat_age_s,
                              len(offer.telemetry))
-            self._shm.buf[_TELEMETRY_AT:_TELEMETRY_AT + len(offer.telemetry)] = offer.telemetry
+            self._buf[_TELEMETRY_AT:_TELEMETRY_AT + len(offer.telemetry)] = offer.telemetry
         os.eventfd_write(self.wake_fd, 1)
         return gen, gen != 0 and claimed == gen
 
@@ -177,7 +185,7 @@ class FrameMailbox:
         except MailboxGone:
             return None
         try:
-            return _CLAIM.unpack_from(self._shm.buf)
+            return _CLAIM.unpack_from(self._buf)
         finally:
             self._lock.release()
 
@@ -194,7 +202,7 @@ class FrameMailbox:
             # The usual case when decoding is the bottleneck, read without the lock (the mapping stays while a
             # waiter is counted): claims only grow and the gen is one aligned 8-byte word, so a read that races
             # a claim can only say "not yet", and the locked wait below asks again.
-            claimed = _CLAIM_GEN.unpack_from(self._shm.buf)[0] >= gen
+            claimed = _CLAIM_GEN.unpack_from(self._buf)[0] >= gen
             return claimed or self._await_claim(gen, time.monotonic() + timeout_s)
         finally:
             with self._waiters_left:
@@ -204,8 +212,8 @@ class FrameMailbox:
     def _await_claim(self, gen: int, deadline: float) -> bool:
         while True:
             with self._lock:
-                claimed = _CLAIM.unpack_from(self._shm.buf)[0]
-                _WATCH.pack_into(self._shm.buf, _WATCH_AT, 0 if claimed >= gen else gen)
+                claimed = _CLAIM.unpack_from(self._buf)[0]
+                _WATCH.pack_into(self._buf, _WATCH_AT, 0 if claimed >= gen else gen)
             remaining = deadline - time.monotonic()
             if claimed >= gen or remaining <= 0:
                 return claimed >= gen
@@ -222,15 +230,15 @@ class FrameMailbox:
     def claim(self) -> Offer | None:
         """Take the frame on offer, if there is one not taken yet."""
         with self._lock:
-            claimed = _CLAIM.unpack_from(self._shm.buf)[0]
-            gen, seq, t_mono, t_wall, h, w, c, name, age, tel_len = _OFFER.unpack_from(self._shm.buf, _OFFER_AT)
+            claimed = _CLAIM.unpack_from(self._buf)[0]
+            gen, seq, t_mono, t_wall, h, w, c, name, age, tel_len = _OFFER.unpack_from(self._buf, _OFFER_AT)
             if gen == 0 or claimed == gen:
                 return None
-            _CLAIM.pack_into(self._shm.buf, 0, gen, time.monotonic_ns())
-            watched = _WATCH.unpack_from(self._shm.buf, _WATCH_AT)[0]
+            _CLAIM.pack_into(self._buf, 0, gen, time.monotonic_ns())
+            watched = _WATCH.unpack_from(self._buf, _WATCH_AT)[0]
             if watched and gen >= watched:  # the watch is used up (a platform that finds a claim made without
-                _WATCH.pack_into(self._shm.buf, _WATCH_AT, 0)  # waiting for it never clears the watch itself)
-            telemetry = bytes(self._shm.buf[_TELEMETRY_AT:_TELEMETRY_AT + tel_len])
+                _WATCH.pack_into(self._buf, _WATCH_AT, 0)  # waiting for it never clears the watch itself)
+            telemetry = bytes(self._buf[_TELEMETRY_AT:_TELEMETRY_AT + tel_len])
         if watched and gen >= watched:
             os.eventfd_write(self.claimed_fd, 1)
         shape = (h, w, c) if c else (h, w)
@@ -253,7 +261,7 @@ class FrameMailbox:
                 os.eventfd_write(self.claimed_fd, 1)
                 self._waiters_left.wait_for(lambda: self._waiters == 0)
         self._shm.close()
-        if self._owner:
+        if self._owner and isinstance(self._shm, SharedMemory):  # the platform's side created the segment
             with contextlib.suppress(FileNotFoundError):
                 self._shm.unlink()
             for fd in self.fds:

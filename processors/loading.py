@@ -50,6 +50,7 @@ def load(spec: str, builtins: dict[str, str], kwargs: dict[str, Any] | None = No
             f"processor {spec!r} is not a known name ({known}) and not of the form module:Class or path/file.py:Class",
             class_name=class_name or None,
         )
+    path: str | None
     if location.endswith(".py") or "/" in location or location.startswith("~"):
         module, path = _import_file(Path(location).expanduser(), class_name, fresh)
     else:

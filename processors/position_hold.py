@@ -121,9 +121,10 @@ class SIFTPositionHold:
             spot = (work.shape[1] / 2.0, work.shape[0] / 2.0) if sx < 0 else (sx * scale, sy * scale)
             self._store_reference(work, spot, at_centre=sx < 0)
             self._pending_spot = None
-        elif self._ref_gray is not None and frame_time_s(self.tmMgr) - self._last_estimate >= self._cfg["interval_s"]:
+        elif (self._ref_gray is not None and self._ref_feat is not None
+              and frame_time_s(self.tmMgr) - self._last_estimate >= self._cfg["interval_s"]):
             self._last_estimate = frame_time_s(self.tmMgr)
-            self._estimate(self._work(frame, scale), frame)
+            self._estimate(self._work(frame, scale), frame, self._ref_gray, self._ref_feat)
         self._draw(frame, scale)
 
     def catch_cmd(self, roi: tuple[int, int, int, int]) -> None:
@@ -176,8 +177,9 @@ class SIFTPositionHold:
         self._last_estimate = -math.inf
         logger.info("SIFTPositionHold: reference stored, %d SIFT keypoints", len(self._ref_feat))
 
-    def _estimate(self, work: np.ndarray, frame: np.ndarray) -> None:
-        ref = self._ref_feat if self._cfg["reuse_reference"] else sift_match.detect(self._sift, self._ref_gray)
+    def _estimate(self, work: np.ndarray, frame: np.ndarray, ref_gray: np.ndarray, ref_feat: sift_match.Features
+                  ) -> None:
+        ref = ref_feat if self._cfg["reuse_reference"] else sift_match.detect(self._sift, ref_gray)
         found = sift_match.match_homography(ref, sift_match.detect(self._sift, work), self.ratio, self.min_inliers)
         det = np.linalg.det(found.homography[:2, :2]) if found is not None else 0.0
         if found is None or not 0.4 < det < 2.5:
@@ -210,7 +212,7 @@ class SIFTPositionHold:
     def _draw(self, frame: np.ndarray, scale: float) -> None:
         if self._ref_gray is None:
             return
-        if self._overlay is None:
+        if self._overlay is None or self.offset_m is None:
             cv2.putText(frame, "HOLD: no match", (8, 20), cv2.FONT_HERSHEY_SIMPLEX, 0.6, (0, 0, 255), 2)
             return
         hom, spot = self._overlay

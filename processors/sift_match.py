@@ -33,7 +33,7 @@ class Match:
 
 def make_sift(n_features: int = 0) -> cv2.SIFT:
     """A SIFT detector; ``n_features=0`` keeps every keypoint (the paper's setting)."""
-    return cv2.SIFT_create(nfeatures=max(int(n_features), 0))
+    return cv2.SIFT.create(nfeatures=max(int(n_features), 0))
 
 
 def detect(sift: cv2.SIFT, gray: np.ndarray, mask: np.ndarray | None = None) -> Features:

@@ -134,8 +134,8 @@ class YoloDetector:
             self._propagate(gray)
         self._prev_gray = gray
         size = (frame.shape[1], frame.shape[0])
-        following = self.followed is not None and self._missed == 0
-        self._vector = self.steering.vector(self.followed.box, size, self._ref_height) if following else None
+        following = self.followed if self._missed == 0 else None
+        self._vector = self.steering.vector(following.box, size, self._ref_height) if following is not None else None
         self._draw(frame)
         if keyframe and self.detections and self.tmMgr is not None:
             now = frame_time_s(self.tmMgr)  # the frame's capture time: a replay saves the same frames
@@ -189,24 +189,24 @@ class YoloDetector:
         """Match the followed object to this keyframe's detections (same class, best overlap)."""
         if self._pending_roi is not None:
             self._pick_from_roi()
-        elif self.followed is not None:
-            same = [d for d in self.detections if d.class_id == self.followed.class_id]
-            best = max(same, key=lambda d: _iou(d.box, self.followed.box), default=None)
-            if best is not None and _iou(best.box, self.followed.box) > 0.1:
+        elif (followed := self.followed) is not None:
+            same = [d for d in self.detections if d.class_id == followed.class_id]
+            best = max(same, key=lambda d: _iou(d.box, followed.box), default=None)
+            if best is not None and _iou(best.box, followed.box) > 0.1:
                 self.followed, self._missed = best, 0
             else:
                 self._missed += 1
                 if self._missed >= self.max_lost:
-                    logger.info("YoloDetector: lost %s", self.followed.label)
+                    logger.info("YoloDetector: lost %s", followed.label)
                     self.followed = None
         if self.followed is None and self.follow_class is not None:
             match = [d for d in self.detections if d.class_id == self.follow_class]
             if match:
                 self._start_following(match[0])
 
-    def _propagate(self, gray: np.ndarray) -> None:
+    def _propagate(self, gray: np.ndarray | None) -> None:
         """Between keyframes: move the detections (and the followed box) with optical flow."""
-        if self._prev_gray is None:
+        if gray is None or self._prev_gray is None:
             return
         boxes = [d.box for d in self.detections]
         if self.followed is not None:

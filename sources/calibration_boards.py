@@ -50,7 +50,7 @@ class Chessboard:
             return None
         return self._points, cv2.cornerSubPix(gray, corners, _SUBPIX_WINDOW, (-1, -1), _SUBPIX_CRITERIA)
 
-    def file_fields(self) -> dict[str, object]:
+    def file_fields(self) -> dict[str, int | float | str]:
         return {"board_type": "chessboard", "board_width": self.corners[0], "board_height": self.corners[1],
                 "square_size": self.square_m}
 
@@ -94,10 +94,11 @@ class CharucoBoard:
         corners, ids, _, _ = self._detector.detectBoard(gray)
         if corners is None or ids is None or len(ids) < MIN_CHARUCO_CORNERS:
             return None
-        objects, points = self._board.matchImagePoints(corners, ids)
+        # The ChArUco corners as one N x 1 x 2 array, as detectBoard returns them (the stub wants a sequence).
+        objects, points = self._board.matchImagePoints(corners, ids)  # type: ignore[call-overload]
         return objects.astype(np.float32), points.astype(np.float32)
 
-    def file_fields(self) -> dict[str, object]:
+    def file_fields(self) -> dict[str, int | float | str]:
         return {"board_type": "charuco", "board_width": self.squares[0], "board_height": self.squares[1],
                 "square_size": self.square_m, "marker_size": self.marker_m, "dictionary": self.dictionary}
 

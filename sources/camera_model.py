@@ -62,7 +62,7 @@ class Mount:
         if len(values) != 3 or not all(math.isfinite(v) and abs(v) <= 10 for v in values):
             raise ValueError(f"offset {offset!r} must be F,R,D in metres from the vehicle's centre, each within "
                              "10 m (e.g. 0.1,0,0.05)")
-        return cls(tilt, values)  # type: ignore[arg-type]
+        return cls(tilt, values)
 
     def describe(self) -> str:
         tilted = f"tilted {self.tilt_deg:g} deg below the nose"
@@ -230,5 +230,6 @@ class CameraModel:
     def _undistort(self, points: np.ndarray) -> np.ndarray:
         import cv2
 
-        return cv2.undistortPointsIter(points.reshape(-1, 1, 2), self._k, self._d, None, None,
+        # R and P may be None (identity: normalised coordinates out); the stub types them as required arrays.
+        return cv2.undistortPointsIter(points.reshape(-1, 1, 2), self._k, self.distortion_array, None, None,  # type: ignore[call-overload]
                                        _UNDISTORT_CRITERIA).reshape(-1, 2)

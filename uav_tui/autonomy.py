@@ -20,7 +20,7 @@ from typing import Any
 from controllers.base import FlightController
 from uav_tui.config import SafetyConfig
 from uav_tui.errors import KNOWN_ERRORS, UavError
-from uav_tui.events import EventLog, Repeats
+from uav_tui.events import EventLog, Level, Repeats
 from uav_tui.telemetry import TelemetryManager
 from uav_tui.text import describe
 from uav_tui.worker import ProcessedFrame
@@ -116,7 +116,7 @@ class AutonomyGate:
         if reason != "operator":
             self.stop_reason = reason
         if was_enabled or reason != "operator":
-            level = "info" if reason == "operator" else "warning"
+            level: Level = "info" if reason == "operator" else "warning"
             self.events.emit(level, "autonomy", f"autonomy OFF: {reason}", origin)
         if hold and self.controller is not None and self.controller.vector_active:
             try:

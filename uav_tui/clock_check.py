@@ -40,7 +40,7 @@ class ClockCheck:
 
 def duration(seconds: int) -> str:
     """``3 d 4 h``, ``2 h 5 min``, ``12 min 30 s``, ``45 s``: the two largest units."""
-    parts = []
+    parts: list[str] = []
     for unit, size in (("d", 86400), ("h", 3600), ("min", 60), ("s", 1)):
         if seconds >= size or (unit == "s" and not parts):
             parts.append(f"{seconds // size} {unit}")

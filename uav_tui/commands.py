@@ -181,7 +181,9 @@ def check_limits(command: Command, safety: SafetyConfig) -> None:
     """
     spec = COMMANDS[command.word]
     for name, key, value in zip(spec.arg_names, spec.limits, command.args, strict=False):
-        limit = getattr(safety, key) if key else None
+        if not key:
+            continue
+        limit = getattr(safety, key)
         if limit is not None and abs(value) > limit:
             raise CommandError(f"{command}: {name} = {value:g} is beyond the limit {key} = {limit:g}; raise "
                                f"{key} in the [safety] section of uav.toml (or --{key.replace('_', '-')}) to "

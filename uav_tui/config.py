@@ -323,19 +323,23 @@ def overrides_from_args(args: argparse.Namespace) -> dict[str, Any]:
             if f.name == "processor_args":
                 result[f.name] = parse_processor_args(value)
             else:
-                result[f.name] = _convert_flag(f.type, value, f.name)
+                result[f.name] = _convert_flag(str(f.type), value, f.name)  # annotations are strings here
     return result
 
 
 def with_overrides(config: Config, **changes: Any) -> Config:
     """A copy of ``config`` with flat keys changed (validated like the CLI)."""
-    sections = {name: {} for name in SECTIONS}
-    top = {}
+    sections: dict[str, dict[str, Any]] = {name: {} for name in SECTIONS}
+    top: dict[str, Any] = {}
     for key, value in changes.items():
         section = section_of(key)
         cls = Config if section is None else SECTIONS[section]
         (top if section is None else sections[section])[key] = _check(cls, key, value, key, "override")
     return replace(config, **top, **{n: replace(getattr(config, n), **v) for n, v in sections.items() if v})
+
+
+_PLAIN_TYPES: dict[str, type[Any] | tuple[type[Any], ...]] = {"bool": bool, "int": int, "float": (int, float),
+                                                              "str": str}
 
 
 def _check(cls: type, key: str, value: Any, name: str, where: str) -> Any:
@@ -348,10 +352,11 @@ def _check(cls: type, key: str, value: Any, name: str, where: str) -> Any:
         elsewhere = f" ({_place_of(close[0])})" if close and close[0] not in known else ""
         hint = f"; did you mean {close[0]!r}{elsewhere}?" if close else f"; known keys: {', '.join(known)}"
         raise ConfigError(f"{where}: unknown key {name!r}{hint}", key=name)
-    expected = {"bool": bool, "int": int, "float": (int, float), "str": str}.get(f.type, dict)
-    if isinstance(value, bool) and f.type != "bool" or not isinstance(value, expected):
-        raise ConfigError(f"{where}: {name} must be {f.type.split('[')[0]}, got {describe(value)}", key=name)
-    if f.type == "float":
+    kind = str(f.type)  # the annotation as written (``from __future__ import annotations``)
+    expected = _PLAIN_TYPES.get(kind, dict)
+    if isinstance(value, bool) and kind != "bool" or not isinstance(value, expected):
+        raise ConfigError(f"{where}: {name} must be {kind.split('[')[0]}, got {describe(value)}", key=name)
+    if kind == "float":
         value = float(value)
         if not math.isfinite(value):
             raise ConfigError(f"{where}: {name} must be a finite number, got {describe(value)}", key=name)
@@ -363,7 +368,7 @@ def _check(cls: type, key: str, value: Any, name: str, where: str) -> Any:
             parse(value)
         except ValueError as exc:
             raise ConfigError(f"{where}: {name}: {exc}", key=name) from None
-    if f.type == "str" and key in ("source", "processor", "fc") and not value.strip():
+    if kind == "str" and key in ("source", "processor", "fc") and not value.strip():
         raise ConfigError(f"{where}: {name} must not be empty", key=name)
     if key == "web_token" and value and (problem := token_problem(value)):
         raise ConfigError(f"{where}: {name} {problem}", key=name)

@@ -18,6 +18,7 @@ import psutil
 
 from controllers import connect_controller
 from controllers.base import FlightController
+from controllers.replay import ReplayController
 from controllers.replay_timeline import ReplayTimeline
 from sources import CameraSource, open_source, warm_up_source
 from sources.camera_model import CameraModel
@@ -141,15 +142,15 @@ class UavCore:
             self.controller = await connect_controller(self.config.fc, heartbeat_timeout=self.config.connect_timeout,
                                                        sim_vehicle=self.config.sim.vehicle())
             self.telemetry = TelemetryManager(self.controller)
-            self.replay = getattr(self.controller, "timeline", None)
-            if self.controller is not None and self.replay is None:  # a replay's clock was the recording's
-                self.telemetry.add_listener(ClockCheck(self.events))
-            if self.replay is not None:
+            if self.controller is not None and not isinstance(self.controller, ReplayController):
+                self.telemetry.add_listener(ClockCheck(self.events))  # a replay's clock was the recording's
+            if isinstance(self.controller, ReplayController):
+                replay = self.replay = self.controller.timeline
                 self.gate = ReplayGate(self.config.safety, self.telemetry, self.events, self.controller)
                 self.worker.stage_clock = on_replay_clock
-                self.add_frame_listener(lambda result: self.replay.frame_done())
-                commands = recorded_commands(self.controller.run_dir)  # type: ignore[attr-defined]
-                self.replay.before_show = CommandReplay(self, loop, commands).before_show
+                self.add_frame_listener(lambda result: replay.frame_done())
+                commands = recorded_commands(self.controller.run_dir)
+                replay.before_show = CommandReplay(self, loop, commands).before_show
             self.gate.telemetry, self.gate.controller = self.telemetry, self.controller
             await self._check_autopilot_failsafe()
             self.worker.bind_telemetry(self.telemetry)
@@ -174,8 +175,9 @@ class UavCore:
             self.link = LinkWatch(self.controller, self.events, self.config.safety.link_timeout)
             self._spawn(self.link.run(), "link")
         self._spawn(self.gate.run(), "autonomy")
-        self._spawn(self.gate.watch(self._newest_frame_age, lambda: self.worker.busy_s,
-                                    lambda: self.worker.consecutive_errors), "watchdog")
+        worker = self.worker
+        self._spawn(self.gate.watch(self._newest_frame_age, lambda: worker.busy_s,
+                                    lambda: worker.consecutive_errors), "watchdog")
         self.state = CoreState.RUNNING
         self.events.emit("info", "platform", f"started: source {self.config.source}, processor "
                          f"{self.worker.processor.info.name} ({self.config.isolation}), fc {self.config.fc}")
@@ -276,7 +278,7 @@ class UavCore:
         try:
             await asyncio.wait_for(controller.hold(), 5)
             self.events.emit("info", "platform", "vehicle put in hold before exit")
-        except (*KNOWN_ERRORS, TimeoutError) as exc:
+        except KNOWN_ERRORS + (TimeoutError,) as exc:
             self.events.emit("error", "platform", f"hold before exit failed: {exc!r}")
 
     async def _release(self) -> None:
@@ -334,8 +336,8 @@ class UavCore:
         self._tasks.append(task)
 
     def _task_done(self, task: asyncio.Task[Any]) -> None:
-        if not task.cancelled() and task.exception() is not None:
-            self.fail(f"the {task.get_name()} task", task.exception())
+        if not task.cancelled() and (exc := task.exception()) is not None:
+            self.fail(f"the {task.get_name()} task", exc)
 
     def fail(self, where: str, exc: BaseException) -> None:
         """An unhandled error (a bug): log it and end the run; the interface holds the vehicle (safety rule 6)."""

@@ -88,7 +88,7 @@ def load(run_dir: str | Path) -> Dataset:
         int(df["t_mono_ns"].min()) for df in (telemetry, frames, events) if df["t_mono_ns"].notna().any()]
     start_mono = min(starts) if starts else 0
     info = {**info, "extra_columns": extra_columns}
-    return Dataset(path, info, *(_index(df, start_mono) for df in (telemetry, frames, events)),
+    return Dataset(path, info, _index(telemetry, start_mono), _index(frames, start_mono), _index(events, start_mono),
                    problems=tuple(str(problem) for problem in problems))
 
 

@@ -161,8 +161,11 @@ class HeadlessRunner:
         if self.core.config.isolation != "thread":
             return output
         return BudgetedText(output, lambda line: output.write(shorten(safe(line), PRINTED_CHARS) + "\n"),
-                            lambda count: self.core.events.emit("warning", "processor", f"{count} more lines of the "
-                                                                "processor's output left out (too many at once)"))
+                            self._left_out)
+
+    def _left_out(self, count: int) -> None:
+        self.core.events.emit("warning", "processor",
+                              f"{count} more lines of the processor's output left out (too many at once)")
 
     async def _run(self) -> int:
         loop = asyncio.get_running_loop()
@@ -199,8 +202,8 @@ class HeadlessRunner:
         if self.core.recorder is not None and self.core.recorder.incomplete and not self.exit_code:
             self.exit_code = EXIT_RECORDING_INCOMPLETE
         self._say(json.dumps({"stopped": self._reason}) if self.json_lines else f"stopped: {self._reason}")
-        if note := saved_run_note(self.core):
-            self._say(json.dumps({"run_dir": str(self.core.recorder.run_dir)}) if self.json_lines else note)
+        if (recorder := self.core.recorder) is not None:
+            self._say(json.dumps({"run_dir": str(recorder.run_dir)}) if self.json_lines else saved_run_note(self.core))
         return EXIT_ABANDONED if self.core.abandoned_calls else self.exit_code
 
     async def _start(self) -> bool:
@@ -242,8 +245,8 @@ class HeadlessRunner:
     def _watched(self, coro: Coroutine[Any, Any, None], name: str) -> asyncio.Task[None]:
         """A task of this runner whose unexpected exception ends the run like any unhandled error."""
         def done(task: asyncio.Task[None]) -> None:
-            if not task.cancelled() and task.exception() is not None:
-                self.core.fail(f"the {name} task", task.exception())
+            if not task.cancelled() and (exc := task.exception()) is not None:
+                self.core.fail(f"the {name} task", exc)
 
         task = asyncio.create_task(coro, name=name)
         task.add_done_callback(done)

@@ -29,7 +29,7 @@ class LineBudget(Generic[T]):
     come from any thread, and the callbacks are called on the thread that gave the line (the timer's on the loop).
     """
 
-    def __init__(self, say_line: Callable[[T], None], say_left_out: Callable[[int], None], *,
+    def __init__(self, say_line: Callable[[T], object], say_left_out: Callable[[int], None], *,
                  burst: int = BURST_LINES, per_s: float = LINES_PER_S) -> None:
         self._say_line = say_line
         self._say_left_out = say_left_out
@@ -125,7 +125,7 @@ class BudgetedText:
     Other file attributes (``encoding``, ``isatty``) are those of ``file``.
     """
 
-    def __init__(self, file: Any, say_line: Callable[[str], None], say_left_out: Callable[[int], None], *,
+    def __init__(self, file: Any, say_line: Callable[[str], object], say_left_out: Callable[[int], None], *,
                  max_line: int = 64 * 1024) -> None:
         self._file = file
         self._budget: LineBudget[str] = LineBudget(say_line, say_left_out)

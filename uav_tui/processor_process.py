@@ -176,7 +176,7 @@ class Inbox:
         self._sock = socket.socket(fileno=os.dup(conn.fileno()))
         self._chunk = bytearray(self.CHUNK)
         self._pending = bytearray()
-        self._long: memoryview | None = None
+        self._long: bytearray | None = None
         """The long message being read, and how much of it has arrived (``_long_at``)."""
         self._long_at = 0
         self._message: tuple[memoryview, list[bytearray], int] | None = None
@@ -191,7 +191,7 @@ class Inbox:
         frames = self._frames()
         if frames is None:
             return None
-        messages = []
+        messages: list[tuple[memoryview, list[bytearray]]] = []
         for frame in frames:
             if self._message is None:
                 (count,), data = BUFFER_COUNT.unpack_from(frame), memoryview(frame)[BUFFER_COUNT.size:]
@@ -210,13 +210,13 @@ class Inbox:
     def _frames(self) -> list[bytearray] | None:
         """The frames completed by what has arrived; None at the end of the pipe."""
         if self._long is not None:
-            size = self._receive(self._long[self._long_at:])
+            size = self._receive(memoryview(self._long)[self._long_at:])
             if size is None:
                 return None
             self._long_at += size
             if self._long_at < len(self._long):
                 return []
-            frame, self._long = self._long.obj, None
+            frame, self._long = self._long, None
             return [frame]
         size = self._receive(memoryview(self._chunk))
         if size is None:
@@ -246,7 +246,7 @@ class Inbox:
             if start + length > len(pending):
                 if length > self.CHUNK:  # the rest goes straight into its own buffer
                     have = len(pending) - start
-                    self._long = memoryview(bytearray(length))
+                    self._long = bytearray(length)
                     self._long[:have] = pending[start:]
                     self._long_at, at = have, len(pending)
                 break

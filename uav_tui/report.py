@@ -228,7 +228,8 @@ def commanded_vectors(run: Dataset) -> pd.DataFrame:
     run's safety limits: start_s, end_s, forward, right; a vector ends after its duration or when the next one
     replaces it."""
     frames = run.frames[run.frames["decision"].fillna("").str.startswith("executed")]
-    proposed = [(t, (vx, vy, vt)) for t, vx, vy, vt in frames[["t_s", "vx", "vy", "vt"]].itertuples(index=False)]
+    proposed: list[tuple[float, tuple[float, ...]]] = [
+        (t, (vx, vy, vt)) for t, vx, vy, vt in frames[["t_s", "vx", "vy", "vt"]].itertuples(index=False)]
     operator = run.events[(run.events["kind"] == "command").fillna(False)
                           & run.events["message"].str.match(r"vector \S+ \S+ \S+$", na=False)]
     for t, message in operator[["t_s", "message"]].itertuples(index=False):

@@ -55,14 +55,17 @@ class TerminalOutput:
         self._thread = threading.Thread(target=self._run, name=name, daemon=True)
         self._thread.start()
 
-    def write(self, text: str) -> None:
+    def write(self, text: str) -> int:
+        """Queue ``text`` for the writer thread (or drop it, counted, when the backlog is full); ``len(text)``
+        as a text file returns, written or not."""
         with self._ready:
             if len(text) > self._kept_write_chars and self._backlog and self._backlog + len(text) > self._max_backlog:
                 self._dropped += 1
-                return
+                return len(text)
             self._pending.append(text)
             self._backlog += len(text)
             self._ready.notify()
+        return len(text)
 
     def flush(self) -> None:
         """Nothing to do: the writer thread flushes after each batch."""

@@ -241,8 +241,7 @@ class ProcessorWorker:
         last_seq, last_buffer = 0, None
         while True:
             with self._wake:
-                seen = (last_seq, last_buffer)
-                self._wake.wait_for(lambda seen=seen: self._stopping or self._jobs or self._has_newer(*seen))
+                self._wake.wait_for(functools.partial(self._ready, last_seq, last_buffer))
                 if self._stopping:
                     return
                 job = self._jobs.popleft() if self._jobs else None
@@ -261,6 +260,10 @@ class ProcessorWorker:
             loop = self._loop
             if loop is not None and not loop.is_closed():
                 loop.call_soon_threadsafe(self._deliver, result)
+
+    def _ready(self, seq: int, buffer: FrameBuffer | None) -> bool:
+        """Something for the processor thread: a stop, a job, or a frame newer than ``seq`` of ``buffer``."""
+        return self._stopping or bool(self._jobs) or self._has_newer(seq, buffer)
 
     def _has_newer(self, seq: int, buffer: FrameBuffer | None) -> bool:
         if self._buffer is None:

@@ -192,9 +192,9 @@ class SimVehicle:
                     self.truth_port,
                 )
                 return self
-        log = self.log_text()
+        output = self.log_text()
         self.stop()
-        raise ControllerError(f"simulated vehicle did not start within {timeout} s; its output:\n{log[-2000:]}")
+        raise ControllerError(f"simulated vehicle did not start within {timeout} s; its output:\n{output[-2000:]}")
 
     def log_text(self) -> str:
         """What the simulator printed so far (stdout and stderr)."""

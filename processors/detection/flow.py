@@ -29,7 +29,8 @@ def shift_boxes(prev_gray: np.ndarray, gray: np.ndarray, boxes: list[Box]) -> li
     if not pts:
         return out
     p0 = np.vstack(pts).astype(np.float32).reshape(-1, 1, 2)
-    p1, status, _ = cv2.calcOpticalFlowPyrLK(prev_gray, gray, p0, None, winSize=(15, 15), maxLevel=2)
+    # nextPts None: OpenCV allocates it (the stub types it as a required array)
+    p1, status, _ = cv2.calcOpticalFlowPyrLK(prev_gray, gray, p0, None, winSize=(15, 15), maxLevel=2)  # type: ignore[call-overload]
     motion = (p1 - p0).reshape(-1, 2)
     ok = status.reshape(-1) == 1
     owner_arr = np.array(owner)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import logging
 import os
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -34,7 +35,7 @@ class UltralyticsBackend:
     def detect(self, frame: np.ndarray) -> list[Detection]:
         """Run ``predict`` on the BGR frame and convert its boxes."""
         cfg = self.config
-        kwargs = {"conf": cfg.conf, "iou": cfg.nms, "verbose": False}
+        kwargs: dict[str, Any] = {"conf": cfg.conf, "iou": cfg.nms, "verbose": False}
         if cfg.input_size:
             kwargs["imgsz"] = cfg.input_size
         if cfg.classes is not None:

@@ -8,58 +8,26 @@ import numpy as np
 import pytest
 
 from controllers.base import Telemetry
-from controllers.sim.geo import Home
 from sources.camera_model import CameraModel, Mount
-from sources.ground import default_ground
-from sources.sim_camera import SimCameraSource
-from sources.sim_geometry import PinholeCamera, Pose
-from sources.sim_render import GroundTarget, SimRenderer
 from uav_tui import geolocate
 from uav_tui.recording.rows import FRAME_COLUMNS, FRAME_OWN_COLUMNS, FrameAligner, FrameRecord, TelemetrySample
 
-HOME = Home()
+from .geo_helpers import HOME, car_views
+
 GOAL_P95_M = {20.0: 1.0, 50.0: 2.0}
 """Issue 39's goals for the simulator's perfect attitude."""
 
 
-def car_box(renderer: SimRenderer, pose: Pose, index: int) -> tuple[int, int, int, int] | None:
-    """The rendered car's bounding box: the pixels that differ from the same frame drawn without it."""
-    with_car = renderer.render(pose, 0.0, index)
-    cars, renderer.targets = renderer.targets, []
-    without = renderer.render(pose, 0.0, index)
-    renderer.targets = cars
-    ys, xs = np.nonzero(np.any(with_car != without, axis=2))
-    if len(xs) == 0 or xs.min() == 0 or ys.min() == 0 or xs.max() == with_car.shape[1] - 1 \
-            or ys.max() == with_car.shape[0] - 1:
-        return None  # not wholly in view
-    return int(xs.min()), int(ys.min()), int(xs.max() - xs.min() + 1), int(ys.max() - ys.min() + 1)
-
-
-def fly_over_car(height: float, *, tilt: float, attitude_deg: float, count: int, seed: int):
+def fly_over_car(height: float, *, tilt: float, attitude_deg: float, count: int, seed: int) -> np.ndarray:
     """(error m, stated uncertainty m) of ``count`` views of a parked car from random poses at ``height``."""
-    camera = PinholeCamera(640, 480, 62.0, tilt)
-    model = SimCameraSource(camera=camera).camera_model()
-    rng = np.random.default_rng(seed)
-    renderer = SimRenderer(camera, default_ground(0), noise_sigma=2.0)
     results = []
-    while len(results) < count:
-        roll, pitch = rng.uniform(-attitude_deg, attitude_deg, 2)
-        pose = Pose(rng.uniform(-50, 50), rng.uniform(-50, 50), -height, roll, pitch, rng.uniform(-180, 180))
-        reach = height * (0.6 if tilt == 90 else 1.2)
-        car = GroundTarget(pose.n + rng.uniform(-reach, reach), pose.e + rng.uniform(-reach, reach), 0.0, 0.0,
-                           phase=rng.uniform(0, 2 * math.pi))
-        renderer.targets = [car]
-        box = car_box(renderer, pose, len(results))
-        if box is None:
-            continue
-        lat, lon, alt = HOME.to_global(pose.n, pose.e, pose.d)
-        fix = geolocate.locate(model, box, roll_deg=pose.roll, pitch_deg=pose.pitch, yaw_deg=pose.yaw, lat_deg=lat,
-                               lon_deg=lon, height_m=height, abs_alt_m=alt)
-        assert fix.status == geolocate.OK, (pose, box)
+    for view in car_views(height, tilt=tilt, attitude_deg=attitude_deg, count=count, seed=seed):
+        fix = view.locate()
+        assert fix.status == geolocate.OK, view
         n, e, d = HOME.to_local(fix.lat_deg, fix.lon_deg, fix.alt_m)
         assert d == pytest.approx(0.0, abs=1e-6)  # the ground's altitude: home's
-        assert fix.distance_m == pytest.approx(math.hypot(n - pose.n, e - pose.e), abs=1e-3)
-        results.append((math.hypot(n - car.centre_n, e - car.centre_e), fix.uncertainty_m))
+        assert fix.distance_m == pytest.approx(math.hypot(n - view.pose.n, e - view.pose.e), abs=1e-3)
+        results.append((view.error_m(fix), fix.uncertainty_m))
     return np.array(results)
 
 

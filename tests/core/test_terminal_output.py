@@ -42,7 +42,7 @@ def test_writes_never_wait_for_a_stalled_terminal_and_the_screen_is_repainted_on
     update = "x" * 50_000  # a screen update
     started = time.monotonic()
     for i in range(40):  # 2 MB, far more than the pipe and the backlog hold
-        output.write(update)
+        assert output.write(update) == len(update)  # as a text file's write does, kept or dropped
         output.write(f"\x1b[?{i}h")  # a terminal mode: short, never dropped
     output.write("END")
     assert time.monotonic() - started < 1.0  # nothing waited for the reader (a blocked write waits forever)

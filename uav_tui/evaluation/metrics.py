@@ -116,7 +116,8 @@ def summarise(per_sequence: list[Scores], times_ms: np.ndarray) -> Scores:
         success_auc=float(np.mean(curves["success_curve"])),
         precision_20=float(curves["precision_curve"][PRECISION_AT_PX]),
         norm_precision=float(np.mean(curves["norm_precision_curve"])), **_timing(times_ms),
-        **{name: curve.tolist() for name, curve in curves.items()},
+        success_curve=curves["success_curve"].tolist(), precision_curve=curves["precision_curve"].tolist(),
+        norm_precision_curve=curves["norm_precision_curve"].tolist(),
         absent_frames=sum(s.absent_frames for s in per_sequence), absent_lost=sum(s.absent_lost for s in per_sequence),
         absent_lost_share=float(np.mean(shares)) if shares else None,
     )

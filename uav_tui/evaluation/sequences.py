@@ -135,8 +135,8 @@ def load_sequence(folder: Path) -> Sequence:
     if not images:
         raise SequenceError(f"{folder}: no {VIDEO_NAME} and no images in {image_dir}")
     candidates = [folder / OTB_GT, folder.parent / f"{folder.name}.txt"]
-    gt_path = next((p for p in candidates if p.is_file()), None)
-    if gt_path is None:
+    gt_path = next((p for p in candidates if p.is_file()), candidates[0])
+    if not gt_path.is_file():
         raise SequenceError(f"{candidates[0]} is missing (nor is there {candidates[1]}): a sequence needs one gt "
                             "row per image")
     gt = read_ground_truth(gt_path)

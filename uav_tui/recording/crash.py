@@ -38,7 +38,7 @@ class CrashRecord:
         faulthandler.disable()
         self._file.close()
         self.path.unlink(missing_ok=True)
-        if self._was_enabled:
+        if self._was_enabled and sys.__stderr__ is not None:
             with contextlib.suppress(AttributeError, OSError, ValueError, RuntimeError):  # no stderr to point at
                 faulthandler.enable(sys.__stderr__, all_threads=True)
 
@@ -54,7 +54,7 @@ def crash_summary(run_dir: Path) -> str | None:
     if not lines:
         return None
     current = next((i for i, line in enumerate(lines) if line.startswith("Current thread")), len(lines))
-    frames = list(itertools.takewhile(bool, map(_FRAME.match, lines[current + 1:])))
+    frames = [m for m in itertools.takewhile(bool, map(_FRAME.match, lines[current + 1:])) if m]
     where = [f"{m['function']} ({m['file']}:{m['line']})" for m in frames[:2]]
     text = lines[0].strip()
     if where:

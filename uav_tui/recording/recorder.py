@@ -29,7 +29,7 @@ import numpy as np
 from controllers.base import Telemetry
 from uav_tui.config import RecordingConfig
 from uav_tui.errors import UavError
-from uav_tui.events import Event
+from uav_tui.events import Event, Level
 from uav_tui.recording.crash import CrashRecord
 from uav_tui.recording.rows import (
     TABLES,
@@ -101,7 +101,7 @@ class Recorder:
         """``tmMgr.save`` calls made outside ``photo_processing`` (ignored)."""
         self.crash: CrashRecord | None = None
         """Where a crash of this process writes its stacks while the run is open (set by :meth:`open`)."""
-        self._emit: Callable[[str, str], None] = lambda level, message: None
+        self._emit: Callable[[Level, str], object] = lambda level, message: None
         self._current: Callable[[], ProcessedFrame | None] = lambda: None
         self._camera: Callable[[], CameraModel | None] = lambda: None
         self._ids = itertools.count(1)
@@ -149,7 +149,7 @@ class Recorder:
 
     def attach(self, core: UavCore) -> None:
         """Become the core's ``tmMgr`` saver and listen to its frames, telemetry and events."""
-        self._emit = lambda level, message: core.events.emit(level, "recorder", message)  # type: ignore[arg-type]
+        self._emit = lambda level, message: core.events.emit(level, "recorder", message)
         # The worker's ``current`` is the frame whose saves are being made, None between frames.
         self._current = lambda: core.worker.current if core.worker is not None else None
         self._camera = lambda: core.camera  # the model of the source the frames come from (it follows a switch)

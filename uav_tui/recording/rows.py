@@ -161,7 +161,7 @@ class FrameAligner:
             computer's clock, so rows are released as they were in the recorded run, at any speed.
     """
 
-    accepts = (TelemetrySample, FrameRecord, MarkSaved)
+    accepts: tuple[type, ...] = (TelemetrySample, FrameRecord, MarkSaved)
 
     def __init__(self, hold_ns: int = 500_000_000, min_hold_ns: int = 200_000_000,
                  telemetry_expected: bool = True, run_dir: Path | None = None, recorded_clock: bool = False) -> None:

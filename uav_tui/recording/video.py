@@ -105,7 +105,7 @@ class VideoStage:
         encoder: an :data:`ENCODERS` entry (default: :func:`choose_encoder`).
     """
 
-    accepts = (VideoFrame, VideoDrop, FrameLink)
+    accepts: tuple[type, ...] = (VideoFrame, VideoDrop, FrameLink)
 
     def __init__(self, writer: DiskWriter, encoder: tuple[str, str, dict[str, str]] | None = None) -> None:
         self.path = writer.run_dir / VIDEO_FILE
@@ -219,5 +219,6 @@ def _video_frame(image: np.ndarray, pix_fmt: str) -> Any:
 
     height, width = image.shape[:2]
     if pix_fmt == "yuv420p" and width % 2 == 0 and height % 2 == 0:
-        return av.VideoFrame.from_ndarray(cv2.cvtColor(image, cv2.COLOR_BGR2YUV_I420), format="yuv420p")
+        i420: np.ndarray = cv2.cvtColor(image, cv2.COLOR_BGR2YUV_I420)  # uint8, as the input
+        return av.VideoFrame.from_ndarray(i420, format="yuv420p")
     return av.VideoFrame.from_ndarray(image, format="bgr24")

@@ -26,7 +26,7 @@ import queue
 import shutil
 import threading
 import time
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Protocol
@@ -118,7 +118,7 @@ class DiskWriter:
         flush_s: how often collected rows are appended to the files.
     """
 
-    def __init__(self, run_dir: Path, tables: dict[str, Sequence[str]], *, stages: Sequence[Stage] = (),
+    def __init__(self, run_dir: Path, tables: Mapping[str, Sequence[str]], *, stages: Sequence[Stage] = (),
                  jpeg_quality: int = 90, max_disk_bytes: int = 0, min_free_bytes: int = 0,
                  on_problem: Callable[[str, str], None] | None = None, max_items: int = 4096,
                  max_image_bytes: int = 48 * MB, flush_s: float = 0.5) -> None:

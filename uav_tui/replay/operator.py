@@ -91,7 +91,7 @@ class CommandReplay:
             future = asyncio.run_coroutine_threadsafe(self._execute(command), self.loop)
             try:
                 future.result(COMMAND_TIMEOUT_S)
-            except (*KNOWN_ERRORS, TimeoutError) as exc:  # the core's event log has said why
+            except KNOWN_ERRORS + (TimeoutError,) as exc:  # the core's event log has said why
                 logger.info("replayed command %s failed: %s", command, exc)
 
     async def _execute(self, command: Command) -> None:

@@ -44,4 +44,5 @@ class AlgorithmPanel(StatusPanel):
             if room is not None and len(proc) > room:  # the name yields: it never changes
                 proc.truncate(room, overflow="ellipsis")
             proc.append_text(summary)
-        return self.rows(*zip(labels, (proc, box, vector, auto, errors), strict=True))
+        values: tuple[Text | str, ...] = (proc, box, vector, auto, errors)
+        return self.rows(*zip(labels, values, strict=True))

@@ -117,7 +117,7 @@ def render_cells(image: np.ndarray, box: Letterbox, selection: Box | None = None
     Returns:
         One strip per cell row. Letterbox bars are blank cells in the panel's own background.
     """
-    small = cv2.resize(image, (box.width, box.height * 2), interpolation=cv2.INTER_AREA)
+    small: np.ndarray = cv2.resize(image, (box.width, box.height * 2), interpolation=cv2.INTER_AREA)
     if small.ndim == 2:
         small = cv2.cvtColor(small, cv2.COLOR_GRAY2BGR)
     small = (small & QUANT_MASK) | (~QUANT_MASK & 0xFF) // 2  # 5 bits per channel, centred in its step

@@ -37,7 +37,7 @@ class PipelinePanel(StatusPanel):
         age = Text(f"{p.frame_age_ms:.0f} ms")
         if p.busy_ms > 1000:
             age.append(f" busy {p.busy_ms / 1000:.1f} s", self.get_component_rich_style("panel--warn"))
-        rows = [
+        rows: list[tuple[str, Text | str]] = [
             ("fps", f"cam {p.capture_fps:4.1f}  proc {p.processed_fps:4.1f}"),
             ("age", age),
             ("time", f"p50 {p.processing_ms_p50:.1f}  p95 {p.processing_ms_p95:.1f} ms"),

@@ -22,7 +22,7 @@ from typing import Any
 from uav_tui.commands import Command
 from uav_tui.config import Config
 from uav_tui.core import CoreState, UavCore
-from uav_tui.events import EventLog
+from uav_tui.events import EventLog, Level
 from uav_tui.headless import (
     EXIT_ABANDONED,
     EXIT_RECORDING_INCOMPLETE,
@@ -178,7 +178,7 @@ class _EventLogHandler(logging.Handler):
             return  # EventLog logs what it emits: never loop
         self._inside.active = True
         try:
-            level = "error" if record.levelno >= logging.ERROR else "warning"
+            level: Level = "error" if record.levelno >= logging.ERROR else "warning"
             self.events.emit(level, "platform", f"{record.name}: {record.getMessage()}", origin=LOG_ORIGIN)
         finally:
             self._inside.active = False

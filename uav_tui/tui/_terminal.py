@@ -97,6 +97,8 @@ def driver_for(watch: TerminalWatch) -> type[LinuxDriver]:
     class HangupSafeDriver(LinuxDriver):
         def __init__(self, *args: Any, **kwargs: Any) -> None:
             super().__init__(*args, **kwargs)
+            if self._file is None:
+                raise RuntimeError("no terminal to draw on: stderr is closed (run uav-tui in a terminal)")
             self._output = TerminalOutput(self._file, self._repaint, self._lost, kept_write_chars=KEPT_WRITE_CHARS,
                                           name="screen-output")
 

@@ -7,6 +7,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import ClassVar
 
+import numpy as np
 from textual.app import App, ComposeResult
 from textual.binding import Binding, BindingType
 from textual.containers import Horizontal, Vertical
@@ -206,7 +207,7 @@ class UavApp(App[None]):
         if event.level != "info" and event.origin not in (LOG_ORIGIN, NATIVE_ORIGIN):
             self.notify(event.message, title=event.kind, severity=event.level, timeout=6, markup=False)
 
-    def _newest_frame(self) -> tuple[int, object, tuple[int, int, int, int] | None] | None:
+    def _newest_frame(self) -> tuple[int, np.ndarray, tuple[int, int, int, int] | None] | None:
         last = self.core.worker.last if self.core.worker is not None else None
         return None if last is None else (last.frame.t_mono_ns, last.frame.image, last.box)
 

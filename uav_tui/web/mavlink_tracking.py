@@ -120,10 +120,11 @@ class CameraTracking:
 
     async def start(self) -> None:
         loop = asyncio.get_running_loop()
-        where = {"local_addr": (self.host, self.port)} if self.scheme == "udpin" else {
-            "remote_addr": (self.host, self.port)}
+        address = (self.host, self.port)
+        local, remote = (address, None) if self.scheme == "udpin" else (None, address)
         try:
-            self.transport, _ = await loop.create_datagram_endpoint(lambda: _Datagrams(self), **where)
+            self.transport, _ = await loop.create_datagram_endpoint(lambda: _Datagrams(self), local_addr=local,
+                                                                    remote_addr=remote)
         except OSError as exc:
             raise UavError(f"camera_mavlink {self.address}: {exc.strerror}; is another program using the "
                            "port? pick another one") from exc
@@ -241,7 +242,7 @@ class CameraTracking:
             return mavlink.MAV_RESULT_ACCEPTED, self._send_status
         return mavlink.MAV_RESULT_UNSUPPORTED, None
 
-    async def _select(self, mode: int, params: tuple[float, ...], origin: str) -> int:
+    async def _select(self, mode: int, params: tuple[float, float, float, float], origin: str) -> int:
         source = self.core.source
         size = source.get_frame_size() if source is not None else (0, 0)
         try:

@@ -66,9 +66,11 @@ def roi_from_message(message: Any, frame_size: tuple[int, int]) -> tuple[int, in
         raise CommandError("roi message must be a JSON object with 'rect' or 'point'", key="roi")
     rect, point = message.get("rect"), message.get("point")
     if rect is not None and _numbers(rect, 4):
-        return rect_to_roi(*rect, frame_size)
+        x0, y0, x1, y1 = rect
+        return rect_to_roi(x0, y0, x1, y1, frame_size)
     if point is not None and _numbers(point, 2):
-        return point_to_roi(*point, frame_size)
+        x, y = point
+        return point_to_roi(x, y, frame_size)
     raise CommandError("roi message needs 'rect': [x0, y0, x1, y1] or 'point': [x, y], numbers in 0..1", key="roi")
 
 

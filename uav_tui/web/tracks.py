@@ -35,7 +35,8 @@ def to_video_frame(image: np.ndarray, width: int) -> VideoFrame:
     out_h = max(2, round(height_in * out_w / width_in)) & ~1
     if (out_w, out_h) != (width_in, height_in):
         image = cv2.resize(image, (out_w, out_h), interpolation=cv2.INTER_AREA)
-    return VideoFrame.from_ndarray(cv2.cvtColor(image, cv2.COLOR_BGR2YUV_I420), format="yuv420p")
+    i420: np.ndarray = cv2.cvtColor(image, cv2.COLOR_BGR2YUV_I420)  # uint8, as the input
+    return VideoFrame.from_ndarray(i420, format="yuv420p")
 
 
 class ProcessedVideoTrack(VideoStreamTrack):
