@@ -9,6 +9,7 @@ import sys
 import sysconfig
 import tomllib
 import warnings
+import zipfile
 from pathlib import Path
 
 import pytest
@@ -86,6 +87,8 @@ def test_the_models_load_from_the_installed_package_in_a_fresh_venv_without_the_
     subprocess.run([sys.executable, "-m", "venv", "--without-pip", str(venv)], check=True)
     python = venv / "bin" / "python"
     (wheel,) = wheels.glob("uav_tui-*.whl")
+    with zipfile.ZipFile(wheel) as archive:  # PEP 561: type checkers use the packages' own annotations
+        assert {f"{package}/py.typed" for package in PACKAGES} <= set(archive.namelist())
     subprocess.run([*pip, "--python", str(python), "install", "--no-deps", "--no-index", str(wheel)], check=True)
     site = Path(subprocess.run([str(python), "-c", "import sysconfig; print(sysconfig.get_path('purelib'))"],
                                check=True, capture_output=True, text=True).stdout.strip())
