@@ -12,6 +12,7 @@ import functools
 import logging
 import time
 from collections.abc import Callable
+from dataclasses import asdict
 from typing import TYPE_CHECKING, Any
 
 import psutil
@@ -30,6 +31,7 @@ from uav_tui.commands import VEHICLE_COMMANDS, Command, parse
 from uav_tui.config import Config
 from uav_tui.errors import KNOWN_ERRORS, NoVehicle, SourceError, UavError
 from uav_tui.events import EventLog
+from uav_tui.geolocate import locate_row
 from uav_tui.link import LinkWatch
 from uav_tui.malloc_tuning import tune_this_process
 from uav_tui.operations import Operations
@@ -449,8 +451,10 @@ class UavCore:
         """Everything an interface shows, as one immutable snapshot."""
         assert self.worker is not None and self.source is not None
         loaded = self.worker.processor
+        telemetry = self.telemetry.snapshot()
+        box = self.worker.last.box if self.worker.last is not None else None
         return CoreStatus(
-            telemetry=self.telemetry.snapshot(),
+            telemetry=telemetry,
             pipeline=self.worker.snapshot(),
             source_uri=self.source.get_properties().get("uri", self.config.source),
             source=self.source.get_properties(),
@@ -471,5 +475,6 @@ class UavCore:
             startup_s=self.startup_s,
             link_lost=self.link is not None and self.link.lost,
             vehicle_problem=self.link.vehicle_problem if self.link is not None else "",
-            box=self.worker.last.box if self.worker.last is not None else None,
+            box=box,
+            target=None if box is None else locate_row(self.camera, box, asdict(telemetry)),  # ~20 us
         )

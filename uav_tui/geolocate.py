@@ -53,6 +53,8 @@ HORIZON = "horizon"
 """The box's centre is at or above the horizon (see :data:`MIN_DEPRESSION_DEG`): no ground point."""
 
 STATUSES = (OK, NO_BOX, NO_CAMERA, NO_POSITION, NO_ATTITUDE, NO_HEIGHT, HORIZON)
+_WHY = {NO_CAMERA: "no camera model (set camera_hfov or calibrate)", NO_POSITION: "no GPS position",
+        NO_ATTITUDE: "no attitude", NO_HEIGHT: "no height", HORIZON: "at or above the horizon"}
 
 
 @dataclass(frozen=True, slots=True)
@@ -82,6 +84,14 @@ class GeoFix:
         if self.north_m is None or self.east_m is None:
             return None
         return math.degrees(math.atan2(self.east_m, self.north_m)) % 360.0
+
+
+def describe(fix: GeoFix) -> str:
+    """One line for the status: ``47.397810,8.545600 12 m at 045 deg +-0.6 m``, why not, or "" without a box."""
+    if fix.status != OK or fix.distance_m is None or fix.bearing_deg is None:
+        return f"not located: {_WHY[fix.status]}" if fix.status in _WHY else ""
+    return (f"{fix.lat_deg:.6f},{fix.lon_deg:.6f} {fix.distance_m:.0f} m at {fix.bearing_deg:03.0f} deg "
+            f"+-{fix.uncertainty_m:.1f} m")
 
 
 def locate(camera: CameraModel | None, box: tuple[float, float, float, float] | None, *, roll_deg: float | None,

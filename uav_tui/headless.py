@@ -19,6 +19,7 @@ from uav_tui.config import Config, SafetyConfig
 from uav_tui.core import UavCore
 from uav_tui.errors import KNOWN_ERRORS, CommandError, error_line
 from uav_tui.events import Event
+from uav_tui.geolocate import describe as describe_target
 from uav_tui.line_budget import BudgetedText
 from uav_tui.native_stderr import native_stderr_as_events
 from uav_tui.status import CoreStatus
@@ -85,6 +86,8 @@ def format_status(status: CoreStatus, elapsed_s: float) -> str:
             line += f" N {t.north_m:.1f} E {t.east_m:.1f}m"
         if status.vehicle_problem:
             line += f" ({status.vehicle_problem})"
+    if status.target is not None and (where := describe_target(status.target)):
+        line += f" | target {where}"
     line += f" | auto {'ON' if status.autonomy else 'OFF'}"
     if status.last_vector is not None:
         vx, vy, vt = status.last_vector

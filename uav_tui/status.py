@@ -6,6 +6,7 @@ from dataclasses import asdict, dataclass, field, fields, replace
 from typing import Any
 
 from controllers.base import Telemetry
+from uav_tui.geolocate import GeoFix
 from uav_tui.stats import PipelineStats
 from uav_tui.text import safe
 from uav_tui.worker import ProcessorState
@@ -48,6 +49,8 @@ class CoreStatus:
     """Why the vehicle cannot come back (e.g. the built-in simulator's process was killed), or ""."""
     box: tuple[int, int, int, int] | None = None
     """The processor's ``box`` on the newest processed frame (frame pixels), None when it tracks nothing."""
+    target: GeoFix | None = None
+    """Where ``box`` is on the ground, from the newest telemetry (frames.csv has it at each capture); None: no box."""
 
     def __post_init__(self) -> None:
         for f in fields(self):

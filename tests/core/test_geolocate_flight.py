@@ -6,9 +6,11 @@ import asyncio
 import math
 
 import numpy as np
+import pytest
 
 from uav_tui import dataset
 from uav_tui.geolocate import OK
+from uav_tui.headless import format_status
 from uav_tui.recording.rows import GEO_COLUMNS
 
 from .flight_helpers import flying_core
@@ -27,8 +29,14 @@ async def test_a_recorded_flight_locates_the_car_it_sees(tmp_path):
         for command in ("vector 0 2 3", "vector 0 -2 3"):  # sideways at 2 m/s: it rolls, then flies level
             await core.execute(command)
             await asyncio.sleep(3.5)
+        status = core.status()  # hovering again, 6 m south of the car: the status line says where it is
+        line = format_status(status, 0.0)
         run_dir = core.recorder.run_dir
     frames = dataset.load(run_dir).frames
+    vehicle_n, vehicle_e = status.telemetry.north_m, status.telemetry.east_m
+    assert status.target is not None and status.target.status == OK
+    assert status.target.distance_m == pytest.approx(math.hypot(car_n - vehicle_n, car_e - vehicle_e), abs=0.5)
+    assert " | target 47." in line and " m at 0" in line, line  # the car is north: bearing 000-010 deg
     assert set(GEO_COLUMNS) <= set(frames.columns)
     whole = (frames["box_x"] > 0) & (frames["box_y"] > 0) & (frames["box_x"] + frames["box_w"] < 640) \
         & (frames["box_y"] + frames["box_h"] < 480)  # a car cut by the frame's edge is not centred in its box

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from rich.text import Text
 
+from uav_tui.geolocate import describe as describe_target
 from uav_tui.status import CoreStatus
 from uav_tui.tui._panel import StatusPanel
 
@@ -22,6 +23,8 @@ class AlgorithmPanel(StatusPanel):
 
     def describe(self, status: CoreStatus) -> Text:
         box = "none" if status.box is None else "{},{} {}x{}".format(*status.box)
+        if status.target is not None and (where := describe_target(status.target)):
+            box += f" @ {where}"
         auto = Text(f"{status.vectors_executed} flown, {status.vectors_rejected} rejected")
         if status.autonomy_stop_reason and not status.autonomy:
             auto.append(" ").append(self.styled(f"stopped: {status.autonomy_stop_reason}", "bad"))
