@@ -20,7 +20,7 @@ from uav_tui.config import add_config_flags, find_config_file, load_config, over
 from uav_tui.errors import CONFIG_ERRORS, error_line
 from uav_tui.text import SafeFormatter, safe
 
-TOOLS = ("sim", "runs", "report", "replay", "eval", "calibrate")
+TOOLS = ("sim", "runs", "report", "export", "replay", "eval", "calibrate")
 """Sub-commands; anything else on the command line configures a run."""
 
 
@@ -28,7 +28,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser = ArgumentParser(
         prog="uav-tui", suggest=TOOLS,
         description="Camera -> your algorithm -> flight controller, with an operator dashboard.",
-        epilog=f"tools: uav-tui sim | runs | report [RUN] | replay RUN... | eval DATA | calibrate (each has --help)\n\n"
+        epilog=f"tools: uav-tui sim | runs | report [RUN] | export [RUN] | replay RUN... | eval DATA | calibrate "
+               f"(each has --help)\n\n"
                f"commands (keys, --script, web):\n{help_text()}",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )

@@ -1,4 +1,5 @@
-"""``uav-tui runs`` (list the recorded runs) and ``uav-tui report [RUN]`` (draw a run's plots)."""
+"""``uav-tui runs`` (list the recorded runs), ``uav-tui report [RUN]`` (draw a run's plots) and ``uav-tui export
+[RUN]`` (its track and target positions as GeoJSON / KML)."""
 
 from __future__ import annotations
 
@@ -16,22 +17,30 @@ from uav_tui.text import escape, redact, safe
 
 
 def main(name: str, argv: list[str]) -> int:
-    """Run the tool ``name`` (``runs`` or ``report``) with its arguments; returns the exit code."""
+    """Run the tool ``name`` (``runs``, ``report`` or ``export``) with its arguments; returns the exit code."""
     parser = ArgumentParser(prog=f"uav-tui {name}")
     parser.add_argument("--runs-dir", metavar="DIR", help="folder holding the runs (default: runs_dir of the "
                         "configuration, 'runs')")
     parser.add_argument("--config", metavar="PATH", help="TOML file to take runs_dir from")
-    if name == "report":
-        parser.description = "Write PNG plots and summary.txt into a run's folder."
+    if name in ("report", "export"):
+        parser.description = ("Write PNG plots and summary.txt into a run's folder." if name == "report" else
+                              "Write the vehicle's track and the geo-located targets into a run's folder: "
+                              "track.geojson (QGIS) and/or track.kml (Google Earth).")
         parser.add_argument("run", nargs="?", metavar="RUN", help="run folder, or its name under the runs "
                             "folder (default: the newest run)")
-    else:
+    if name == "export":
+        parser.add_argument("--geojson", action="store_true", help="write track.geojson (default: both)")
+        parser.add_argument("--kml", action="store_true", help="write track.kml (default: both)")
+    elif name != "report":
         parser.description = "List recorded runs: start, duration, frames, size."
     args = parser.parse_args(argv)
     try:
         runs_dir = Path(args.runs_dir or load_config(find_config_file(args.config)).recording.runs_dir).expanduser()
         if name == "report":
             return _report(find_run(runs_dir, args.run))
+        if name == "export":
+            formats = [f for f in ("geojson", "kml") if getattr(args, f)] or ["geojson", "kml"]
+            return _export(find_run(runs_dir, args.run), formats)
         return _list(runs_dir)
     except KNOWN_ERRORS as exc:
         print(safe(error_line(exc, f"uav-tui {name}"), multiline=True), file=sys.stderr)
@@ -96,6 +105,18 @@ def _report(run_dir: Path) -> int:
     print(text)  # safe already
     for path in paths:
         print(safe(f"wrote {path}"))
+    return 0
+
+
+def _export(run_dir: Path, formats: list[str]) -> int:
+    from uav_tui import dataset, export
+
+    run = dataset.load(run_dir)
+    for path in export.write(run, formats):
+        print(safe(f"wrote {path}"))
+    targets = int((run.frames["target_status"] == "ok").sum())
+    print(f"{targets} target positions" if targets else "no target positions: the run has no frame whose box was "
+          "geo-located (it needs a box, a camera model and GPS; see target_status in frames.csv)")
     return 0
 
 

@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import asyncio
+import json
 import math
+import xml.etree.ElementTree as ET
 
 import numpy as np
 import pytest
 
-from uav_tui import dataset
+from uav_tui import dataset, runs_cli
 from uav_tui.geolocate import OK
 from uav_tui.headless import format_status
 from uav_tui.recording.rows import GEO_COLUMNS
@@ -54,3 +56,22 @@ async def test_a_recorded_flight_locates_the_car_it_sees(tmp_path):
     tilted = np.hypot(located["roll_deg"], located["pitch_deg"]).to_numpy(dtype=np.float64) > 3.0
     assert moving.sum() > 10 and tilted.sum() > 3, "the flight must include fast and tilted frames to mean anything"
     assert math.isclose(located["rel_alt_m"].median(), ALTITUDE_M, abs_tol=1.0)
+
+    # Exported for QGIS and Google Earth: both parse and hold the recorded positions and the track.
+    assert runs_cli.main("export", [str(run_dir)]) == 0
+    features = json.loads((run_dir / "track.geojson").read_text())["features"]
+    points = [f for f in features if f["properties"]["kind"] == "target"]
+    recorded = frames[frames["target_status"] == OK]
+    assert [p["properties"]["frame_id"] for p in points] == recorded["frame_id"].tolist()
+    assert np.allclose([p["geometry"]["coordinates"][:2] for p in points],
+                       recorded[["target_lon_deg", "target_lat_deg"]].to_numpy(dtype=np.float64), atol=1e-8)
+    track = [f for f in features if f["geometry"]["type"] == "LineString"]
+    assert len(track) == 1 and len(track[0]["geometry"]["coordinates"]) == len(track[0]["properties"]["times"]) > 50
+    kml = ET.parse(run_dir / "track.kml").getroot()
+    ns = {"k": "http://www.opengis.net/kml/2.2"}
+    placemarks = kml.findall("k:Document/k:Placemark/k:Point/k:coordinates", ns)
+    assert len(placemarks) == len(points)
+    lon, lat = (float(v) for v in placemarks[0].text.split(","))
+    assert (lon, lat) == (pytest.approx(points[0]["geometry"]["coordinates"][0], abs=1e-8),
+                          pytest.approx(points[0]["geometry"]["coordinates"][1], abs=1e-8))
+    assert len(kml.findall("k:Document/k:Placemark/k:TimeStamp/k:when", ns)) == len(points)
