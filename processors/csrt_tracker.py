@@ -5,7 +5,6 @@ from __future__ import annotations
 import logging
 import statistics
 from collections import deque
-from collections.abc import Iterable
 from typing import Any
 
 import cv2
@@ -13,7 +12,7 @@ import numpy as np
 
 from processors import sift_match, target_search
 from processors.follow import TargetFollower
-from processors.steering import Box
+from processors.steering import Box, as_box
 
 logger = logging.getLogger(__name__)
 
@@ -146,7 +145,7 @@ class CSRTTrackingProcessor(TargetFollower):
         """Tracked box (x, y, w, h) in full-frame pixels, None when lost or idle."""
         if not self._tracking or self._work_box is None:
             return None
-        return _box(v * self._shrink for v in self._work_box)
+        return as_box(v * self._shrink for v in self._work_box)
 
     @property
     def selected(self) -> bool:
@@ -218,7 +217,7 @@ class CSRTTrackingProcessor(TargetFollower):
         target_px = self._cfg["target_px"]
         self._shrink = max(1, int(np.ceil(np.sqrt(roi[2] * roi[3]) / target_px))) if target_px else 1
         work = self._work_frame(frame)
-        box = _box(v / self._shrink for v in roi)
+        box = as_box(v / self._shrink for v in roi)
         appearance = target_search.template(cv2.cvtColor(work, cv2.COLOR_BGR2GRAY), box)
         if appearance is None:
             logger.warning("CSRTTrackingProcessor: ROI %s is too small to track, ignored", roi)
@@ -226,7 +225,7 @@ class CSRTTrackingProcessor(TargetFollower):
         self._templates = [appearance, appearance.copy()]
         self._quality.clear()
         small, sift_scale = self._sift_gray(frame)
-        sift_box = _box(v * sift_scale for v in roi)
+        sift_box = as_box(v * sift_scale for v in roi)
         mask = np.zeros(small.shape, np.uint8)
         x, y, w, h = (int(round(v)) for v in sift_box)
         mask[max(y, 0) : y + h, max(x, 0) : x + w] = 255
@@ -247,7 +246,7 @@ class CSRTTrackingProcessor(TargetFollower):
         if tracker is None or previous is None:
             return  # nothing selected
         ok, found = tracker.update(work)
-        box = _box(found) if ok else previous
+        box = as_box(found) if ok else previous
         self._csrt_box = box
         match = self._find(work, box, 0.25, (1.0,))
         self.score = match.score if match is not None else -1.0
@@ -308,14 +307,8 @@ class CSRTTrackingProcessor(TargetFollower):
         area_ratio = (x1 - x0) * (y1 - y0) * scale**2 / (ref_box[2] * ref_box[3])
         if not 0.25 < area_ratio < 4.0:
             return
-        box = _box(float(v) / self._shrink for v in (x0, y0, x1 - x0, y1 - y0))
+        box = as_box(float(v) / self._shrink for v in (x0, y0, x1 - x0, y1 - y0))
         self._new_tracker(work, box)
         logger.info("CSRTTrackingProcessor: re-acquired by SIFT (%d inliers)", found.inliers)
         if self.tmMgr is not None:
             self.tmMgr.save(frame, event="reacquired", inliers=found.inliers)
-
-
-def _box(values: Iterable[float]) -> Box:
-    """The four values (x, y, w, h) as a box of floats."""
-    x, y, w, h = values
-    return float(x), float(y), float(w), float(h)

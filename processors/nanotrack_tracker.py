@@ -14,7 +14,7 @@ from processors import target_search
 from processors.follow import TargetFollower
 from processors.models import create_nanotrack
 from processors.nanotrack_template import SelectedTemplate
-from processors.steering import Box
+from processors.steering import Box, as_box
 
 logger = logging.getLogger(__name__)
 
@@ -130,7 +130,7 @@ class NanoTrackProcessor(TargetFollower):
         """Tracked box (x, y, w, h) in full-frame pixels, None when lost or idle."""
         if not self._tracking or self._work_box is None:
             return None
-        return tuple(v * self._shrink for v in self._work_box)  # type: ignore[return-value]
+        return as_box(v * self._shrink for v in self._work_box)
 
     @property
     def selected(self) -> bool:
@@ -141,16 +141,16 @@ class NanoTrackProcessor(TargetFollower):
     def _start(self, frame: np.ndarray, roi: Box) -> bool:
         self._shrink = max(1, int(math.sqrt(roi[2] * roi[3]) // _EXEMPLAR_PX))
         work = self._work_frame(frame)
-        box = tuple(v / self._shrink for v in roi)
-        appearance = target_search.template(cv2.cvtColor(work, cv2.COLOR_BGR2GRAY), box)  # type: ignore[arg-type]
+        box = as_box(v / self._shrink for v in roi)
+        appearance = target_search.template(cv2.cvtColor(work, cv2.COLOR_BGR2GRAY), box)
         if appearance is None:
             logger.warning("NanoTrackProcessor: ROI %s is too small to track, ignored", roi)
             return False
         self._templates = [appearance]
-        self._selected = SelectedTemplate(work, box)  # type: ignore[arg-type]
+        self._selected = SelectedTemplate(work, box)
         self._looks.clear()
         self._levels.clear()
-        self._restart(work, box)  # type: ignore[arg-type]
+        self._restart(work, box)
         logger.info("NanoTrackProcessor: target %s selected (tracked at 1/%d)", roi, self._shrink)
         return True
 
@@ -312,14 +312,14 @@ class NanoTrackProcessor(TargetFollower):
             return  # further than the target could have gone since it was lost
         probe = selected.tracker_at(work, found.box)
         _, placed = probe.update(work)
-        box, score = tuple(float(v) for v in placed), float(probe.getTrackingScore())
-        match = self._appearance(work, box)  # type: ignore[arg-type]
+        box, score = as_box(placed), float(probe.getTrackingScore())
+        match = self._appearance(work, box)
         look = match.score if match is not None else -1.0
-        if self._is_target(look, score, box, work):  # type: ignore[arg-type]
+        if self._is_target(look, score, box, work):
             logger.info("NanoTrackProcessor: re-acquired %s (appearance %.2f, score %.2f)",
                         "in the whole frame" if whole else "nearby", look, score)
             self._tracker, self.look, self.score = probe, look, score
-            self._work_box = self._nano_box = box  # type: ignore[assignment]
+            self._work_box = self._nano_box = box
             self._tracking, self._evidence = True, 0
             self._steps.clear()
             self._velocity = (0.0, 0.0)

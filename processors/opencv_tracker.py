@@ -9,7 +9,7 @@ import cv2
 import numpy as np
 
 from processors.models import nanotrack_files
-from processors.steering import Box
+from processors.steering import Box, as_box
 
 logger = logging.getLogger(__name__)
 
@@ -59,7 +59,7 @@ class OpenCVTracker:
 
     def catch_cmd(self, roi: tuple[int, int, int, int]) -> None:
         """Start tracking ``roi`` (x, y, w, h, frame pixels) on the next frame."""
-        self._pending = tuple(float(v) for v in roi)  # type: ignore[assignment]
+        self._pending = as_box(roi)
 
     def photo_processing(self, frame: np.ndarray) -> None:
         """Update the tracker on ``frame`` and draw its box in place."""
@@ -69,7 +69,7 @@ class OpenCVTracker:
             self.box, self._pending = self._pending, None
         elif self._tracker is not None:
             ok, found = self._tracker.update(frame)
-            self.box = tuple(float(v) for v in found) if ok else None  # type: ignore[assignment]
+            self.box = as_box(found) if ok else None
         if self.box is not None:
             x, y, w, h = (int(round(v)) for v in self.box)
             cv2.rectangle(frame, (x, y), (x + w, y + h), (0, 255, 0), 2)

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import logging
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 import cv2
@@ -26,6 +27,12 @@ CAMERA_ORIENTATIONS = ("down", "forward")
 
 Box = tuple[float, float, float, float]
 """(x, y, w, h) in frame pixels."""
+
+
+def as_box(values: Iterable[float]) -> Box:
+    """Four values (x, y, w, h), e.g. an OpenCV rect or a scaled box, as a :data:`Box` of floats."""
+    x, y, w, h = values
+    return float(x), float(y), float(w), float(h)
 
 Vector = tuple[float, float, float]
 """(vx, vy, t): body-frame m/s and seconds."""

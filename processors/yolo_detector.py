@@ -13,7 +13,7 @@ import numpy as np
 from processors.detection import Detection, DetectorConfig, load_backend
 from processors.detection.flow import shift_boxes
 from processors.frame_telemetry import frame_time_s
-from processors.steering import Box, Steering, Vector, draw_target
+from processors.steering import Box, Steering, Vector, as_box, draw_target
 
 logger = logging.getLogger(__name__)
 
@@ -146,7 +146,7 @@ class YoloDetector:
 
     def catch_cmd(self, roi: tuple[int, int, int, int]) -> None:
         """Follow the detection that overlaps ``roi`` (x, y, w, h, frame pixels) the most."""
-        self._pending_roi = tuple(float(v) for v in roi)  # type: ignore[assignment]
+        self._pending_roi = as_box(roi)
         self.followed = None
         self._pick_from_roi()
 
