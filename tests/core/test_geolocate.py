@@ -97,3 +97,22 @@ def test_a_frame_row_holds_the_target_position_or_why_there_is_none():
         assert row["target_status"] == status
         assert [row[c] for c in ("target_lat_deg", "target_lon_deg", "target_alt_m", "target_uncertainty_m")] \
             == [None] * 4
+
+
+def test_a_distorted_camera_mounted_off_centre_locates_the_ground_point_its_pixel_shows():
+    ideal = CameraModel.from_hfov(640, 480, 70.0)
+    model = CameraModel(640, 480, ideal.fx, ideal.fy, ideal.cx, ideal.cy, (-0.28, 0.09, 0.0008, -0.0005, 0.0),
+                        Mount(60.0, (0.3, 0.0, 0.1)))
+    # Level, heading east, 20 m up: the camera sits 0.3 m east of the vehicle and 0.1 m lower, looking east,
+    # 60 deg below the horizon, so its optical axis meets the ground at (19.9 / tan 60) m east of it.
+    ahead = 0.3 + 19.9 / math.tan(math.radians(60.0))
+    u, v = model.ray_to_pixel(np.array([0.0, 0.0, 1.0]))
+    fix = geolocate.locate(model, (u - 4.5, v - 4.5, 10, 10), roll_deg=0.0, pitch_deg=0.0, yaw_deg=90.0, lat_deg=0.0,
+                           lon_deg=0.0, height_m=20.0)
+    assert (fix.north_m, fix.east_m) == (pytest.approx(0.0, abs=1e-6), pytest.approx(ahead, abs=1e-6))
+    # Off the axis, through the distortion: the pixel where a ground point shows is located back onto it.
+    seen = np.array([8.0, -5.0, 19.9])  # a ground point from the camera, FRD (the vehicle heads north here)
+    pixel = model.ray_to_pixel(model.rotation_body_camera.T @ seen)  # the vehicle sees it 0.3 m further ahead
+    fix = geolocate.locate(model, (pixel[0] - 4.5, pixel[1] - 4.5, 10, 10), roll_deg=0.0, pitch_deg=0.0, yaw_deg=0.0,
+                           lat_deg=0.0, lon_deg=0.0, height_m=20.0)
+    assert (fix.north_m, fix.east_m) == (pytest.approx(8.3, abs=1e-4), pytest.approx(-5.0, abs=1e-4))
