@@ -53,8 +53,10 @@ HORIZON = "horizon"
 """The box's centre is at or above the horizon (see :data:`MIN_DEPRESSION_DEG`): no ground point."""
 
 STATUSES = (OK, NO_BOX, NO_CAMERA, NO_POSITION, NO_ATTITUDE, NO_HEIGHT, HORIZON)
-_WHY = {NO_CAMERA: "no camera model (set camera_hfov or calibrate)", NO_POSITION: "no GPS position",
-        NO_ATTITUDE: "no attitude", NO_HEIGHT: "no height", HORIZON: "at or above the horizon"}
+_WHY = {NO_POSITION: "no GPS position", NO_ATTITUDE: "no attitude", NO_HEIGHT: "no height",
+        HORIZON: "at or above the horizon"}
+"""What the status shows when a box is not located. Without a camera model it shows nothing: the event log says
+``no camera model`` once, and a tracker on a camera without one should not carry a warning on every line."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -87,7 +89,7 @@ class GeoFix:
 
 
 def describe(fix: GeoFix) -> str:
-    """One line for the status: ``47.397810,8.545600 12 m at 045 deg +-0.6 m``, why not, or "" without a box."""
+    """One line for the status: ``47.397810,8.545600 12 m at 045 deg +-0.6 m``, why not, or "" (no box or camera)."""
     if fix.status != OK or fix.distance_m is None or fix.bearing_deg is None:
         return f"not located: {_WHY[fix.status]}" if fix.status in _WHY else ""
     return (f"{fix.lat_deg:.6f},{fix.lon_deg:.6f} {fix.distance_m:.0f} m at {fix.bearing_deg:03.0f} deg "

@@ -116,3 +116,12 @@ def test_a_distorted_camera_mounted_off_centre_locates_the_ground_point_its_pixe
     fix = geolocate.locate(model, (pixel[0] - 4.5, pixel[1] - 4.5, 10, 10), roll_deg=0.0, pitch_deg=0.0, yaw_deg=0.0,
                            lat_deg=0.0, lon_deg=0.0, height_m=20.0)
     assert (fix.north_m, fix.east_m) == (pytest.approx(8.3, abs=1e-4), pytest.approx(-5.0, abs=1e-4))
+
+
+def test_the_status_line_says_where_or_why_not():
+    fix = geolocate.GeoFix(geolocate.OK, 47.3977961, 8.5456, 488.0, 0.62, north_m=6.0, east_m=-0.1)
+    assert geolocate.describe(fix) == "47.397796,8.545600 6 m at 359 deg +-0.6 m"
+    assert geolocate.describe(geolocate.GeoFix(geolocate.HORIZON)) == "not located: at or above the horizon"
+    assert geolocate.describe(geolocate.GeoFix(geolocate.NO_POSITION)) == "not located: no GPS position"
+    assert geolocate.describe(geolocate.GeoFix(geolocate.NO_CAMERA)) == ""  # the event log said it once
+    assert geolocate.describe(geolocate.GeoFix(geolocate.NO_BOX)) == ""
