@@ -89,8 +89,8 @@ def parse_pose_message(message: MavlinkMessage) -> tuple[Literal["position", "at
         boot_ms = int(fields["time_boot_ms"])
         if message.message_name == "LOCAL_POSITION_NED":
             return "position", boot_ms, (float(fields["x"]), float(fields["y"]), float(fields["z"]))
-        angles = tuple(math.degrees(float(fields[name])) for name in ("roll", "pitch", "yaw"))
-        return "attitude", boot_ms, angles  # type: ignore[return-value]
+        roll, pitch, yaw = (math.degrees(float(fields[name])) for name in ("roll", "pitch", "yaw"))
+        return "attitude", boot_ms, (roll, pitch, yaw)
     except (ValueError, KeyError, TypeError):
         return None
 

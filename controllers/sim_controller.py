@@ -22,8 +22,8 @@ class SimController(MavsdkController):
         sim: the running :class:`SimVehicle` (``sim.truth()`` reaches its ground-truth channel).
     """
 
-    def __init__(self, sim: SimVehicle, **kwargs: object) -> None:
-        super().__init__(**kwargs)  # type: ignore[arg-type]
+    def __init__(self, sim: SimVehicle, **kwargs: Any) -> None:
+        super().__init__(**kwargs)
         self.sim = sim
 
     async def close(self) -> None:

@@ -136,7 +136,8 @@ class CameraModel:
     def from_dict(cls, data: dict[str, Any], origin: str | None = None) -> CameraModel:
         """The model :meth:`to_dict` wrote; CameraModelError when a value is missing or wrong."""
         try:
-            mount = Mount(float(data["tilt_deg"]), tuple(float(v) for v in data["offset_m"]))  # type: ignore[arg-type]
+            forward, right, down = (float(v) for v in data["offset_m"])
+            mount = Mount(float(data["tilt_deg"]), (forward, right, down))
             rms = data.get("rms_px")
             return cls(int(data["width"]), int(data["height"]), float(data["fx"]), float(data["fy"]),
                        float(data["cx"]), float(data["cy"]), tuple(float(c) for c in data["distortion"]), mount,

@@ -11,7 +11,7 @@ import difflib
 import re
 import sys
 from collections.abc import Sequence
-from typing import NoReturn
+from typing import Any, NoReturn
 
 from uav_tui.text import safe
 
@@ -23,8 +23,8 @@ class ArgumentParser(argparse.ArgumentParser):
         suggest: words that may stand where a flag did not parse, besides the flags (the tools' names).
     """
 
-    def __init__(self, *args: object, suggest: Sequence[str] = (), **kwargs: object) -> None:
-        super().__init__(*args, **kwargs)  # type: ignore[arg-type]
+    def __init__(self, *args: Any, suggest: Sequence[str] = (), **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
         self.suggest = tuple(suggest)
 
     def error(self, message: str) -> NoReturn:

@@ -246,6 +246,13 @@ def test_a_model_round_trips_through_run_json_and_a_damaged_one_is_none(tmp_path
     assert create_source(f"run:{tmp_path}").camera_model() is None
 
 
+@pytest.mark.parametrize("offset", [[0.1, 0.0], [0.1, 0.0, 0.05, 1.0]])
+def test_a_recorded_mount_offset_of_other_than_three_values_is_refused(offset: list[float]) -> None:
+    data = {**CameraModel(640, 480, 505.1, 504.9, 318.7, 242.1).to_dict(), "offset_m": offset}
+    with pytest.raises(CameraModelError, match="a value is missing or wrong"):
+        CameraModel.from_dict(data)
+
+
 def test_uav_tui_calibrate_with_a_charuco_board(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     """A board printed by --write-board, seen in part or whole, calibrates the camera as well."""
     printed_board = tmp_path / "board.png"

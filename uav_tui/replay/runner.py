@@ -8,6 +8,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from controllers.replay import ReplayController
+from sources.run import RunSource
 from uav_tui.config import Config, with_overrides
 from uav_tui.core import UavCore
 from uav_tui.errors import UavError
@@ -104,18 +106,18 @@ async def replay(job: ReplayJob) -> ReplayResult:
 
 async def _until_finished(core: UavCore) -> None:
     source, worker, controller = core.source, core.worker, core.controller
-    assert source is not None and worker is not None and controller is not None
-    finished = source.finished  # type: ignore[attr-defined]
+    assert isinstance(source, RunSource) and worker is not None and isinstance(controller, ReplayController)
+    finished = source.finished
     while True:
         await asyncio.sleep(POLL_S)
         if core.quit_requested.is_set():
-            raise UavError(f"replay of {controller.run_dir} stopped: "  # type: ignore[attr-defined]
+            raise UavError(f"replay of {controller.run_dir} stopped: "
                            f"{core.processor_error or 'a task failed'}")
         last = worker.last
         if finished.is_set() and worker.busy_s == 0 and last is not None and last.frame.seq >= source.buffer.newest_seq:
             break
     if core.replay is not None and core.replay.lockstep:  # the telemetry after the last frame, for its interpolation
-        while controller.applied < len(controller.samples):  # type: ignore[attr-defined]
+        while controller.applied < len(controller.samples):
             await asyncio.sleep(POLL_S)
 
 
