@@ -67,4 +67,6 @@ class CoreStatus:
         """JSON-ready form (for ``--json`` and the web page)."""
         data = asdict(self)
         data["capabilities"] = sorted(self.capabilities)
+        if self.target is not None:
+            data["target"].update(distance_m=self.target.distance_m, bearing_deg=self.target.bearing_deg)
         return data

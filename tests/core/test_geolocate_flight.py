@@ -39,6 +39,8 @@ async def test_a_recorded_flight_locates_the_car_it_sees(tmp_path):
     assert status.target is not None and status.target.status == OK
     assert status.target.distance_m == pytest.approx(math.hypot(car_n - vehicle_n, car_e - vehicle_e), abs=0.5)
     assert " | target 47." in line and " m at 0" in line, line  # the car is north: bearing 000-010 deg
+    as_json = json.loads(json.dumps(status.as_dict(), default=str))["target"]  # --json lines, the web page
+    assert as_json["status"] == OK and as_json["distance_m"] == pytest.approx(status.target.distance_m)
     assert set(GEO_COLUMNS) <= set(frames.columns)
     whole = (frames["box_x"] > 0) & (frames["box_y"] > 0) & (frames["box_x"] + frames["box_w"] < 640) \
         & (frames["box_y"] + frames["box_h"] < 480)  # a car cut by the frame's edge is not centred in its box
