@@ -216,8 +216,8 @@ class FrameAligner:
         if image and self.run_dir is not None and not (self.run_dir / image).is_file():
             record.values[_SAVED:_SAVED + 2] = [False, ""]
         values, how = self.history.at(record.t_mono_ns)
-        box = record.values[_BOX:_BOX + 4]
-        fix = locate_row(record.camera, None if box[0] is None else box, values)  # type: ignore[arg-type]
+        x, y, w, h = record.values[_BOX:_BOX + 4]
+        fix = locate_row(record.camera, None if x is None else (x, y, w, h), values)
         return Row("frames", [*record.values, how, *(_finite(values[name]) for name in FIELDS), *_geo(fix)])
 
 
