@@ -127,7 +127,6 @@ class CSRTTrackingProcessor(TargetFollower):
         self.ratio = ratio
         self._sift = sift_match.make_sift(self._cfg["sift_features"])
         self._tracker: cv2.Tracker | None = None
-        self._shrink = 1  # work frame = full frame / shrink (a whole factor)
         self._ref_feat: sift_match.Features | None = None  # SIFT-frame pixels
         self._ref_box: Box | None = None  # SIFT-frame pixels, where the reference features were taken
         self._templates: list[np.ndarray] = []  # [at selection, adapted]; work-frame appearance
@@ -137,7 +136,6 @@ class CSRTTrackingProcessor(TargetFollower):
         self._tracking = False
         self._evidence = 0  # frames of loss evidence in a row
         self._lost_frames = 0
-        self._force_search = False
 
     # ---- state ----------------------------------------------------------------------------------
     @property
@@ -167,17 +165,7 @@ class CSRTTrackingProcessor(TargetFollower):
         self._tracker, self._templates, self._work_box = None, [], None
         self._tracking = False
 
-    def _search_now(self) -> None:
-        self._force_search = True
-
     # ---- internals ------------------------------------------------------------------------------
-    def _work_frame(self, frame: np.ndarray) -> np.ndarray:
-        k = self._shrink
-        if k == 1:
-            return frame
-        h, w = frame.shape[0] // k, frame.shape[1] // k  # whole blocks of k x k: INTER_AREA's fast path
-        return cv2.resize(frame[: h * k, : w * k], (w, h), interpolation=cv2.INTER_AREA)
-
     def _gray_window(self, work: np.ndarray, box: Box, radius: float) -> tuple[np.ndarray, int, int]:
         """Grayscale of the part of ``work`` that a search ``radius`` around ``box`` can touch, and its origin."""
         x, y, w, h = box

@@ -48,6 +48,10 @@ class TargetFollower:
         self._pending_roi: Box | None = None
         self._ref_height = 0.0
         self._vector: Vector | None = None
+        self._shrink = 1
+        """The tracker works on the frame shrunk by this whole factor (boxes stay in full-frame pixels)."""
+        self._force_search = False
+        """Set by F2: the tracker searches for the target on the next frame."""
 
     # ---- contract -------------------------------------------------------------------------------
     def photo_processing(self, frame: np.ndarray) -> None:
@@ -114,9 +118,17 @@ class TargetFollower:
         raise NotImplementedError
 
     def _search_now(self) -> None:
-        raise NotImplementedError
+        self._force_search = True
 
     # ---- internals ------------------------------------------------------------------------------
+    def _work_frame(self, frame: np.ndarray) -> np.ndarray:
+        """``frame`` shrunk by ``_shrink``: INTER_AREA on whole k x k blocks, its fast path."""
+        k = self._shrink
+        if k == 1:
+            return frame
+        h, w = frame.shape[0] // k, frame.shape[1] // k
+        return cv2.resize(frame[: h * k, : w * k], (w, h), interpolation=cv2.INTER_AREA)
+
     def _clip(self, roi: Box, frame: np.ndarray) -> Box | None:
         fh, fw = frame.shape[:2]
         x0, y0 = max(roi[0], 0.0), max(roi[1], 0.0)

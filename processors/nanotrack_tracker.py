@@ -107,7 +107,6 @@ class NanoTrackProcessor(TargetFollower):
         self.lost_after, self.accept_ratio = max(1, int(lost_after)), accept_ratio
         self.wide_every = max(1, int(wide_every))
         self._tracker: cv2.TrackerNano | None = None
-        self._shrink = 1  # work frame = full frame / shrink (a whole factor)
         self._templates: list[np.ndarray] = []  # [the selection's appearance]; work-frame pixels
         self._selected: SelectedTemplate | None = None  # NanoTrack's template at selection, to start it elsewhere
         self._looks: deque[float] = deque(maxlen=_APPEARANCE_HISTORY)
@@ -120,7 +119,6 @@ class NanoTrackProcessor(TargetFollower):
         self._tracking = False
         self._evidence = 0
         self._lost_frames = 0
-        self._force_search = False
         self.look = 0.0
         """Appearance score (normalised correlation) of the last box: diagnostics."""
 
@@ -170,17 +168,7 @@ class NanoTrackProcessor(TargetFollower):
         self._selected = None
         self._tracking = False
 
-    def _search_now(self) -> None:
-        self._force_search = True
-
     # ---- internals ------------------------------------------------------------------------------
-    def _work_frame(self, frame: np.ndarray) -> np.ndarray:
-        k = self._shrink
-        if k == 1:
-            return frame
-        h, w = frame.shape[0] // k, frame.shape[1] // k  # whole blocks of k x k: INTER_AREA's fast path
-        return cv2.resize(frame[: h * k, : w * k], (w, h), interpolation=cv2.INTER_AREA)
-
     def _restart(self, work: np.ndarray, box: Box) -> None:
         """NanoTrack (re)started on ``box``: its template is what is there now."""
         self._tracker = create_nanotrack()
