@@ -116,7 +116,7 @@ def test_runs_lists_processor_and_source_without_passwords(tmp_path: Path, capsy
     assert tools_main("runs", ["--runs-dir", str(tmp_path)]) == 0
     header, first, second = capsys.readouterr().out.splitlines()
     assert header.split()[-2:] == ["processor", "source"]
-    assert first.split()[-2:] == ["csrt", "usb:0?[31m"]
+    assert first.split()[-2:] == ["csrt", "usb:0\\x1b[31m"]  # the one escaping function, text.safe
     assert second.split()[-2:] == ["mine.py:Mine", "rtsp://pilot:***@192.0.2.1/cam"]
 
 

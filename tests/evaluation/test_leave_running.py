@@ -42,7 +42,8 @@ def test_a_processor_that_raises_on_frame_5_fails_that_job_alone(tmp_path: Path,
                  "--workers", "1", "--out", str(out)])
     printed = capsys.readouterr().out
     assert code == 1
-    assert re.search(r"b-second\s+│\s+\S*Failing\S*\s+│\s+failed\s+│\s+frame 5", printed), printed
+    # the tracker's cell folds a long path (the clone's), so the row is matched without it; the summary names it
+    assert re.search(r"b-second\s+│[^│\n]*│\s+failed\s+│\s+frame 5", printed), printed
     assert f"{TRACKERS}:Failing first_x=30 on b-second failed at frame 5: ValueError: bad reshape on frame 5 " \
            "(trackers.py:" in " ".join(printed.split())
     assert "1 of 4 jobs failed" in printed
