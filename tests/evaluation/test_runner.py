@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import json
+import os
 from pathlib import Path
+from unittest import mock
 
 import numpy as np
 import pytest
@@ -73,8 +75,11 @@ def test_a_dask_cluster_gives_the_same_results_as_local_workers(video_sequence: 
     sequences = find_sequences([video_sequence])
     trackers = [TrackerSpec("cv:csrt"), TrackerSpec("csrt"), replay(video_sequence / "gt.txt", dx=3.0)]
     local = evaluate(sequences, trackers, workers=1)
-    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True, host="127.0.0.1",
-                                  scheduler_port=0, dashboard_address="127.0.0.1:0") as cluster:
+    # Its nanny sets MALLOC_TRIM_THRESHOLD_ and *_NUM_THREADS in this process's environment to start its worker:
+    # restored after, or the next test in this pytest process would see a user's malloc tuning (test_opencv_pool).
+    with mock.patch.dict(os.environ), distributed.LocalCluster(
+            n_workers=1, threads_per_worker=1, processes=True, host="127.0.0.1", scheduler_port=0,
+            dashboard_address="127.0.0.1:0") as cluster:
         remote = evaluate(sequences, trackers, cluster=cluster.scheduler_address)
     assert [(r.sequence, r.tracker) for r in remote] == [(r.sequence, r.tracker) for r in local]
     for here, there in zip(local, remote, strict=True):
