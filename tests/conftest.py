@@ -14,11 +14,13 @@ ROOT = Path(__file__).resolve().parents[1]
 SERIAL = frozenset({
     "tests/core/test_safety.py", "tests/core/test_autopilot_failsafe.py", "tests/core/test_link_loss_exit.py",
     "tests/core/test_sim_camera_mavlink.py", "tests/processors/test_closed_loop.py", "tests/tui/test_tmux.py",
+    "tests/core/test_opencv_pool.py",
 })
 """Modules marked ``serial``: their tests hold real time to bounds (setpoints at 20 Hz, a failsafe within
-max_t, the camera's pose at 30 FPS, a control loop closing) or drive a terminal; .ci/run runs them alone,
-after the others have run on both cores, so that a test on the other core cannot stretch them. Measured
-at load average 14 with test_isolation.py too: 51 tests, 620 s; these take about 420 s of it."""
+max_t, the camera's pose at 30 FPS, a control loop closing, idle threads' CPU time against spinning ones') or drive
+a terminal; .ci/run runs them alone, after the others have run on both cores, so that a test on the other core
+cannot stretch them. Measured at load average 14 with test_isolation.py too: 51 tests, 620 s; these take about
+420 s of it."""
 
 SOAK = frozenset({"tests/processors/test_csrt_real_video.py", "tests/processors/test_nanotrack_real_video.py"})
 """Modules marked ``soak``: minutes of real video through the trackers; .ci/run runs them in a step of their own."""
