@@ -69,6 +69,7 @@ class Tmux:
         except subprocess.CalledProcessError:  # the session ended with the program
             return False
         log = "".join(line[LOG_COLUMN:] for line in screen.splitlines())
+        log = re.sub("[\u2580-\u259f]", "", log)  # the scrollbar's blocks, once the log outgrows its panel
         return "".join(text.split()) in "".join(log.split())
 
     def keys(self, *keys: str) -> None:
