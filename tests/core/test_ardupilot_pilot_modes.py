@@ -25,6 +25,11 @@ async def pilot_in_loiter(tmp_path: Path) -> AsyncIterator[UavCore]:
             truth = core.truth  # type: ignore[attr-defined]
             await asyncio.to_thread(truth.request, {"cmd": "rc_throttle", "pwm": 1500})
             await asyncio.to_thread(truth.request, {"cmd": "rc_mode", "mode": "LOITER"})
+            for _ in range(50):  # the pilot's switch is seen (MAVSDK's HOLD) before the test goes on
+                if core.telemetry.snapshot().flight_mode == "HOLD":
+                    break
+                await asyncio.sleep(0.1)
+            assert core.telemetry.snapshot().flight_mode == "HOLD", "the pilot's LOITER never reached telemetry"
             yield core
 
 
@@ -43,7 +48,6 @@ async def test_autonomy_does_not_fly_from_a_pilots_loiter(tmp_path: Path) -> Non
 async def test_exit_leaves_a_pilots_loiter_alone(tmp_path: Path) -> None:
     async with pilot_in_loiter(tmp_path) as core:
         truth = core.truth  # type: ignore[attr-defined]
-        await asyncio.sleep(1.0)  # telemetry reports the pilot's mode
         await core.stop("quit")
         assert any("vehicle left in HOLD mode at exit" in e.message for e in core.events.recent)
         assert truth.wait_latest()["mode"] == "LOITER"
