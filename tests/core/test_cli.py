@@ -14,6 +14,7 @@ import subprocess
 import sys
 import threading
 import time
+from collections.abc import Iterator
 from pathlib import Path
 
 import psutil
@@ -148,19 +149,26 @@ def test_vehicle_command_without_a_vehicle_fails_the_script_clearly(tmp_path: Pa
     assert result.stderr.startswith("uav-tui: error: script line 2 (arm) failed") and "--fc sim" in result.stderr
 
 
-def start_headless(tmp_path: Path, *flags: str) -> subprocess.Popen[str]:
-    """``uav-tui --no-ui`` as a job of its own (as a shell starts it), once its first status line is out."""
+@contextlib.contextmanager
+def headless_job(tmp_path: Path, *flags: str) -> Iterator[subprocess.Popen[str]]:
+    """``uav-tui --no-ui`` as a job of its own (as a shell starts it), once its first status line is out. However
+    the test ends (a pytest-timeout included) it is killed, reaped and its pipes closed: left to the garbage
+    collector, they failed a later test of the same worker with ResourceWarning."""
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    process = subprocess.Popen([sys.executable, "-m", "uav_tui", "--no-ui", "--runs-dir", str(tmp_path / "runs"),
-                                *flags], cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                               text=True, process_group=0)  # a job, in the shell's session
-    assert process.stdout is not None
-    deadline = time.monotonic() + 30
-    while time.monotonic() < deadline and process.poll() is None:
-        if "proc" in process.stdout.readline():  # the loop is running
-            return process
-    process.kill()
-    pytest.fail(f"no status line: {process.communicate()}")
+    with subprocess.Popen([sys.executable, "-m", "uav_tui", "--no-ui", "--runs-dir", str(tmp_path / "runs"), *flags],
+                          cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                          process_group=0) as process:  # a job, in the shell's session; leaving: pipes closed, reaped
+        try:
+            assert process.stdout is not None
+            deadline = time.monotonic() + 30
+            while time.monotonic() < deadline and process.poll() is None:
+                if "proc" in process.stdout.readline():  # the loop is running
+                    yield process
+                    return
+            process.kill()
+            pytest.fail(f"no status line: {process.communicate()}")
+        finally:
+            process.kill()
 
 
 @pytest.mark.parametrize(("signum", "to_job"), [(signal.SIGTERM, False), (signal.SIGINT, True), (signal.SIGHUP, True)],
@@ -168,15 +176,12 @@ def start_headless(tmp_path: Path, *flags: str) -> subprocess.Popen[str]:
 def test_signals_stop_cleanly(tmp_path: Path, signum: int, to_job: bool) -> None:
     """A terminal sends Ctrl-C, and a login shell whose SSH session dropped SIGHUP, to every process of the job:
     the platform stops in order; its helpers (the processor's process, the shared-memory tracker) are not hit."""
-    process = start_headless(tmp_path)
-    try:
+    with headless_job(tmp_path) as process:
         if to_job:
             os.killpg(process.pid, signum)
         else:
             process.send_signal(signum)
         out, err = process.communicate(timeout=20)
-    finally:
-        process.kill()
     assert process.returncode == 0, err
     assert "stopped:" in out
     assert "processor (pid" not in out + err  # no crash of the processor's process reported
@@ -185,27 +190,25 @@ def test_signals_stop_cleanly(tmp_path: Path, signum: int, to_job: bool) -> None
 
 def test_ctrl_z_does_not_suspend_a_headless_run(tmp_path: Path) -> None:
     """Suspended, the platform would stop streaming to the vehicle: Ctrl-Z (SIGTSTP to the job) is refused, said."""
-    process = start_headless(tmp_path)
-    try:
-        assert process.stdout is not None
-        os.killpg(process.pid, signal.SIGTSTP)
-        time.sleep(1.0)
-        assert psutil.Process(process.pid).status() != psutil.STATUS_STOPPED
-        lines = [process.stdout.readline() for _ in range(3)]  # status lines go on
-        process.send_signal(signal.SIGTERM)
-        out, err = process.communicate(timeout=20)
-    finally:
-        with contextlib.suppress(ProcessLookupError):
-            os.killpg(process.pid, signal.SIGCONT)  # a stopped process could not be killed
-        process.kill()
+    with headless_job(tmp_path) as process:
+        try:
+            assert process.stdout is not None
+            os.killpg(process.pid, signal.SIGTSTP)
+            time.sleep(1.0)
+            assert psutil.Process(process.pid).status() != psutil.STATUS_STOPPED
+            lines = [process.stdout.readline() for _ in range(3)]  # status lines go on
+            process.send_signal(signal.SIGTERM)
+            out, err = process.communicate(timeout=20)
+        finally:
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(process.pid, signal.SIGCONT)  # wakes the job's other processes, were they stopped
     assert process.returncode == 0, err
     assert "[warning] platform: Ctrl-Z ignored: a suspended uav-tui would stop flying the vehicle" in "".join(lines)
     assert "processor (pid" not in out + err and "stopped: SIGTERM" in out
 
 
 def test_hangup_with_continue_keeps_the_run_and_its_processor_going(tmp_path: Path) -> None:
-    process = start_headless(tmp_path, "--on-hangup", "continue")
-    try:
+    with headless_job(tmp_path, "--on-hangup", "continue") as process:
         assert process.stdout is not None
         processor = next(p for p in psutil.Process(process.pid).children() if "processors.child" in p.cmdline())
         os.killpg(process.pid, signal.SIGHUP)  # the SSH session dropped
@@ -213,8 +216,6 @@ def test_hangup_with_continue_keeps_the_run_and_its_processor_going(tmp_path: Pa
         assert processor.is_running() and process.poll() is None
         process.send_signal(signal.SIGTERM)
         out, err = process.communicate(timeout=20)
-    finally:
-        process.kill()
     assert process.returncode == 0, err
     assert "[warning] platform: terminal lost (SIGHUP), --on-hangup continue: the run goes on" in "".join(lines) + out
     assert "processor (pid" not in out + err and "stopped: SIGTERM" in out
