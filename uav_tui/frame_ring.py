@@ -191,10 +191,11 @@ def ensure_resource_tracker() -> None:
     - SharedMemory would start it with ``sys.stderr``'s descriptor; under the dashboard, Textual has
       replaced ``sys.stderr`` with an object that has none (``bad value(s) in fds_to_keep``): give it the
       real one.
-    - It shares the terminal's job, and a hang-up is sent to every process of the job: it starts with
-      SIGHUP blocked (the mask is inherited, and it never unblocks it), so it outlives the terminal.
+    - It shares the terminal's job, and a hang-up or a Ctrl-Z is sent to every process of the job: it
+      starts with SIGHUP and SIGTSTP blocked (the mask is inherited, and it never unblocks them), so it
+      outlives the terminal and is never left stopped by a Ctrl-Z that the platform itself ignores.
     """
-    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGHUP})
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGHUP, signal.SIGTSTP})
     try:
         with contextlib.redirect_stderr(sys.__stderr__ or sys.stderr):
             resource_tracker.ensure_running()
