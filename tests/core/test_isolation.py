@@ -117,6 +117,7 @@ async def test_the_processor_process_loads_no_platform_module(tmp_path: Path) ->
     assert platform == []  # ... and the platform's modules never came in
 
 
+@pytest.mark.serial  # bounds the event loop's lag: a busy neighbour on the other core breaks it
 async def test_a_gil_hog_cannot_freeze_the_platform(tmp_path: Path) -> None:
     async with flying_core(tmp_path, processor=faulty(tmp_path), max_t=MAX_T, processor_timeout=4.0, record=True,
                            runs_dir=str(tmp_path / "runs")) as core:
@@ -220,6 +221,7 @@ async def test_a_hung_call_times_out_and_never_blocks_other_commands(tmp_path: P
         await wait_until(lambda: held(core), 5, "hold")
 
 
+@pytest.mark.serial  # a bound in real time
 def test_sigterm_leaves_within_3_s_whatever_the_processor_does(tmp_path: Path) -> None:
     (tmp_path / "stuck.py").write_text(
         "import signal, time\n\nclass Stuck:\n    def photo_processing(self, frame):\n"
