@@ -22,6 +22,9 @@ MAX_WAIT_S = 24 * 3600.0
 MIN_ORBIT_RADIUS_M = 1.0
 """The smallest ``orbit R``: PX4 flies no smaller orbit (the built-in vehicle refuses one too)."""
 
+MIN_TAKEOFF_ALT_M = 1.0
+"""The lowest ``takeoff ALT``: lower is ground effect, not a hover (and ``1e-300`` is no altitude)."""
+
 MIN_ORBIT_SPEED_MS = 0.1
 """The slowest ``orbit R V``, |V| (V < 0 circles the other way): anything slower is no orbit."""
 
@@ -63,6 +66,13 @@ def _button(text: str) -> int:
     if text not in ("1", "2", "3", "4"):
         raise ValueError("not 1..4")
     return int(text)
+
+
+def _takeoff_alt(text: str) -> float:
+    value = _finite(text)
+    if value < MIN_TAKEOFF_ALT_M:
+        raise ValueError(f"below {MIN_TAKEOFF_ALT_M:g} m, the lowest take-off altitude")
+    return value
 
 
 def _orbit_radius(text: str) -> float:
@@ -108,7 +118,7 @@ class CommandSpec:
 COMMANDS: dict[str, CommandSpec] = {
     "arm": CommandSpec("arm", "arm the motors"),
     "disarm": CommandSpec("disarm", "disarm the motors (refused in the air by the autopilot)"),
-    "takeoff": CommandSpec("takeoff [ALT]", "take off to ALT metres (default: takeoff_alt)", (_positive,), 1,
+    "takeoff": CommandSpec("takeoff [ALT]", "take off to ALT metres (default: takeoff_alt)", (_takeoff_alt,), 1,
                            limits=("max_altitude",)),
     "land": CommandSpec("land", "land where it is"),
     "rtl": CommandSpec("rtl", "return to launch and land"),

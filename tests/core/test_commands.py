@@ -108,6 +108,8 @@ def test_non_finite_and_absurd_values_are_refused(line: str) -> None:
     ("orbit 5 nan", "bad argument V = 'nan': not a finite number"),
     ("orbit five 1", "bad argument R = 'five': not a number"),
     ("f 9", "bad argument N = '9': not 1..4"),
+    ("takeoff 1e-300", "bad argument ALT = '1e-300': below 1 m, the lowest take-off altitude"),
+    ("takeoff 0.5", "bad argument ALT = '0.5': below 1 m"),
 ], ids=lambda v: v)
 def test_a_bad_argument_is_named_with_what_it_must_be(line: str, reason: str) -> None:
     with pytest.raises(CommandError) as refused:
