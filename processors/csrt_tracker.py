@@ -129,26 +129,8 @@ class CSRTTrackingProcessor(TargetFollower):
         self._tracker: cv2.Tracker | None = None
         self._ref_feat: sift_match.Features | None = None  # SIFT-frame pixels
         self._ref_box: Box | None = None  # SIFT-frame pixels, where the reference features were taken
-        self._templates: list[np.ndarray] = []  # [at selection, adapted]; work-frame appearance
         self._quality: deque[float] = deque(maxlen=_QUALITY_HISTORY)
-        self._work_box: Box | None = None  # work-frame pixels: the last box accepted as the target
         self._csrt_box: Box | None = None  # work-frame pixels: where CSRT is now (it keeps running while lost)
-        self._tracking = False
-        self._evidence = 0  # frames of loss evidence in a row
-        self._lost_frames = 0
-
-    # ---- state ----------------------------------------------------------------------------------
-    @property
-    def box(self) -> Box | None:
-        """Tracked box (x, y, w, h) in full-frame pixels, None when lost or idle."""
-        if not self._tracking or self._work_box is None:
-            return None
-        return as_box(v * self._shrink for v in self._work_box)
-
-    @property
-    def selected(self) -> bool:
-        """True while a target is selected (tracked or lost)."""
-        return bool(self._templates)
 
     # ---- hooks ----------------------------------------------------------------------------------
     def _track(self, frame: np.ndarray) -> None:

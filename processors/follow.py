@@ -12,7 +12,7 @@ import logging
 import cv2
 import numpy as np
 
-from processors.steering import Box, Steering, Vector, draw_target
+from processors.steering import Box, Steering, Vector, as_box, draw_target
 
 logger = logging.getLogger(__name__)
 
@@ -52,6 +52,15 @@ class TargetFollower:
         """The tracker works on the frame shrunk by this whole factor (boxes stay in full-frame pixels)."""
         self._force_search = False
         """Set by F2: the tracker searches for the target on the next frame."""
+        self._templates: list[np.ndarray] = []
+        """The target's appearance (work-frame pixels); empty when nothing is selected."""
+        self._work_box: Box | None = None
+        """Work-frame pixels: the last box accepted as the target."""
+        self._tracking = False
+        """False while the selected target is lost."""
+        self._evidence = 0
+        """Frames of loss evidence in a row."""
+        self._lost_frames = 0
 
     # ---- contract -------------------------------------------------------------------------------
     def photo_processing(self, frame: np.ndarray) -> None:
@@ -95,12 +104,14 @@ class TargetFollower:
     @property
     def box(self) -> Box | None:
         """Tracked box (x, y, w, h) in full-frame pixels, None when lost or idle."""
-        raise NotImplementedError
+        if not self._tracking or self._work_box is None:
+            return None
+        return as_box(v * self._shrink for v in self._work_box)
 
     @property
     def selected(self) -> bool:
         """True while a target is selected (tracked or lost)."""
-        raise NotImplementedError
+        return bool(self._templates)
 
     @property
     def lost(self) -> bool:

@@ -107,33 +107,15 @@ class NanoTrackProcessor(TargetFollower):
         self.lost_after, self.accept_ratio = max(1, int(lost_after)), accept_ratio
         self.wide_every = max(1, int(wide_every))
         self._tracker: cv2.TrackerNano | None = None
-        self._templates: list[np.ndarray] = []  # [the selection's appearance]; work-frame pixels
         self._selected: SelectedTemplate | None = None  # NanoTrack's template at selection, to start it elsewhere
         self._looks: deque[float] = deque(maxlen=_APPEARANCE_HISTORY)
         self._levels: deque[float] = deque(maxlen=_SCORE_HISTORY)
         self._steps: deque[float] = deque(maxlen=_MOTION_HISTORY)
-        self._work_box: Box | None = None  # work-frame pixels: the last box accepted as the target
         self._nano_box: Box | None = None  # work-frame pixels: where NanoTrack is now (it keeps running while lost)
         self._velocity = (0.0, 0.0)  # work-frame pixels per frame of the accepted box's centre
         self._speed = 0.0  # the largest recent step (box sizes a frame) when the target was lost
-        self._tracking = False
-        self._evidence = 0
-        self._lost_frames = 0
         self.look = 0.0
         """Appearance score (normalised correlation) of the last box: diagnostics."""
-
-    # ---- state ----------------------------------------------------------------------------------
-    @property
-    def box(self) -> Box | None:
-        """Tracked box (x, y, w, h) in full-frame pixels, None when lost or idle."""
-        if not self._tracking or self._work_box is None:
-            return None
-        return as_box(v * self._shrink for v in self._work_box)
-
-    @property
-    def selected(self) -> bool:
-        """True while a target is selected (tracked or lost)."""
-        return bool(self._templates)
 
     # ---- hooks ----------------------------------------------------------------------------------
     def _start(self, frame: np.ndarray, roi: Box) -> bool:
