@@ -113,6 +113,7 @@ class FrameMailbox:
         self.lock_fd, self.wake_fd, self.claimed_fd = lock_fd, wake_fd, claimed_fd
         self._lock = SharedLock(lock_fd, shm)
         self._closing = False
+        self._claimed_at_close = 0  # the processor's last claim, kept when the mapping goes
         self._waiters = 0  # threads in wait_claimed: close wakes them and lets them leave before the fds go
         self._waiters_left = threading.Condition()
 
@@ -192,11 +193,12 @@ class FrameMailbox:
     def wait_claimed(self, gen: int, timeout_s: float) -> bool:
         """Block up to ``timeout_s`` until the processor claimed offer ``gen`` (or a later one); True once it has.
 
-        Raises MailboxGone as :meth:`offer` does, and when another thread closes the mailbox meanwhile.
+        Raises MailboxGone as :meth:`offer` does, and when another thread closes the mailbox meanwhile, unless
+        the processor had claimed ``gen`` before (it died working on that frame: the frame was taken).
         """
         with self._waiters_left:
             if self._closing:
-                raise MailboxGone("the frame mailbox is closed")
+                return self._claimed_before_close(gen)
             self._waiters += 1
         try:
             # The usual case when decoding is the bottleneck, read without the lock (the mapping stays while a
@@ -219,8 +221,13 @@ class FrameMailbox:
                 return claimed >= gen
             if select.select([self.claimed_fd], [], [], remaining)[0]:
                 if self._closing:
-                    raise MailboxGone("the frame mailbox was closed")
+                    return self._claimed_before_close(gen)
                 _drain(self.claimed_fd)
+
+    def _claimed_before_close(self, gen: int) -> bool:
+        if self._claimed_at_close >= gen:
+            return True
+        raise MailboxGone("the frame mailbox was closed")
 
     # -- the processor ----------------------------------------------------------------------------
 
@@ -256,6 +263,8 @@ class FrameMailbox:
         with self._waiters_left:
             if self._closing:
                 return
+            if self._owner:
+                self._claimed_at_close = _CLAIM_GEN.unpack_from(self._buf)[0]
             self._closing = True
             if self._waiters:
                 os.eventfd_write(self.claimed_fd, 1)

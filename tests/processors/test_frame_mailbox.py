@@ -138,3 +138,18 @@ def test_closing_wakes_a_thread_waiting_for_a_claim_before_its_descriptors_go(ma
     for fd in descriptors:
         with pytest.raises(OSError):
             os.fstat(fd)  # and the descriptors are closed all the same
+
+
+def test_a_claim_made_before_the_processor_died_still_counts_after_the_close(mailbox: FrameMailbox) -> None:
+    """The child claims a replay's frame and dies on it; its mailbox is closed before the capture thread asks.
+
+    The frame was taken (the replay goes on after it); an offer it never claimed is still MailboxGone. Before,
+    both raised, and under load the replay offered the dead child's frame again to its successor (CI, stop 43).
+    """
+    mailbox.offer(offer(1))
+    claim_in_another_process(mailbox)
+    mailbox.offer(offer(2))
+    mailbox.close()
+    assert mailbox.wait_claimed(1, timeout_s=0)
+    with pytest.raises(MailboxGone):
+        mailbox.wait_claimed(2, timeout_s=0)
