@@ -18,7 +18,7 @@ from controllers.errors import ControllerError
 logger = logging.getLogger(__name__)
 
 DEFAULT_RATE_HZ = 20.0
-"""Setpoint rate, the one the README promises; PX4 wants >= 2 Hz, ArduCopter a target within GUID_TIMEOUT."""
+"""Setpoint rate, the one docs/safety.md promises; PX4 wants >= 2 Hz, ArduCopter a target within GUID_TIMEOUT."""
 
 PRESTREAM_S = 0.1
 """PX4 accepts offboard only while setpoints are already streaming; stream this long before asking."""

@@ -37,7 +37,7 @@ def _key(help: str, *, minimum: float | None = None, maximum: float | None = Non
 
 @dataclass(frozen=True)
 class SafetyConfig:
-    """Limits the platform enforces on every vector (the README's safety rules)."""
+    """Limits the platform enforces on every vector (the manual's safety rules, docs/safety.md)."""
 
     max_speed: float = _key("largest |vx|, |vy| executed, m/s", minimum=0.05, maximum=20, default=1.0)
     max_t: float = _key("longest vector duration, s; also the processor-stall limit", minimum=0.1, maximum=10,

@@ -123,7 +123,7 @@ async def test_rule3_setpoints_stream_at_20_hz_for_the_whole_vector(tmp_path: Pa
         await wait_until(lambda: not core.controller.vector_active, 6, "the vector to end")
         records = await setpoints_since(core.truth, since)
         sent = moving(records)
-        # The README's promise, counted where the vehicle receives them: 40 in 2 s; a stalled loop may lose a few.
+        # docs/safety.md's promise, counted where the vehicle receives them: 40 in 2 s; a stalled loop may lose a few.
         assert len(sent) >= 0.9 * 20 * 2.0, len(sent)
         span_s = (sent[-1]["t_mono_ns"] - sent[0]["t_mono_ns"]) / 1e9
         assert span_s <= 2.0 + 0.1

@@ -124,10 +124,10 @@ def test_ctrl_c_says_what_is_kept_and_how_to_go_on(tmp_path: Path) -> None:
     assert f"--resume {out}" in err
 
 
-def test_the_readme_example_processor_evaluates(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    readme = (ROOT / "README.md").read_text()
-    code = re.search(r"```python\n(# ~/algos/mine.py.*?)```", readme, re.S)
-    assert code, "the README's example processor"
+def test_the_manual_example_processor_evaluates(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    page = (ROOT / "docs" / "writing-a-processor.md").read_text()
+    code = re.search(r"```python\n(# ~/algos/mine.py.*?)```", page, re.S)
+    assert code, "the manual's example processor"
     (tmp_path / "mine.py").write_text(code.group(1))
     data, out = tmp_path / "data", tmp_path / "out"
     write_video_sequence(data / "moving-box")

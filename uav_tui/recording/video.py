@@ -5,6 +5,8 @@ queued to the disk writer like a JPEG; the writer thread encodes it (:class:`Vid
 is a stream of self-contained 188-byte packets with no index at the end, so a file cut anywhere
 (SIGKILL, power loss) plays up to the cut; encoded bytes are appended on every writer tick, before
 the index rows that name them are written, so every indexed frame is on disk.
+PyAV rather than OpenCV's ``VideoWriter``: 3.4 ms per 640x480 frame for H.264 in MPEG-TS against 6.8 ms
+for OpenCV's MJPEG AVI, whose index at the end is lost when the process is killed.
 
 ``video.csv`` has one row per captured frame: its position in the video (``video_frame``, empty
 when it was dropped, with the reason in ``dropped``), the frame id it got when it was processed

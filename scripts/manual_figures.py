@@ -1,10 +1,10 @@
-"""Write the README's measured figures from the benchmarks' JSON, so that no number in it is typed by hand.
+"""Write the manual's measured figures from the benchmarks' JSON, so that no number in it is typed by hand.
 
     .venv/bin/python scripts/bench_tracking.py > scripts/results/tracking.json
-    .venv/bin/python scripts/readme_figures.py           # rewrites the marked blocks of README.md
-    .venv/bin/python scripts/readme_figures.py --check   # exit 1 when README.md differs from the JSON
+    .venv/bin/python scripts/manual_figures.py           # rewrites the marked blocks of docs/benchmarks.md
+    .venv/bin/python scripts/manual_figures.py --check   # exit 1 when docs/benchmarks.md differs from the JSON
 
-Each block ``<!-- bench:NAME -->`` ... ``<!-- /bench:NAME -->`` in README.md is made from
+Each block ``<!-- bench:NAME -->`` ... ``<!-- /bench:NAME -->`` in docs/benchmarks.md is made from
 ``scripts/results/NAME.json`` by the renderer of that name in :data:`RENDERERS`; the JSON is the
 benchmark's own output, committed beside this script.
 """
@@ -20,7 +20,8 @@ from pathlib import Path
 from typing import Any
 
 ROOT = Path(__file__).resolve().parents[1]
-README = ROOT / "README.md"
+PAGE = ROOT / "docs" / "benchmarks.md"
+"""The manual's page that holds the marked blocks."""
 RESULTS = ROOT / "scripts" / "results"
 BLOCK = re.compile(r"(<!-- bench:(?P<name>[\w-]+) -->\n)(?P<body>.*?)(<!-- /bench:(?P=name) -->)", re.DOTALL)
 
@@ -40,12 +41,12 @@ def tracking(result: dict[str, Any]) -> str:
              for owner, named in result.get("goals", {}).items() for name, verdict in named.items()]
     missing = [f"{label} not measured: {why}" for label, why in result.get("missing", {}).items()]
     notes = [f"{result['sequences']} sequences of `{Path(result['data']).name}`, {result['workers']} job(s) at a time, "
-             f"{result['threads']} OpenCV/ONNX thread(s) each.", *(f"- {line}" for line in goals + missing)]
+             f"{result['threads']} OpenCV/ONNX thread(s) each.", "", *(f"- {line}" for line in goals + missing)]
     return "\n".join([*rows, "", *notes]) + "\n"
 
 
 RENDERERS: dict[str, Callable[[dict[str, Any]], str]] = {"tracking": tracking}
-"""Block name -> how its JSON (``scripts/results/NAME.json``) is written into the README."""
+"""Block name -> how its JSON (``scripts/results/NAME.json``) is written into the page."""
 
 
 def render(text: str, results: Path = RESULTS) -> str:
@@ -53,7 +54,7 @@ def render(text: str, results: Path = RESULTS) -> str:
     def block(match: re.Match[str]) -> str:
         name = match["name"]
         if name not in RENDERERS:
-            raise SystemExit(f"README.md: no renderer for the block bench:{name}; known: {', '.join(RENDERERS)}")
+            raise SystemExit(f"{PAGE.name}: no renderer for the block bench:{name}; known: {', '.join(RENDERERS)}")
         data = json.loads((results / f"{name}.json").read_text())
         return f"{match.group(1)}{RENDERERS[name](data)}{match.group(4)}"
     return BLOCK.sub(block, text)
@@ -61,16 +62,18 @@ def render(text: str, results: Path = RESULTS) -> str:
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--check", action="store_true", help="only say whether README.md is up to date (exit 1 if not)")
+    parser.add_argument("--check", action="store_true",
+                        help=f"only say whether {PAGE.relative_to(ROOT)} is up to date (exit 1 if not)")
     args = parser.parse_args()
-    text = README.read_text()
+    text = PAGE.read_text()
     new = render(text)
     if args.check:
         if new != text:
-            print("README.md differs from scripts/results/*.json: run scripts/readme_figures.py", file=sys.stderr)
+            print(f"{PAGE.relative_to(ROOT)} differs from scripts/results/*.json: run scripts/manual_figures.py",
+                  file=sys.stderr)
             return 1
         return 0
-    README.write_text(new)
+    PAGE.write_text(new)
     return 0
 
 
