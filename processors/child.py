@@ -71,6 +71,11 @@ from processors.errors import ProcessorLoadError
 from processors.frame_mailbox import FrameMailbox, Offer, Segment
 from processors.frame_telemetry import DEFAULT_SAVE_MAX_HZ, FrameTelemetry
 
+JOB_SIGNALS = frozenset({signal.SIGINT, signal.SIGQUIT, signal.SIGHUP, signal.SIGTSTP, signal.SIGTTIN, signal.SIGTTOU})
+"""What a terminal sends to every process of its job. The platform starts this process with them blocked (a
+process between fork and exec has default handlers: a Ctrl-Z then stops it, and the platform with it, in the
+kernel's vfork wait); what came meanwhile is discarded here, then they are unblocked."""
+
 LOG_LEVEL_ENV = "UAV_TUI_PROCESSOR_LOG_LEVEL"
 """The platform's log level, for the child's root logger."""
 
@@ -192,14 +197,14 @@ def _start_resource_tracker() -> None:
     to /dev/null, not to this process's pipe: the platform's reader of that pipe would wait for it to end.
     """
     own_group, platform_group = os.getpgid(0), os.getpgid(os.getppid())
-    ignored = {sig: signal.signal(sig, signal.SIG_IGN)
-               for sig in (signal.SIGINT, signal.SIGQUIT, signal.SIGTSTP, signal.SIGHUP)}
+    ignored = {sig: signal.signal(sig, signal.SIG_IGN) for sig in JOB_SIGNALS}  # drops those sent while starting
     try:
         os.setpgid(0, platform_group)
         with _output_to_devnull():
             resource_tracker.ensure_running()
         os.setpgid(0, own_group)
     finally:
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, JOB_SIGNALS)  # blocked by the platform while it started this
         for sig, handler in ignored.items():
             signal.signal(sig, handler)
 

@@ -28,12 +28,14 @@ import signal
 import sys
 import threading
 import weakref
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from multiprocessing import resource_tracker
 from multiprocessing.shared_memory import SharedMemory
 
 import numpy as np
+
+from processors.child import JOB_SIGNALS
 
 MAX_SLOTS = 12
 """One in the child, one being written, the rest held by readers (preview, web, recorder, snapshot)."""
@@ -192,12 +194,23 @@ def ensure_resource_tracker() -> None:
       replaced ``sys.stderr`` with an object that has none (``bad value(s) in fds_to_keep``): give it the
       real one.
     - It shares the terminal's job, and a hang-up or a Ctrl-Z is sent to every process of the job: it
-      starts with SIGHUP and SIGTSTP blocked (the mask is inherited, and it never unblocks them), so it
+      starts with the job's signals blocked (the mask is inherited, and it never unblocks them), so it
       outlives the terminal and is never left stopped by a Ctrl-Z that the platform itself ignores.
     """
-    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGHUP, signal.SIGTSTP})
+    with job_signals_blocked(), contextlib.redirect_stderr(sys.__stderr__ or sys.stderr):
+        resource_tracker.ensure_running()
+
+
+@contextlib.contextmanager
+def job_signals_blocked() -> Iterator[None]:
+    """Block the terminal's job signals in this thread while it starts a process, which inherits the mask.
+
+    Between fork and exec the new process has default handlers: a Ctrl-Z sent to the job then stops it before
+    it runs its program, and this process waits for it in the kernel (vfork, unkillable) until ``fg``: the
+    vehicle was no longer flown. Ctrl-C would kill it before it ran.
+    """
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, JOB_SIGNALS)
     try:
-        with contextlib.redirect_stderr(sys.__stderr__ or sys.stderr):
-            resource_tracker.ensure_running()
+        yield
     finally:
         signal.pthread_sigmask(signal.SIG_SETMASK, previous)

@@ -32,7 +32,7 @@ from processors.child import BUFFER_COUNT, LOG_LEVEL_ENV, MEMORY_EXIT_CODE, pars
 from processors.frame_mailbox import FrameMailbox
 from sources.buffer import Frame, FrameBuffer
 from uav_tui import malloc_tuning, opencv_pool
-from uav_tui.frame_ring import Slot, ensure_resource_tracker
+from uav_tui.frame_ring import Slot, ensure_resource_tracker, job_signals_blocked
 from uav_tui.text import safe, shorten
 
 TAIL_LINES = 30
@@ -279,10 +279,11 @@ def spawn(ready: asyncio.Future[ProcessorInfo], output: Callable[[list[bytes]], 
            "PYTHONPATH": os.pathsep.join(p for p in sys.path if p),  # its imports
            LOG_LEVEL_ENV: logging.getLevelName(logging.getLogger().getEffectiveLevel())}
     try:
-        proc = subprocess.Popen([sys.executable, "-m", "processors.child", str(theirs.fileno()), mailbox.address],
-                                pass_fds=(theirs.fileno(), *mailbox.fds), stdin=subprocess.DEVNULL,
-                                stdout=subprocess.PIPE, stderr=subprocess.STDOUT, env=env,
-                                process_group=0)
+        with job_signals_blocked():  # the child unblocks them once it is itself
+            proc = subprocess.Popen([sys.executable, "-m", "processors.child", str(theirs.fileno()), mailbox.address],
+                                    pass_fds=(theirs.fileno(), *mailbox.fds), stdin=subprocess.DEVNULL,
+                                    stdout=subprocess.PIPE, stderr=subprocess.STDOUT, env=env,
+                                    process_group=0)
     except BaseException:
         mailbox.close()
         raise

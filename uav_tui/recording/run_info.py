@@ -64,13 +64,21 @@ def describe(core: UavCore) -> dict[str, Any]:
 
 def versions() -> dict[str, str]:
     """Python, platform and the versions of the packages that shape a run's data."""
-    found = {"python": platform.python_version(), "platform": platform.platform()}
+    found = {"python": platform.python_version(), "platform": _platform()}
     for package in _PACKAGES:
         try:
             found[package] = metadata.version(package)
         except metadata.PackageNotFoundError:
             continue
     return found
+
+
+def _platform() -> str:
+    """What ``platform.platform()`` says (``Linux-6.1.0-arm64-with-glibc2.36``) without starting ``uname -p`` for the
+    processor's name, as it does: a Ctrl-Z reaching that process before it ran stopped it, and uav-tui with it."""
+    libc, version = platform.libc_ver()
+    return "-".join([platform.system(), platform.release(), platform.machine(),
+                     *([f"with-{libc}{version}"] if libc else [])])
 
 
 def write_json(path: Path, data: dict[str, Any]) -> None:
