@@ -1,4 +1,4 @@
-"""The frame-processor contract: one required method, three optional ones, names as published."""
+"""The frame-processor contract: one required method, four optional ones, names as published."""
 
 from __future__ import annotations
 
@@ -11,8 +11,12 @@ import numpy as np
 
 from processors.errors import ProcessorLoadError
 
-OPTIONAL_METHODS = ("catch_cmd", "customize_processing", "getPreparedVector")
-"""Detected once at load time; a processor without ``getPreparedVector`` never moves the vehicle."""
+OPTIONAL_METHODS = ("catch_cmd", "customize_processing", "getPreparedVector", "getLandingTarget")
+"""Detected once at load time; a processor without ``getPreparedVector`` never moves the vehicle, one without
+``getLandingTarget`` never sends a landing target."""
+
+_SIGNATURES = ("catch_cmd(self, roi)", "customize_processing(self, id)", "getPreparedVector(self)",
+               "getLandingTarget(self)")
 
 Box = tuple[int, int, int, int]
 """``(x, y, w, h)`` in frame pixels, (x, y) the top-left corner."""
@@ -28,6 +32,8 @@ class FrameProcessor(Protocol):
         catch_cmd(roi)            operator selected (x, y, w, h) in frame pixels
         customize_processing(id)  operator pressed F1..F4 (id 1..4)
         getPreparedVector()       (vx, vy, t): body-frame m/s, vx forward, vy right, t seconds; or None
+        getLandingTarget()        the landing pad seen in the frame just processed, a
+                                  :class:`~processors.landing_target.LandingTarget`; or None
 
     ``tmMgr`` is set by the platform after construction (a :class:`~processors.frame_telemetry.FrameTelemetry`:
     ``snapshot()``, the telemetry at the frame's capture with its ``frame_seq`` and ``frame_t_ns``, the clock
@@ -66,8 +72,7 @@ def validate_processor(instance: object, *, name: str, path: str | None) -> Proc
         )
     _require_arity(method, 1, where, path, class_name, "photo_processing(self, frame)")
     capabilities = set()
-    for optional, signature in zip(OPTIONAL_METHODS, ("catch_cmd(self, roi)", "customize_processing(self, id)",
-                                                      "getPreparedVector(self)"), strict=True):
+    for optional, signature in zip(OPTIONAL_METHODS, _SIGNATURES, strict=True):
         candidate = getattr(instance, optional, None)
         if candidate is None:
             continue

@@ -152,3 +152,26 @@ def test_read_box_accepts_only_a_positive_finite_box(box: object, expected: obje
 
 def test_read_box_without_the_attribute_is_none() -> None:
     assert read_box(object()) is None
+
+
+def test_get_landing_target_is_detected_at_load(tmp_path: Path) -> None:
+    path = write(tmp_path, '''
+        from processors import LandingTarget
+
+        class Pad:
+            def photo_processing(self, frame):
+                pass
+
+            def getLandingTarget(self):
+                return LandingTarget((0.0, 0.0, 1.0), 5.0)
+        ''')
+    loaded = load_processor(f"{path}:Pad")
+    assert loaded.info.capabilities == {"getLandingTarget"}
+    assert loaded.instance.getLandingTarget().distance_m == 5.0
+
+
+def test_get_landing_target_with_an_argument_is_refused(tmp_path: Path) -> None:
+    path = write(tmp_path, "class Pad:\n    def photo_processing(self, frame):\n        pass\n"
+                           "    def getLandingTarget(self, frame):\n        return None\n")
+    with pytest.raises(ProcessorLoadError, match=r"getLandingTarget\(self\)"):
+        load_processor(f"{path}:Pad")

@@ -1,0 +1,41 @@
+"""The contract's landing target: a unit direction in the camera frame, an optional distance, checked on build."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from processors.landing_target import CAMERA_FRAME, LandingTarget
+
+
+def test_direction_is_normalised_and_angles_follow_it() -> None:
+    target = LandingTarget((3.0, -4.0, 12.0), distance_m=6.5, frame_seq=42)
+    assert target.direction == pytest.approx((3 / 13, -4 / 13, 12 / 13))
+    assert target.angles == pytest.approx((math.atan2(3, 12), math.atan2(-4, 12)))
+    assert target.position_m == pytest.approx((1.5, -2.0, 6.0))
+    assert (target.frame, target.frame_seq) == (CAMERA_FRAME, 42)
+
+
+def test_from_angles_round_trips() -> None:
+    target = LandingTarget.from_angles(math.radians(10), math.radians(-20))
+    assert target.angles == pytest.approx((math.radians(10), math.radians(-20)))
+    assert target.distance_m is None and target.position_m is None
+
+
+@pytest.mark.parametrize("direction", [(0.0, 0.0, 0.0), (0.0, 0.0, -1.0), (1.0, 0.0, 0.0), (math.nan, 0.0, 1.0)],
+                         ids=["zero", "behind", "sideways", "nan"])
+def test_a_direction_not_in_front_of_the_camera_is_refused(direction: tuple[float, float, float]) -> None:
+    with pytest.raises(ValueError, match="z > 0"):
+        LandingTarget(direction)
+
+
+@pytest.mark.parametrize("distance", [0.0, -1.0, math.inf, 1e6], ids=["zero", "negative", "inf", "huge"])
+def test_a_wrong_distance_is_refused(distance: float) -> None:
+    with pytest.raises(ValueError, match="distance"):
+        LandingTarget((0.0, 0.0, 1.0), distance)
+
+
+def test_only_the_camera_frame_is_accepted() -> None:
+    with pytest.raises(ValueError, match="frame"):
+        LandingTarget((0.0, 0.0, 1.0), frame="body")
