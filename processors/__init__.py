@@ -19,6 +19,7 @@ BUILTINS: dict[str, str] = {
     "csrt": "processors.csrt_tracker:CSRTTrackingProcessor",
     "position_hold": "processors.position_hold:SIFTPositionHold",
     "yolo": "processors.yolo_detector:YoloDetector",
+    "precision_land": "processors.precision_land:PrecisionLand",
 }
 """Short names of the built-in processors."""
 

@@ -21,6 +21,7 @@ from sources.ground import default_ground
 from sources.pacing import Pacer
 from sources.pose import PoseAt, PoseProvider
 from sources.sim_geometry import PinholeCamera, Pose
+from sources.sim_marker import GroundMarker, parse_marker
 from sources.sim_render import SimRenderer, default_targets
 from sources.uri import SourceUri
 
@@ -34,17 +35,20 @@ class SimCameraSource(CaptureSource):
     """A pinhole camera over a textured ground, at the pose ``pose_provider`` reports.
 
     URI: ``sim:[?width=640&height=480&fps=30&hfov=62&mount=down|forward&tilt=DEG&targets=N
-    &target_speed=1.0&noise=2&seed=0]``. Without a pose (no provider, or no telemetry yet) it renders
-    a hover at 10 m over the origin, so the pipeline always has frames. Its properties report, at the
-    newest frame, the pose it was drawn from and each target's ``n``, ``e`` and ground ``corners``.
+    &target_speed=1.0&noise=2&seed=0&marker=ID&marker_dict=4x4_50&marker_size=0.5&marker_at=N,E]``; ``marker``
+    lays a landing pad (:class:`sources.sim_marker.GroundMarker`) on the ground. Without a pose (no provider,
+    or no telemetry yet) it renders a hover at 10 m over the origin, so the pipeline always has frames. Its
+    properties report, at the newest frame, the pose it was drawn from, each target's ``n``, ``e`` and ground
+    ``corners``, and the marker.
     """
 
     kind = "sim"
 
     def __init__(self, uri: str = "sim:", *, camera: PinholeCamera | None = None, fps: float = 30.0,
                  targets: int = 0, target_speed: float = 1.0, noise: float = 2.0, seed: int = 0,
-                 pose_provider: PoseProvider | None = None) -> None:
+                 pose_provider: PoseProvider | None = None, marker: GroundMarker | None = None) -> None:
         self.camera = camera or PinholeCamera()
+        self.marker = marker
         super().__init__(uri, f"pinhole {self.camera.hfov_deg:g} deg, tilt {self.camera.tilt_deg:g} deg")
         self.width, self.height, self.fps = self.camera.width, self.camera.height, fps
         self.targets = default_targets(targets, target_speed)
@@ -75,7 +79,7 @@ class SimCameraSource(CaptureSource):
         source = cls(uri.text, camera=camera, fps=uri.take_float("fps", 30.0) or 30.0,
                      targets=uri.take_int("targets", 0) or 0, target_speed=uri.take_float("target_speed", 1.0) or 0.0,
                      noise=uri.take_float("noise", 2.0) or 0.0, seed=uri.take_int("seed", 0) or 0,
-                     pose_provider=pose_provider)
+                     pose_provider=pose_provider, marker=_marker(uri))
         uri.finish()
         return source
 
@@ -98,7 +102,8 @@ class SimCameraSource(CaptureSource):
     def _grab(self) -> np.ndarray | None:
         assert self._pacer is not None
         if self.renderer is None:  # built here, on the capture thread: the first ground texture takes ~1.5 s
-            self.renderer = SimRenderer(self.camera, default_ground(self.seed), self.targets, self.noise, self.seed)
+            self.renderer = SimRenderer(self.camera, default_ground(self.seed), self.targets, self.noise, self.seed,
+                                        self.marker)
         if not self._pacer.wait():
             return None
         self._captured_mono_ns = time.monotonic_ns()  # the instant this frame shows
@@ -128,7 +133,27 @@ class SimCameraSource(CaptureSource):
         p = self.pose
         positions = [{**dict(zip(("n", "e"), target.position(self._t)[:2], strict=True)),
                       "corners": target.corners(self._t).round(2).tolist()} for target in self.targets]
-        return {"hfov": self.camera.hfov_deg, "tilt": self.camera.tilt_deg, "targets": positions,
+        marker = None if self.marker is None else {
+            "dictionary": self.marker.dictionary, "id": self.marker.marker_id, "size_m": self.marker.size_m,
+            "n": self.marker.n, "e": self.marker.e}
+        return {"hfov": self.camera.hfov_deg, "tilt": self.camera.tilt_deg, "targets": positions, "marker": marker,
                 "pose": {"n": p.n, "e": p.e, "d": p.d, "roll": p.roll, "pitch": p.pitch, "yaw": p.yaw},
                 "pose_source": "vehicle telemetry" if self.pose_from_vehicle else "default hover at 10 m (no pose yet)",
                 "pose_extrapolated_ms": round(self.pose_extrapolated_s * 1000, 1)}
+
+
+def _marker(uri: SourceUri) -> GroundMarker | None:
+    """The ``marker=ID`` pad of a ``sim:`` URI (``marker_dict``, ``marker_size``, ``marker_at``), or None."""
+    marker_id = uri.take_int("marker")
+    if marker_id is None:
+        stray = sorted(name for name in uri.params if name.startswith("marker_"))
+        if stray:
+            raise SourceUriError(f"camera URI {uri.text!r}: {', '.join(stray)} need marker=ID (the pad's id)",
+                                 key="source")
+        return None
+    dictionary, size = uri.take_str("marker_dict", "4x4_50") or "", uri.take_float("marker_size", 0.5) or 0.0
+    at = uri.take_str("marker_at", "0,0") or ""
+    try:
+        return parse_marker(dictionary, marker_id, size, at)
+    except ValueError as exc:
+        raise SourceUriError(f"camera URI {uri.text!r}: {exc}", key="source") from None

@@ -1,4 +1,4 @@
-"""Renders what a pinhole camera on the simulated vehicle sees: the ground, moving targets, sky, noise."""
+"""Renders what a pinhole camera on the simulated vehicle sees: the ground, a marker, moving targets, sky, noise."""
 
 from __future__ import annotations
 
@@ -16,6 +16,7 @@ from sources.sim_geometry import (
     ground_to_image,
     ray_down_coefficients,
 )
+from sources.sim_marker import GroundMarker
 
 SKY_BGR = (235, 206, 175)
 HORIZON_MIN_DOWN = 0.01
@@ -70,9 +71,10 @@ class SimRenderer:
     """Draws frames for one camera over one ground; ``render`` is pure given the pose and time."""
 
     def __init__(self, camera: PinholeCamera, ground: GroundTexture, targets: list[GroundTarget] | None = None,
-                 noise_sigma: float = 0.0, seed: int = 0) -> None:
+                 noise_sigma: float = 0.0, seed: int = 0, marker: GroundMarker | None = None) -> None:
         self.camera, self.ground = camera, ground
         self.targets = targets or []
+        self.marker = marker
         self._patch = _target_patch(seed)
         h, w = camera.height, camera.width
         self._u, self._v = np.meshgrid(np.arange(w, dtype=np.float32), np.arange(h, dtype=np.float32))
@@ -84,6 +86,8 @@ class SimRenderer:
         """A new BGR frame of ``pose`` at time ``t``; ``index`` picks the noise pattern."""
         image = self._ground(pose)
         self._sky(image, pose)
+        if self.marker is not None:
+            self._draw_marker(image, pose, self.marker)
         for target in self.targets:
             self._draw_target(image, pose, target, t)
         if self._noise:
@@ -116,22 +120,39 @@ class SimRenderer:
         image[down <= HORIZON_MIN_DOWN * scale] = SKY_BGR
 
     def _draw_target(self, image: np.ndarray, pose: Pose, target: GroundTarget, t: float) -> None:
-        h_img = ground_to_image(pose, self.camera)
-        ground = np.column_stack([target.corners(t), np.ones(4)])
-        projected = ground @ h_img.T
+        self._paste(image, pose, self._patch, target.corners(t))
+
+    def _draw_marker(self, image: np.ndarray, pose: Pose, marker: GroundMarker) -> None:
+        quad = self._project(pose, marker.patch_corners())
+        if quad is not None:
+            side = float(np.max(np.linalg.norm(quad - np.roll(quad, 1, axis=0), axis=1)))
+            self._paste(image, pose, marker.patch(side), marker.patch_corners(), quad)
+
+    def _project(self, pose: Pose, ground_corners: np.ndarray) -> np.ndarray | None:
+        """Image pixels of ground corners (n, e); None when one is behind the camera."""
+        homogeneous = np.column_stack([ground_corners, np.ones(len(ground_corners))])
+        projected = homogeneous @ ground_to_image(pose, self.camera).T
         if np.any(projected[:, 2] <= 1e-6):
+            return None
+        return projected[:, :2] / projected[:, 2:]
+
+    def _paste(self, image: np.ndarray, pose: Pose, patch: np.ndarray, ground_corners: np.ndarray,
+               quad: np.ndarray | None = None) -> None:
+        """Draw ``patch`` (its corners: top-left, top-right, bottom-right, bottom-left) onto ``ground_corners``."""
+        quad = self._project(pose, ground_corners) if quad is None else quad
+        if quad is None:
             return
-        quad = (projected[:, :2] / projected[:, 2:]).astype(np.float32)
         x0, y0 = np.floor(quad.min(axis=0)).astype(int)
-        x1, y1 = np.ceil(quad.max(axis=0)).astype(int)
+        x1, y1 = np.ceil(quad.max(axis=0)).astype(int) + 1
         x0, y0, x1, y1 = max(x0, 0), max(y0, 0), min(x1, self.camera.width), min(y1, self.camera.height)
         if x1 <= x0 or y1 <= y0:
             return
-        ph, pw = self._patch.shape[:2]
-        src = np.array([[0, 0], [pw, 0], [pw, ph], [0, ph]], np.float32)
-        matrix = cv2.getPerspectiveTransform(src, quad - np.array([x0, y0], np.float32))
+        ph, pw = patch.shape[:2]
+        # Pixel centres are whole numbers (OpenCV's, as in K): the patch's outer edges are half a pixel out.
+        src = np.array([[-0.5, -0.5], [pw - 0.5, -0.5], [pw - 0.5, ph - 0.5], [-0.5, ph - 0.5]], np.float32)
+        matrix = cv2.getPerspectiveTransform(src, (quad - (x0, y0)).astype(np.float32))
         size = (x1 - x0, y1 - y0)
-        patch = cv2.warpPerspective(self._patch, matrix, size, flags=cv2.INTER_LINEAR)
+        warped = cv2.warpPerspective(patch, matrix, size, flags=cv2.INTER_LINEAR)
         mask = cv2.warpPerspective(np.full((ph, pw), 255, np.uint8), matrix, size, flags=cv2.INTER_LINEAR)
         roi = image[y0:y1, x0:x1]
-        np.copyto(roi, patch, where=mask[..., None] > 127)
+        np.copyto(roi, warped, where=mask[..., None] > 127)

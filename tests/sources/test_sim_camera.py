@@ -166,3 +166,30 @@ def test_no_pose_renders_the_default_hover_and_targets_are_reported() -> None:
 def test_bad_options(uri: str) -> None:
     with pytest.raises(SourceUriError):
         create_source(uri)
+
+
+def test_a_marker_from_the_uri_is_drawn_where_configured_and_reported() -> None:
+    source = create_source("sim:?width=320&height=240&noise=0&marker=7&marker_dict=apriltag_36h11&marker_size=1.5"
+                           "&marker_at=2,-1")
+    assert source.get_properties()["marker"] == {"dictionary": "apriltag_36h11", "id": 7, "size_m": 1.5,
+                                                 "n": 2.0, "e": -1.0}
+    renderer = SimRenderer(source.camera, default_ground(0), marker=source.marker)
+    image = renderer.render(Pose(d=-10.0))
+    u, v = project_ground_point(2.0, -1.0, Pose(d=-10.0), source.camera)
+    detector = cv2.aruco.ArucoDetector(cv2.aruco.getPredefinedDictionary(cv2.aruco.DICT_APRILTAG_36h11))
+    corners, ids, _ = detector.detectMarkers(cv2.cvtColor(image, cv2.COLOR_BGR2GRAY))
+    assert ids is not None and ids.ravel().tolist() == [7]
+    assert corners[0].reshape(4, 2).mean(axis=0) == pytest.approx((u, v), abs=0.5)
+    side = np.linalg.norm(corners[0][0, 1] - corners[0][0, 0])
+    assert side == pytest.approx(1.5 * source.camera.focal_px / 10.0, rel=0.03)
+
+
+@pytest.mark.parametrize(("query", "message"), [
+    ("marker_size=0.5", "need marker=ID"),
+    ("marker=7&marker_dict=5x5_9", "not one of OpenCV's"),
+    ("marker=70&marker_dict=4x4_50", "ids 0..49"),
+    ("marker=1&marker_at=north", "N,E in metres"),
+], ids=["size-without-id", "dictionary", "id", "position"])
+def test_a_wrong_marker_in_the_uri_says_what_is_expected(query: str, message: str) -> None:
+    with pytest.raises(SourceUriError, match=message):
+        create_source(f"sim:?{query}")
