@@ -74,7 +74,9 @@ class FlightController(Protocol):
     Optional: ``pose_samples()``, an async iterator of timestamped position and attitude samples
     (:class:`controllers.mavsdk_pose.PoseSample`), which the ``sim:`` camera is drawn from; ``own_modes``,
     the flight modes its vectors and holds leave the vehicle in (default HOLD and OFFBOARD; any other is
-    a pilot's, a mission's or a failsafe's, which autonomy and the hold at exit leave alone).
+    a pilot's, a mission's or a failsafe's, which autonomy and the hold at exit leave alone);
+    ``send_landing_target(fix)``, LANDING_TARGET for a :class:`controllers.landing_target.LandingTargetFix`,
+    converted for the autopilot and stamped with the capture time on its clock.
     """
 
     description: str

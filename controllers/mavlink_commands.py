@@ -1,4 +1,4 @@
-"""Raw MAVLink through MAVSDK's MavlinkDirect plugin: mode changes and velocity setpoints.
+"""Raw MAVLink through MAVSDK's MavlinkDirect plugin: mode changes, velocity setpoints, landing targets.
 
 Why not MAVSDK's Offboard plugin: from the first ``set_velocity_body`` on, MAVSDK re-sends the last
 setpoint at 20 Hz from its own thread until ``offboard.stop()``. If our event loop stalled during a
@@ -83,6 +83,12 @@ def velocity_body_setpoint(target_system: int, forward_ms: float, right_ms: floa
         "vy": float(right_ms),
     }
     return _message("SET_POSITION_TARGET_LOCAL_NED", target_system, fields)
+
+
+def landing_target(target_system: int, fields: dict[str, Any]) -> MavlinkMessage:
+    """LANDING_TARGET with ``fields`` (see :mod:`controllers.landing_target`); a broadcast, it has no target fields."""
+    return MavlinkMessage(message_name="LANDING_TARGET", target_system_id=target_system, target_component_id=1,
+                          fields_json=json.dumps(fields))
 
 
 def ack_result(ack: MavlinkMessage) -> str:

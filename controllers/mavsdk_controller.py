@@ -4,14 +4,16 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import json
 import logging
 import math
+import time
 from collections.abc import AsyncIterator, Awaitable, Callable
 from typing import Any, TypeVar
 
 from mavsdk.asyncio import Autopilot, ComponentType, Configuration, Mavsdk, MavsdkConnectionError, System
 from mavsdk.asyncio.plugins.action import ActionAsync, OrbitYawBehavior
-from mavsdk.asyncio.plugins.mavlink_direct import MavlinkDirectAsync
+from mavsdk.asyncio.plugins.mavlink_direct import MavlinkDirectAsync, MavlinkMessage
 from mavsdk.asyncio.plugins.param import ParamAsync
 from mavsdk.asyncio.plugins.telemetry import TelemetryAsync
 
@@ -26,11 +28,12 @@ from controllers.connection import (
 )
 from controllers.errors import ControllerError
 from controllers.failsafe import STALE_MARGIN_S, FailsafeReport, ParamAccess, check_failsafe
-from controllers.mavlink_commands import px4_set_mode, send_command, velocity_body_setpoint
+from controllers.landing_target import LandingTargetError, LandingTargetFix, landing_target_fields
+from controllers.mavlink_commands import landing_target, px4_set_mode, send_command, velocity_body_setpoint
 from controllers.mavsdk_calls import AbandoningExecutor, Subscriptions, bounded, release, use_abandoning_executor
 from controllers.mavsdk_link import LinkMonitor
 from controllers.mavsdk_log import route_mavsdk_log
-from controllers.mavsdk_pose import POSE_RATE_HZ, pose_samples, request_pose_rate
+from controllers.mavsdk_pose import POSE_RATE_HZ, BootClock, pose_samples, request_pose_rate
 from controllers.mavsdk_telemetry import merged_updates, set_rates
 from controllers.vector_stream import DEFAULT_RATE_HZ, VectorStream
 
@@ -92,6 +95,8 @@ class MavsdkController:
         self._subscriptions = Subscriptions()
         self._closed = False
         self._vectors = VectorStream(self, rate_hz=vector_rate_hz, name="MavsdkController")
+        self._boot_clock = BootClock()
+        """The autopilot's clock (``time_boot_ms`` of its ATTITUDE) against ours: LANDING_TARGET's time_usec."""
 
     # ---- connection ------------------------------------------------------------------------------
 
@@ -146,6 +151,7 @@ class MavsdkController:
         self._direct = MavlinkDirectAsync(system)
         self._link = LinkMonitor(self._direct, self._telemetry, self._sysid, self._subscriptions)
         self._link.start()
+        self._subscriptions.read(self._direct.subscribe_message("ATTITUDE"), self._on_attitude, "mavsdk-boot-clock")
         await self._ask_for_telemetry()
 
     async def _ask_for_telemetry(self) -> None:
@@ -315,6 +321,35 @@ class MavsdkController:
     def last_vector_end(self) -> str:
         """How the last vector ended: completed, stopped, vehicle left offboard (MODE), failed: ..."""
         return self._vectors.last_end
+
+    # ---- landing target -------------------------------------------------------------------------
+
+    async def send_landing_target(self, fix: LandingTargetFix) -> dict[str, Any]:
+        """Send LANDING_TARGET for a target seen in the frame captured at ``fix.capture_mono_ns``.
+
+        Converted for this autopilot (:mod:`controllers.landing_target`: ArduPilot angles in BODY_FRD, PX4 the
+        local NED position), ``time_usec`` the capture on the autopilot's clock (µs since its boot, mapped from
+        its ATTITUDE messages). Returns the fields sent.
+
+        Raises:
+            LandingTargetError: the autopilot's clock is not known yet, or the fix can't be given to it.
+            ControllerError: not connected, or the send failed.
+        """
+        time_usec = self._boot_clock.boot_us(fix.capture_mono_ns)
+        if time_usec is None:
+            raise LandingTargetError("landing target: no ATTITUDE from the autopilot yet, so its clock is unknown: "
+                                     "not sent")
+        fields = landing_target_fields(self.autopilot, fix, time_usec)
+        message = landing_target(self._sysid, fields)
+        await self._command("landing_target", lambda: self._direct.send_message(message))
+        return fields
+
+    def _on_attitude(self, message: MavlinkMessage) -> None:
+        received = time.monotonic_ns()
+        if message.system_id != self._sysid:
+            return
+        with contextlib.suppress(ValueError, KeyError, TypeError):
+            self._boot_clock.observe(int(json.loads(message.fields_json)["time_boot_ms"]), received)
 
     # ---- OffboardPort (used by VectorStream) -----------------------------------------------------
 

@@ -51,6 +51,12 @@ class BootClock:
         self._offsets: collections.deque[tuple[int, int]] = collections.deque()  # (received_ns, offset), rising
 
     def to_mono_ns(self, boot_ms: int, received_mono_ns: int) -> int:
+        """The monotonic time of an autopilot time ``boot_ms`` that arrived at ``received_mono_ns``."""
+        self.observe(boot_ms, received_mono_ns)
+        return boot_ms * 1_000_000 + self._offsets[0][1]
+
+    def observe(self, boot_ms: int, received_mono_ns: int) -> None:
+        """One message stamped ``boot_ms`` by the autopilot arrived at ``received_mono_ns``."""
         offset = received_mono_ns - boot_ms * 1_000_000
         window = self._offsets
         if window and offset - window[0][1] > CLOCK_RESET_S * 1e9:
@@ -60,7 +66,12 @@ class BootClock:
         window.append((received_mono_ns, offset))
         while received_mono_ns - window[0][0] > CLOCK_WINDOW_S * 1e9:
             window.popleft()
-        return boot_ms * 1_000_000 + window[0][1]
+
+    def boot_us(self, mono_ns: int) -> int | None:
+        """``mono_ns`` (time.monotonic_ns()) on the autopilot's clock, µs since its boot; None before a message."""
+        if not self._offsets:
+            return None
+        return (mono_ns - self._offsets[0][1]) // 1000
 
 
 def message_interval_command(target_system: int, message_id: int, rate_hz: float) -> MavlinkMessage:

@@ -50,6 +50,15 @@ def test_clock_takes_the_fastest_delivery_and_restarts_with_the_autopilot() -> N
     assert clock.to_mono_ns(100, rebooted + 3 * MS) == rebooted + 3 * MS  # boot time back at 0.1 s
 
 
+def test_clock_maps_our_time_onto_the_autopilots_boot_clock() -> None:
+    clock = BootClock()
+    assert clock.boot_us(5 * MS) is None  # nothing heard from the autopilot yet
+    start = 1_000_000 * MS
+    for boot, delay in ((0, 9), (20, 2), (40, 6)):
+        clock.observe(boot, start + boot * MS + delay * MS)
+    assert clock.boot_us(start + 100 * MS) == 98_000  # the fastest delivery (2 ms) bounds the offset
+
+
 async def test_the_autopilot_streams_the_pose_at_50_hz_stamped_when_it_was_true(sim_vehicle: SimVehicle) -> None:
     fc = MavsdkController()
     await fc.connect(sim_vehicle.connection_string)
