@@ -76,6 +76,8 @@ def build_parser(parser_class: type[argparse.ArgumentParser] = argparse.Argument
     p.add_argument("--gps-clock-offset", type=float, default=0.0, metavar="S",
                    help="UTC time sent in SYSTEM_TIME minus this computer's clock (play a ground computer whose "
                    "clock is wrong)")
+    p.add_argument("--plnd-enabled", action="store_true",
+                   help="ArduPilot dialect: PLND_ENABLED=1, LAND flies over the LANDING_TARGET pad")
     p.add_argument("--parent-pid", type=int, default=None, metavar="PID", help="exit when PID stops being our parent")
     p.add_argument("--log-level", default="INFO", help="logging level on stderr")
     return p
@@ -103,6 +105,7 @@ def config_from_args(args: argparse.Namespace) -> ServerConfig:
         failsafe_land_after_s=args.failsafe_land_after,
         parent_pid=args.parent_pid,
         gps_clock_offset_s=args.gps_clock_offset,
+        precland_enabled=args.plnd_enabled,
         physics=physics,
     )
 

@@ -62,7 +62,7 @@ class CommandHandler:
         self._handlers: dict[int, Callable[[Cmd], int]] = {
             M.MAV_CMD_COMPONENT_ARM_DISARM: self._arm_disarm,
             M.MAV_CMD_NAV_TAKEOFF: self._takeoff,
-            M.MAV_CMD_NAV_LAND: self._mode_action(lambda c: self.v.guidance.land()),
+            M.MAV_CMD_NAV_LAND: self._mode_action(self._land),
             M.MAV_CMD_NAV_RETURN_TO_LAUNCH: self._mode_action(lambda c: self.v.guidance.rtl()),
             M.MAV_CMD_DO_SET_MODE: self._set_mode,
             M.MAV_CMD_DO_ORBIT: self._orbit,
@@ -88,7 +88,10 @@ class CommandHandler:
             )
 
         if stick is not None:  # the ArduCopter dialect: the parameters it simulates
+            pad = self.s.pad
             return [
+                Param("PLND_ENABLED", M.MAV_PARAM_TYPE_INT8, lambda: int(pad.enabled),
+                      lambda value: setattr(pad, "enabled", bool(value))),
                 bind("GUID_TIMEOUT", cfg, "guided_timeout_s"),
                 bind("PILOT_SPD_UP", stick, "speed_up_ms"),
                 bind("PILOT_SPD_DN", stick, "speed_dn_ms"),
@@ -116,6 +119,12 @@ class CommandHandler:
                 COM_ARM_WO_GPS=0,
             ),
         ]
+
+    def _land(self, cmd: Cmd) -> None:
+        """NAV_LAND; on PX4, param 2 asks for precision landing (1 opportunistic, 2 required)."""
+        if not self.s.dialect.ardupilot:
+            self.s.pad.enabled = cmd.p[1] > 0
+        self.v.guidance.land()
 
     def _set_loss_action(self, value: float) -> None:
         if int(value) in OFFBOARD_LOSS_ACTIONS:

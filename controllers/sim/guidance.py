@@ -10,6 +10,7 @@ holds its stopping point, LOITER holds its position but climbs or sinks with the
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from enum import StrEnum
 from typing import TYPE_CHECKING
@@ -113,6 +114,8 @@ class Guidance:
         """The RC throttle (ArduCopter dialect); None: no RC, as the PX4 dialect is flown."""
         self.hold_mode = Mode.HOLD
         """What a finished takeoff holds in: PX4 switches to HOLD, ArduCopter stays in GUIDED."""
+        self.pad: Callable[[], np.ndarray | None] | None = None
+        """The landing pad's (north, east) from precision landing now, or None (see :mod:`controllers.sim.precland`)."""
 
     # ------------------------------------------------------------ transitions
     def _enter(self, mode: Mode) -> None:
@@ -243,6 +246,9 @@ class Guidance:
         return cfg.fast_descent_ms if self.v.altitude > cfg.land_alt1_m else cfg.land_speed_ms
 
     def _land(self) -> Demand:
+        pad = self.pad() if self.pad is not None else None
+        if pad is not None:  # precision landing: over the newest estimate of the pad (kept once it goes stale)
+            self.target[:2] = pad
         vel = self._toward(self.target, self.v.cfg.cruise_speed_ms, 0.0, 0.0)
         vel[2] = self._descent_speed()
         return vel, self._yaw_goal, None

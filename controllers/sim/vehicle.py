@@ -19,6 +19,7 @@ from controllers.sim.geo import Home
 from controllers.sim.guidance import OFFBOARD_LOSS_ACTIONS, Mode, OffboardSetpoint, ThrottleStick
 from controllers.sim.link import MavlinkLink
 from controllers.sim.physics import Multicopter, PhysicsConfig
+from controllers.sim.precland import PadEstimate
 from controllers.sim.setpoints import SetpointRecord, parse_local_ned
 from controllers.sim.streams import TelemetryStreams
 from controllers.sim.truth_server import TruthServer
@@ -52,6 +53,8 @@ class ServerConfig:
     """Exit when this process is no longer our parent (the launcher died without stopping us)."""
     gps_clock_offset_s: float = 0.0
     """The UTC time the vehicle sends (SYSTEM_TIME) minus this computer's clock."""
+    precland_enabled: bool = False
+    """ArduPilot dialect: PLND_ENABLED at start (precision landing from LANDING_TARGET in LAND)."""
     physics: PhysicsConfig = field(default_factory=PhysicsConfig)
 
 
@@ -68,6 +71,9 @@ class SimVehicleServer:
             self.vehicle.guidance.stick = ThrottleStick(config.rc_throttle_pwm)
             self.vehicle.guidance.hold_mode = Mode.GUIDED
         self.link = MavlinkLink(config.mavlink_port)
+        self.pad = PadEstimate(self.dialect.ardupilot)
+        self.pad.enabled = config.precland_enabled and self.dialect.ardupilot
+        self.vehicle.guidance.pad = lambda: self.pad.pad(time.monotonic_ns())
         self.streams = TelemetryStreams(self.link.encoder, self.vehicle, config.home,
                                         gps_clock_offset_s=config.gps_clock_offset_s, dialect=self.dialect)
         self.commands = CommandHandler(self)
@@ -124,6 +130,8 @@ class SimVehicleServer:
         kind = msg.get_type()
         if kind == "SET_POSITION_TARGET_LOCAL_NED":
             self._on_setpoint(msg, t_ns)
+        elif kind == "LANDING_TARGET":
+            self.pad.on_message(msg, t_ns, self.vehicle.pos.copy(), self.vehicle.attitude())
         elif kind in ("COMMAND_LONG", "COMMAND_INT"):
             self.commands.on_command(msg)
         elif kind in ("PARAM_REQUEST_READ", "PARAM_REQUEST_LIST", "PARAM_SET"):
