@@ -4,13 +4,17 @@ from __future__ import annotations
 
 import logging
 import math
-from typing import Any
+import re
+from typing import TYPE_CHECKING, Any
 
 import cv2
 import numpy as np
 
 from processors import markers
 from processors.landing_target import LandingTarget
+
+if TYPE_CHECKING:
+    from sources.camera_model import CameraModel
 
 logger = logging.getLogger(__name__)
 
@@ -25,6 +29,8 @@ MAX_REPROJECTION_PX = 3.0
 """A pose whose corners reproject further than this (RMS) from the detected ones is not a flat square."""
 
 GREEN, RED, YELLOW = (0, 200, 0), (0, 0, 230), (0, 220, 255)
+
+_NUMBER = re.compile(r"\d+(?:\.\d+)?")
 
 
 class PrecisionLand:
@@ -136,7 +142,7 @@ class PrecisionLand:
         self._target = LandingTarget(tuple(pose.tvec), pose.distance_m, getattr(snapshot, "frame_seq", None))
         return f"marker {self.marker_id} at {pose.distance_m:.2f} m"
 
-    def _size_check(self, pose: markers.MarkerPose, camera: Any) -> str | None:
+    def _size_check(self, pose: markers.MarkerPose, camera: CameraModel) -> str | None:
         """Why the distance does not fit the telemetry's height above home, or None when it fits (or can't say)."""
         snapshot = self.tmMgr.snapshot()
         height = getattr(snapshot, "rel_alt_m", None)
@@ -156,7 +162,8 @@ class PrecisionLand:
                 f"({self.marker_size_m / ratio:.2f} m would fit)? no target")
 
     def _set_status(self, status: str) -> None:
-        changed = status.split(" at ")[0] != self.status.split(" at ")[0]
+        """Set ``status``; log it when it says something new (a new distance alone is not news)."""
+        changed = _NUMBER.sub("#", status) != _NUMBER.sub("#", self.status)
         self.status = status
         if changed:
             logger.info("PrecisionLand: %s", status)

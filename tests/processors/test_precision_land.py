@@ -163,3 +163,16 @@ def test_registered_by_name_with_its_arguments() -> None:
     assert (loaded.instance.dictionary, loaded.instance.marker_id) == ("DICT_APRILTAG_36H11", 4)
     with pytest.raises(ProcessorLoadError, match="apriltag_36h11"):
         load_processor("precision_land", {"dictionary": "apriltag"})
+
+
+def test_the_status_is_logged_when_it_says_something_new_not_every_frame(renderer: SimRenderer, caplog: Any) -> None:
+    processor = PrecisionLand("4x4_50", 7, 1.0)  # wrong size: the size check fails on every frame
+    with caplog.at_level(logging.INFO, logger="processors.precision_land"):
+        for seq, altitude in enumerate((10.0, 10.1, 10.2, 10.3), start=1):
+            pose = Pose(d=-altitude)
+            run(processor, renderer.render(pose, index=seq), pose, seq=seq)
+        pose = Pose(d=-10.0)
+        run(PrecisionLand("4x4_50", 7, 0.5), renderer.render(pose, index=1), pose)
+    logged = [record.getMessage() for record in caplog.records]
+    assert len(logged) == 2, logged
+    assert logged[0].startswith("PrecisionLand: size check") and logged[1].startswith("PrecisionLand: marker 7 at ")
