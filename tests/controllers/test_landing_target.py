@@ -10,6 +10,7 @@ from collections.abc import AsyncIterator
 import numpy as np
 import pytest
 import pytest_asyncio
+from pymavlink.dialects.v20 import common as mavlink
 
 from controllers.landing_target import (
     MAV_FRAME_BODY_FRD,
@@ -23,6 +24,13 @@ from controllers.landing_target import (
 )
 from controllers.mavsdk_controller import MavsdkController
 from controllers.sim.launcher import SimVehicle
+from controllers.sim.precland import PadEstimate
+from processors.frame_telemetry import FrameTelemetry
+from processors.precision_land import PrecisionLand
+from sources import create_source
+from sources.ground import default_ground
+from sources.sim_geometry import Pose
+from sources.sim_render import SimRenderer
 from tests.controllers.mavlink_tap import MavlinkTap
 
 NADIR = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
@@ -145,3 +153,34 @@ async def test_landing_target_as_the_autopilot_receives_it(sim_vehicle: SimVehic
     early_ms = (expected_us - received["time_usec"]) / 1000
     assert -1.0 <= early_ms <= 20.0, f"time_usec {early_ms:+.1f} ms from the capture on the autopilot's clock"
     assert received["time_usec"] < (arrived_ns - boot_ns) / 1000  # the capture, not the send
+
+
+@pytest.mark.parametrize("autopilot", ["px4", "ardupilot"])
+@pytest.mark.parametrize("mount", ["down", "45"], ids=["nadir", "tilted-45"])
+def test_the_processors_target_points_each_autopilot_at_the_sim_marker(autopilot: str, mount: str) -> None:
+    """sim: camera -> precision_land -> conversion -> the autopilot's reading: the pad where the simulator put it."""
+    tilt = "" if mount == "down" else f"&tilt={mount}"
+    camera = create_source(f"sim:?marker=5&marker_size=0.6&marker_at=4,2&noise=0{tilt}")
+    model = camera.camera_model()
+    renderer = SimRenderer(camera.camera, default_ground(0), marker=camera.marker)
+    pose = Pose(n=2.5 if mount == "down" else -2.0, e=1.5, d=-8.0, roll=4.0, pitch=-6.0, yaw=20.0)
+    telemetry = {"rel_alt_m": 8.0, "roll_deg": pose.roll, "pitch_deg": pose.pitch, "yaw_deg": pose.yaw}
+    tm = FrameTelemetry(lambda image, extra: None)
+    tm.camera_model = model
+    tm.begin(1, 0, 0, telemetry, 0.1)
+    processor = PrecisionLand("4x4_50", 5, 0.6)
+    processor.tmMgr = tm
+    processor.photo_processing(renderer.render(pose))
+    target = processor.getLandingTarget()
+    assert target is not None, processor.status
+    fix = LandingTargetFix(0, target.direction, target.distance_m, model.rotation_body_camera, model.mount.offset_m,
+                           (pose.roll, pose.pitch, pose.yaw), (pose.n, pose.e, pose.d))
+    fields = landing_target_fields(autopilot, fix, 0)
+    estimate = PadEstimate(ardupilot=autopilot == "ardupilot")
+    estimate.enabled = True
+    message = mavlink.MAVLink_landing_target_message(**{**fields, "q": [1.0, 0.0, 0.0, 0.0]})
+    estimate.on_message(message, 0, np.array([pose.n, pose.e, pose.d]),
+                        tuple(math.radians(a) for a in (pose.roll, pose.pitch, pose.yaw)))
+    pad = estimate.pad(0)
+    assert pad is not None
+    assert math.dist(pad, (4.0, 2.0)) < 0.02 * target.distance_m, f"{pad} from {target.distance_m:.1f} m"
