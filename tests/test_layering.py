@@ -1,10 +1,13 @@
-"""The plug-in levels never import the platform: a processor child can load them alone."""
+"""The plug-in levels never import the platform, and the platform's modules import each other in one direction."""
 
+import ast
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 @pytest.mark.timeout(180)  # a cold import of every module, in a child bounded at 120 s
@@ -24,5 +27,70 @@ def test_levels_load_without_the_platform() -> None:
         "print(sorted(name for name in sys.modules if name.split('.')[0] == 'uav_tui'))\n"
     )
     done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120, check=True,
-                          cwd=Path(__file__).resolve().parents[1])
+                          cwd=ROOT)
     assert done.stdout.strip() == "[]", done.stdout
+
+
+def _module_name(path: Path) -> str:
+    parts = path.relative_to(ROOT).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def _imports(path: Path, name: str, modules: set[str]) -> set[str]:
+    """The modules of ``modules`` that ``path`` names in any import statement: at module level, in a function
+    or under ``TYPE_CHECKING`` (a type-only import still ties the two modules together)."""
+    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+    found = set()
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        if isinstance(node, ast.Import):
+            names = [alias.name for alias in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                base = ".".join(package.split(".")[:len(package.split(".")) - node.level + 1] + [base]).strip(".")
+            names = [base] + [f"{base}.{alias.name}" for alias in node.names]
+        else:
+            continue
+        for imported in names:
+            while imported and imported not in modules:
+                imported = imported.rpartition(".")[0]
+            if imported and imported != name:
+                found.add(imported)
+    return found
+
+
+def _cycle(graph: dict[str, set[str]]) -> list[str]:
+    """One import circle in ``graph`` (module -> modules it imports), or [] when there is none."""
+    done: set[str] = set()
+    path: list[str] = []
+
+    def visit(module: str) -> list[str]:
+        if module in path:
+            return path[path.index(module):] + [module]
+        if module in done:
+            return []
+        path.append(module)
+        for imported in sorted(graph[module]):
+            if cycle := visit(imported):
+                return cycle
+        path.pop()
+        done.add(module)
+        return []
+
+    for module in sorted(graph):
+        if cycle := visit(module):
+            return cycle
+    return []
+
+
+def test_cycle_finder_finds_a_circle() -> None:
+    assert _cycle({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == ["a", "b", "c", "a"]
+    assert _cycle({"a": {"b"}, "b": set(), "c": {"a", "b"}}) == []
+
+
+def test_no_import_circle_in_the_platform() -> None:
+    """Helpers (operations, recorder, replay, web) see the core through Protocols and never import it back."""
+    paths = {_module_name(path): path for path in (ROOT / "uav_tui").rglob("*.py")}
+    graph = {name: _imports(path, name, set(paths)) for name, path in paths.items()}
+    assert {"uav_tui.operations", "uav_tui.recording", "uav_tui.web"} <= graph["uav_tui.core"]  # edges are seen
+    assert _cycle(graph) == []

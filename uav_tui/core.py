@@ -7,7 +7,6 @@ listen to processed frames and events, and send operator commands through :meth:
 from __future__ import annotations
 
 import asyncio
-import enum
 import functools
 import logging
 import time
@@ -40,7 +39,7 @@ from uav_tui.processor_errors import ProcessorErrors
 from uav_tui.recording import Recorder, describe
 from uav_tui.replay.gate import ReplayGate, on_replay_clock
 from uav_tui.replay.operator import CommandReplay, recorded_commands
-from uav_tui.status import CoreStatus
+from uav_tui.status import CoreState, CoreStatus
 from uav_tui.telemetry import TelemetryManager
 from uav_tui.text import last_line, shorten
 from uav_tui.worker import ProcessedFrame, ProcessorWorker, load_in_thread
@@ -62,12 +61,6 @@ LEFT_ALONE_AT_EXIT = frozenset({"LAND", "RETURN_TO_LAUNCH", "MISSION", "MANUAL",
 """Flight modes (MAVSDK's names) a hold before exit would interrupt: the vehicle landing or returning by
 itself (the operator's ``land``/``rtl`` or a failsafe), a mission, a pilot flying by hand. Exit holds the
 vehicle in any other mode, where something uav-tui started (a vector, an orbit, a takeoff) may be flying it."""
-
-
-class CoreState(enum.Enum):
-    NEW = "new"  # constructed, nothing opened
-    RUNNING = "running"  # start() finished: frames flow, commands are accepted
-    STOPPED = "stopped"  # stop() finished: everything released
 
 
 class UavCore:
@@ -348,6 +341,33 @@ class UavCore:
             self.failure = f"unhandled error in {where}: {exc!r}"
             self.events.emit("error", "platform", f"{self.failure}; stopping")
         self.quit_requested.set()
+
+    # -- state the helpers change through the core ------------------------------------------------
+
+    def hand_over(self, mode: str | None) -> None:
+        """A vehicle command handed the vehicle to ``mode`` (LAND, RETURN_TO_LAUNCH), or to no mode of its own."""
+        self.handed_over = mode
+
+    def clear_processor_error(self) -> None:
+        """The processor was reloaded: its last error is history."""
+        self.processor_error = None
+
+    def request_quit(self) -> None:
+        """Ask the interface that runs the core to stop it (``quit``)."""
+        self.quit_requested.set()
+
+    def switch_source(self, source: CameraSource, camera: CameraModel | None) -> CameraSource | None:
+        """Take frames from ``source`` (with its camera model) from now on; returns the old source, still open."""
+        assert self.worker is not None
+        old, self.source, self.camera = self.source, source, camera
+        if self.recorder is not None:
+            self.recorder.watch(source)  # before the worker attaches: each frame is copied before it is drawn on
+        self.worker.attach(source.buffer, camera)
+        return old
+
+    def current_frame(self) -> ProcessedFrame | None:
+        """The frame whose ``tmMgr.save`` calls are being made now (the worker's), None between frames."""
+        return self.worker.current if self.worker is not None else None
 
     # -- frames ----------------------------------------------------------------------------------
 

@@ -29,7 +29,7 @@ class LineBudget(Generic[T]):
     come from any thread, and the callbacks are called on the thread that gave the line (the timer's on the loop).
     """
 
-    def __init__(self, say_line: Callable[[T], object], say_left_out: Callable[[int], None], *,
+    def __init__(self, say_line: Callable[[T], object], say_left_out: Callable[[int], object], *,
                  burst: int = BURST_LINES, per_s: float = LINES_PER_S) -> None:
         self._say_line = say_line
         self._say_left_out = say_left_out

@@ -1,9 +1,13 @@
-"""What each operator command does to a running core (``UavCore.execute`` parses, logs and dispatches)."""
+"""What each operator command does to a running core (``UavCore.execute`` parses, logs and dispatches).
+
+The commands see the core through :class:`OperatedCore`: what they read, and the core's own methods
+for what they change (the vehicle handed over, the processor's error cleared, the camera switched).
+"""
 
 from __future__ import annotations
 
 import asyncio
-from typing import TYPE_CHECKING, Any, NamedTuple
+from typing import TYPE_CHECKING, Any, NamedTuple, Protocol
 
 from uav_tui.autonomy import check_vector
 from uav_tui.commands import VEHICLE_COMMANDS, Command, check_limits
@@ -14,7 +18,14 @@ from uav_tui.text import describe, shorten
 
 if TYPE_CHECKING:
     from controllers.base import FlightController
-    from uav_tui.core import UavCore
+    from processors import LoadedProcessor
+    from processors.base import ProcessorInfo
+    from sources import CameraSource
+    from sources.camera_model import CameraModel
+    from uav_tui.autonomy import AutonomyGate
+    from uav_tui.config import Config
+    from uav_tui.recording import Recorder
+    from uav_tui.worker import Answer
 
 HANDED_OVER = {"land": "LAND", "rtl": "RETURN_TO_LAUNCH"}
 """Commands that hand the vehicle to the autopilot's own mode (MAVSDK's name): exit leaves it there."""
@@ -38,10 +49,55 @@ class Outcome(NamedTuple):
     processor began it: the frames it started after that saw it (a replay gives it before the same frame)."""
 
 
+class CommandedHost(Protocol):
+    """What commands use of the processor's host (thread or process)."""
+
+    @property
+    def processor(self) -> LoadedProcessor: ...
+
+    async def call(self, method: str, *args: Any) -> Answer: ...
+
+    async def reload(self) -> ProcessorInfo: ...
+
+
+class OperatedCore(Protocol):
+    """The part of :class:`~uav_tui.core.UavCore` the commands read, and the methods they change it through."""
+
+    @property
+    def config(self) -> Config: ...
+
+    @property
+    def gate(self) -> AutonomyGate: ...
+
+    @property
+    def controller(self) -> FlightController | None: ...
+
+    @property
+    def source(self) -> CameraSource | None: ...
+
+    @property
+    def recorder(self) -> Recorder | None: ...
+
+    @property
+    def worker(self) -> CommandedHost | None: ...
+
+    async def open_source(self, uri: str) -> CameraSource: ...
+
+    def camera_model(self, source: CameraSource) -> CameraModel | None: ...
+
+    def switch_source(self, source: CameraSource, camera: CameraModel | None) -> CameraSource | None: ...
+
+    def hand_over(self, mode: str | None) -> None: ...
+
+    def clear_processor_error(self) -> None: ...
+
+    def request_quit(self) -> None: ...
+
+
 class Operations:
     """One coroutine per command word; each returns what happened or raises UavError saying why not."""
 
-    def __init__(self, core: UavCore) -> None:
+    def __init__(self, core: OperatedCore) -> None:
         self.core = core
         self._processor_calls = ProcessorCalls()
 
@@ -55,7 +111,7 @@ class Operations:
         else:
             outcome = await getattr(self, f"_{command.word}")(*command.args, origin=origin)
         if command.word in VEHICLE_COMMANDS:
-            self.core.handed_over = HANDED_OVER.get(command.word)
+            self.core.hand_over(HANDED_OVER.get(command.word))
         return outcome if isinstance(outcome, Outcome) else Outcome(outcome)
 
     async def _takeoff(self, altitude: float | None = None, *, origin: str) -> str:
@@ -107,22 +163,18 @@ class Operations:
         except ProcessorLoadError as exc:
             raise ProcessorLoadError(f"reload failed, {name} keeps running: {exc}", path=exc.path,
                                      class_name=exc.class_name, missing=exc.missing) from exc
-        core.processor_error = None
+        core.clear_processor_error()
         return f"processor {info.name} reloaded"
 
     async def _source(self, uri: str, *, origin: str) -> str:
         core = self.core
-        assert core.worker is not None
         new = await core.open_source(uri)
         try:
             camera = core.camera_model(new)
         except SourceError:
             await asyncio.get_running_loop().run_in_executor(None, new.close)
             raise
-        old, core.source, core.camera = core.source, new, camera
-        if core.recorder is not None:
-            core.recorder.watch(new)
-        core.worker.attach(new.buffer, camera)
+        old = core.switch_source(new, camera)
         if old is not None:
             await asyncio.get_running_loop().run_in_executor(None, old.close)
         width, height = new.get_frame_size()
@@ -132,7 +184,7 @@ class Operations:
         raise CommandError("wait is for --script files only", key="command")
 
     async def _quit(self, *, origin: str) -> str:
-        self.core.quit_requested.set()
+        self.core.request_quit()
         return "quit requested"
 
     def _vehicle(self) -> FlightController:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import enum
 from dataclasses import asdict, dataclass, field, fields, replace
 from typing import Any
 
@@ -10,6 +11,14 @@ from uav_tui.geolocate import GeoFix
 from uav_tui.stats import PipelineStats
 from uav_tui.text import safe
 from uav_tui.worker import ProcessorState
+
+
+class CoreState(enum.Enum):
+    """Where a core is in its life; it starts once and stops once."""
+
+    NEW = "new"  # constructed, nothing opened
+    RUNNING = "running"  # start() finished: frames flow, commands are accepted
+    STOPPED = "stopped"  # stop() finished: everything released
 
 
 @dataclass(frozen=True)

@@ -29,6 +29,9 @@ class FakeCore:
         self.camera = None
         self._listeners: list[Callable[[ProcessedFrame], None]] = []
 
+    def current_frame(self) -> ProcessedFrame | None:
+        return self.worker.current
+
     def add_frame_listener(self, listener: Callable[[ProcessedFrame], None]) -> None:
         self._listeners.append(listener)
 

@@ -22,14 +22,14 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
 from controllers.base import Telemetry
 from uav_tui.config import RecordingConfig
 from uav_tui.errors import UavError
-from uav_tui.events import Event, Level
+from uav_tui.events import Event, EventLog, Level
 from uav_tui.recording.crash import CrashRecord
 from uav_tui.recording.rows import (
     TABLES,
@@ -57,7 +57,7 @@ from uav_tui.worker import ProcessedFrame
 if TYPE_CHECKING:
     from sources import CameraSource, Frame
     from sources.camera_model import CameraModel
-    from uav_tui.core import UavCore
+    from uav_tui.telemetry import TelemetryManager
 
 logger = logging.getLogger(__name__)
 
@@ -67,6 +67,26 @@ RESERVE = ".reserved-for-run.json"
 """A file that holds disk space from the start of the run to its end: freed then, so that the final ``run.json`` is
 written on a disk that filled up meanwhile."""
 RESERVE_BYTES = 256 * 1024
+
+
+class RecordedCore(Protocol):
+    """What the recorder reads of the core it records (:meth:`Recorder.attach`)."""
+
+    @property
+    def events(self) -> EventLog: ...
+
+    @property
+    def telemetry(self) -> TelemetryManager: ...
+
+    @property
+    def source(self) -> CameraSource | None: ...
+
+    @property
+    def camera(self) -> CameraModel | None: ...
+
+    def current_frame(self) -> ProcessedFrame | None: ...
+
+    def add_frame_listener(self, listener: Callable[[ProcessedFrame], None]) -> None: ...
 
 
 @dataclass(slots=True)
@@ -147,11 +167,10 @@ class Recorder:
         logger.info("Recorder(%s): recording", run_dir)
         return recorder
 
-    def attach(self, core: UavCore) -> None:
+    def attach(self, core: RecordedCore) -> None:
         """Become the core's ``tmMgr`` saver and listen to its frames, telemetry and events."""
         self._emit = lambda level, message: core.events.emit(level, "recorder", message)
-        # The worker's ``current`` is the frame whose saves are being made, None between frames.
-        self._current = lambda: core.worker.current if core.worker is not None else None
+        self._current = core.current_frame  # the frame whose saves are being made, None between frames
         self._camera = lambda: core.camera  # the model of the source the frames come from (it follows a switch)
         core.telemetry.saver = self.save
         core.telemetry.add_listener(self.on_telemetry)

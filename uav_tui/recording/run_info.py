@@ -9,12 +9,17 @@ import os
 import platform
 from importlib import metadata
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 from uav_tui.text import redact
 
 if TYPE_CHECKING:
-    from uav_tui.core import UavCore
+    from controllers.base import FlightController
+    from controllers.replay_timeline import ReplayTimeline
+    from processors import LoadedProcessor
+    from sources import CameraSource
+    from sources.camera_model import CameraModel
+    from uav_tui.config import Config
 
 RUN_NAME_FORMAT = "%Y-%m-%dT%H-%M-%SZ"
 """Run folders are named after their UTC start, sortable, without ':' (FAT/exFAT sticks cannot hold it)."""
@@ -41,7 +46,37 @@ def new_run_dir(runs_dir: Path, started_wall_ns: int) -> Path:
     raise FileExistsError(f"{runs_dir / name} and 999 numbered variants exist")
 
 
-def describe(core: UavCore) -> dict[str, Any]:
+class _Host(Protocol):
+    @property
+    def processor(self) -> LoadedProcessor: ...
+
+
+class DescribedCore(Protocol):
+    """What ``run.json`` reads of a started core (:func:`describe`)."""
+
+    @property
+    def config(self) -> Config: ...
+
+    @property
+    def started_wall_ns(self) -> int: ...
+
+    @property
+    def source(self) -> CameraSource | None: ...
+
+    @property
+    def camera(self) -> CameraModel | None: ...
+
+    @property
+    def controller(self) -> FlightController | None: ...
+
+    @property
+    def worker(self) -> _Host | None: ...
+
+    @property
+    def replay(self) -> ReplayTimeline | None: ...
+
+
+def describe(core: DescribedCore) -> dict[str, Any]:
     """What ``run.json`` says about a started core's run."""
     source = core.source.get_properties() if core.source is not None else {}
     processor = core.worker.processor if core.worker is not None else None

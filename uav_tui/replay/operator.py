@@ -9,13 +9,11 @@ import csv
 import logging
 import math
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 from uav_tui.commands import Command, parse
 from uav_tui.errors import KNOWN_ERRORS
-
-if TYPE_CHECKING:
-    from uav_tui.core import UavCore
+from uav_tui.status import CoreState
 
 logger = logging.getLogger(__name__)
 
@@ -71,6 +69,15 @@ def _frame_starts(frames_csv: Path) -> list[tuple[int, int]]:
     return starts
 
 
+class ReplayedCore(Protocol):
+    """What :class:`CommandReplay` uses of the core: its state and its one command entry."""
+
+    @property
+    def state(self) -> CoreState: ...
+
+    async def execute(self, command: Command | str, origin: str = "script") -> str: ...
+
+
 class CommandReplay:
     """Gives the replayed processor each recorded command before the frame it is due at (:func:`recorded_commands`).
 
@@ -78,7 +85,8 @@ class CommandReplay:
     the command to finish, so the processor has it before that frame, in lockstep and paced alike.
     """
 
-    def __init__(self, core: UavCore, loop: asyncio.AbstractEventLoop, commands: list[tuple[int, Command]]) -> None:
+    def __init__(self, core: ReplayedCore, loop: asyncio.AbstractEventLoop,
+                 commands: list[tuple[int, Command]]) -> None:
         self.core = core
         self.loop = loop
         self.commands = commands
@@ -95,6 +103,6 @@ class CommandReplay:
                 logger.info("replayed command %s failed: %s", command, exc)
 
     async def _execute(self, command: Command) -> None:
-        while self.core.state.value == "new":  # the camera can run ahead of the core's start
+        while self.core.state is CoreState.NEW:  # the camera can run ahead of the core's start
             await asyncio.sleep(0.01)
         await self.core.execute(command, origin="replay")

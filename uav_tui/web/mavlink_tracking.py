@@ -36,6 +36,7 @@ from uav_tui.line_budget import LineBudget
 from uav_tui.text import describe
 from uav_tui.web.failures import HandlerFailures
 from uav_tui.web.roi import point_to_roi, rect_to_roi
+from uav_tui.web.view import ServedCore
 
 logger = logging.getLogger(__name__)
 
@@ -89,13 +90,13 @@ class CameraTracking:
     """The camera component for one running core.
 
     Args:
-        core: the running UavCore.
+        core: the running core (:class:`~uav_tui.web.view.ServedCore`).
         address: ``udpin:HOST:PORT`` or ``udpout:HOST:PORT``.
         system_id: MAVLink system id (the vehicle's, so the ground station groups the camera with it).
         component_id: MAVLink component id (MAV_COMP_ID_CAMERA).
     """
 
-    def __init__(self, core: Any, address: str, *, system_id: int = 1,
+    def __init__(self, core: ServedCore, address: str, *, system_id: int = 1,
                  component_id: int = mavlink.MAV_COMP_ID_CAMERA) -> None:
         self.core = core
         self.address = address

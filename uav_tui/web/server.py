@@ -34,16 +34,17 @@ from aiortc import RTCConfiguration, RTCPeerConnection, RTCSessionDescription
 
 from uav_tui.commands import Command, parse
 from uav_tui.config import WebConfig
-from uav_tui.core import CoreState
 from uav_tui.errors import KNOWN_ERRORS, CommandError, UavError
 from uav_tui.events import Event
 from uav_tui.line_budget import LineBudget
+from uav_tui.status import CoreState
 from uav_tui.text import describe, shorten
 from uav_tui.web.failures import HandlerFailures
 from uav_tui.web.mdns import adopt_mdns_resolver
 from uav_tui.web.roi import roi_from_message
 from uav_tui.web.throttle import AuthThrottle
 from uav_tui.web.tracks import VideoHub
+from uav_tui.web.view import ServedCore
 
 logger = logging.getLogger(__name__)
 
@@ -62,11 +63,11 @@ class WebServer:
     """Serves the page for one running core.
 
     Args:
-        core: the running UavCore.
+        core: the running core (:class:`~uav_tui.web.view.ServedCore`).
         config: the ``[web]`` section.
     """
 
-    def __init__(self, core: Any, config: WebConfig) -> None:
+    def __init__(self, core: ServedCore, config: WebConfig) -> None:
         self.core = core
         self.config = config
         self.token = config.web_token or secrets.token_urlsafe(24)  # 192 bits (config refuses under 96)

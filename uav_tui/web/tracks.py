@@ -14,7 +14,6 @@ import fractions
 import logging
 import time
 from concurrent.futures import ThreadPoolExecutor
-from typing import Any
 
 import cv2
 import numpy as np
@@ -23,6 +22,7 @@ from aiortc.contrib.media import MediaRelay
 from aiortc.mediastreams import VIDEO_CLOCK_RATE, VIDEO_TIME_BASE, MediaStreamError
 from av import VideoFrame
 
+from uav_tui.web.view import FrameFeed
 from uav_tui.worker import ProcessedFrame
 
 logger = logging.getLogger(__name__)
@@ -107,12 +107,12 @@ class VideoHub:
     """Gives every viewer a track of the processed video; one source track for all of them.
 
     Args:
-        core: the running UavCore (``add_frame_listener`` / ``remove_frame_listener``).
+        core: the running core's processed frames.
         width: streamed width in pixels.
         fps: streamed frame rate.
     """
 
-    def __init__(self, core: Any, width: int, fps: float) -> None:
+    def __init__(self, core: FrameFeed, width: int, fps: float) -> None:
         self._core = core
         self.width, self.fps = width, fps
         self._relay = MediaRelay()

@@ -1,0 +1,38 @@
+"""What the side channels (the web page, the MAVLink camera component) use of a running core."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Protocol
+
+if TYPE_CHECKING:
+    from sources import CameraSource
+    from uav_tui.commands import Command
+    from uav_tui.events import EventLog
+    from uav_tui.status import CoreState, CoreStatus
+    from uav_tui.worker import ProcessedFrame
+
+
+class FrameFeed(Protocol):
+    """Processed frames, delivered on the loop to each listener added."""
+
+    def add_frame_listener(self, listener: Callable[[ProcessedFrame], None]) -> None: ...
+
+    def remove_frame_listener(self, listener: Callable[[ProcessedFrame], None]) -> None: ...
+
+
+class ServedCore(FrameFeed, Protocol):
+    """A running core as the side channels see it: its state, status, events, camera and commands."""
+
+    @property
+    def state(self) -> CoreState: ...
+
+    @property
+    def events(self) -> EventLog: ...
+
+    @property
+    def source(self) -> CameraSource | None: ...
+
+    def status(self) -> CoreStatus: ...
+
+    async def execute(self, command: Command | str, origin: str = "script") -> str: ...
