@@ -4,7 +4,13 @@ from __future__ import annotations
 
 from collections.abc import AsyncIterator
 from dataclasses import dataclass, fields
-from typing import Any, Literal, Protocol, runtime_checkable
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Literal, Protocol, runtime_checkable
+
+if TYPE_CHECKING:
+    from controllers.failsafe import FailsafeReport
+    from controllers.landing_target import LandingTargetFix
+    from controllers.replay_timeline import ReplayTimeline
 
 
 @dataclass(frozen=True, slots=True)
@@ -71,12 +77,10 @@ class FlightController(Protocol):
     body-frame velocity setpoint at >= 10 Hz for ``t`` seconds, then sends zero and puts the vehicle
     in a holding mode itself. A new vector replaces the running one.
 
-    Optional: ``pose_samples()``, an async iterator of timestamped position and attitude samples
-    (:class:`controllers.mavsdk_pose.PoseSample`), which the ``sim:`` camera is drawn from; ``own_modes``,
-    the flight modes its vectors and holds leave the vehicle in (default HOLD and OFFBOARD; any other is
-    a pilot's, a mission's or a failsafe's, which autonomy and the hold at exit leave alone);
-    ``send_landing_target(fix)``, LANDING_TARGET for a :class:`controllers.landing_target.LandingTargetFix`,
-    converted for the autopilot and stamped with the capture time on its clock.
+    Optional capabilities are the small Protocols below (:class:`FailsafeCheck`, :class:`PoseFeed`,
+    :class:`OwnModes`, :class:`LandingTargets`, :class:`BlockingCalls`, :class:`SimulatorOwner`,
+    :class:`RecordedVehicle`); the platform asks ``isinstance(controller, PoseFeed)`` and uses what the
+    answer allows.
     """
 
     description: str
@@ -110,3 +114,78 @@ class FlightController(Protocol):
     def telemetry(self) -> AsyncIterator[dict[str, Any]]:
         """Partial telemetry updates keyed by :class:`Telemetry` field names, as they arrive."""
         ...
+
+
+@runtime_checkable
+class FailsafeCheck(Protocol):
+    """A controller that can read (and set) the autopilot's offboard-loss failsafe (MAVLink autopilots)."""
+
+    async def check_failsafe(self, max_t: float, *, tune: bool) -> FailsafeReport:
+        """Check the failsafe against vectors of up to ``max_t`` s; with ``tune``, set what allows longer."""
+        ...
+
+
+@runtime_checkable
+class PoseFeed(Protocol):
+    """A controller that streams the vehicle's pose, which the ``sim:`` camera is drawn from."""
+
+    def pose_samples(self) -> AsyncIterator[PoseSample]:
+        """Timestamped position and attitude samples (:class:`PoseSample`), as they arrive."""
+        ...
+
+
+@runtime_checkable
+class OwnModes(Protocol):
+    """A controller that says which flight modes its own vectors and holds leave the vehicle in.
+
+    Without it: HOLD and OFFBOARD. Any other mode is a pilot's, a mission's or a failsafe's, which
+    autonomy and the hold at exit leave alone.
+    """
+
+    @property
+    def own_modes(self) -> frozenset[str]: ...
+
+
+@runtime_checkable
+class LandingTargets(Protocol):
+    """A controller that sends LANDING_TARGET (precision landing) for a target seen in a frame."""
+
+    async def send_landing_target(self, fix: LandingTargetFix) -> dict[str, Any]:
+        """Send it converted for the autopilot and stamped with the frame's capture time on its clock; returns
+        what was sent."""
+        ...
+
+
+@runtime_checkable
+class BlockingCalls(Protocol):
+    """A controller whose calls can stay blocked in a thread after it is closed (MAVSDK's)."""
+
+    @property
+    def unfinished_calls(self) -> list[str]:
+        """The calls still blocked (abandoned: they do not keep the process alive)."""
+        ...
+
+
+class Simulator(Protocol):
+    """A simulator process a controller owns."""
+
+    def exit_status(self) -> str | None:
+        """How the process ended by itself (``"killed by SIGKILL"``), else None (running, or stopped on request)."""
+        ...
+
+
+@runtime_checkable
+class SimulatorOwner(Protocol):
+    """A controller that started the simulated vehicle it flies (``--fc sim``)."""
+
+    sim: Simulator
+
+
+@runtime_checkable
+class RecordedVehicle(Protocol):
+    """A controller that replays a recorded run's vehicle (``--fc replay:RUN``): nothing is ever sent."""
+
+    run_dir: Path
+    """The recorded run's folder."""
+    timeline: ReplayTimeline
+    """Where the replay is on the recorded clock; shared with the ``run:`` camera of the same run."""

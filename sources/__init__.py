@@ -9,7 +9,7 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
-from sources.base import CameraSource, CaptureSource
+from sources.base import CameraSource, CaptureSource, WarmsUp
 from sources.buffer import Frame, FrameBuffer
 from sources.errors import SourceError, SourceUriError
 from sources.uri import SourceUri
@@ -53,9 +53,9 @@ def warm_up_source(uri: str) -> None:
     try:
         parsed = SourceUri.parse(uri)
         module_name, class_name = SCHEMES[parsed.scheme].split(":")
-        warm_up = getattr(getattr(importlib.import_module(module_name), class_name), "warm_up", None)
-        if warm_up is not None:
-            warm_up(parsed)
+        cls = getattr(importlib.import_module(module_name), class_name)
+        if isinstance(cls, WarmsUp):  # a class with a static warm_up(uri)
+            cls.warm_up(parsed)
     except (KeyError, SourceError):
         return
 

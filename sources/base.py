@@ -13,6 +13,7 @@ from sources.buffer import FrameBuffer
 
 if TYPE_CHECKING:
     from sources.camera_model import CameraModel
+    from sources.uri import SourceUri
 
 logger = logging.getLogger(__name__)
 
@@ -35,6 +36,23 @@ class CameraSource(Protocol):
     def get_frame_size(self) -> tuple[int, int]: ...
     def close(self) -> None: ...
     def get_properties(self) -> dict[str, Any]: ...
+
+
+@runtime_checkable
+class KnowsCameraModel(Protocol):
+    """A source that can know its own camera model (``sim:`` its renderer's); the platform asks it first."""
+
+    def camera_model(self) -> CameraModel | None:
+        """The model, or None: this source cannot know (the configured one is taken, if any)."""
+        ...
+
+
+@runtime_checkable
+class WarmsUp(Protocol):
+    """A source class with a slow one-off preparation (``sim:`` builds its ground) that may run before it is
+    built, overlapping the platform's other start-up work (:func:`sources.warm_up_source`)."""
+
+    def warm_up(self, uri: SourceUri) -> None: ...
 
 
 class CaptureSource:

@@ -17,7 +17,7 @@ from collections.abc import Callable
 from numbers import Real
 from typing import Any
 
-from controllers.base import FlightController
+from controllers.base import FlightController, OwnModes
 from uav_tui.config import SafetyConfig
 from uav_tui.errors import KNOWN_ERRORS, UavError
 from uav_tui.events import EventLog, Level, Repeats
@@ -41,8 +41,7 @@ def own_modes(controller: FlightController | None) -> frozenset[str]:
     A controller may say (``own_modes``): on ArduCopter the platform holds in GUIDED (OFFBOARD), so
     HOLD there is LOITER or BRAKE, a pilot's or a failsafe's. Otherwise :data:`AUTONOMY_MODES`.
     """
-    modes = getattr(controller, "own_modes", None)
-    return modes if isinstance(modes, frozenset) else AUTONOMY_MODES
+    return controller.own_modes if isinstance(controller, OwnModes) else AUTONOMY_MODES
 
 Vector = tuple[float, float, float]
 

@@ -17,10 +17,10 @@ from typing import TYPE_CHECKING, Any
 import psutil
 
 from controllers import connect_controller
-from controllers.base import FlightController
-from controllers.replay import ReplayController
+from controllers.base import BlockingCalls, FailsafeCheck, FlightController, PoseFeed, RecordedVehicle
 from controllers.replay_timeline import ReplayTimeline
 from sources import CameraSource, open_source, warm_up_source
+from sources.base import KnowsCameraModel
 from sources.camera_model import CameraModel
 from sources.pose import PoseTrack
 from uav_tui import pose_feed
@@ -137,9 +137,9 @@ class UavCore:
             self.controller = await connect_controller(self.config.fc, heartbeat_timeout=self.config.connect_timeout,
                                                        sim_vehicle=self.config.sim.vehicle())
             self.telemetry = TelemetryManager(self.controller)
-            if self.controller is not None and not isinstance(self.controller, ReplayController):
+            if self.controller is not None and not isinstance(self.controller, RecordedVehicle):
                 self.telemetry.add_listener(ClockCheck(self.events))  # a replay's clock was the recording's
-            if isinstance(self.controller, ReplayController):
+            if isinstance(self.controller, RecordedVehicle):
                 replay = self.replay = self.controller.timeline
                 self.gate = ReplayGate(self.config.safety, self.telemetry, self.events, self.controller)
                 self.worker.stage_clock = on_replay_clock
@@ -211,11 +211,10 @@ class UavCore:
 
     async def _check_autopilot_failsafe(self) -> None:
         """Read (and set) the autopilot's offboard-loss failsafe; autonomy is refused while it is too slow."""
-        check = getattr(self.controller, "check_failsafe", None)
-        if check is None:
+        if not isinstance(self.controller, FailsafeCheck):
             return
         safety = self.config.safety
-        report = await check(safety.max_t, tune=safety.tune_autopilot_failsafe)
+        report = await self.controller.check_failsafe(safety.max_t, tune=safety.tune_autopilot_failsafe)
         self.events.emit("info", "autonomy", report.summary())
         if not report.ok:
             self.gate.refusal = "; ".join(report.problems)
@@ -309,7 +308,8 @@ class UavCore:
     async def _close_controller(self) -> None:
         if self.controller is not None:
             await self.controller.close()
-            self.abandoned_calls = list(getattr(self.controller, "unfinished_calls", ()))
+            if isinstance(self.controller, BlockingCalls):
+                self.abandoned_calls = list(self.controller.unfinished_calls)
             if self.abandoned_calls:
                 self.events.emit("error", "link", "flight controller calls still blocked, abandoned: "
                                  + ", ".join(self.abandoned_calls))
@@ -416,9 +416,9 @@ class UavCore:
 
         Raises CameraModelError when the model is for another frame size than the source gives.
         """
-        own = getattr(source, "camera_model", None)
         width, height = source.get_frame_size()
-        model = (own() if own is not None else None) or self.config.camera.model(width, height)
+        own = source.camera_model() if isinstance(source, KnowsCameraModel) else None
+        model = own or self.config.camera.model(width, height)
         if model is not None and width and height:
             model.check_size(width, height)
         self.events.emit("info", "source", f"camera model: {model.describe()}" if model is not None else
@@ -428,12 +428,11 @@ class UavCore:
     async def _vehicle_pose(self) -> PoseTrack:
         """The pose track fed from the controller's telemetry, started on first use (any MAVLink autopilot)."""
         if self.pose_track is None:
-            samples = getattr(self.controller, "pose_samples", None)
-            if samples is None:
+            if not isinstance(self.controller, PoseFeed):
                 raise SourceError("the sim: camera draws the vehicle's view from its MAVLink telemetry: use it with "
                                   "--fc sim or a MAVLink connection string (e.g. udpin://0.0.0.0:14540)")
             self.pose_track = PoseTrack()
-            self._spawn(pose_feed.feed(samples(), self.pose_track), "pose")
+            self._spawn(pose_feed.feed(self.controller.pose_samples(), self.pose_track), "pose")
             if not await pose_feed.wait_first_pose(self.pose_track):
                 self.events.emit("warning", "source", "no position/attitude telemetry yet: the sim: camera shows "
                                  "a hover at 10 m until it comes")
@@ -483,7 +482,7 @@ class UavCore:
             processor_error=self.processor_error,
             processor_state=self.worker.state(),
             fc=self.config.fc,
-            fc_description=getattr(self.controller, "description", "none"),
+            fc_description=self.controller.description if self.controller is not None else "none",
             heartbeat_age_s=self.controller.heartbeat_age_s() if self.controller else None,
             autonomy=self.gate.enabled,
             autonomy_stop_reason=self.gate.stop_reason,

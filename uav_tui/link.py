@@ -9,7 +9,7 @@ from __future__ import annotations
 import asyncio
 import time
 
-from controllers.base import FlightController
+from controllers.base import FlightController, SimulatorOwner
 from uav_tui.events import EventLog
 
 CHECK_PERIOD_S = 0.2
@@ -49,8 +49,7 @@ class LinkWatch:
         elif age < self.link_timeout and self.lost:
             self.lost = False
             self.events.emit("info", "link", f"link restored after {time.monotonic() - self._lost_at:.1f} s")
-        sim = getattr(self.controller, "sim", None)
-        ended = sim.exit_status() if sim is not None else None
+        ended = self.controller.sim.exit_status() if isinstance(self.controller, SimulatorOwner) else None
         if ended and not self.vehicle_problem:
             self.vehicle_problem = f"simulator process {ended}"
             self.events.emit("error", "link", f"the built-in simulator process {ended}: the vehicle is gone; "

@@ -3,9 +3,12 @@ with connecting the vehicle); mistakes in the URI are left for ``open_source`` t
 
 from __future__ import annotations
 
+import importlib
+
 import pytest
 
-from sources import open_source, warm_up_source
+from sources import SCHEMES, open_source, warm_up_source
+from sources.base import WarmsUp
 from sources.ground import default_ground
 
 
@@ -25,3 +28,12 @@ def test_the_sim_camera_builds_its_ground_ahead_and_uses_that_one() -> None:
 @pytest.mark.parametrize("uri", ["nope:", "sim:?seed=x", "no scheme", "synthetic:"])
 def test_nothing_to_prepare_or_a_bad_uri_is_silent(uri: str) -> None:
     warm_up_source(uri)
+
+
+def test_only_the_sim_camera_has_a_warm_up() -> None:
+    for scheme, target in SCHEMES.items():
+        module_name, class_name = target.split(":")
+        if scheme == "picam":
+            continue  # imports picamera2
+        cls = getattr(importlib.import_module(module_name), class_name)
+        assert isinstance(cls, WarmsUp) == (scheme == "sim"), scheme

@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 import numpy as np
 
 from controllers.base import Telemetry
+from sources.buffer import Frame
 from uav_tui.config import RecordingConfig
 from uav_tui.errors import UavError
 from uav_tui.events import Event, EventLog, Level
@@ -55,7 +56,7 @@ from uav_tui.recording.writer import MB, DiskWriter, Rename
 from uav_tui.worker import ProcessedFrame
 
 if TYPE_CHECKING:
-    from sources import CameraSource, Frame
+    from sources import CameraSource
     from sources.camera_model import CameraModel
     from uav_tui.telemetry import TelemetryManager
 
@@ -216,7 +217,7 @@ class Recorder:
                 self._emit("warning", "tmMgr.save() called outside photo_processing(): ignored (it stores "
                                       "the frame being processed)")
             return
-        image = getattr(image, "image", image)  # a sources Frame is fine too
+        image = image.image if isinstance(image, Frame) else image  # a sources Frame is fine too
         if not isinstance(image, np.ndarray) or image.ndim not in (2, 3):
             raise TypeError(f"tmMgr.save(frame, **extra): frame must be an image array, got {type(image).__name__}")
         entry = self._saves.get(id(result))

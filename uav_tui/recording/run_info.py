@@ -11,11 +11,11 @@ from importlib import metadata
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol
 
+from controllers.base import RecordedVehicle
 from uav_tui.text import redact
 
 if TYPE_CHECKING:
     from controllers.base import FlightController
-    from controllers.replay_timeline import ReplayTimeline
     from processors import LoadedProcessor
     from sources import CameraSource
     from sources.camera_model import CameraModel
@@ -72,15 +72,12 @@ class DescribedCore(Protocol):
     @property
     def worker(self) -> _Host | None: ...
 
-    @property
-    def replay(self) -> ReplayTimeline | None: ...
-
 
 def describe(core: DescribedCore) -> dict[str, Any]:
     """What ``run.json`` says about a started core's run."""
     source = core.source.get_properties() if core.source is not None else {}
     processor = core.worker.processor if core.worker is not None else None
-    replayed = getattr(core.controller, "run_dir", None) if core.replay is not None else None
+    replayed = core.controller.run_dir if isinstance(core.controller, RecordedVehicle) else None
     config = dataclasses.asdict(core.config)
     config["web"]["web_token"] = "***" if core.config.web.web_token else ""  # never recorded
     return {
@@ -92,7 +89,8 @@ def describe(core: DescribedCore) -> dict[str, Any]:
         "processor": {} if processor is None else {
             "name": processor.info.name, "spec": processor.spec, "path": processor.info.path,
             "capabilities": sorted(processor.info.capabilities), "kwargs": _plain(processor.kwargs)},
-        "controller": {"fc": core.config.fc, "description": getattr(core.controller, "description", "none")},
+        "controller": {"fc": core.config.fc,
+                       "description": core.controller.description if core.controller is not None else "none"},
         **({"replay_of": {"run": str(Path(replayed).resolve()), "name": Path(replayed).name}} if replayed else {}),
     }
 

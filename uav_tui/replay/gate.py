@@ -6,13 +6,18 @@ import asyncio
 import bisect
 import csv
 from pathlib import Path
+from typing import Protocol
 
-from controllers.replay import ReplayController
+from controllers.base import FlightController, RecordedVehicle
 from uav_tui.autonomy import AutonomyGate
 from uav_tui.config import SafetyConfig
 from uav_tui.events import EventLog
 from uav_tui.telemetry import TelemetryManager
 from uav_tui.worker import ProcessedFrame
+
+
+class ReplayedController(FlightController, RecordedVehicle, Protocol):
+    """The controller of a replay: a flight controller that replays a recorded run's vehicle."""
 
 
 def autonomy_switches(events_csv: Path) -> list[tuple[int, bool]]:
@@ -51,7 +56,7 @@ class ReplayGate(AutonomyGate):
     """
 
     def __init__(self, safety: SafetyConfig, telemetry: TelemetryManager, events: EventLog,
-                 controller: ReplayController) -> None:
+                 controller: ReplayedController) -> None:
         super().__init__(safety, telemetry, events)
         self.controller = controller
         self.clock = controller.timeline.now
