@@ -10,6 +10,7 @@ zero + hold of each vector (rule 3) are the controller's ``set_fly_vector``.
 from __future__ import annotations
 
 import asyncio
+import enum
 import logging
 import math
 import time
@@ -44,6 +45,49 @@ def own_modes(controller: FlightController | None) -> frozenset[str]:
     return controller.own_modes if isinstance(controller, OwnModes) else AUTONOMY_MODES
 
 Vector = tuple[float, float, float]
+
+
+class Verdict(enum.Enum):
+    """What the gate did with a processed frame's vector."""
+
+    EXECUTED = "executed"  # sent to the flight controller (clamped, maybe)
+    NOT_EXECUTED = "not executed"  # valid, but a condition of safety rule 2 did not hold
+    REJECTED = "rejected"  # not a vector that may fly (safety rule 1)
+    NO_VECTOR = "no vector"  # the processor had nothing to do
+    ERROR = "error"  # the processor raised on the frame
+
+
+class Decision(str):
+    """A decision's text, as ``frames.csv`` records it and every interface shows it, with its :class:`Verdict`.
+
+    It is the text (compared, shown and written as before); code branches on :attr:`verdict`.
+    """
+
+    verdict: Verdict | None
+    """None only for :data:`NO_DECISION`."""
+
+    def __new__(cls, verdict: Verdict | None, text: str) -> Decision:
+        decision = super().__new__(cls, text)
+        decision.verdict = verdict
+        return decision
+
+    def __reduce__(self) -> tuple[type[Decision], tuple[Verdict | None, str]]:
+        """Copied and pickled with its verdict (``dataclasses.asdict`` deep-copies a status)."""
+        return Decision, (self.verdict, str(self))
+
+
+NO_DECISION = Decision(None, "")
+"""Before the first vector is judged."""
+
+
+class StopCause(enum.Enum):
+    """Why the watchdog stops autonomy (safety rule 4); the stop reason's text says the details."""
+
+    PROCESSOR_STALLED = "processor stalled"
+    PROCESSOR_FAILING = "processor failing"
+    TAKEN_OVER = "taken over"  # a pilot, a mission or a failsafe switched modes: no hold, it has the vehicle
+    CAMERA_STALLED = "camera stalled"
+    LINK_LOST = "link lost"
 
 
 def check_vector(raw: Any, safety: SafetyConfig) -> tuple[Vector | None, str]:
@@ -92,7 +136,7 @@ class AutonomyGate:
         self.executed = 0
         self.rejected = 0
         self.last_vector: Vector | None = None
-        self.last_decision = ""
+        self.last_decision = NO_DECISION
         self._rejections = Repeats(events, "warning", "autonomy", "processor")
         self._pending: tuple[Vector, ProcessedFrame] | None = None
         self._wake = asyncio.Event()
@@ -109,14 +153,17 @@ class AutonomyGate:
         self.enabled, self.stop_reason, self._flown = True, "", False
         self.events.emit("info", "autonomy", "autonomy ON", origin)
 
-    async def disable(self, origin: str, reason: str = "operator", *, hold: bool = True) -> None:
-        """Turn autonomy off; with ``hold`` and a vector running, zero it and hold at once."""
+    async def disable(self, origin: str, reason: str | None = None, *, hold: bool = True) -> None:
+        """Turn autonomy off; with ``hold`` and a vector running, zero it and hold at once.
+
+        ``reason`` is why it stops by itself (shown as :attr:`stop_reason`); None: the operator switched it off.
+        """
         was_enabled, self.enabled, self._pending = self.enabled, False, None
-        if reason != "operator":
+        if reason is not None:
             self.stop_reason = reason
-        if was_enabled or reason != "operator":
-            level: Level = "info" if reason == "operator" else "warning"
-            self.events.emit(level, "autonomy", f"autonomy OFF: {reason}", origin)
+        if was_enabled or reason is not None:
+            level: Level = "info" if reason is None else "warning"
+            self.events.emit(level, "autonomy", f"autonomy OFF: {reason or 'operator'}", origin)
         if hold and self.controller is not None and self.controller.vector_active:
             try:
                 await self.controller.hold()
@@ -126,19 +173,22 @@ class AutonomyGate:
     def consider(self, result: ProcessedFrame) -> None:
         """Decide on ``result``'s vector (on the loop, right after processing); sets ``result.decision``."""
         if result.vector is None:
-            result.decision = "error" if result.error else "no vector"
+            result.decision = Decision(Verdict.ERROR, "error") if result.error else Decision(Verdict.NO_VECTOR,
+                                                                                             "no vector")
             return
         vector, note = check_vector(result.vector, self.safety)
         if vector is None:
             self.rejected += 1
-            result.decision = note
-            self.last_vector, self.last_decision = None, note  # no stale vector beside this decision
+            result.decision = self.last_decision = Decision(Verdict.REJECTED, note)
+            self.last_vector = None  # no stale vector beside this decision
             self._rejections.report(note, f"frame {result.frame.seq}: vector {note}")
             return
         self.last_vector = vector
-        result.decision = self._why_not(result) or ("executed" + (f" ({note})" if note else ""))
-        self.last_decision = result.decision
-        if result.decision.startswith("executed"):
+        why_not = self._why_not(result)
+        result.decision = self.last_decision = (
+            Decision(Verdict.NOT_EXECUTED, why_not) if why_not else
+            Decision(Verdict.EXECUTED, "executed" + (f" ({note})" if note else "")))
+        if self.last_decision.verdict is Verdict.EXECUTED:
             self._pending = (vector, result)
             self._wake.set()
 
@@ -199,26 +249,29 @@ class AutonomyGate:
             await asyncio.sleep(WATCHDOG_PERIOD_S)
             if not self.enabled:
                 continue
-            reason = self._failure(frame_age(), processor_busy_s(), processor_errors())
-            if reason:
+            failure = self._failure(frame_age(), processor_busy_s(), processor_errors())
+            if failure is not None:
+                cause, reason = failure
                 # Whoever switched modes has the vehicle: a hold from here would override them.
-                await self.disable("watchdog", reason, hold="took over" not in reason)
+                await self.disable("watchdog", reason, hold=cause is not StopCause.TAKEN_OVER)
 
-    def _failure(self, frame_age: float | None, busy_s: float, errors: int) -> str:
+    def _failure(self, frame_age: float | None, busy_s: float, errors: int) -> tuple[StopCause, str] | None:
+        """Why autonomy must stop now, and the reason to show; None: nothing failed."""
         s = self.safety
         if busy_s > s.max_t:
-            return f"processor stalled ({busy_s:.1f} s in one call)"
+            return StopCause.PROCESSOR_STALLED, f"processor stalled ({busy_s:.1f} s in one call)"
         if errors >= s.max_processor_errors:
-            return f"processor raised {errors} times in a row"
+            return StopCause.PROCESSOR_FAILING, f"processor raised {errors} times in a row"
         mode = self.telemetry.snapshot().flight_mode
         if self._flown and mode is not None and mode not in own_modes(self.controller):
-            return f"vehicle switched to {mode}: the pilot, a mission or a failsafe took over"
-        if self.controller is not None and self._taken_over():
-            return self._taken_over()
+            return StopCause.TAKEN_OVER, f"vehicle switched to {mode}: the pilot, a mission or a failsafe took over"
+        if self.controller is not None and (taken_over := self._taken_over()):
+            return StopCause.TAKEN_OVER, taken_over
         if frame_age is None or frame_age > s.camera_stall:
-            return "camera stalled" if frame_age is None else f"camera stalled (newest frame {frame_age:.1f} s old)"
+            return StopCause.CAMERA_STALLED, ("camera stalled" if frame_age is None else
+                                              f"camera stalled (newest frame {frame_age:.1f} s old)")
         if self.controller is not None:
             age = self.controller.heartbeat_age_s()
             if age > s.link_timeout:
-                return f"link lost (heartbeat {age:.1f} s old)"
-        return ""
+                return StopCause.LINK_LOST, f"link lost (heartbeat {age:.1f} s old)"
+        return None

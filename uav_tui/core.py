@@ -245,7 +245,7 @@ class UavCore:
             return
         self._processor_errors.flush()
         self.events.emit("info", "platform", f"stopping: {reason}")
-        await self.gate.disable("platform", reason if self.gate.enabled else "operator", hold=False)
+        await self.gate.disable("platform", reason if self.gate.enabled else None, hold=False)
         vehicle = self.telemetry.snapshot()
         if self.controller is not None and (self.controller.vector_active or vehicle.in_air):
             await self._hold_before_exit(self.controller)
@@ -488,6 +488,7 @@ class UavCore:
             autonomy_stop_reason=self.gate.stop_reason,
             last_vector=self.gate.last_vector,
             last_decision=self.gate.last_decision,
+            last_verdict=self.gate.last_decision.verdict,
             vectors_executed=self.gate.executed,
             vectors_rejected=self.gate.rejected,
             recording=self.recorder.status() if self.recorder is not None else {},

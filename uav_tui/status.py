@@ -7,6 +7,7 @@ from dataclasses import asdict, dataclass, field, fields, replace
 from typing import Any
 
 from controllers.base import Telemetry
+from uav_tui.autonomy import Verdict
 from uav_tui.geolocate import GeoFix
 from uav_tui.stats import PipelineStats
 from uav_tui.text import safe
@@ -60,6 +61,8 @@ class CoreStatus:
     """The processor's ``box`` on the newest processed frame (frame pixels), None when it tracks nothing."""
     target: GeoFix | None = None
     """Where ``box`` is on the ground, from the newest telemetry (frames.csv has it at each capture); None: no box."""
+    last_verdict: Verdict | None = None
+    """What ``last_decision`` decided (None before the first vector)."""
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -76,6 +79,7 @@ class CoreStatus:
         """JSON-ready form (for ``--json`` and the web page)."""
         data = asdict(self)
         data["capabilities"] = sorted(self.capabilities)
+        data["last_verdict"] = self.last_verdict.value if self.last_verdict is not None else None
         if self.target is not None:
             data["target"].update(distance_m=self.target.distance_m, bearing_deg=self.target.bearing_deg)
         return data

@@ -14,6 +14,7 @@ import pytest
 
 from controllers.base import Telemetry
 from sources.synthetic import SyntheticScene
+from uav_tui.autonomy import Verdict
 from uav_tui.core import UavCore
 from uav_tui.events import Event
 from uav_tui.stats import PipelineStats
@@ -46,6 +47,7 @@ STATUS = CoreStatus(
     autonomy_stop_reason="",
     last_vector=(0.35, -0.2, 1.0),
     last_decision="executed",
+    last_verdict=Verdict.EXECUTED,
     vectors_executed=42,
     vectors_rejected=1,
     recording={"run_dir": "runs/2026-11-22T08-00-00Z", "frames_saved": 57, "dropped": 3},

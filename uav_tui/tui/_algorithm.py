@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from rich.text import Text
 
+from uav_tui.autonomy import Verdict
 from uav_tui.geolocate import describe as describe_target
 from uav_tui.status import CoreStatus
 from uav_tui.tui._panel import StatusPanel
@@ -34,7 +35,7 @@ class AlgorithmPanel(StatusPanel):
             vector = Text("none" if status.last_vector is None else
                           "({:+.2f}, {:+.2f}, {:.1f}s)".format(*status.last_vector))
         if status.last_decision:
-            level = "good" if status.last_decision.startswith("executed") else "warn"
+            level = "good" if status.last_verdict is Verdict.EXECUTED else "warn"
             vector.append(" ").append(self.styled(status.last_decision, level))
         errors = Text(str(status.pipeline.errors))
         if status.processor_error:
