@@ -151,7 +151,7 @@ class AutonomyGate:
         if self.refusal:
             raise UavError(f"autonomy refused: {self.refusal}")
         self.enabled, self.stop_reason, self._flown = True, "", False
-        self.events.emit("info", "autonomy", "autonomy ON", origin)
+        self.events.emit("info", "autonomy", "autonomy ON", origin, autonomy=True)
 
     async def disable(self, origin: str, reason: str | None = None, *, hold: bool = True) -> None:
         """Turn autonomy off; with ``hold`` and a vector running, zero it and hold at once.
@@ -163,7 +163,7 @@ class AutonomyGate:
             self.stop_reason = reason
         if was_enabled or reason is not None:
             level: Level = "info" if reason is None else "warning"
-            self.events.emit(level, "autonomy", f"autonomy OFF: {reason or 'operator'}", origin)
+            self.events.emit(level, "autonomy", f"autonomy OFF: {reason or 'operator'}", origin, autonomy=False)
         if hold and self.controller is not None and self.controller.vector_active:
             try:
                 await self.controller.hold()

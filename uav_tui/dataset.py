@@ -38,7 +38,7 @@ from uav_tui.run_files import Problem, read_json, read_table
 
 _TEXT = ("flight_mode", "gps_fix", "decision", "error", "image", "extra", "telemetry", "level", "kind", "origin",
          "message", "command", "target_status")
-_FLAGS = ("armed", "in_air", "health_ok", "saved")
+_FLAGS = ("armed", "in_air", "health_ok", "saved", "autonomy")
 _INTEGERS = ("fc_boot_ms", "fc_clock_offset_ms", "satellites", "frame_id", "seq", "box_x", "box_y", "box_w", "box_h")
 
 

@@ -35,6 +35,8 @@ class Event:
     """Who caused it: ``tui``, ``script``, ``web``, ``mavlink``, ``platform`` ..."""
     command: str = ""
     """The operator command this event is the outcome or the error of (empty for other events)."""
+    autonomy: bool | None = None
+    """The autonomy switch this event records: True switched on, False off; None for other events."""
 
 
 class EventLog:
@@ -61,17 +63,18 @@ class EventLog:
             self._listeners.remove(listener)
 
     def emit(self, level: Level, kind: Kind, message: str, origin: str = "platform", *, command: str = "",
-             t_mono_ns: int | None = None) -> Event:
+             t_mono_ns: int | None = None, autonomy: bool | None = None) -> Event:
         """Record and deliver an event; ``message``, ``origin`` and ``command`` are bounded, redacted and escaped here.
 
         ``t_mono_ns``: when it happened, if that was before now (the wall time is moved back with it).
+        ``autonomy``: the event switched autonomy on (True) or off (False).
         """
         message = safe(shorten(message, MAX_MESSAGE_CHARS), multiline=True)
         t_mono, t_wall = time.monotonic_ns(), time.time_ns()
         if t_mono_ns is not None:
             t_mono, t_wall = t_mono_ns, t_wall - (t_mono - t_mono_ns)
         event = Event(t_wall, t_mono, level, kind, message, safe(shorten(origin, 200)),
-                      safe(shorten(command, MAX_MESSAGE_CHARS)))
+                      safe(shorten(command, MAX_MESSAGE_CHARS)), autonomy)
         logger.debug("[%s/%s/%s] %s", level, kind, origin, message)  # interfaces show events; logs keep them
         loop = self._loop
         if loop is None or threading.get_ident() == self._loop_thread:

@@ -17,12 +17,15 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from sources.run import read_video
 from sources.synthetic import SyntheticScene
 from uav_tui import dataset
+from uav_tui.autonomy import AutonomyGate
 from uav_tui.cli import main
-from uav_tui.config import load_config
+from uav_tui.config import RecordingConfig, SafetyConfig, load_config
 from uav_tui.core import CoreState, UavCore
 from uav_tui.errors import UavError
 from uav_tui.jobs import run_jobs
+from uav_tui.recording import Recorder
 from uav_tui.recording.interpolate import CONTINUOUS, DISCRETE
+from uav_tui.replay.gate import autonomy_switches
 from uav_tui.replay.operator import recorded_commands
 from uav_tui.replay.runner import ReplayJob, recorded_processor, replay_config, replay_run
 from uav_tui.report import write_report
@@ -31,6 +34,7 @@ from uav_tui.tui.app import UavApp
 from uav_tui.tui.screens.confirm import ConfirmScreen
 
 from .flight_helpers import flying_core, wait_until
+from .recorder_fakes import FakeCore
 
 BRIGHTNESS = "tests.core.replay_processors:Brightness"
 DARKNESS = "tests.core.replay_processors:Darkness"
@@ -195,6 +199,27 @@ def test_a_command_is_due_before_the_first_frame_the_processor_started_after_it(
     ]
     _write_csv(tmp_path / "events.csv", stamped)
     assert [(t_ns, str(command)) for t_ns, command in recorded_commands(tmp_path)] == [(1020, "f 2")]
+
+
+async def test_a_replay_reads_the_autonomy_switches_from_their_column_and_old_runs_from_the_text(tmp_path):
+    core = FakeCore()
+    recorder = Recorder.open(RecordingConfig(runs_dir=str(tmp_path)), {}, telemetry_expected=False)
+    recorder.attach(core)
+    gate = AutonomyGate(SafetyConfig(), core.telemetry, core.events)
+    gate.controller = object()  # what enable() asks for; nothing is flown here
+    gate.enable("tui")
+    core.events.emit("info", "autonomy", "autonomy ON is what this message says; it switches nothing")
+    await gate.disable("tui", hold=False)
+    recorder.close()
+    events_csv = recorder.run_dir / "events.csv"
+    switches = autonomy_switches(events_csv)
+    assert [on for _, on in switches] == [True, False]
+    assert dataset.load(recorder.run_dir).events["autonomy"].dropna().tolist() == [True, False]
+
+    # A run recorded before the column: the events' text says it.
+    rows = list(csv.DictReader(events_csv.read_text().splitlines()))
+    _write_csv(events_csv, [{k: v for k, v in row.items() if k != "autonomy"} for row in rows])
+    assert [on for _, on in autonomy_switches(events_csv)] == [True, True, False]  # the lookalike counts there
 
 
 def test_two_processors_on_the_same_flight_in_parallel_compare_frame_by_frame(flight, tmp_path):

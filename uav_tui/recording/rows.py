@@ -26,9 +26,10 @@ if TYPE_CHECKING:
 TELEMETRY_COLUMNS: tuple[str, ...] = TELEMETRY_FIELDS
 """telemetry.csv: one row per telemetry update; ``t_mono_ns``/``t_wall_ns`` are when it was received."""
 
-EVENT_COLUMNS: tuple[str, ...] = ("t_wall_ns", "t_mono_ns", "level", "kind", "origin", "message", "command")
+EVENT_COLUMNS: tuple[str, ...] = ("t_wall_ns", "t_mono_ns", "level", "kind", "origin", "message", "command",
+                                  "autonomy")
 """events.csv: one row per :class:`uav_tui.events.Event`; ``command`` names the operator command an outcome
-or error row reports on."""
+or error row reports on; ``autonomy`` is True or False where autonomy was switched on or off, else empty."""
 
 FRAME_OWN_COLUMNS: tuple[str, ...] = (
     "frame_id", "seq", "t_wall_ns", "t_mono_ns", "t_start_ns", "t_end_ns", "t_vector_ns", "vx", "vy", "vt",
@@ -107,7 +108,7 @@ def frame_record(result: ProcessedFrame, frame_id: int, image: str, extra_json: 
 
 def event_row(event: Event) -> Row:
     return Row("events", [event.t_wall_ns, event.t_mono_ns, event.level, event.kind, event.origin, event.message,
-                          event.command])
+                          event.command, event.autonomy])
 
 
 def telemetry_row(sample: TelemetrySample) -> Row:

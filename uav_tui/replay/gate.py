@@ -21,17 +21,35 @@ class ReplayedController(FlightController, RecordedVehicle, Protocol):
 
 
 def autonomy_switches(events_csv: Path) -> list[tuple[int, bool]]:
-    """(t_mono_ns, on) each time autonomy was switched on or off in a recorded run, oldest first."""
+    """(t_mono_ns, on) each time autonomy was switched on or off in a recorded run, oldest first.
+
+    Read from events.csv's ``autonomy`` column (True, False, or empty for other events). Runs recorded
+    before that column existed say it only in the message: there, an ``autonomy`` event whose message starts
+    with "autonomy ON" or "autonomy OFF" is taken as the switch.
+    """
     switches = []
     if events_csv.is_file():
         with open(events_csv, newline="") as handle:
-            for row in csv.DictReader(handle):
-                message = row.get("message") or ""
-                if row.get("kind") == "autonomy" and row.get("t_mono_ns") and message.startswith(("autonomy ON",
-                                                                                                   "autonomy OFF")):
-                    switches.append((int(row["t_mono_ns"]), message.startswith("autonomy ON")))
+            reader = csv.DictReader(handle)
+            switched = _switch if "autonomy" in (reader.fieldnames or ()) else _switch_in_message
+            for row in reader:
+                on = switched(row)
+                if on is not None and row.get("t_mono_ns"):
+                    switches.append((int(row["t_mono_ns"]), on))
     switches.sort()
     return switches
+
+
+def _switch(row: dict[str, str]) -> bool | None:
+    return {"True": True, "False": False}.get(row.get("autonomy") or "")
+
+
+def _switch_in_message(row: dict[str, str]) -> bool | None:
+    """The switch in a run recorded without the ``autonomy`` column: the event's text says it."""
+    message = row.get("message") or ""
+    if row.get("kind") != "autonomy" or not message.startswith(("autonomy ON", "autonomy OFF")):
+        return None
+    return message.startswith("autonomy ON")
 
 
 def on_replay_clock(result: ProcessedFrame) -> None:
