@@ -63,8 +63,8 @@ _WHY = {NO_POSITION: "no GPS position", NO_ATTITUDE: "no attitude", NO_HEIGHT: "
 class GeoFix:
     """A box's ground position, or why there is none (``status``; the numbers are None unless ``ok``).
 
-    ``north_m``/``east_m`` are from the vehicle to the target, ``alt_m`` is the ground's altitude AMSL
-    (None when the autopilot reports no AMSL altitude).
+    ``north_m``/``east_m`` are from the vehicle to the target, ``height_m`` the vehicle's height above it,
+    ``alt_m`` is the ground's altitude AMSL (None when the autopilot reports no AMSL altitude).
     """
 
     status: str
@@ -74,11 +74,19 @@ class GeoFix:
     uncertainty_m: float | None = None
     north_m: float | None = None
     east_m: float | None = None
+    height_m: float | None = None
 
     @property
     def distance_m(self) -> float | None:
         """Horizontal distance from the vehicle to the target."""
         return None if self.north_m is None or self.east_m is None else math.hypot(self.north_m, self.east_m)
+
+    @property
+    def range_m(self) -> float | None:
+        """Straight-line distance from the vehicle to the target (MAVLink's ``dist``)."""
+        if self.distance_m is None or self.height_m is None:
+            return None
+        return math.hypot(self.distance_m, self.height_m)
 
     @property
     def bearing_deg(self) -> float | None:
@@ -135,7 +143,7 @@ def locate(camera: CameraModel | None, box: tuple[float, float, float, float] | 
     lat = lat_deg + math.degrees(north / EARTH_RADIUS_M)  # type: ignore[operator]
     lon = lon_deg + math.degrees(east / (EARTH_RADIUS_M * math.cos(math.radians(lat_deg))))  # type: ignore[arg-type, operator]
     alt = abs_alt_m - height_m if _known(abs_alt_m) else None  # type: ignore[operator]
-    return GeoFix(OK, lat, lon, alt, math.sqrt(spread), north, east)
+    return GeoFix(OK, lat, lon, alt, math.sqrt(spread), north, east, height_m)
 
 
 def locate_row(camera: CameraModel | None, box: tuple[float, float, float, float] | None,

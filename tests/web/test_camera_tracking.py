@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import math
 import socket
 from collections.abc import AsyncIterator
 from typing import Any
@@ -80,6 +81,17 @@ async def test_track_rectangle_and_point_reach_catch_cmd(tracking: tuple[UavCore
     ack = await station.receive("COMMAND_ACK", command=mavlink.MAV_CMD_CAMERA_STOP_TRACKING)
     assert ack.result == mavlink.MAV_RESULT_ACCEPTED
     await station.receive("CAMERA_TRACKING_IMAGE_STATUS", tracking_status=mavlink.CAMERA_TRACKING_STATUS_FLAGS_IDLE)
+
+
+async def test_a_box_without_a_ground_position_is_tracked_but_not_located(
+        tracking: tuple[UavCore, GroundStation]) -> None:
+    core, station = tracking  # no vehicle: no GPS position
+    await station.command(mavlink.MAV_CMD_CAMERA_TRACK_RECTANGLE, 0.25, 0.3, 0.55, 0.7)
+    await station.receive("CAMERA_TRACKING_IMAGE_STATUS", tracking_status=mavlink.CAMERA_TRACKING_STATUS_FLAGS_ACTIVE)
+    geo = await station.receive("CAMERA_TRACKING_GEO_STATUS")
+    assert geo.tracking_status == mavlink.CAMERA_TRACKING_STATUS_FLAGS_IDLE and (geo.lat, geo.lon) == (0, 0)
+    assert all(math.isnan(v) for v in (geo.alt, geo.h_acc, geo.v_acc, geo.dist))
+    assert core.status().target is not None and core.status().target.status != "ok"
 
 
 async def test_bad_and_unknown_commands_are_refused(tracking: tuple[UavCore, GroundStation]) -> None:
@@ -173,6 +185,8 @@ async def test_a_failing_processor_is_reported_as_a_tracking_error() -> None:
         status = await station.receive("CAMERA_TRACKING_IMAGE_STATUS",
                                        tracking_status=mavlink.CAMERA_TRACKING_STATUS_FLAGS_ERROR)
         assert status.tracking_mode == mavlink.CAMERA_TRACKING_MODE_NONE
+        geo = await station.receive("CAMERA_TRACKING_GEO_STATUS")
+        assert geo.tracking_status == mavlink.CAMERA_TRACKING_STATUS_FLAGS_ERROR
     finally:
         station.sock.close()
         await core.stop("test finished")

@@ -6,7 +6,12 @@ page, run through ``core.execute(..., origin="mavlink:SYS/COMP")``. Every comman
 and CAMERA_TRACKING_IMAGE_STATUS reports what the processor tracks (its ``box`` on the newest processed
 frame, normalised): active with the rectangle, idle when it tracks nothing (or after
 MAV_CMD_CAMERA_STOP_TRACKING), error when its last frame raised; once after each command, then once a
-second. The component sends HEARTBEAT (MAV_TYPE_CAMERA) and answers CAMERA_INFORMATION requests with
+second. Beside it, CAMERA_TRACKING_GEO_STATUS says where the box's centre is on the ground
+(:mod:`uav_tui.geolocate`, from the telemetry at the frame's capture): active with latitude, longitude,
+altitude AMSL, ``h_acc`` (the 1-sigma uncertainty), ``v_acc`` and ``dist`` (straight-line range from the
+vehicle); idle with latitude and longitude 0 and the rest NaN whenever there is no ground position (nothing
+tracked, no camera model, no GPS, a box at the horizon), error as above. Velocity and heading are NaN: a box
+has neither. The component sends HEARTBEAT (MAV_TYPE_CAMERA) and answers CAMERA_INFORMATION requests with
 the tracking capability flags, so a ground station discovers it.
 
 Endpoint (config ``camera_mavlink``): ``udpin:HOST:PORT`` listens and answers whoever spoke last;
@@ -25,6 +30,7 @@ import asyncio
 import logging
 import math
 from collections.abc import Callable
+from dataclasses import asdict
 from typing import Any
 
 from pymavlink.dialects.v20 import common as mavlink
@@ -32,6 +38,7 @@ from pymavlink.dialects.v20 import common as mavlink
 from processors.base import Box
 from uav_tui.commands import Command
 from uav_tui.errors import KNOWN_ERRORS, CommandError, ConfigError, UavError
+from uav_tui.geolocate import HEIGHT_SIGMA_M, NO_BOX, OK, GeoFix, locate_row
 from uav_tui.line_budget import LineBudget
 from uav_tui.text import describe
 from uav_tui.web.failures import HandlerFailures
@@ -41,7 +48,7 @@ from uav_tui.web.view import ServedCore
 logger = logging.getLogger(__name__)
 
 STATUS_PERIOD_S = 1.0
-"""HEARTBEAT and CAMERA_TRACKING_IMAGE_STATUS are sent this often."""
+"""HEARTBEAT, CAMERA_TRACKING_IMAGE_STATUS and CAMERA_TRACKING_GEO_STATUS are sent this often."""
 
 QUEUE_COMMANDS = 16
 """Commands waiting to be handled; more are dropped (and counted)."""
@@ -111,6 +118,8 @@ class CameraTracking:
         """False after MAV_CMD_CAMERA_STOP_TRACKING until the next track command: the status says idle."""
         self.tracked: tuple[Box | None, tuple[int, int], bool] = (None, (0, 0), False)
         """The newest processed frame's box, its frame size and whether the processor raised on it."""
+        self.located = GeoFix(NO_BOX)
+        """Where that box is on the ground."""
         self._commands: asyncio.Queue[Any] = asyncio.Queue(maxsize=QUEUE_COMMANDS)
         self._tasks: list[asyncio.Task[None]] = []
         self.failures = HandlerFailures(core.events, f"CameraTracking({address})")
@@ -157,6 +166,11 @@ class CameraTracking:
         """Frame listener (on the loop): keep what the processor reported for the newest frame."""
         height, width = result.frame.image.shape[:2]
         self.tracked = (result.box, (width, height), result.error is not None)
+        if result.box is None:
+            self.located = GeoFix(NO_BOX)
+        else:  # ~20 us, with the telemetry as it was at the capture
+            telemetry, _ = self.core.telemetry.at(result.frame.t_mono_ns)
+            self.located = locate_row(self.core.camera, result.box, asdict(telemetry))
 
     def received(self, data: bytes, addr: tuple[str, int]) -> None:
         """Datagram from the ground station (on the loop): queue the commands addressed to us."""
@@ -240,7 +254,9 @@ class CameraTracking:
                 requested == mavlink.MAVLINK_MSG_ID_CAMERA_INFORMATION:
             return mavlink.MAV_RESULT_ACCEPTED, self._send_information
         if requested == mavlink.MAVLINK_MSG_ID_CAMERA_TRACKING_IMAGE_STATUS:
-            return mavlink.MAV_RESULT_ACCEPTED, self._send_status
+            return mavlink.MAV_RESULT_ACCEPTED, self._send_image_status
+        if requested == mavlink.MAVLINK_MSG_ID_CAMERA_TRACKING_GEO_STATUS:
+            return mavlink.MAV_RESULT_ACCEPTED, self._send_geo_status
         return mavlink.MAV_RESULT_UNSUPPORTED, None
 
     async def _select(self, mode: int, params: tuple[float, float, float, float], origin: str) -> int:
@@ -273,26 +289,53 @@ class CameraTracking:
         self.mav.heartbeat_send(mavlink.MAV_TYPE_CAMERA, mavlink.MAV_AUTOPILOT_INVALID, 0, 0, mavlink.MAV_STATE_ACTIVE)
 
     def _send_status(self) -> None:
+        self._send_image_status()
+        self._send_geo_status()
+
+    def _reported(self) -> tuple[int, Box | None]:
+        """(CAMERA_TRACKING_STATUS_FLAGS_*, the box to report): the box only while the flag is active."""
         box, (width, height), failed = self.tracked
-        if failed or box is None or not self.reporting or not width or not height:
-            flag = mavlink.CAMERA_TRACKING_STATUS_FLAGS_ERROR if failed else mavlink.CAMERA_TRACKING_STATUS_FLAGS_IDLE
+        if failed:
+            return mavlink.CAMERA_TRACKING_STATUS_FLAGS_ERROR, None
+        if box is None or not self.reporting or not width or not height:
+            return mavlink.CAMERA_TRACKING_STATUS_FLAGS_IDLE, None
+        return mavlink.CAMERA_TRACKING_STATUS_FLAGS_ACTIVE, box
+
+    def _send_image_status(self) -> None:
+        flag, box = self._reported()
+        if box is None:
             self.mav.camera_tracking_image_status_send(flag, mavlink.CAMERA_TRACKING_MODE_NONE, 0,
                                                        *([float("nan")] * 7))
             return
+        _, (width, height), _ = self.tracked
         x, y, w, h = box  # normalised 0..1 (left/top 0), clipped: MAVLink has no room for off-image corners
         x0, x1 = (min(max(v / width, 0.0), 1.0) for v in (x, x + w))
         y0, y1 = (min(max(v / height, 0.0), 1.0) for v in (y, y + h))
         point = (x0 + x1) / 2, (y0 + y1) / 2, (x1 - x0) / 2
         self.mav.camera_tracking_image_status_send(
-            mavlink.CAMERA_TRACKING_STATUS_FLAGS_ACTIVE, self.mode, mavlink.CAMERA_TRACKING_TARGET_DATA_IN_STATUS,
-            *point, x0, y0, x1, y1)
+            flag, self.mode, mavlink.CAMERA_TRACKING_TARGET_DATA_IN_STATUS, *point, x0, y0, x1, y1)
+
+    def _send_geo_status(self) -> None:
+        (flag, box), fix, nan = self._reported(), self.located, float("nan")
+        if box is None or fix.status != OK or fix.lat_deg is None or fix.lon_deg is None:
+            idle = mavlink.CAMERA_TRACKING_STATUS_FLAGS_IDLE  # tracking, but nowhere on the ground
+            self.mav.camera_tracking_geo_status_send(idle if box is not None else flag, 0, 0, *([nan] * 10))
+            return
+        self.mav.camera_tracking_geo_status_send(
+            flag, round(fix.lat_deg * 1e7), round(fix.lon_deg * 1e7), _or_nan(fix.alt_m), _or_nan(fix.uncertainty_m),
+            nan if fix.alt_m is None else HEIGHT_SIGMA_M, nan, nan, nan, nan, _or_nan(fix.range_m), nan, nan)
 
     def _send_information(self) -> None:
         size = self.core.source.get_frame_size() if self.core.source is not None else (0, 0)
         self.mav.camera_information_send(
             0, list(b"uav-tui".ljust(32, b"\0")), list(b"processed camera".ljust(32, b"\0")), 0, 0.0, 0.0, 0.0,
             size[0], size[1], 0,
-            mavlink.CAMERA_CAP_FLAGS_HAS_TRACKING_POINT | mavlink.CAMERA_CAP_FLAGS_HAS_TRACKING_RECTANGLE, 0, b"")
+            mavlink.CAMERA_CAP_FLAGS_HAS_TRACKING_POINT | mavlink.CAMERA_CAP_FLAGS_HAS_TRACKING_RECTANGLE
+            | mavlink.CAMERA_CAP_FLAGS_HAS_TRACKING_GEO_STATUS, 0, b"")
+
+
+def _or_nan(value: float | None) -> float:
+    return float("nan") if value is None else value
 
 
 def _origin(message: Any) -> str:
