@@ -2,11 +2,11 @@
 
 Plots are drawn on plain ``matplotlib.figure.Figure`` objects (the Agg renderer, no pyplot, no
 display needed): ``track.png`` (ground track, NED east/north coloured by time, executed vectors as
-arrows), ``flight.png`` (altitude, attitude, commanded vs actual velocity, autonomy shaded),
-``processing.png`` (processed FPS and latency over time), ``box.png`` (the tracked box's centre and size
-over time), ``extra.png`` (each ``tmMgr.save`` field that changes, over time on its own axis);
-``summary.txt``; and ``report.html``, all of it in one self-contained page (images embedded) to open
-on the drone or copy off it.
+arrows, the geo-located target positions as crosses), ``flight.png`` (altitude, attitude, commanded vs
+actual velocity, autonomy shaded), ``processing.png`` (processed FPS and latency over time), ``box.png``
+(the tracked box's centre and size over time), ``extra.png`` (each ``tmMgr.save`` field that changes,
+over time on its own axis); ``summary.txt``; and ``report.html``, all of it in one self-contained page
+(images embedded) to open on the drone or copy off it.
 """
 
 from __future__ import annotations
@@ -25,6 +25,7 @@ from matplotlib.figure import Figure
 from uav_tui.autonomy import check_vector
 from uav_tui.config import SafetyConfig
 from uav_tui.dataset import Dataset, load
+from uav_tui.geolocate import EARTH_RADIUS_M, OK
 from uav_tui.recording.crash import CRASH_FILE, crash_summary
 from uav_tui.report_replay import REPLAY_PLOT, replay_figure
 from uav_tui.text import safe
@@ -143,7 +144,12 @@ def _track(run: Dataset, figure: Figure) -> None:
         return
     points = ax.scatter(track["east_m"], track["north_m"], c=track["t_s"], cmap="viridis", s=6, zorder=3)
     figure.colorbar(points, ax=ax, label="time, s")
-    east, north = track["east_m"], track["north_m"]
+    targets = target_positions(run)
+    if len(targets):
+        ax.scatter(targets["east_m"], targets["north_m"], marker="x", s=14, color="tab:red", alpha=0.7, zorder=4,
+                   label=f"target ({len(targets)} frames geo-located)")
+    east = pd.concat([track["east_m"], targets["east_m"]])
+    north = pd.concat([track["north_m"], targets["north_m"]])
     # Square limits, at least MIN_TRACK_M wide: a vehicle that did not move is not drawn on centimetre axes.
     half = max((east.max() - east.min()) * 1.1, (north.max() - north.min()) * 1.1, MIN_TRACK_M) / 2
     ax.set_xlim((east.max() + east.min()) / 2 - half, (east.max() + east.min()) / 2 + half)
@@ -151,6 +157,22 @@ def _track(run: Dataset, figure: Figure) -> None:
     ax.set_aspect("equal", adjustable="box")
     ax.grid(True, alpha=0.3)
     _executed_arrows(run, ax, 2 * half)
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(loc="upper left", fontsize="small", framealpha=0.6)
+
+
+def target_positions(run: Dataset) -> pd.DataFrame:
+    """``t_s``, ``north_m``, ``east_m`` of every geo-located target (``target_status`` ok), in the track's local
+    metres: the frame's own position plus the target's offset from it (the flat-earth step of
+    :mod:`uav_tui.geolocate` undone), so no home position is needed."""
+    columns = ["t_s", "north_m", "east_m", "lat_deg", "lon_deg", "target_lat_deg", "target_lon_deg"]
+    frames = run.frames
+    rows = frames.loc[(frames["target_status"] == OK).fillna(False), columns].astype("float64")
+    rows = rows[np.isfinite(rows).all(axis=1)]
+    north = rows["north_m"] + np.radians(rows["target_lat_deg"] - rows["lat_deg"]) * EARTH_RADIUS_M
+    east = rows["east_m"] + np.radians(rows["target_lon_deg"] - rows["lon_deg"]) * EARTH_RADIUS_M \
+        * np.cos(np.radians(rows["lat_deg"]))
+    return pd.DataFrame({"t_s": rows["t_s"], "north_m": north, "east_m": east})
 
 
 def _executed_arrows(run: Dataset, ax: Axes, span_m: float) -> None:
@@ -172,7 +194,6 @@ def _executed_arrows(run: Dataset, ax: Axes, span_m: float) -> None:
     ax.quiver(shown["east_m"], shown["north_m"], east, north, color="tab:red", alpha=0.6, width=0.003, zorder=4,
               angles="xy", scale_units="xy", scale=fastest / (0.1 * span_m),
               label=f"executed vectors (fastest {fastest:.2g} m/s){every}")
-    ax.legend(loc="upper left", fontsize="small", framealpha=0.6)
 
 
 def _flight(run: Dataset, figure: Figure) -> None:

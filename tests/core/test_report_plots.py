@@ -5,6 +5,7 @@ start-up spike, and one self-contained report.html."""
 from __future__ import annotations
 
 import base64
+import math
 import re
 import time
 
@@ -15,6 +16,7 @@ from matplotlib.collections import LineCollection
 from matplotlib.patches import Rectangle
 from matplotlib.quiver import Quiver
 
+from sources.camera_model import CameraModel
 from uav_tui import dataset, report
 from uav_tui.config import RecordingConfig
 from uav_tui.recording import Recorder
@@ -98,6 +100,42 @@ def test_box_shows_the_tracked_centre_and_size_over_time_with_a_gap_once_lost(ho
     assert np.allclose(x[:30], 25 + np.arange(30)) and np.allclose(y[:30], 40)
     assert np.allclose(width[:30], 30) and np.allclose(height[:30], 40)
     assert np.isnan(x[30:]).all()  # lost: a gap, not a line to zero
+
+
+@pytest.fixture
+def located_run(tmp_path):
+    """Flying north at 5 m, heading east, level, over a target 1.25 m ahead of it (a down camera, 90 deg wide,
+    its box's centre 8 px above the picture's); the box is lost after 30 of 40 frames."""
+    core = FakeCore()
+    core.camera = CameraModel.from_hfov(64, 48, 90.0)
+    recorder = Recorder.open(RecordingConfig(runs_dir=str(tmp_path)), {}, telemetry_expected=True)
+    recorder.attach(core)
+    image = np.zeros((48, 64, 3), np.uint8)
+    for i in range(40):
+        north = 0.1 * i
+        core.telemetry.apply({"north_m": north, "east_m": -2.0, "lat_deg": 47.0 + math.degrees(north / 6_371_000),
+                              "lon_deg": 8.0, "abs_alt_m": 505.0, "rel_alt_m": 5.0, "roll_deg": 0.0, "pitch_deg": 0.0,
+                              "yaw_deg": 90.0, "in_air": True})
+        time.sleep(0.004)
+        core.process(image, i, lambda result, i=i: setattr(result, "box", (27, 11, 11, 11) if i < 30 else None))
+    recorder.close()
+    return recorder.run_dir
+
+
+def test_the_track_shows_the_target_positions_in_local_metres(located_run):
+    write_report(located_run)
+    assert (located_run / "track.png").read_bytes().startswith(b"\x89PNG")
+    frames = dataset.load(located_run).frames
+    ax = draw(dataset.load(located_run))["track.png"].axes[0]
+    (targets,) = (c for c in ax.collections if c.get_label().startswith("target"))
+    recorded = frames[frames["target_status"] == "ok"]
+    assert len(recorded) == 30 and targets.get_label() == "target (30 frames geo-located)"
+    east, north = targets.get_offsets().T
+    # straight ahead (east) of where each frame was taken, to the 1e-8 degrees (1 mm) frames.csv keeps
+    assert np.allclose(north, recorded["north_m"], atol=0.002)
+    assert np.allclose(east, recorded["east_m"] + 1.25, atol=0.002)
+    low, high = ax.get_xlim()
+    assert low < east.min() and east.max() < high
 
 
 def test_processing_rate_has_no_start_up_spike():
