@@ -8,7 +8,7 @@ from typing import Any
 
 from controllers.base import Telemetry
 from uav_tui.autonomy import Verdict
-from uav_tui.geolocate import GeoFix
+from uav_tui.geolocate import GeoFix, describe
 from uav_tui.stats import PipelineStats
 from uav_tui.text import safe
 from uav_tui.worker import ProcessorState
@@ -81,5 +81,6 @@ class CoreStatus:
         data["capabilities"] = sorted(self.capabilities)
         data["last_verdict"] = self.last_verdict.value if self.last_verdict is not None else None
         if self.target is not None:
-            data["target"].update(distance_m=self.target.distance_m, bearing_deg=self.target.bearing_deg)
+            data["target"].update(distance_m=self.target.distance_m, bearing_deg=self.target.bearing_deg,
+                                  range_m=self.target.range_m, description=describe(self.target))
         return data

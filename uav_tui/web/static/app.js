@@ -159,6 +159,7 @@ function showStatus(message) {
   }
   if (s.box) line += ` | box ${s.box[0]},${s.box[1]} ${s.box[2]}x${s.box[3]}`;
   showTracked(s.box, message.frame);
+  showTarget(s.target);
   if (s.last_decision) line += ` | ${s.last_decision}`;
   const host = s.processor_state;
   if (host) {
@@ -169,6 +170,15 @@ function showStatus(message) {
   if (s.processor_error) line += ` | processor error: ${s.processor_error}`;
   line += ` | ${message.viewers} watching`;
   $("status").textContent = line;
+}
+
+// Where the tracked box is on the ground, over the picture's corner (showing it moves nothing): the TUI's line
+// (latitude,longitude, distance and bearing from the vehicle, 1-sigma uncertainty) or why it is not located.
+function showTarget(target) {
+  const line = $("target"), text = target && target.description;
+  line.hidden = !text;
+  line.textContent = text ? "target " + text : "";
+  line.className = target && target.status !== "ok" ? "target warn" : "target";
 }
 
 function showEvent(e) {
