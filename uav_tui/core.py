@@ -471,7 +471,11 @@ class UavCore:
         assert self.worker is not None and self.source is not None
         loaded = self.worker.processor
         telemetry = self.telemetry.snapshot()
-        box = self.worker.last.box if self.worker.last is not None else None
+        last = self.worker.last
+        box = last.box if last is not None else None
+        # the box where it was seen: with the telemetry at that frame's capture, not the newest (~20 us)
+        target = None if last is None or box is None else \
+            locate_row(self.camera, box, asdict(self.telemetry.at(last.frame.t_mono_ns)[0]))
         return CoreStatus(
             telemetry=telemetry,
             pipeline=self.worker.snapshot(),
@@ -496,5 +500,5 @@ class UavCore:
             link_lost=self.link is not None and self.link.lost,
             vehicle_problem=self.link.vehicle_problem if self.link is not None else "",
             box=box,
-            target=None if box is None else locate_row(self.camera, box, asdict(telemetry)),  # ~20 us
+            target=target,
         )

@@ -60,7 +60,7 @@ class CoreStatus:
     box: tuple[int, int, int, int] | None = None
     """The processor's ``box`` on the newest processed frame (frame pixels), None when it tracks nothing."""
     target: GeoFix | None = None
-    """Where ``box`` is on the ground, from the newest telemetry (frames.csv has it at each capture); None: no box."""
+    """Where ``box`` is on the ground, from the telemetry at that frame's capture; None: no box."""
     last_verdict: Verdict | None = None
     """What ``last_decision`` decided (None before the first vector)."""
 

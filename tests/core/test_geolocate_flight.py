@@ -5,6 +5,7 @@ from __future__ import annotations
 import asyncio
 import json
 import math
+import re
 import xml.etree.ElementTree as ET
 
 import numpy as np
@@ -38,7 +39,11 @@ async def test_a_recorded_flight_locates_the_car_it_sees(tmp_path):
     vehicle_n, vehicle_e = status.telemetry.north_m, status.telemetry.east_m
     assert status.target is not None and status.target.status == OK
     assert status.target.distance_m == pytest.approx(math.hypot(car_n - vehicle_n, car_e - vehicle_e), abs=0.5)
-    assert " | target 47." in line and " m at 0" in line, line  # the car is north: bearing 000-010 deg
+    # the car is north, a little either side as the vehicle ends its flight over home (0.9 m east under load)
+    bearing = math.degrees(math.atan2(car_e - vehicle_e, car_n - vehicle_n)) % 360
+    shown = re.search(r" \| target 47\.\d+,8\.\d+ \d+ m at (\d{3}) deg ", line)
+    assert shown, line
+    assert abs((float(shown.group(1)) - bearing + 180) % 360 - 180) <= 5, (line, bearing)  # 0.3 m at 6 m: 3 deg
     as_json = json.loads(json.dumps(status.as_dict(), default=str))["target"]  # --json lines, the web page
     assert as_json["status"] == OK and as_json["distance_m"] == pytest.approx(status.target.distance_m)
     assert set(GEO_COLUMNS) <= set(frames.columns)
