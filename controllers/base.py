@@ -42,6 +42,8 @@ class Telemetry:
     lon_deg: float | None = None
     abs_alt_m: float | None = None
     rel_alt_m: float | None = None
+    rangefinder_m: float | None = None
+    """A downward rangefinder's reading (along the vehicle's down axis), None without one or out of its range."""
     roll_deg: float | None = None
     pitch_deg: float | None = None
     yaw_deg: float | None = None

@@ -5,6 +5,7 @@ REQUEST_DATA_STREAM from the controller, because it sends nothing until asked):
 
 =================================================  =======
 position, attitude, NED velocity, local position    10 Hz
+downward rangefinder (DISTANCE_SENSOR), if any      10 Hz
 in-air / landed state, home                         2 Hz
 battery, GPS info                                   1 Hz
 flight mode, armed, health (from HEARTBEAT, SYS_STATUS)  as the autopilot sends them (~1 Hz)
@@ -32,6 +33,7 @@ RATES_HZ: dict[str, float] = {
     "attitude_euler": 10.0,
     "velocity_ned": 10.0,
     "position_velocity_ned": 10.0,
+    "distance_sensor": 10.0,
     "in_air": 2.0,
     "landed_state": 2.0,
     "home": 1.0,
@@ -79,6 +81,19 @@ def from_position_velocity_ned(pv: Any) -> Update:
     return position | from_velocity_ned(pv.velocity)
 
 
+def from_distance_sensor(d: Any) -> Update:
+    """A downward sensor's reading, None outside its (minimum, maximum) range; other sensors are ignored.
+
+    MAVSDK turns DISTANCE_SENSOR's orientation MAV_SENSOR_ROTATION_PITCH_270 into pitch 270 (pointing down).
+    """
+    pitch = _num(d.orientation.pitch_deg) if d.orientation is not None else None
+    if pitch is None or math.sin(math.radians(pitch)) > -0.99:
+        return {}
+    low, high, now = _num(d.minimum_distance_m), _num(d.maximum_distance_m), _num(d.current_distance_m)
+    inside = now is not None and low is not None and high is not None and max(low, 0.0) < now < high
+    return {"rangefinder_m": now if inside else None}
+
+
 def from_battery(b: Any) -> Update:
     return {"battery_v": _num(b.voltage_v), "battery_pct": _num(b.remaining_percent)}
 
@@ -109,6 +124,7 @@ STREAMS: dict[str, Callable[[Any], Update]] = {
     "attitude_euler": from_attitude_euler,
     "velocity_ned": from_velocity_ned,
     "position_velocity_ned": from_position_velocity_ned,
+    "distance_sensor": from_distance_sensor,
     "battery": from_battery,
     "gps_info": from_gps_info,
     "health": from_health,

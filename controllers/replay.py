@@ -29,6 +29,8 @@ SCHEME = "replay:"
 _TYPES: dict[str, type] = {f.name: next(t for t in (bool, int, float, str) if t.__name__ in str(f.type))
                             for f in fields(Telemetry)}
 """Telemetry field -> the type its CSV text converts to."""
+_CLEARED = frozenset({"rangefinder_m"})
+"""Fields whose empty cell after a value is news (a rangefinder out of its range): replayed as None."""
 
 
 def parse_address(address: str) -> tuple[Path, float | None]:
@@ -49,7 +51,7 @@ def parse_address(address: str) -> tuple[Path, float | None]:
 
 
 def read_telemetry(path: Path) -> list[dict[str, Any]]:
-    """The rows of a ``telemetry.csv`` as typed updates (empty cells left out), oldest first.
+    """The rows of a ``telemetry.csv`` as typed updates (empty cells left out but :data:`_CLEARED`'s), oldest first.
 
     A run recorded without a vehicle (``--fc none``) has no such file: it has no rows.
     """
@@ -58,7 +60,8 @@ def read_telemetry(path: Path) -> list[dict[str, Any]]:
         return rows
     with open(path, newline="") as handle:
         for row in csv.DictReader(handle):
-            update = {name: _typed(name, text) for name, text in row.items() if name in _TYPES and text}
+            update = {name: _typed(name, text) if text else None for name, text in row.items()
+                      if name in _TYPES and (text or name in _CLEARED)}
             if update.get("t_mono_ns"):
                 rows.append(update)
     rows.sort(key=lambda update: update["t_mono_ns"])

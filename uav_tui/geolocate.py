@@ -7,6 +7,10 @@ approximation around the vehicle (mean earth radius: off by < 0.5 % of the dista
 ranges a camera sees a target). Pure scalar math (no NumPy on the path): about 20 µs a box, uncertainty
 included (``scripts/bench_geolocation.py``).
 
+The height above the ground is a downward rangefinder's, tilt-corrected, when the autopilot reports one
+in range (``rangefinder_m``), else the height above home (right on flat ground around home); which one
+was used is ``GeoFix.height_from``.
+
 The uncertainty is the horizontal displacement the assumed 1-sigma errors below cause, each found by
 projecting again with that one input off by its sigma, added in quadrature. It covers the attitude and
 the height only: the vehicle's own position error (GPS: 1-3 m) adds to it one for one.
@@ -32,8 +36,18 @@ YAW_SIGMA_DEG = 2.0
 """Assumed 1-sigma error of the heading: magnetometer-based yaw is the worst-known angle."""
 
 HEIGHT_SIGMA_M = 0.5
-"""Assumed 1-sigma error of the height above the ground: barometric height above home over a flight on
-flat ground (a rangefinder is better; terrain that is not flat is worse and not covered)."""
+"""Assumed 1-sigma error of the height above home as the height above the ground: barometric height over a
+flight on flat ground (terrain that is not flat is worse and not covered)."""
+
+RANGEFINDER_SIGMA_M = 0.1
+"""Assumed 1-sigma error of a downward rangefinder's height: a few centimetres of the sensor's, plus ground
+that is not quite flat between the vehicle and the target."""
+
+FROM_RANGEFINDER = "rangefinder"
+FROM_HOME = "home"
+HEIGHT_SIGMAS = {FROM_RANGEFINDER: RANGEFINDER_SIGMA_M, FROM_HOME: HEIGHT_SIGMA_M}
+"""Where the height above the ground came from (``GeoFix.height_from``, frames.csv ``target_height_from``)
+and its assumed 1-sigma error."""
 
 MIN_DEPRESSION_DEG = 1.0
 """A ray less than this far below the horizontal (the ground more than ~57 heights away, or sky) is not
@@ -48,7 +62,7 @@ NO_POSITION = "no_position"
 """No latitude/longitude (no GPS fix yet, or no flight controller)."""
 NO_ATTITUDE = "no_attitude"
 NO_HEIGHT = "no_height"
-"""No height above home from the autopilot."""
+"""No height above the ground from the autopilot (neither rangefinder nor height above home)."""
 HORIZON = "horizon"
 """The box's centre is at or above the horizon (see :data:`MIN_DEPRESSION_DEG`): no ground point."""
 
@@ -63,8 +77,9 @@ _WHY = {NO_POSITION: "no GPS position", NO_ATTITUDE: "no attitude", NO_HEIGHT: "
 class GeoFix:
     """A box's ground position, or why there is none (``status``; the numbers are None unless ``ok``).
 
-    ``north_m``/``east_m`` are from the vehicle to the target, ``height_m`` the vehicle's height above it,
-    ``alt_m`` is the ground's altitude AMSL (None when the autopilot reports no AMSL altitude).
+    ``north_m``/``east_m`` are from the vehicle to the target, ``height_m`` the vehicle's height above it
+    (``height_from``: :data:`FROM_RANGEFINDER` or :data:`FROM_HOME`), ``alt_m`` is the ground's altitude AMSL
+    (None when the autopilot reports no AMSL altitude).
     """
 
     status: str
@@ -75,6 +90,7 @@ class GeoFix:
     north_m: float | None = None
     east_m: float | None = None
     height_m: float | None = None
+    height_from: str = ""
 
     @property
     def distance_m(self) -> float | None:
@@ -106,15 +122,16 @@ def describe(fix: GeoFix) -> str:
 
 def locate(camera: CameraModel | None, box: tuple[float, float, float, float] | None, *, roll_deg: float | None,
            pitch_deg: float | None, yaw_deg: float | None, lat_deg: float | None, lon_deg: float | None,
-           height_m: float | None, abs_alt_m: float | None = None) -> GeoFix:
+           height_m: float | None, abs_alt_m: float | None = None, height_from: str = FROM_HOME) -> GeoFix:
     """The ground position of the centre of ``box`` (x, y, w, h in frame pixels) seen from this pose.
 
     Args:
         camera: the frame's camera model (None: status ``no_camera``).
         roll_deg, pitch_deg, yaw_deg: the vehicle's attitude at the capture.
         lat_deg, lon_deg: the vehicle's position at the capture.
-        height_m: the vehicle's height above the ground (the autopilot's height above home on flat ground).
+        height_m: the vehicle's height above the ground.
         abs_alt_m: the vehicle's altitude AMSL, for the target's altitude (optional).
+        height_from: where ``height_m`` came from (a key of :data:`HEIGHT_SIGMAS`): its assumed error.
     """
     if box is None:
         return GeoFix(NO_BOX)
@@ -134,7 +151,8 @@ def locate(camera: CameraModel | None, box: tuple[float, float, float, float] | 
     if found is None:
         return GeoFix(HORIZON)
     spread = 0.0
-    for index, sigma in ((2, ATTITUDE_SIGMA_DEG), (3, ATTITUDE_SIGMA_DEG), (4, YAW_SIGMA_DEG), (5, HEIGHT_SIGMA_M)):
+    height_sigma = HEIGHT_SIGMAS[height_from]
+    for index, sigma in ((2, ATTITUDE_SIGMA_DEG), (3, ATTITUDE_SIGMA_DEG), (4, YAW_SIGMA_DEG), (5, height_sigma)):
         moved = _moved(args, index, sigma, found)
         if moved is None:
             return GeoFix(HORIZON)
@@ -143,18 +161,24 @@ def locate(camera: CameraModel | None, box: tuple[float, float, float, float] | 
     lat = lat_deg + math.degrees(north / EARTH_RADIUS_M)  # type: ignore[operator]
     lon = lon_deg + math.degrees(east / (EARTH_RADIUS_M * math.cos(math.radians(lat_deg))))  # type: ignore[arg-type, operator]
     alt = abs_alt_m - height_m if _known(abs_alt_m) else None  # type: ignore[operator]
-    return GeoFix(OK, lat, lon, alt, math.sqrt(spread), north, east, height_m)
+    return GeoFix(OK, lat, lon, alt, math.sqrt(spread), north, east, height_m, height_from)
 
 
 def locate_row(camera: CameraModel | None, box: tuple[float, float, float, float] | None,
                telemetry: Mapping[str, Any]) -> GeoFix:
     """:func:`locate` with telemetry fields by name (a frame row's interpolated values, ``Telemetry`` as a dict).
 
-    The height above the ground is ``rel_alt_m``, the height above home: right on flat ground around home.
+    The height above the ground is the rangefinder's (``rangefinder_m``, along the body's down axis, times the
+    cosines of roll and pitch) when there is one, else ``rel_alt_m``, the height above home.
     """
-    return locate(camera, box, roll_deg=telemetry.get("roll_deg"), pitch_deg=telemetry.get("pitch_deg"),
-                  yaw_deg=telemetry.get("yaw_deg"), lat_deg=telemetry.get("lat_deg"), lon_deg=telemetry.get("lon_deg"),
-                  height_m=telemetry.get("rel_alt_m"), abs_alt_m=telemetry.get("abs_alt_m"))
+    roll, pitch, reading = telemetry.get("roll_deg"), telemetry.get("pitch_deg"), telemetry.get("rangefinder_m")
+    if reading is not None and roll is not None and pitch is not None and _known(reading, roll, pitch):
+        height, source = reading * math.cos(math.radians(roll)) * math.cos(math.radians(pitch)), FROM_RANGEFINDER
+    else:
+        height, source = telemetry.get("rel_alt_m"), FROM_HOME
+    return locate(camera, box, roll_deg=roll, pitch_deg=pitch, yaw_deg=telemetry.get("yaw_deg"),
+                  lat_deg=telemetry.get("lat_deg"), lon_deg=telemetry.get("lon_deg"), height_m=height,
+                  abs_alt_m=telemetry.get("abs_alt_m"), height_from=source)
 
 
 def _known(*values: float | None) -> bool:

@@ -29,8 +29,11 @@ DEFAULT_RATES_HZ: dict[int, float] = {
     M.MAVLINK_MSG_ID_BATTERY_STATUS: 1.0,
     M.MAVLINK_MSG_ID_VFR_HUD: 4.0,
     M.MAVLINK_MSG_ID_SYSTEM_TIME: 1.0,
+    M.MAVLINK_MSG_ID_DISTANCE_SENSOR: 10.0,
 }
 """Streamed at boot, in Hz."""
+RANGEFINDER_CM = (5, 4000)
+"""The simulated downward rangefinder's range, centimetres (a LiDAR-Lite v3's)."""
 _SLACK_S = 0.005
 """A message due this close to the current tick goes now, so 50 Hz streams survive tick jitter."""
 
@@ -88,6 +91,7 @@ class TelemetryStreams:
             M.MAVLINK_MSG_ID_BATTERY_STATUS: self.battery_status,
             M.MAVLINK_MSG_ID_VFR_HUD: self.vfr_hud,
             M.MAVLINK_MSG_ID_SYSTEM_TIME: self.system_time,
+            M.MAVLINK_MSG_ID_DISTANCE_SENSOR: self.distance_sensor,
             M.MAVLINK_MSG_ID_AUTOPILOT_VERSION: self.autopilot_version,
         }
         self._interval = {mid: 1.0 / hz for mid, hz in DEFAULT_RATES_HZ.items()}
@@ -210,6 +214,17 @@ class TelemetryStreams:
     def local_position_ned(self) -> mavlink.MAVLink_message:
         pos, vel, _ = self._nav()
         return self.enc.local_position_ned_encode(self.boot_ms(), *(float(x) for x in pos), *(float(x) for x in vel))
+
+    def distance_sensor(self) -> mavlink.MAVLink_message:
+        """A downward rangefinder over the flat ground: the range along the body's down axis; beyond its
+        maximum (or tilted past 80 degrees) it reports maximum + 1 cm, out of range."""
+        pos, _, (roll, pitch, _) = self._nav()
+        low, high = RANGEFINDER_CM
+        tilt = math.cos(roll) * math.cos(pitch)
+        reading = -pos[2] * 100 / tilt if tilt > math.cos(math.radians(80)) else high + 1
+        current = int(round(min(max(reading, 0), high + 1)))
+        return self.enc.distance_sensor_encode(self.boot_ms(), low, high, current, M.MAV_DISTANCE_SENSOR_LASER, 0,
+                                               M.MAV_SENSOR_ROTATION_PITCH_270, 0)
 
     def gps_raw_int(self) -> mavlink.MAVLink_message:
         v = self.v

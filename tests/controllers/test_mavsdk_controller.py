@@ -200,8 +200,8 @@ async def test_sim_starts_its_own_vehicle_and_stops_it_on_close() -> None:
     assert not fc.sim.running
 
 
-FAST_KEYS = ("lat_deg", "roll_deg", "vn_ms", "north_m")
-"""Documented at 10 Hz."""
+FAST_KEYS = ("lat_deg", "roll_deg", "vn_ms", "north_m", "rangefinder_m")
+"""Documented at 10 Hz (the simulated vehicle has a downward rangefinder)."""
 SLOW_KEYS = ("battery_v", "gps_fix", "armed", "flight_mode", "in_air", "health_ok", "heartbeat_age_s")
 """Documented at 1-2 Hz."""
 

@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
 from controllers.base import Telemetry
+from controllers.mavsdk_telemetry import from_distance_sensor
 from sources.camera_model import CameraModel, Mount
 from uav_tui import geolocate
 from uav_tui.recording.rows import FRAME_COLUMNS, FRAME_OWN_COLUMNS, FrameAligner, FrameRecord, TelemetrySample
@@ -74,6 +76,38 @@ def test_missing_input_gives_a_status_and_no_position(missing, status):
     assert nan.status == status
 
 
+def test_a_rangefinder_height_is_preferred_tilt_corrected_and_said():
+    camera = CameraModel.from_hfov(640, 480, 62.0)
+    box = (400, 300, 20, 20)
+    # rolled 10 degrees, 20 m over the ground: the rangefinder reads along the tilted down axis; the barometer
+    # says 23 m above home (the ground here is 3 m lower than home, or the barometer drifted)
+    pose = dict(roll_deg=10.0, pitch_deg=-4.0, yaw_deg=30.0, lat_deg=47.0, lon_deg=8.0, abs_alt_m=523.0)
+    reading = 20.0 / (math.cos(math.radians(10.0)) * math.cos(math.radians(-4.0)))
+    fix = geolocate.locate_row(camera, box, {**pose, "rel_alt_m": 23.0, "rangefinder_m": reading})
+    truth = geolocate.locate(camera, box, **pose, height_m=20.0)
+    assert (fix.lat_deg, fix.lon_deg, fix.height_m) == (pytest.approx(truth.lat_deg, abs=1e-9),
+                                                        pytest.approx(truth.lon_deg, abs=1e-9), pytest.approx(20.0))
+    assert fix.height_from == geolocate.FROM_RANGEFINDER and fix.alt_m == pytest.approx(503.0)
+    assert fix.uncertainty_m < truth.uncertainty_m  # 0.1 m of height error assumed instead of 0.5 m
+    # out of its range (None) or without one: the height above home, said so
+    for telemetry in ({**pose, "rel_alt_m": 23.0, "rangefinder_m": None}, {**pose, "rel_alt_m": 23.0}):
+        fallback = geolocate.locate_row(camera, box, telemetry)
+        assert fallback.height_from == geolocate.FROM_HOME and fallback.height_m == 23.0
+        assert fallback.lat_deg == geolocate.locate(camera, box, **pose, height_m=23.0).lat_deg
+
+
+def test_a_downward_rangefinder_reading_reaches_telemetry_only_in_range():
+    def sensor(current: float, pitch: float = 270.0) -> SimpleNamespace:
+        return SimpleNamespace(minimum_distance_m=0.05, maximum_distance_m=40.0, current_distance_m=current,
+                               orientation=SimpleNamespace(roll_deg=0.0, pitch_deg=pitch, yaw_deg=0.0))
+
+    assert from_distance_sensor(sensor(12.5)) == {"rangefinder_m": 12.5}
+    assert from_distance_sensor(sensor(12.5, pitch=-90.0)) == {"rangefinder_m": 12.5}
+    for out_of_range in (40.01, 0.0, math.nan):
+        assert from_distance_sensor(sensor(out_of_range)) == {"rangefinder_m": None}
+    assert from_distance_sensor(sensor(12.5, pitch=0.0)) == {}  # a forward obstacle sensor is not a height
+
+
 def _row(camera: CameraModel | None, telemetry: Telemetry) -> dict:
     aligner = FrameAligner(hold_ns=0, min_hold_ns=0)
     aligner.handle(TelemetrySample(telemetry, 0))
@@ -88,7 +122,7 @@ def test_a_frame_row_holds_the_target_position_or_why_there_is_none():
     flying = Telemetry(lat_deg=47.0, lon_deg=8.0, abs_alt_m=520.0, rel_alt_m=20.0, roll_deg=0.0, pitch_deg=0.0,
                        yaw_deg=90.0)
     row = _row(camera, flying)
-    assert row["target_status"] == "ok"
+    assert row["target_status"] == "ok" and row["target_height_from"] == "home"
     assert row["target_lat_deg"] == pytest.approx(47.0, abs=1e-6) and row["target_alt_m"] == pytest.approx(500.0)
     assert 0.3 < row["target_uncertainty_m"] < 1.0
     no_gps = _row(camera, Telemetry(rel_alt_m=20.0, roll_deg=0.0, pitch_deg=0.0, yaw_deg=0.0))

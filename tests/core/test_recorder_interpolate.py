@@ -5,6 +5,7 @@ from __future__ import annotations
 import pytest
 
 from controllers.base import Telemetry
+from controllers.replay import read_telemetry
 from uav_tui.recording.interpolate import FIELDS, TelemetryHistory
 from uav_tui.recording.rows import FRAME_COLUMNS, FRAME_OWN_COLUMNS, FrameAligner, FrameRecord, TelemetrySample
 
@@ -28,6 +29,26 @@ def test_continuous_fields_are_linear_between_their_own_samples():
     assert history.at(175 * MS)[0]["north_m"] == pytest.approx(2.5)
     # roll changed at 0 and 150 only (the snapshot at 100 repeated it).
     assert history.at(120 * MS)[0]["roll_deg"] == pytest.approx(8.0)
+
+
+def test_a_rangefinder_out_of_range_is_a_gap_not_a_line_across_it():
+    history = _history((0, {"rangefinder_m": 10.0}), (100, {"rangefinder_m": 11.0}), (200, {"rangefinder_m": None}),
+                       (300, {"rangefinder_m": None}), (400, {"rangefinder_m": 14.0}), (500, {"rangefinder_m": 15.0}))
+    assert history.at(50 * MS)[0]["rangefinder_m"] == pytest.approx(10.5)
+    for t_ms in (150, 250, 350):  # next to or inside the gap: no reading (the height above home is used)
+        assert history.at(t_ms * MS)[0]["rangefinder_m"] is None
+    assert history.at(450 * MS)[0]["rangefinder_m"] == pytest.approx(14.5)
+    without = _history((0, {"north_m": 1.0}), (100, {"north_m": 2.0}))  # a vehicle without one waits for nothing
+    assert without.at(50 * MS)[0]["rangefinder_m"] is None and without.covers(50 * MS)
+
+
+def test_a_replay_reads_a_rangefinder_out_of_range_as_none_not_as_its_last_reading(tmp_path):
+    (tmp_path / "telemetry.csv").write_text("t_mono_ns,rel_alt_m,rangefinder_m\n1,30.0,29.5\n2,41.0,\n3,,\n")
+    assert read_telemetry(tmp_path / "telemetry.csv") == [
+        {"t_mono_ns": 1, "rel_alt_m": 30.0, "rangefinder_m": 29.5},
+        {"t_mono_ns": 2, "rel_alt_m": 41.0, "rangefinder_m": None},
+        {"t_mono_ns": 3, "rangefinder_m": None},  # other fields' empty cells: nothing new
+    ]
 
 
 def test_angles_take_the_short_way_round_in_the_autopilots_convention():

@@ -11,7 +11,7 @@ from pymavlink.dialects.v20 import common as mavlink
 from tests.core.flight_helpers import flying_core
 from tests.web.conftest import free_port
 from tests.web.test_camera_tracking import GroundStation
-from uav_tui.geolocate import HEIGHT_SIGMA_M
+from uav_tui.geolocate import RANGEFINDER_SIGMA_M
 
 ALTITUDE_M = 20.0
 
@@ -41,7 +41,7 @@ async def test_the_ground_station_hears_where_the_car_is(tmp_path) -> None:
     error = math.hypot(north - car_n, east - car_e)
     assert error <= 1.0 and error <= geo.h_acc, (north, east, geo.h_acc)  # degE7 is ~1 cm: no rounding error
     assert abs(down) < 0.1  # the car stands on the ground at home's altitude
-    assert geo.v_acc == HEIGHT_SIGMA_M and 0.1 < geo.h_acc < 2.0
+    assert geo.v_acc == pytest.approx(RANGEFINDER_SIGMA_M) and 0.1 < geo.h_acc < 2.0  # the simulator has one
     slant = math.hypot(car_n - vehicle["n"], car_e - vehicle["e"], vehicle["d"])
     assert geo.dist == pytest.approx(slant, abs=0.5)
     assert all(math.isnan(v) for v in (geo.vel_n, geo.vel_e, geo.vel_d, geo.vel_acc, geo.hdg, geo.hdg_acc))

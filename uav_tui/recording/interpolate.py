@@ -11,15 +11,20 @@ fix ...) take the value of the snapshot nearest in time.
 from __future__ import annotations
 
 import bisect
+import math
 from typing import Any
 
 from controllers.base import Telemetry
 
 CONTINUOUS: tuple[str, ...] = (
     "fc_boot_ms", "lat_deg", "lon_deg", "abs_alt_m", "rel_alt_m", "roll_deg", "pitch_deg", "yaw_deg",
-    "north_m", "east_m", "down_m", "vn_ms", "ve_ms", "vd_ms", "battery_v", "battery_pct",
+    "north_m", "east_m", "down_m", "vn_ms", "ve_ms", "vd_ms", "battery_v", "battery_pct", "rangefinder_m",
 )
 """Fields interpolated linearly."""
+
+GAPS = frozenset({"rangefinder_m"})
+"""Continuous fields whose None after a value is news (a rangefinder out of its range): kept as a gap, so no
+line is drawn across it and an instant next to it has no value."""
 
 ANGLES = frozenset({"roll_deg", "pitch_deg", "yaw_deg"})
 """Continuous fields in degrees that wrap at +-180: interpolated the short way round."""
@@ -60,8 +65,10 @@ class TelemetryHistory:
         self._times.append(t_ns)
         self._snapshots.append(sample)
         for name, (times, values) in self._series.items():
-            value = getattr(sample, name)
-            if value is not None and (previous is None or getattr(previous, name) != value or not times):
+            given = getattr(sample, name)
+            gap = given is None and name in GAPS and values and not math.isnan(values[-1])
+            value = math.nan if gap else given
+            if value is not None and (previous is None or getattr(previous, name) != given or not times):
                 times.append(t_ns)
                 values.append(float(value))
         self._trim(t_ns - self.keep_ns)
@@ -89,6 +96,7 @@ class TelemetryHistory:
         if not self._times:
             return dict.fromkeys(FIELDS), "none"
         values: dict[str, Any] = {name: _interpolate(*self._series[name], t_ns, name in ANGLES) for name in CONTINUOUS}
+        values.update({name: None for name in GAPS if values[name] is not None and math.isnan(values[name])})
         if values["fc_boot_ms"] is not None:
             values["fc_boot_ms"] = round(values["fc_boot_ms"])
         nearest = self._snapshots[_nearest(self._times, t_ns)]

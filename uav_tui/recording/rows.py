@@ -42,10 +42,11 @@ extras as JSON, and how the telemetry columns were obtained (``interpolated``, `
 ``none``; see :meth:`TelemetryHistory.at`)."""
 
 GEO_COLUMNS: tuple[str, ...] = ("target_lat_deg", "target_lon_deg", "target_alt_m", "target_uncertainty_m",
-                                 "target_status")
+                                 "target_status", "target_height_from")
 """frames.csv, last: where the centre of ``box`` is on the ground (:mod:`uav_tui.geolocate`, from the camera
 model and the telemetry at the capture): latitude, longitude, ground altitude AMSL, 1-sigma uncertainty in
-metres, and the status (``ok``; empty without a box; else why there is no position)."""
+metres, the status (``ok``; empty without a box; else why there is no position), and where the height above
+the ground came from (``rangefinder`` or ``home``: the height above home)."""
 
 FRAME_COLUMNS: tuple[str, ...] = FRAME_OWN_COLUMNS + FIELDS + GEO_COLUMNS
 """frames.csv: the frame's own columns, the telemetry interpolated to the capture time, the target's position."""
@@ -225,9 +226,9 @@ class FrameAligner:
 def _geo(fix: GeoFix) -> tuple[Any, ...]:
     """The :data:`GEO_COLUMNS` of a fix (coordinates to 1e-8 degrees, ~1 mm)."""
     if fix.lat_deg is None or fix.lon_deg is None or fix.uncertainty_m is None:
-        return None, None, None, None, fix.status
+        return None, None, None, None, fix.status, None
     alt = None if fix.alt_m is None else round(fix.alt_m, 3)
-    return round(fix.lat_deg, 8), round(fix.lon_deg, 8), alt, round(fix.uncertainty_m, 3), fix.status
+    return round(fix.lat_deg, 8), round(fix.lon_deg, 8), alt, round(fix.uncertainty_m, 3), fix.status, fix.height_from
 
 
 def _finite(value: Any) -> Any:

@@ -38,7 +38,7 @@ from pymavlink.dialects.v20 import common as mavlink
 from processors.base import Box
 from uav_tui.commands import Command
 from uav_tui.errors import KNOWN_ERRORS, CommandError, ConfigError, UavError
-from uav_tui.geolocate import HEIGHT_SIGMA_M, NO_BOX, OK, GeoFix, locate_row
+from uav_tui.geolocate import HEIGHT_SIGMAS, NO_BOX, OK, GeoFix, locate_row
 from uav_tui.line_budget import LineBudget
 from uav_tui.text import describe
 from uav_tui.web.failures import HandlerFailures
@@ -321,9 +321,10 @@ class CameraTracking:
             idle = mavlink.CAMERA_TRACKING_STATUS_FLAGS_IDLE  # tracking, but nowhere on the ground
             self.mav.camera_tracking_geo_status_send(idle if box is not None else flag, 0, 0, *([nan] * 10))
             return
+        v_acc = nan if fix.alt_m is None else HEIGHT_SIGMAS[fix.height_from]
         self.mav.camera_tracking_geo_status_send(
             flag, round(fix.lat_deg * 1e7), round(fix.lon_deg * 1e7), _or_nan(fix.alt_m), _or_nan(fix.uncertainty_m),
-            nan if fix.alt_m is None else HEIGHT_SIGMA_M, nan, nan, nan, nan, _or_nan(fix.range_m), nan, nan)
+            v_acc, nan, nan, nan, nan, _or_nan(fix.range_m), nan, nan)
 
     def _send_information(self) -> None:
         size = self.core.source.get_frame_size() if self.core.source is not None else (0, 0)
