@@ -3,7 +3,8 @@
 The sim: camera draws the world from the autopilot's own pose (its local origin is the world's), so the car
 stands 6 m north of the autopilot's local origin. Each located frame's target, put in local metres through
 the frame's own position (north_m/east_m, lat/lon), must land on it: the autopilot's real attitude,
-altitude and timing go through the projection, while it hovers and while it flies sideways.
+altitude and timing go through the projection, while it hovers and while it flies sideways; the height above
+the ground is PX4 SIH's simulated rangefinder's, ArduCopter's height above home.
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ import pytest
 from sources.sim_render import default_targets
 from tests import sitl
 from uav_tui import dataset
-from uav_tui.geolocate import EARTH_RADIUS_M, OK
+from uav_tui.geolocate import EARTH_RADIUS_M, FROM_HOME, FROM_RANGEFINDER, OK
 
 pytestmark = pytest.mark.sitl
 
@@ -55,9 +56,12 @@ def fly(fc: str, tmp_path: Path, wait_first_s: float) -> dataset.Dataset:
 
 
 @pytest.mark.timeout(400)
-@pytest.mark.parametrize("launch", [sitl.px4_sih, sitl.arducopter], ids=["px4_sih", "arducopter"])
+@pytest.mark.parametrize("launch, height_from", [(sitl.px4_sih, FROM_RANGEFINDER), (sitl.arducopter, FROM_HOME)],
+                         ids=["px4_sih", "arducopter"])
 def test_the_parked_car_is_located_where_it_stands_on_a_real_autopilot(
-        launch: Callable[[Path], AbstractContextManager[sitl.Sitl]], tmp_path: Path) -> None:
+        launch: Callable[[Path], AbstractContextManager[sitl.Sitl]], height_from: str, tmp_path: Path) -> None:
+    """SIH simulates a downward distance sensor, which PX4 sends as DISTANCE_SENSOR; ArduCopter's SITL has none
+    unless its RNGFND1_* parameters configure one: there the height above home is used."""
     workdir = tmp_path / "sitl"
     workdir.mkdir()
     with launch(workdir) as vehicle:
@@ -82,3 +86,4 @@ def test_the_parked_car_is_located_where_it_stands_on_a_real_autopilot(
     tilted = np.hypot(located["roll_deg"], located["pitch_deg"]).to_numpy(dtype=np.float64) > 2.0
     assert tilted.sum() > 3, "the flight must include tilted frames to mean anything"
     assert math.isclose(located["rel_alt_m"].median(), ALTITUDE_M, abs_tol=1.0)
+    assert (located["target_height_from"] == height_from).all()
