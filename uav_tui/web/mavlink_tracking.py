@@ -30,7 +30,6 @@ import asyncio
 import logging
 import math
 from collections.abc import Callable
-from dataclasses import asdict
 from typing import Any
 
 from pymavlink.dialects.v20 import common as mavlink
@@ -38,8 +37,9 @@ from pymavlink.dialects.v20 import common as mavlink
 from processors.base import Box
 from uav_tui.commands import Command
 from uav_tui.errors import KNOWN_ERRORS, CommandError, ConfigError, UavError
-from uav_tui.geolocate import HEIGHT_SIGMAS, NO_BOX, OK, GeoFix, locate_row
+from uav_tui.geolocate import HEIGHT_SIGMAS, NO_BOX, OK, GeoFix
 from uav_tui.line_budget import LineBudget
+from uav_tui.status import CoreState
 from uav_tui.text import describe
 from uav_tui.web.failures import HandlerFailures
 from uav_tui.web.roi import point_to_roi, rect_to_roi
@@ -118,8 +118,6 @@ class CameraTracking:
         """False after MAV_CMD_CAMERA_STOP_TRACKING until the next track command: the status says idle."""
         self.tracked: tuple[Box | None, tuple[int, int], bool] = (None, (0, 0), False)
         """The newest processed frame's box, its frame size and whether the processor raised on it."""
-        self.located = GeoFix(NO_BOX)
-        """Where that box is on the ground."""
         self._commands: asyncio.Queue[Any] = asyncio.Queue(maxsize=QUEUE_COMMANDS)
         self._tasks: list[asyncio.Task[None]] = []
         self.failures = HandlerFailures(core.events, f"CameraTracking({address})")
@@ -166,11 +164,6 @@ class CameraTracking:
         """Frame listener (on the loop): keep what the processor reported for the newest frame."""
         height, width = result.frame.image.shape[:2]
         self.tracked = (result.box, (width, height), result.error is not None)
-        if result.box is None:
-            self.located = GeoFix(NO_BOX)
-        else:  # ~20 us, with the telemetry as it was at the capture
-            telemetry, _ = self.core.telemetry.at(result.frame.t_mono_ns)
-            self.located = locate_row(self.core.camera, result.box, asdict(telemetry))
 
     def received(self, data: bytes, addr: tuple[str, int]) -> None:
         """Datagram from the ground station (on the loop): queue the commands addressed to us."""
@@ -316,7 +309,7 @@ class CameraTracking:
             flag, self.mode, mavlink.CAMERA_TRACKING_TARGET_DATA_IN_STATUS, *point, x0, y0, x1, y1)
 
     def _send_geo_status(self) -> None:
-        (flag, box), fix, nan = self._reported(), self.located, float("nan")
+        (flag, box), fix, nan = self._reported(), self._located(), float("nan")
         if box is None or fix.status != OK or fix.lat_deg is None or fix.lon_deg is None:
             idle = mavlink.CAMERA_TRACKING_STATUS_FLAGS_IDLE  # tracking, but nowhere on the ground
             self.mav.camera_tracking_geo_status_send(idle if box is not None else flag, 0, 0, *([nan] * 10))
@@ -325,6 +318,11 @@ class CameraTracking:
         self.mav.camera_tracking_geo_status_send(
             flag, round(fix.lat_deg * 1e7), round(fix.lon_deg * 1e7), _or_nan(fix.alt_m), _or_nan(fix.uncertainty_m),
             v_acc, nan, nan, nan, nan, _or_nan(fix.range_m), nan, nan)
+
+    def _located(self) -> GeoFix:
+        """Where the newest processed frame's box is on the ground, as every interface shows it."""
+        target = self.core.status().target if self.core.state is CoreState.RUNNING else None
+        return target or GeoFix(NO_BOX)
 
     def _send_information(self) -> None:
         size = self.core.source.get_frame_size() if self.core.source is not None else (0, 0)
