@@ -123,8 +123,11 @@ class Replayed:
     first: int
     last: int
     """The measured frames, both included."""
+    seqs: list[int]
+    """The measured frames it processed: all from ``first`` to ``last`` unless it skipped some (a late reader
+    skips frames, as the camera's newest frame wins)."""
     boxes: list[Box | None]
-    """What the processor tracked after each measured frame (its ``box``)."""
+    """What the processor tracked after each frame of ``seqs`` (its ``box``)."""
 
 
 def bare_loop(path: Path, processor: str, replayed: Replayed, roi: Box | None, fps: float | None) -> dict[str, Any]:
@@ -220,7 +223,8 @@ async def platform_run(source: str, processor: str, isolation: str, seconds: flo
         "handoff_ms_p95": float(np.percentile(handoff, 95)),
         **latency_percentiles((stamps[:, 3] - stamps[:, 1]) / 1e6),  # capture to result
     }
-    return measures, Replayed(selected[0] if selected else None, int(stamps[0, 0]), int(stamps[-1, 0]), measured_boxes)
+    seqs = [int(seq) for seq in stamps[:, 0]]
+    return measures, Replayed(selected[0] if selected else None, seqs[0], seqs[-1], seqs, measured_boxes)
 
 
 def rounds(processor: str, size: tuple[int, int], video: Path, seconds: float, count: int,
@@ -258,9 +262,11 @@ def in_fresh_interpreter(function: Callable[..., dict[str, Any]], *args: Any) ->
 
 
 def _first_difference(bare: list[Box | None], platform: Replayed) -> int | None:
-    """The first measured frame (its sequence number) on which the bare loop did not track what the platform did
-    (the same box within a pixel, or nothing in both); None when it did on every one."""
-    for seq, (b, p) in enumerate(zip(bare, platform.boxes, strict=True), start=platform.first):
+    """The first frame the platform processed (its sequence number) on which the bare loop, which processed every
+    measured frame, did not track what the platform did (the same box within a pixel, or nothing in both); None
+    when it did on every one."""
+    for seq, p in zip(platform.seqs, platform.boxes, strict=True):
+        b = bare[seq - platform.first]
         if not (b is p if b is None or p is None else np.allclose(b, p, atol=1)):
             return seq
     return None
