@@ -4,7 +4,7 @@ Platform: ``file:VIDEO?realtime=0`` (the file source runs in lockstep with its r
 thread, FrameBuffer and the processor worker, with ``isolation = "process"`` and ``"thread"``.
 Bare loop: ``ok, frame = cap.read(); alg.photo_processing(frame)`` as fast as it goes, each time in a fresh
 interpreter as a researcher's script runs: glibc's default allocator and OpenCV's default thread pool (the platform
-sets its own for the processor's process, see ``uav_tui.malloc_tuning`` and ``uav_tui.opencv_pool``).
+sets its own for the processor's process, see ``uav_tui.hosting.malloc_tuning`` and ``uav_tui.hosting.opencv_pool``).
 After each platform run, the bare loop replays exactly the frames that run processed: from the frame the target
 was selected on (csrt; untimed up to the measured frames), then the measured frames, timed. A tracker's work per
 frame depends on what it is doing: on real 1280x720 video, CSRT lost its target on 10 % of the first 300 frames
@@ -61,7 +61,7 @@ from sources.synthetic import SyntheticScene  # noqa: E402
 from uav_tui.config import load_config  # noqa: E402
 from uav_tui.core import UavCore  # noqa: E402
 from uav_tui.evaluation import find_sequences  # noqa: E402
-from uav_tui.worker import ProcessedFrame  # noqa: E402
+from uav_tui.hosting.host import ProcessedFrame  # noqa: E402
 
 PROCESSORS = ("template", "csrt", "position_hold", "yolo")
 RESOLUTIONS = ((640, 480), (1280, 720))

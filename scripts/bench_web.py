@@ -28,7 +28,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from controllers.sim.launcher import free_ports  # noqa: E402
 from uav_tui.config import load_config  # noqa: E402
 from uav_tui.core import UavCore  # noqa: E402
-from uav_tui.worker import ProcessedFrame  # noqa: E402
+from uav_tui.hosting.host import ProcessedFrame  # noqa: E402
 
 CHROMIUM = "/usr/bin/chromium"
 CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",

@@ -17,7 +17,7 @@ _EXPORTS = {
     "Command": "uav_tui.commands",
     "parse_command": "uav_tui.commands:parse",
     "TelemetryManager": "uav_tui.telemetry",
-    "ProcessedFrame": "uav_tui.worker",
+    "ProcessedFrame": "uav_tui.hosting.host",
     "Event": "uav_tui.events",
     "UavError": "uav_tui.errors",
     "ConfigError": "uav_tui.errors",

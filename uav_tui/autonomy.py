@@ -22,9 +22,9 @@ from controllers.base import FlightController, OwnModes
 from uav_tui.config import SafetyConfig
 from uav_tui.errors import KNOWN_ERRORS, UavError
 from uav_tui.events import EventLog, Level, Repeats
+from uav_tui.hosting.host import ProcessedFrame
 from uav_tui.telemetry import TelemetryManager
 from uav_tui.text import describe
-from uav_tui.worker import ProcessedFrame
 
 logger = logging.getLogger(__name__)
 

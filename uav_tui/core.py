@@ -31,18 +31,19 @@ from uav_tui.config import Config
 from uav_tui.errors import KNOWN_ERRORS, NoVehicle, SourceError, UavError
 from uav_tui.events import EventLog
 from uav_tui.geolocate import locate_row
+from uav_tui.hosting.exception_reports import ProcessorErrors
+from uav_tui.hosting.host import ProcessedFrame
+from uav_tui.hosting.malloc_tuning import tune_this_process
+from uav_tui.hosting.process_host import LOAD_TIMEOUT_S, ProcessWorker
+from uav_tui.hosting.thread_host import ProcessorWorker, load_in_thread
 from uav_tui.link import LinkWatch
-from uav_tui.malloc_tuning import tune_this_process
 from uav_tui.operations import Operations
-from uav_tui.process_worker import LOAD_TIMEOUT_S, ProcessWorker
-from uav_tui.processor_errors import ProcessorErrors
 from uav_tui.recording import Recorder, describe
 from uav_tui.replay.gate import ReplayGate, on_replay_clock
 from uav_tui.replay.operator import CommandReplay, recorded_commands
 from uav_tui.status import CoreState, CoreStatus
 from uav_tui.telemetry import TelemetryManager
 from uav_tui.text import last_line, shorten
-from uav_tui.worker import ProcessedFrame, ProcessorWorker, load_in_thread
 
 if TYPE_CHECKING:  # aiortc and pymavlink are imported only when the side channels are switched on
     from uav_tui.web import WebServer

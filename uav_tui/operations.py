@@ -12,8 +12,8 @@ from typing import TYPE_CHECKING, Any, NamedTuple, Protocol
 from uav_tui.autonomy import check_vector
 from uav_tui.commands import VEHICLE_COMMANDS, Command, check_limits
 from uav_tui.errors import CommandError, ProcessorLoadError, SourceError, UavError
-from uav_tui.process_worker import ProcessorRaised
-from uav_tui.processor_calls import ProcessorCalls
+from uav_tui.hosting.operator_calls import ProcessorCalls
+from uav_tui.hosting.process_host import ProcessorRaised
 from uav_tui.text import describe, shorten
 
 if TYPE_CHECKING:
@@ -24,8 +24,8 @@ if TYPE_CHECKING:
     from sources.camera_model import CameraModel
     from uav_tui.autonomy import AutonomyGate
     from uav_tui.config import Config
+    from uav_tui.hosting.host import Answer
     from uav_tui.recording import Recorder
-    from uav_tui.worker import Answer
 
 HANDED_OVER = {"land": "LAND", "rtl": "RETURN_TO_LAUNCH"}
 """Commands that hand the vehicle to the autopilot's own mode (MAVSDK's name): exit leaves it there."""

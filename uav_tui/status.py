@@ -9,9 +9,9 @@ from typing import Any
 from controllers.base import Telemetry
 from uav_tui.autonomy import Verdict
 from uav_tui.geolocate import GeoFix, describe
+from uav_tui.hosting.host import ProcessorState
 from uav_tui.stats import PipelineStats
 from uav_tui.text import safe
-from uav_tui.worker import ProcessorState
 
 
 class CoreState(enum.Enum):

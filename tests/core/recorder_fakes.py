@@ -8,8 +8,8 @@ from dataclasses import dataclass
 
 from sources.buffer import Frame
 from uav_tui.events import EventLog
+from uav_tui.hosting.host import ProcessedFrame
 from uav_tui.telemetry import TelemetryManager
-from uav_tui.worker import ProcessedFrame
 
 
 @dataclass

@@ -15,7 +15,7 @@ from sources.buffer import Frame
 from uav_tui.autonomy import AutonomyGate, Verdict
 from uav_tui.config import SafetyConfig
 from uav_tui.events import EventLog
-from uav_tui.worker import ProcessedFrame
+from uav_tui.hosting.host import ProcessedFrame
 
 
 @dataclass

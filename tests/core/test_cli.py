@@ -210,7 +210,7 @@ def test_ctrl_z_does_not_suspend_a_headless_run(tmp_path: Path) -> None:
 def test_hangup_with_continue_keeps_the_run_and_its_processor_going(tmp_path: Path) -> None:
     with headless_job(tmp_path, "--on-hangup", "continue") as process:
         assert process.stdout is not None
-        processor = next(p for p in psutil.Process(process.pid).children() if "processors.child" in p.cmdline())
+        processor = next(p for p in psutil.Process(process.pid).children() if "uav_tui.hosting.child" in p.cmdline())
         os.killpg(process.pid, signal.SIGHUP)  # the SSH session dropped
         lines = [process.stdout.readline() for _ in range(3)]  # status lines go on
         assert processor.is_running() and process.poll() is None

@@ -30,8 +30,8 @@ from uav_tui.core import UavCore
 from uav_tui.errors import ConfigError, ProcessorLoadError, UavError
 from uav_tui.events import EventLog
 from uav_tui.headless import format_status
-from uav_tui.process_worker import ProcessWorker
-from uav_tui.worker import ProcessedFrame
+from uav_tui.hosting.host import ProcessedFrame
+from uav_tui.hosting.process_host import ProcessWorker
 
 MAX_T = 1.5
 

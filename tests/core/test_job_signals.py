@@ -20,15 +20,15 @@ import pytest
 
 from tests.core.flight_helpers import wait_until
 from uav_tui.events import EventLog
-from uav_tui.frame_ring import job_signals_blocked
-from uav_tui.process_worker import ProcessWorker
+from uav_tui.hosting.frame_ring import job_signals_blocked
+from uav_tui.hosting.process_host import ProcessWorker
 from uav_tui.recording import run_info
 
 ROOT = Path(__file__).resolve().parents[2]
 
 SPAWNS_UNDER_CTRL_Z = '''
 import os, signal, subprocess, sys
-from uav_tui.frame_ring import job_signals_blocked
+from uav_tui.hosting.frame_ring import job_signals_blocked
 signal.signal(signal.SIGTSTP, lambda *_: None)  # as the platform's loop catches it
 print("ready", flush=True)
 for _ in range(100):
@@ -67,7 +67,7 @@ async def test_the_processors_process_unblocks_the_job_signals_once_started(tmp_
     (tmp_path / "idle.py").write_text("class Idle:\n    def photo_processing(self, frame):\n        pass\n")
     worker = await ProcessWorker.start(f"{tmp_path}/idle.py:Idle", {}, print, events=EventLog(), on_fault=print)
     try:
-        child = next(p for p in psutil.Process().children() if "processors.child" in p.cmdline())
+        child = next(p for p in psutil.Process().children() if "uav_tui.hosting.child" in p.cmdline())
 
         def blocked() -> int:
             status = Path(f"/proc/{child.pid}/status").read_text()

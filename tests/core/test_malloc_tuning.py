@@ -9,14 +9,14 @@ from pathlib import Path
 
 import pytest
 
-from uav_tui.malloc_tuning import ENVIRONMENT, child_environment
+from uav_tui.hosting.malloc_tuning import ENVIRONMENT, child_environment
 
 ROOT = Path(__file__).resolve().parents[2]
 
 FRAMES = '''
 import resource, sys
 import numpy as np
-from uav_tui.malloc_tuning import tune_this_process
+from uav_tui.hosting.malloc_tuning import tune_this_process
 if sys.argv[1] == "tuned":
     assert tune_this_process()
 def frame():  # a detector's frame: three 6 MB temporaries alive together, all freed at its end

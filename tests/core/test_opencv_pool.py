@@ -9,9 +9,9 @@ from pathlib import Path
 
 import pytest
 
-from uav_tui import malloc_tuning, opencv_pool
 from uav_tui.config import load_config
 from uav_tui.core import UavCore
+from uav_tui.hosting import malloc_tuning, opencv_pool
 
 JOBS = '''
 import os, time

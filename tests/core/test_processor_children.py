@@ -19,7 +19,7 @@ import numpy as np
 from sources.buffer import FrameBuffer
 from tests.core.flight_helpers import wait_until
 from uav_tui.events import EventLog
-from uav_tui.process_worker import ProcessWorker
+from uav_tui.hosting.process_host import ProcessWorker
 
 SPAWNER = '''
 import multiprocessing, os, subprocess, sys, time

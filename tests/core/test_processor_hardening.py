@@ -159,7 +159,7 @@ def test_a_signal_ends_the_platform_while_the_processor_loads(tmp_path: Path, si
     seen = bytearray()
     try:
         read_until(proc, seen, lambda out: b"loading processor" in out, 30, "loading notice")
-        child = next(p for p in psutil.Process(proc.pid).children() if "processors.child" in " ".join(p.cmdline()))
+        child = next(p for p in psutil.Process(proc.pid).children() if "uav_tui.hosting.child" in " ".join(p.cmdline()))
         sent = time.monotonic()
         proc.send_signal(sig)
         code = finish(proc, seen, 30)

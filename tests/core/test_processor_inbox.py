@@ -9,8 +9,8 @@ from multiprocessing.connection import wait
 
 import numpy as np
 
-from processors.child import send_message
-from uav_tui.processor_process import Inbox
+from uav_tui.hosting.child import send_message
+from uav_tui.hosting.child_process import Inbox
 
 
 def read_all(inbox: Inbox, count: int) -> list[object]:

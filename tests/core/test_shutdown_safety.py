@@ -26,7 +26,7 @@ from tests.core.flight_helpers import (
 )
 from uav_tui.core import CoreState
 from uav_tui.headless import EXIT_UNHANDLED_ERROR, HeadlessRunner
-from uav_tui.worker import ProcessedFrame
+from uav_tui.hosting.host import ProcessedFrame
 
 SCRIPT = "arm\ntakeoff 3\nwait 6\nf 1\nautonomy on\nwait 120\n"
 

@@ -24,13 +24,14 @@ from sources import open_source
 from sources.buffer import FrameBuffer
 from sources.synthetic import SyntheticSource
 from tests.videos import create_video_file
-from uav_tui import process_worker
 from uav_tui.events import EventLog
-from uav_tui.frame_ring import MAX_SLOTS
-from uav_tui.process_worker import ProcessWorker
-from uav_tui.processor_process import Inbox
+from uav_tui.hosting import process_host
+from uav_tui.hosting.child_process import Inbox
+from uav_tui.hosting.frame_ring import MAX_SLOTS
+from uav_tui.hosting.host import ProcessedFrame
+from uav_tui.hosting.process_host import ProcessWorker
+from uav_tui.hosting.thread_host import ProcessorWorker
 from uav_tui.telemetry import TelemetryManager
-from uav_tui.worker import ProcessedFrame, ProcessorWorker
 
 Worker = ProcessorWorker | ProcessWorker
 BOTH = pytest.mark.parametrize("isolation", ["process", "thread"])
@@ -407,7 +408,7 @@ async def test_results_closer_together_than_the_poll_period_are_read_in_batches(
     of each waking the loop, none lost or out of order; once they stop, the pipe is watched again, so a lone reply
     is read as it comes, not a poll later; and a child killed while its results are polled is still reported."""
     poll_s = 0.2
-    monkeypatch.setattr(process_worker, "RESULTS_POLL_S", poll_s)
+    monkeypatch.setattr(process_host, "RESULTS_POLL_S", poll_s)
     batches: list[int] = []
     read = Inbox.read
 

@@ -17,11 +17,11 @@ from sources.synthetic import SyntheticScene
 from uav_tui.autonomy import Verdict
 from uav_tui.core import UavCore
 from uav_tui.events import Event
+from uav_tui.hosting.host import ProcessorState
 from uav_tui.stats import PipelineStats
 from uav_tui.status import CoreStatus
 from uav_tui.tui._event_log import EventLogView
 from uav_tui.tui.app import UavApp
-from uav_tui.worker import ProcessorState
 
 from .conftest import started
 

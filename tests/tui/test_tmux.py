@@ -153,7 +153,7 @@ def test_quit_while_flying_holds_the_vehicle_before_exit(tmux, tmp_path, sim_veh
 
 
 def processor_process(app: psutil.Process) -> psutil.Process:
-    return next(p for p in app.children() if "processors.child" in " ".join(p.cmdline()))
+    return next(p for p in app.children() if "uav_tui.hosting.child" in " ".join(p.cmdline()))
 
 
 @pytest.mark.parametrize(("policy", "hangup"), [("stop", "close"), ("stop", "ssh"), ("continue", "close"),

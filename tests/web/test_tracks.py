@@ -10,8 +10,8 @@ import pytest
 from aiortc.mediastreams import MediaStreamError
 
 from sources.buffer import Frame
+from uav_tui.hosting.host import ProcessedFrame
 from uav_tui.web.tracks import ProcessedVideoTrack, VideoHub, to_video_frame
-from uav_tui.worker import ProcessedFrame
 
 
 def processed(seq: int, width: int = 640, height: int = 480) -> ProcessedFrame:

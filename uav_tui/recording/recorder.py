@@ -31,6 +31,7 @@ from sources.buffer import Frame
 from uav_tui.config import RecordingConfig
 from uav_tui.errors import UavError
 from uav_tui.events import Event, EventLog, Level
+from uav_tui.hosting.host import ProcessedFrame
 from uav_tui.recording.crash import CrashRecord
 from uav_tui.recording.rows import (
     TABLES,
@@ -53,7 +54,6 @@ from uav_tui.recording.video import (
     describe_video,
 )
 from uav_tui.recording.writer import MB, DiskWriter, Rename
-from uav_tui.worker import ProcessedFrame
 
 if TYPE_CHECKING:
     from sources import CameraSource

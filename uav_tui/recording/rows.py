@@ -15,10 +15,10 @@ import numpy as np
 from controllers.base import TELEMETRY_FIELDS, Telemetry
 from uav_tui.events import Event
 from uav_tui.geolocate import GeoFix, locate_row
+from uav_tui.hosting.host import ProcessedFrame
 from uav_tui.recording.interpolate import FIELDS, TelemetryHistory
 from uav_tui.recording.writer import Row
 from uav_tui.text import last_line, shorten
-from uav_tui.worker import ProcessedFrame
 
 if TYPE_CHECKING:
     from sources.camera_model import CameraModel

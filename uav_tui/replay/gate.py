@@ -12,8 +12,8 @@ from controllers.base import FlightController, RecordedVehicle
 from uav_tui.autonomy import AutonomyGate
 from uav_tui.config import SafetyConfig
 from uav_tui.events import EventLog
+from uav_tui.hosting.host import ProcessedFrame
 from uav_tui.telemetry import TelemetryManager
-from uav_tui.worker import ProcessedFrame
 
 
 class ReplayedController(FlightController, RecordedVehicle, Protocol):

@@ -22,8 +22,8 @@ from aiortc.contrib.media import MediaRelay
 from aiortc.mediastreams import VIDEO_CLOCK_RATE, VIDEO_TIME_BASE, MediaStreamError
 from av import VideoFrame
 
+from uav_tui.hosting.host import ProcessedFrame
 from uav_tui.web.view import FrameFeed
-from uav_tui.worker import ProcessedFrame
 
 logger = logging.getLogger(__name__)
 

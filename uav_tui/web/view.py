@@ -9,8 +9,8 @@ if TYPE_CHECKING:
     from sources import CameraSource
     from uav_tui.commands import Command
     from uav_tui.events import EventLog
+    from uav_tui.hosting.host import ProcessedFrame
     from uav_tui.status import CoreState, CoreStatus
-    from uav_tui.worker import ProcessedFrame
 
 
 class FrameFeed(Protocol):

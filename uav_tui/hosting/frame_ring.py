@@ -35,7 +35,7 @@ from multiprocessing.shared_memory import SharedMemory
 
 import numpy as np
 
-from processors.child import JOB_SIGNALS
+from uav_tui.hosting.child import JOB_SIGNALS
 
 MAX_SLOTS = 12
 """One in the child, one being written, the rest held by readers (preview, web, recorder, snapshot)."""

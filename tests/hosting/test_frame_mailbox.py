@@ -15,7 +15,7 @@ from multiprocessing.connection import wait
 
 import pytest
 
-from processors.frame_mailbox import _WATCH, _WATCH_AT, FrameMailbox, MailboxGone, Offer
+from uav_tui.hosting.frame_mailbox import _WATCH, _WATCH_AT, FrameMailbox, MailboxGone, Offer
 
 
 def offer(gen: int, seq: int | None = None, telemetry: bytes = b"", heartbeat_age_s: float | None = None) -> Offer:
@@ -32,7 +32,7 @@ def mailbox() -> FrameMailbox:
 def claim_in_another_process(box: FrameMailbox) -> str:
     """Claim once from a fresh interpreter attached by address; what it got, as text."""
     code = textwrap.dedent(f"""
-        from processors.frame_mailbox import FrameMailbox
+        from uav_tui.hosting.frame_mailbox import FrameMailbox
         box = FrameMailbox.attach("{box.address}")
         got = box.claim()
         print(None if got is None else

@@ -1,6 +1,6 @@
 """One processor process as the platform sees it: how it is started, what it printed, how it ended.
 
-:class:`ChildProcess` is the handle :class:`~uav_tui.process_worker.ProcessWorker` keeps per child:
+:class:`ChildProcess` is the handle :class:`~uav_tui.hosting.process_host.ProcessWorker` keeps per child:
 the process, its pipe and frame mailbox, the frames and calls it has been offered, the slots it may still reference, and
 the last lines of its output (stdout and stderr together, forwarded escaped to the platform's stdout
 the way ``print()`` reaches it with thread isolation, and kept for the crash report). Its log records
@@ -28,11 +28,11 @@ from multiprocessing.connection import Connection
 from typing import Any
 
 from processors.base import ProcessorInfo
-from processors.child import BUFFER_COUNT, LOG_LEVEL_ENV, MEMORY_EXIT_CODE, parse_log_line
-from processors.frame_mailbox import FrameMailbox
 from sources.buffer import Frame, FrameBuffer
-from uav_tui import malloc_tuning, opencv_pool
-from uav_tui.frame_ring import Slot, ensure_resource_tracker, job_signals_blocked
+from uav_tui.hosting import malloc_tuning, opencv_pool
+from uav_tui.hosting.child import BUFFER_COUNT, LOG_LEVEL_ENV, MEMORY_EXIT_CODE, parse_log_line
+from uav_tui.hosting.frame_mailbox import FrameMailbox
+from uav_tui.hosting.frame_ring import Slot, ensure_resource_tracker, job_signals_blocked
 from uav_tui.text import safe, shorten
 
 TAIL_LINES = 30
@@ -166,7 +166,7 @@ class Inbox:
     (the platform's own sends stay blocking) and splits the bytes the way
     :class:`~multiprocessing.connection.Connection` framed them: a 4-byte big-endian length, or -1 and
     an 8-byte one for 2 GiB and more, then the bytes. A message is a frame with a pickle and the frames
-    of its out-of-band buffers (:func:`processors.child.send_message`); a frame longer than one read (an
+    of its out-of-band buffers (:func:`uav_tui.hosting.child.send_message`); a frame longer than one read (an
     image from ``tmMgr.save``) is read straight into a buffer of its own size.
     """
 
@@ -264,7 +264,7 @@ class Inbox:
 
 
 def spawn(ready: asyncio.Future[ProcessorInfo], output: Callable[[list[bytes]], None]) -> ChildProcess:
-    """Start ``python -m processors.child`` with a pipe and a frame mailbox; its output is read on a thread and its
+    """Start ``python -m uav_tui.hosting.child`` with a pipe and a frame mailbox; its output is read on a thread and its
     lines given to ``output`` (a :class:`~uav_tui.line_budget.LineBudget`'s ``lines``: see :func:`say_output`).
 
     The child has a process group of its own: a terminal's Ctrl-C, Ctrl-Z and hang-up (sent to every process of
@@ -280,7 +280,8 @@ def spawn(ready: asyncio.Future[ProcessorInfo], output: Callable[[list[bytes]], 
            LOG_LEVEL_ENV: logging.getLevelName(logging.getLogger().getEffectiveLevel())}
     try:
         with job_signals_blocked():  # the child unblocks them once it is itself
-            proc = subprocess.Popen([sys.executable, "-m", "processors.child", str(theirs.fileno()), mailbox.address],
+            proc = subprocess.Popen([sys.executable, "-m", "uav_tui.hosting.child", str(theirs.fileno()),
+                                     mailbox.address],
                                     pass_fds=(theirs.fileno(), *mailbox.fds), stdin=subprocess.DEVNULL,
                                     stdout=subprocess.PIPE, stderr=subprocess.STDOUT, env=env,
                                     process_group=0)

@@ -14,7 +14,7 @@ import time
 from collections.abc import Awaitable, Callable
 
 from uav_tui.errors import UavError
-from uav_tui.worker import Answer
+from uav_tui.hosting.host import Answer
 
 
 class _Call:

@@ -1,8 +1,8 @@
-"""The processor's own process: ``python -m processors.child FD MAILBOX`` runs one processor behind a pipe.
+"""The processor's own process: ``python -m uav_tui.hosting.child FD MAILBOX`` runs one processor behind a pipe.
 
-The platform (``uav_tui.process_worker``) starts this module in a fresh interpreter and talks to it
+The platform (``uav_tui.hosting.process_host``) starts this module in a fresh interpreter and talks to it
 over the :class:`~multiprocessing.connection.Connection` on file descriptor ``FD``; frames come through
-the :class:`~processors.frame_mailbox.FrameMailbox` at ``MAILBOX`` (its address, one argument). It imports only
+the :class:`~uav_tui.hosting.frame_mailbox.FrameMailbox` at ``MAILBOX`` (its address, one argument). It imports only
 this level (``processors``), NumPy and the researcher's code: a GIL-bound loop, a hang, ``os._exit``,
 a segfault or a leak here cannot freeze or kill the flight path.
 
@@ -68,8 +68,8 @@ import numpy as np
 from processors import load_processor
 from processors.base import read_box
 from processors.errors import ProcessorLoadError
-from processors.frame_mailbox import FrameMailbox, Offer, Segment
 from processors.frame_telemetry import DEFAULT_SAVE_MAX_HZ, FrameTelemetry
+from uav_tui.hosting.frame_mailbox import FrameMailbox, Offer, Segment
 
 JOB_SIGNALS = frozenset({signal.SIGINT, signal.SIGQUIT, signal.SIGHUP, signal.SIGTSTP, signal.SIGTTIN, signal.SIGTTOU})
 """What a terminal sends to every process of its job. The platform starts this process with them blocked (a

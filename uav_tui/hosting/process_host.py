@@ -1,10 +1,11 @@
-"""The processor in its own process: same surface as :class:`~uav_tui.worker.ProcessorWorker`, nothing shared.
+"""The process host (``isolation = "process"``): the processor in its own process, same surface as
+:class:`~uav_tui.hosting.thread_host.ProcessorWorker`, nothing shared.
 
-Frames live in :class:`~uav_tui.frame_ring.FrameRing`'s shared-memory slots (decoded there by cameras
+Frames live in :class:`~uav_tui.hosting.frame_ring.FrameRing`'s shared-memory slots (decoded there by cameras
 that can; copied in once, off the capture thread, for those that cannot; never pickled). Every new frame
-is *offered* in the child's :class:`~processors.frame_mailbox.FrameMailbox`, replacing the previous offer,
+is *offered* in the child's :class:`~uav_tui.hosting.frame_mailbox.FrameMailbox`, replacing the previous offer,
 and the child claims the newest whenever it is free: the hand-off waits for nothing in this process.
-Results, calls and ``tmMgr.save`` requests come over a pipe (protocol in :mod:`processors.child`), read
+Results, calls and ``tmMgr.save`` requests come over a pipe (protocol in :mod:`uav_tui.hosting.child`), read
 by the event loop itself whenever the pipe is readable, never blocking it. The watchdog
 (``run``, on the loop) kills a child that stays silent longer than ``processor_timeout``; a child that
 dies for any reason is reported (exit code or signal, last lines of its output), ``on_fault`` stops
@@ -34,17 +35,17 @@ from controllers.base import TELEMETRY_FIELDS
 from processors import LoadedProcessor
 from processors.base import ProcessorInfo
 from processors.errors import ProcessorLoadError
-from processors.frame_mailbox import TELEMETRY_BYTES, MailboxGone, Offer
 from processors.frame_telemetry import DEFAULT_SAVE_MAX_HZ
 from sources.buffer import Frame, FrameBuffer
 from uav_tui.errors import UavError
 from uav_tui.events import EventLog
-from uav_tui.frame_ring import FrameRing
+from uav_tui.hosting.child_process import ChildProcess, Offered, PendingCall, describe_exit, rss_mb, say_output, spawn
+from uav_tui.hosting.frame_mailbox import TELEMETRY_BYTES, MailboxGone, Offer
+from uav_tui.hosting.frame_ring import FrameRing
+from uav_tui.hosting.host import Answer, ProcessedFrame, ProcessorState
 from uav_tui.line_budget import LineBudget
-from uav_tui.processor_process import ChildProcess, Offered, PendingCall, describe_exit, rss_mb, say_output, spawn
 from uav_tui.stats import PipelineStats, RollingStats
 from uav_tui.telemetry import TelemetryManager
-from uav_tui.worker import Answer, ProcessedFrame, ProcessorState
 
 if TYPE_CHECKING:
     from sources.camera_model import CameraModel

@@ -1,4 +1,5 @@
-"""The processor worker: every call into the researcher's code runs on one thread, newest frame first."""
+"""The thread host (``isolation = "thread"``): every call into the researcher's code runs on one thread, newest
+frame first."""
 
 from __future__ import annotations
 
@@ -13,14 +14,14 @@ import traceback
 from collections import deque
 from collections.abc import Callable
 from concurrent.futures import Future
-from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from controllers.base import TELEMETRY_FIELDS, Telemetry
 from processors import LoadedProcessor, load_processor
-from processors.base import Box, ProcessorInfo, read_box
+from processors.base import ProcessorInfo, read_box
 from processors.frame_telemetry import DEFAULT_SAVE_MAX_HZ, FrameTelemetry
 from sources.buffer import Frame, FrameBuffer
+from uav_tui.hosting.host import Answer, ProcessedFrame, ProcessorState
 from uav_tui.stats import PipelineStats, RollingStats
 from uav_tui.telemetry import TelemetryManager
 
@@ -33,63 +34,6 @@ JOIN_TIMEOUT_S = 2.0
 """How long stopping waits for the processor's current call before abandoning it."""
 
 
-@dataclass(slots=True)
-class ProcessedFrame:
-    """One frame's trip through the processor, with the time of each stage (monotonic ns)."""
-
-    frame: Frame
-    """The frame as captured; the processor may have drawn its overlay on ``frame.image``."""
-    t_start_ns: int
-    t_end_ns: int = 0
-    t_vector_ns: int = 0
-    """When getPreparedVector returned (0 if the processor has none)."""
-    vector: Any = None
-    """What getPreparedVector returned, unchecked (the autonomy gate validates it)."""
-    error: str | None = None
-    """Traceback text if the processor raised."""
-    decision: str = ""
-    """What the autonomy gate did with the vector: ``executed`` or why not."""
-    extra: dict[str, Any] = field(default_factory=dict)
-    """Fields the processor stored with ``tmMgr.save(frame, **extra)`` for this frame."""
-    saved: bool = False
-    """True when the processor saved this frame's image."""
-    box: Box | None = None
-    """The processor's ``box`` attribute after this frame (what it tracks), or None."""
-
-
-@dataclass(frozen=True, slots=True)
-class Answer:
-    """What an operator's call into the processor (``catch_cmd``, ``customize_processing``) returned, and when."""
-
-    value: Any
-    t_taken_ns: int
-    """When the processor began the call (monotonic ns): the frames it started after that saw its effect."""
-
-
-@dataclass(frozen=True, slots=True)
-class ProcessorState:
-    """How the processor's host is doing, for the status line, the TUI and the web page."""
-
-    isolation: str
-    """``process`` (its own process) or ``thread`` (a thread of the platform)."""
-    state: str
-    """``starting``, ``running``, ``restarting N`` or ``crashed: reason``."""
-    pid: int | None
-    memory_mb: float | None
-    """Resident memory of the processor's process (None in thread mode: it is the platform's)."""
-
-    def summary(self) -> str:
-        """``running, pid 4242, 38 MB``; ``restarting 2``; ``crashed: reason``; ``in a platform thread``."""
-        if self.isolation == "thread":
-            return "in a platform thread"
-        parts = [self.state]
-        if self.pid is not None:
-            parts.append(f"pid {self.pid}")
-        if self.memory_mb is not None:
-            parts.append(f"{self.memory_mb:.0f} MB")
-        return ", ".join(parts)
-
-
 class ProcessorWorker:
     """Runs a processor on one dedicated thread, always on the newest frame of a buffer.
 
@@ -100,7 +44,7 @@ class ProcessorWorker:
     the same thread between two frames, so researchers never need a lock.
 
     This is ``isolation = "thread"``: a breakpoint in the processor works, but a processor that holds
-    the GIL, hangs or crashes takes the platform with it (see :class:`~uav_tui.process_worker.ProcessWorker`).
+    the GIL, hangs or crashes takes the platform with it (see :class:`~uav_tui.hosting.process_host.ProcessWorker`).
     """
 
     isolation = "thread"
