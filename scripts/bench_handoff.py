@@ -21,9 +21,9 @@ from types import SimpleNamespace
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from processors.base import ProcessorInfo  # noqa: E402
-from uav_tui.hosting.child import ChildRunner, send_message  # noqa: E402
-from uav_tui.hosting.child_process import Inbox  # noqa: E402
+from uav_tui.hosting.child import ChildRunner  # noqa: E402
 from uav_tui.hosting.frame_mailbox import FrameMailbox, Offer  # noqa: E402
+from uav_tui.hosting.pipe import Inbox, send_message  # noqa: E402
 
 SHAPE = (480, 640, 3)
 

@@ -9,8 +9,7 @@ from multiprocessing.connection import wait
 
 import numpy as np
 
-from uav_tui.hosting.child import send_message
-from uav_tui.hosting.child_process import Inbox
+from uav_tui.hosting.pipe import Inbox, send_message
 
 
 def read_all(inbox: Inbox, count: int) -> list[object]:

@@ -26,9 +26,9 @@ from sources.synthetic import SyntheticSource
 from tests.videos import create_video_file
 from uav_tui.events import EventLog
 from uav_tui.hosting import process_host
-from uav_tui.hosting.child_process import Inbox
 from uav_tui.hosting.frame_ring import MAX_SLOTS
 from uav_tui.hosting.host import ProcessedFrame
+from uav_tui.hosting.pipe import Inbox
 from uav_tui.hosting.process_host import ProcessWorker
 from uav_tui.hosting.thread_host import ProcessorWorker
 from uav_tui.telemetry import TelemetryManager

@@ -2,8 +2,9 @@
 
 A job starts the processor with ``catch_cmd`` on frame 1's gt box (whole frame pixels), then calls
 ``photo_processing`` on every frame and reads its ``box`` as the platform does
-(:func:`processors.base.read_box`). Only the ``photo_processing`` call is timed; decoding is not,
-and frames are decoded one at a time, so a job holds one frame whatever the sequence's length.
+(:func:`uav_tui.hosting.frame_call.call_frame`, the call every host makes). Only the ``photo_processing``
+call is timed; decoding is not, and frames are decoded one at a time, so a job holds one frame whatever the
+sequence's length.
 
 The processor's ``tmMgr`` is a :class:`~processors.frame_telemetry.FrameTelemetry`, as in a run: its
 snapshot has no vehicle (every telemetry field None) and the frame's number and time in the sequence;
@@ -17,7 +18,6 @@ from __future__ import annotations
 
 import json
 import os
-import time
 import traceback
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
@@ -28,12 +28,12 @@ import cv2
 import numpy as np
 
 from controllers.base import TELEMETRY_FIELDS
-from processors.base import read_box
 from processors.detection.onnx_runtime import THREADS_ENV
 from processors.frame_telemetry import FrameTelemetry
 from uav_tui.evaluation.metrics import Scores, score_sequence
 from uav_tui.evaluation.sequences import Sequence
 from uav_tui.evaluation.trackers import TrackerSpec
+from uav_tui.hosting.frame_call import call_frame, describe
 from uav_tui.jobs import Progress, run_jobs
 from uav_tui.recording.rows import extra_json
 
@@ -122,6 +122,14 @@ def set_threads(threads: int) -> None:
     os.environ[THREADS_ENV] = str(threads)
 
 
+class _Failed(Exception):
+    """A frame on which the processor raised: the exception in one line, and its traceback."""
+
+    def __init__(self, raised: str, traceback_text: str) -> None:
+        super().__init__(raised)
+        self.raised, self.traceback = raised, traceback_text
+
+
 def run_job(job: Job) -> JobResult:
     """Run ``job.tracker`` over ``job.sequence`` (one-pass evaluation) and score it; never raises for the processor."""
     set_threads(job.threads)
@@ -142,17 +150,18 @@ def run_job(job: Job) -> JobResult:
             stage = f"frame {frame}"
             t_ns = round(index * 1e9 / sequence.fps)
             telemetry.begin(frame, t_ns, 0, NO_VEHICLE, None)
-            start = time.perf_counter_ns()
-            processor.photo_processing(image)
-            times_ns[index] = time.perf_counter_ns() - start
+            outcome = call_frame(processor, image, vector=False)
+            if outcome.error is not None:
+                raise _Failed(outcome.raised, outcome.error)
+            times_ns[index] = outcome.t_end_ns - outcome.t_start_ns
             made = frame
-            box = read_box(processor)
-            if box is not None:
-                boxes[index] = box
+            if outcome.box is not None:
+                boxes[index] = outcome.box
             folder.write(frame, t_ns / 1e9)
     except Exception as exc:  # noqa: BLE001 - the job fails alone, saying where and why
+        failed = exc if isinstance(exc, _Failed) else _Failed(describe(exc), traceback.format_exc())
         return JobResult(sequence.name, job.tracker.label, boxes, times_ns[:made] / 1e6, None,
-                         error=_describe(exc), failed_at=stage, traceback=traceback.format_exc(),
+                         error=failed.raised, failed_at=stage, traceback=failed.traceback,
                          saves=folder.stored, save_calls=telemetry.saves + telemetry.saves_throttled,
                          threads=job.threads)
     times_ms = times_ns / 1e6
@@ -187,14 +196,6 @@ def evaluate(sequences: list[Sequence], trackers: list[TrackerSpec], *, workers:
     run_jobs(run_job, todo, workers=workers, cluster=cluster, on_result=report,
              progress=(lambda count, total: progress(skipped + count, len(jobs))) if progress else None)
     return [finished[(job.sequence.name, job.tracker.label)] for job in jobs]
-
-
-def _describe(exc: BaseException) -> str:
-    """``ValueError: text (file.py:12)``: the exception and the line of the innermost frame that raised it."""
-    frames = traceback.extract_tb(exc.__traceback__)
-    where = f" ({Path(frames[-1].filename).name}:{frames[-1].lineno})" if frames else ""
-    text = " ".join(str(exc).split())[:300]
-    return f"{type(exc).__name__}: {text}{where}" if text else f"{type(exc).__name__}{where}"
 
 
 def _slug(label: str) -> str:

@@ -3,25 +3,14 @@
 The platform (``uav_tui.hosting.process_host``) starts this module in a fresh interpreter and talks to it
 over the :class:`~multiprocessing.connection.Connection` on file descriptor ``FD``; frames come through
 the :class:`~uav_tui.hosting.frame_mailbox.FrameMailbox` at ``MAILBOX`` (its address, one argument). It imports only
-this level (``processors``), NumPy and the researcher's code: a GIL-bound loop, a hang, ``os._exit``,
+the ``processors`` level, its own few modules here
+(``tests/test_layering.py`` lists them), NumPy and the researcher's code: a GIL-bound loop, a hang, ``os._exit``,
 a segfault or a leak here cannot freeze or kill the flight path.
 
-Messages, platform -> child (pickled tuples, ``Connection.send``)::
-
-    ("load", spec, kwargs, memory_mb, save_images, save_max_hz)  first message: cap memory, construct the processor
-    ("call", call_id, method, args)                 catch_cmd / customize_processing
-    ("forget", [slot, ...])                         the platform freed these slots: unmap them
-    ("camera", CameraModel | None)                  the source's camera model (``tmMgr.camera()``), at each change
-
-child -> platform (:func:`send_message`: pickle protocol 5, arrays out of band)::
-
-    ("ready", ProcessorInfo) | ("load_error", message, path, class_name, missing)
-    ("result", gen, t_start_ns, t_end_ns, t_vector_ns, vector, box, error, saves, released)
-    ("reply", call_id, ok, value_or_error, t_taken_ns, saves, released)
-
-Frames are not messages: whenever it is free (no call waiting), this process claims the frame on offer
-in the mailbox (the image in a shared-memory slot, read and drawn in place, and the pickled telemetry
-attached to it) and answers with a ``result`` for that offer's ``gen``.
+The messages both ways are :mod:`uav_tui.hosting.wire`'s. Frames are not messages: whenever it is free (no
+call waiting), this process claims the frame on offer in the mailbox (the image in a shared-memory slot, read
+and drawn in place, and the pickled telemetry attached to it) and answers with a ``Result`` for that offer's
+``gen``.
 
 ``saves`` are the ``tmMgr.save(frame, **extra)`` calls made meanwhile: ``(image, extra)``, the image
 copied at the call (what is drawn afterwards must not reach the dataset), so it is pickled. When the
@@ -32,8 +21,7 @@ The processor's log records go to stderr one per line, as ``LOG_TAG level name "
 platform logs them as its own (escaped and redacted like every record); anything else the process
 prints is forwarded line by line, escaped.
 
-``released`` names the slots this process no longer references: a processor may keep a frame (the
-previous one, for optical flow) and the platform must not reuse that slot until it lets go.
+``released`` names the slots this process no longer references (see ``Result.released``).
 
 Calls and frames run one at a time in this process's main thread (calls first), so a researcher never
 needs a lock.
@@ -53,7 +41,6 @@ import pickle
 import resource
 import select
 import signal
-import struct
 import sys
 import time
 import traceback
@@ -66,10 +53,12 @@ from typing import Any
 import numpy as np
 
 from processors import load_processor
-from processors.base import read_box
 from processors.errors import ProcessorLoadError
 from processors.frame_telemetry import DEFAULT_SAVE_MAX_HZ, FrameTelemetry
+from uav_tui.hosting.frame_call import call_frame
 from uav_tui.hosting.frame_mailbox import FrameMailbox, Offer, Segment
+from uav_tui.hosting.pipe import send_message
+from uav_tui.hosting.wire import Call, Camera, Forget, Load, LoadError, Ready, Reply, Result, Save, ToChild
 
 JOB_SIGNALS = frozenset({signal.SIGINT, signal.SIGQUIT, signal.SIGHUP, signal.SIGTSTP, signal.SIGTTIN, signal.SIGTTOU})
 """What a terminal sends to every process of its job. The platform starts this process with them blocked (a
@@ -84,9 +73,6 @@ MEMORY_EXIT_CODE = 86
 
 LOG_TAG = "\x00uav-tui-log\t"
 """Starts a stderr line that carries one log record: ``LOG_TAG + f"{levelno}\\t{name}\\t{json text}"``."""
-
-BUFFER_COUNT = struct.Struct("!I")
-"""Leads every frame that carries a pickle (:func:`send_message`): how many out-of-band frames follow it."""
 
 _PR_SET_PDEATHSIG = 1
 
@@ -148,19 +134,6 @@ class Slots:
                 raise MemoryError(f"cannot map the frame ({exc.strerror})") from exc
             raise
         return shm
-
-
-def send_message(conn: Connection, message: tuple[Any, ...]) -> None:
-    """Send ``message`` as one frame ``count + pickle`` then ``count`` frames with its arrays' bytes.
-
-    Arrays (``tmMgr.save`` images) go out of band: written to the pipe straight from their memory, and
-    the platform unpickles them into the buffers it read, without copying them again.
-    """
-    buffers: list[pickle.PickleBuffer] = []
-    data = pickle.dumps(message, protocol=5, buffer_callback=buffers.append)
-    conn.send_bytes(BUFFER_COUNT.pack(len(buffers)) + data)
-    for buffer in buffers:
-        conn.send_bytes(buffer.raw())
 
 
 def _picklable(value: Any) -> Any:
@@ -240,7 +213,7 @@ class ChildRunner:
         self.mailbox = mailbox
         self.loaded = loaded
         self.instance = loaded.instance
-        self.saves: list[tuple[np.ndarray | None, dict[str, Any]]] = []
+        self.saves: list[Save] = []
         """The ``tmMgr.save`` calls since the last message (sent with the next result or reply)."""
         self.save_images = save_images
         self.telemetry = FrameTelemetry(self._keep_save, save_max_hz=save_max_hz)
@@ -276,56 +249,42 @@ class ChildRunner:
                 continue
             send_message(self.conn, self.process(offer))
 
-    def handle(self, message: tuple[Any, ...]) -> None:
-        kind = message[0]
-        if kind == "call":
-            send_message(self.conn, self.call(*message[1:]))
-        elif kind == "forget":
-            self.slots.forget(message[1])
-        elif kind == "camera":
-            self.telemetry.camera_model = message[1]
+    def handle(self, message: ToChild) -> None:
+        if isinstance(message, Call):
+            send_message(self.conn, self.call(message))
+        elif isinstance(message, Forget):
+            self.slots.forget(message.slots)
+        elif isinstance(message, Camera):
+            self.telemetry.camera_model = message.model
 
-    def process(self, offer: Offer) -> tuple[Any, ...]:
+    def process(self, offer: Offer) -> Result:
         if offer.telemetry != self._telemetry[0]:
             self._telemetry = (offer.telemetry, pickle.loads(offer.telemetry) if offer.telemetry else {})
         self.telemetry.begin(offer.seq, offer.t_mono_ns, offer.t_wall_ns, self._telemetry[1], offer.heartbeat_age_s)
         image = self.slots.view(offer.slot, offer.shape)
-        vector, box, error, t_vector = None, None, None, 0
-        start = time.monotonic_ns()
-        try:
-            self.instance.photo_processing(image)
-            end = time.monotonic_ns()
-            if self.has_vector:
-                vector = _picklable(self.instance.getPreparedVector())
-                t_vector = time.monotonic_ns()
-            box = read_box(self.instance)
-        except MemoryError:
-            raise
-        except Exception:  # noqa: BLE001 - counted and reported by the platform, never fatal
-            end = time.monotonic_ns()
-            error = traceback.format_exc()
+        outcome = call_frame(self.instance, image, vector=self.has_vector, let_through=(MemoryError,))
         del image
-        return ("result", offer.gen, start, end, t_vector, vector, box, error, self._take_saves(),
-                self.slots.released())
+        return Result(offer.gen, outcome.t_start_ns, outcome.t_end_ns, outcome.t_vector_ns, _picklable(outcome.vector),
+                      outcome.box, outcome.error, self._take_saves(), self.slots.released())
 
     def _keep_save(self, image: np.ndarray, extra: dict[str, Any]) -> None:
         # A copy: the image as it is now, not with what photo_processing draws on it afterwards.
         kept = np.array(image) if self.save_images else None
         self.saves.append((kept, {key: _picklable(value) for key, value in extra.items()}))
 
-    def _take_saves(self) -> list[tuple[np.ndarray | None, dict[str, Any]]]:
+    def _take_saves(self) -> list[Save]:
         saves, self.saves = self.saves, []
         return saves
 
-    def call(self, call_id: int, method: str, args: tuple[Any, ...]) -> tuple[Any, ...]:
+    def call(self, call: Call) -> Reply:
         taken = time.monotonic_ns()
         try:
-            value, ok = _picklable(getattr(self.instance, method)(*args)), True
+            value, ok = _picklable(getattr(self.instance, call.method)(*call.args)), True
         except MemoryError:
             raise
         except Exception as exc:  # noqa: BLE001 - handed to the operator as the command's error
             value, ok = f"{type(exc).__name__}: {exc}", False
-        return ("reply", call_id, ok, value, taken, self._take_saves(), self.slots.released())
+        return Reply(call.call_id, ok, value, taken, self._take_saves(), self.slots.released())
 
 
 def main(fd: int, mailbox_address: str) -> int:
@@ -335,21 +294,21 @@ def main(fd: int, mailbox_address: str) -> int:
     _start_resource_tracker()
     conn = Connection(fd)
     mailbox = FrameMailbox.attach(mailbox_address)
-    _, spec, kwargs, memory_mb, save_images, save_max_hz = conn.recv()
+    load: Load = conn.recv()
     try:
-        if too_small := _limit_memory(memory_mb):
-            send_message(conn, ("load_error", too_small, None, spec.rpartition(":")[2], None))
+        if too_small := _limit_memory(load.memory_mb):
+            send_message(conn, LoadError(too_small, None, load.spec.rpartition(":")[2], None))
             return 0
         try:
-            loaded = load_processor(spec, kwargs)
+            loaded = load_processor(load.spec, load.kwargs)
         except ProcessorLoadError as exc:
-            send_message(conn, ("load_error", str(exc), exc.path, exc.class_name, exc.missing))
+            send_message(conn, LoadError(str(exc), exc.path, exc.class_name, exc.missing))
             return 0
-        send_message(conn, ("ready", loaded.info))
-        ChildRunner(conn, mailbox, loaded, save_images=save_images, save_max_hz=save_max_hz).serve()
+        send_message(conn, Ready(loaded.info))
+        ChildRunner(conn, mailbox, loaded, save_images=load.save_images, save_max_hz=load.save_max_hz).serve()
     except MemoryError:
         traceback.print_exc()
-        print(f"processor_memory_mb = {memory_mb:g} MB reached", file=sys.stderr, flush=True)
+        print(f"processor_memory_mb = {load.memory_mb:g} MB reached", file=sys.stderr, flush=True)
         os._exit(MEMORY_EXIT_CODE)
     return 0
 

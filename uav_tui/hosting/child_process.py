@@ -15,8 +15,6 @@ import logging
 import multiprocessing
 import os
 import signal
-import socket
-import struct
 import subprocess
 import sys
 import threading
@@ -30,9 +28,10 @@ from typing import Any
 from processors.base import ProcessorInfo
 from sources.buffer import Frame, FrameBuffer
 from uav_tui.hosting import malloc_tuning, opencv_pool
-from uav_tui.hosting.child import BUFFER_COUNT, LOG_LEVEL_ENV, MEMORY_EXIT_CODE, parse_log_line
+from uav_tui.hosting.child import LOG_LEVEL_ENV, MEMORY_EXIT_CODE, parse_log_line
 from uav_tui.hosting.frame_mailbox import FrameMailbox
 from uav_tui.hosting.frame_ring import Slot, ensure_resource_tracker, job_signals_blocked
+from uav_tui.hosting.pipe import Inbox
 from uav_tui.text import safe, shorten
 
 TAIL_LINES = 30
@@ -157,110 +156,6 @@ class ChildProcess:
         returncode = self.proc.wait()
         self.ended.set()
         on_end(returncode)
-
-
-class Inbox:
-    """The child's messages, read without ever blocking: for the event loop, when the pipe is readable.
-
-    The pipe is a socket (``multiprocessing.Pipe``); this reads a duplicate of it with ``MSG_DONTWAIT``
-    (the platform's own sends stay blocking) and splits the bytes the way
-    :class:`~multiprocessing.connection.Connection` framed them: a 4-byte big-endian length, or -1 and
-    an 8-byte one for 2 GiB and more, then the bytes. A message is a frame with a pickle and the frames
-    of its out-of-band buffers (:func:`uav_tui.hosting.child.send_message`); a frame longer than one read (an
-    image from ``tmMgr.save``) is read straight into a buffer of its own size.
-    """
-
-    CHUNK = 256 * 1024
-
-    def __init__(self, conn: Connection) -> None:
-        self._sock = socket.socket(fileno=os.dup(conn.fileno()))
-        self._chunk = bytearray(self.CHUNK)
-        self._pending = bytearray()
-        self._long: bytearray | None = None
-        """The long message being read, and how much of it has arrived (``_long_at``)."""
-        self._long_at = 0
-        self._message: tuple[memoryview, list[bytearray], int] | None = None
-        """A pickle waiting for its out-of-band buffers: (pickle, buffers so far, how many)."""
-
-    def fileno(self) -> int:
-        return self._sock.fileno()
-
-    def read(self) -> list[tuple[memoryview, list[bytearray]]] | None:
-        """The messages completed by what has arrived, maybe none, as ``pickle.loads(data, buffers=buffers)``
-        takes them; None at the end of the pipe."""
-        frames = self._frames()
-        if frames is None:
-            return None
-        messages: list[tuple[memoryview, list[bytearray]]] = []
-        for frame in frames:
-            if self._message is None:
-                (count,), data = BUFFER_COUNT.unpack_from(frame), memoryview(frame)[BUFFER_COUNT.size:]
-                if count == 0:
-                    messages.append((data, []))
-                else:
-                    self._message = (data, [], count)
-                continue
-            data, buffers, count = self._message
-            buffers.append(frame)
-            if len(buffers) == count:
-                messages.append((data, buffers))
-                self._message = None
-        return messages
-
-    def _frames(self) -> list[bytearray] | None:
-        """The frames completed by what has arrived; None at the end of the pipe."""
-        if self._long is not None:
-            size = self._receive(memoryview(self._long)[self._long_at:])
-            if size is None:
-                return None
-            self._long_at += size
-            if self._long_at < len(self._long):
-                return []
-            frame, self._long = self._long, None
-            return [frame]
-        size = self._receive(memoryview(self._chunk))
-        if size is None:
-            return None
-        self._pending += memoryview(self._chunk)[:size]
-        return self._split()
-
-    def _receive(self, into: memoryview) -> int | None:
-        """Bytes read into ``into`` now (0 when none are there); None at the end of the pipe."""
-        try:
-            size = self._sock.recv_into(into, len(into), socket.MSG_DONTWAIT)
-        except (BlockingIOError, InterruptedError):
-            return 0
-        except OSError:
-            return None
-        return size or None
-
-    def _split(self) -> list[bytearray]:
-        frames: list[bytearray] = []
-        pending, at = self._pending, 0
-        while len(pending) - at >= 4:
-            (length,), start = struct.unpack_from("!i", pending, at), at + 4
-            if length == -1:
-                if len(pending) - at < 12:
-                    break
-                (length,), start = struct.unpack_from("!Q", pending, at + 4), at + 12
-            if start + length > len(pending):
-                if length > self.CHUNK:  # the rest goes straight into its own buffer
-                    have = len(pending) - start
-                    self._long = bytearray(length)
-                    self._long[:have] = pending[start:]
-                    self._long_at, at = have, len(pending)
-                break
-            frames.append(pending[start:start + length])
-            at = start + length
-        del pending[:at]
-        return frames
-
-    @property
-    def closed(self) -> bool:
-        return self._sock.fileno() < 0
-
-    def close(self) -> None:
-        self._sock.close()
 
 
 def spawn(ready: asyncio.Future[ProcessorInfo], output: Callable[[list[bytes]], None]) -> ChildProcess:

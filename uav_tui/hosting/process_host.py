@@ -5,7 +5,7 @@ Frames live in :class:`~uav_tui.hosting.frame_ring.FrameRing`'s shared-memory sl
 that can; copied in once, off the capture thread, for those that cannot; never pickled). Every new frame
 is *offered* in the child's :class:`~uav_tui.hosting.frame_mailbox.FrameMailbox`, replacing the previous offer,
 and the child claims the newest whenever it is free: the hand-off waits for nothing in this process.
-Results, calls and ``tmMgr.save`` requests come over a pipe (protocol in :mod:`uav_tui.hosting.child`), read
+Results, calls and ``tmMgr.save`` requests come over a pipe (messages in :mod:`uav_tui.hosting.wire`), read
 by the event loop itself whenever the pipe is readable, never blocking it. The watchdog
 (``run``, on the loop) kills a child that stays silent longer than ``processor_timeout``; a child that
 dies for any reason is reported (exit code or signal, last lines of its output), ``on_fault`` stops
@@ -43,6 +43,7 @@ from uav_tui.hosting.child_process import ChildProcess, Offered, PendingCall, de
 from uav_tui.hosting.frame_mailbox import TELEMETRY_BYTES, MailboxGone, Offer
 from uav_tui.hosting.frame_ring import FrameRing
 from uav_tui.hosting.host import Answer, ProcessedFrame, ProcessorState
+from uav_tui.hosting.wire import Call, Camera, Forget, Load, LoadError, Ready, Reply, Result, Save, ToChild
 from uav_tui.line_budget import LineBudget
 from uav_tui.stats import PipelineStats, RollingStats
 from uav_tui.telemetry import TelemetryManager
@@ -178,7 +179,7 @@ class ProcessWorker:
                 self._detach(self._buffer)
             self._buffer, self._camera, child = buffer, camera, self._child
         if child is not None:
-            self._send(child, ("camera", camera))  # before the first frame of the new source is offered
+            self._send(child, Camera(camera))  # before the first frame of the new source is offered
         with self._lock:
             buffer.set_allocator(self._ring.capture_view)  # cameras that can decode into shared memory do
             buffer.set_read_waiter(functools.partial(self._wait_claimed, buffer))
@@ -221,7 +222,7 @@ class ProcessWorker:
         call_id = next(self._call_ids)
         future: asyncio.Future[Any] = asyncio.get_running_loop().create_future()
         child.calls[call_id] = PendingCall(f"{method}{args!r}", time.monotonic_ns(), future)
-        if not self._send(child, ("call", call_id, method, args)):
+        if not self._send(child, Call(call_id, method, args)):
             child.calls.pop(call_id)
             raise UavError(f"the processor is not running ({self.state_text})")
         return await future
@@ -286,7 +287,7 @@ class ProcessWorker:
         self._all_children.append(child)
         child.watch_exit(functools.partial(_call_soon, loop, self._ended, child))
         loop.add_reader(child.inbox.fileno(), self._on_readable, child)
-        self._send(child, ("load", self.spec, self.kwargs, self.memory_mb, self.save_images, self.save_max_hz))
+        self._send(child, Load(self.spec, self.kwargs, self.memory_mb, self.save_images, self.save_max_hz))
         try:
             await asyncio.wait_for(asyncio.shield(child.ready), LOAD_TIMEOUT_S)
         except TimeoutError:
@@ -306,7 +307,7 @@ class ProcessWorker:
         info = child.ready.result()
         self.processor = LoadedProcessor(instance=None, info=info, spec=self.spec, kwargs=self.kwargs)
         if self._camera is not None:  # before it can be offered a frame
-            self._send(child, ("camera", self._camera))
+            self._send(child, Camera(self._camera))
         with self._lock:
             self._child = child
             self._picked, self._offered = (None, 0), (None, 0, 0)
@@ -392,7 +393,7 @@ class ProcessWorker:
         if copied:
             np.copyto(slot.array(), frame.image)  # the slot is ours alone until it is offered
         if forget:
-            self._send(child, ("forget", forget))
+            self._send(child, Forget(forget))
         offer = Offer(next(self._gens), slot.name, slot.shape, frame.seq, frame.t_mono_ns, frame.t_wall_ns,
                       *self._telemetry_at(frame.t_mono_ns))
         with self._lock:
@@ -455,7 +456,7 @@ class ProcessWorker:
             self._pickled_telemetry = (latest, data)
         return self._pickled_telemetry[1], heartbeat_age
 
-    def _send(self, child: ChildProcess, message: tuple[Any, ...]) -> bool:
+    def _send(self, child: ChildProcess, message: ToChild) -> bool:
         """Send one message to ``child``; False when it is gone (the end of its pipe reports that)."""
         try:
             with self._send_lock:
@@ -509,7 +510,7 @@ class ProcessWorker:
             except Exception:  # noqa: BLE001 - a value that cannot be unpickled here: say so, go on
                 logger.exception("ProcessWorker(%s): unreadable message from pid %s", self.spec, child.pid)
                 continue
-            if message[0] == "result":
+            if isinstance(message, Result):
                 self._take_result(child, message)
             else:
                 self._on_message(child, message)
@@ -545,23 +546,23 @@ class ProcessWorker:
             await asyncio.get_running_loop().run_in_executor(None, child.output_reader.join, 0.5)
         self._on_exit(child, returncode)
 
-    def _take_result(self, child: ChildProcess, message: tuple[Any, ...]) -> None:
-        _, gen, start, end, t_vector, vector, box, error, saves, released = message
+    def _take_result(self, child: ChildProcess, message: Result) -> None:
         with self._lock:
-            offered = child.offered.pop(gen, None)
+            offered = child.offered.pop(message.gen, None)
             # A copied-in frame's overlay is in the slot: lend it before the child's hold goes.
             slot_view = self._ring.lend(offered.slot) if offered is not None and offered.copied else None
         if offered is not None:
             offered.buffer.mark_read(offered.frame.seq)  # taken (a replay knew at the claim: _wait_claimed)
-        self._release(child, released)
+        self._release(child, message.released)
         if offered is None or child is not self._child or self._closing:
             return
         frame = offered.frame
         if slot_view is not None:
             frame = Frame(slot_view, frame.seq, frame.t_mono_ns, frame.t_wall_ns)
-        result = ProcessedFrame(frame=frame, t_start_ns=start, t_end_ns=end, t_vector_ns=t_vector, vector=vector,
-                                error=error, box=box)
-        self._store(saves, result)
+        result = ProcessedFrame(frame=frame, t_start_ns=message.t_start_ns, t_end_ns=message.t_end_ns,
+                                t_vector_ns=message.t_vector_ns, vector=message.vector, error=message.error,
+                                box=message.box)
+        self._store(message.saves, result)
         if result.error:
             self.stats.errors += 1
             self.consecutive_errors += 1
@@ -574,7 +575,7 @@ class ProcessWorker:
         self.last = result
         self._on_result(result)
 
-    def _store(self, saves: list[tuple[Any, dict[str, Any]]], result: ProcessedFrame | None) -> None:
+    def _store(self, saves: list[Save], result: ProcessedFrame | None) -> None:
         """Replay the child's ``tmMgr.save`` calls here, where the recorder is."""
         if not saves or self.telemetry is None:
             return
@@ -585,25 +586,23 @@ class ProcessWorker:
         finally:
             self.current = None
 
-    def _on_message(self, child: ChildProcess, message: tuple[Any, ...]) -> None:
-        kind = message[0]
-        if kind == "ready":
+    def _on_message(self, child: ChildProcess, message: Ready | LoadError | Reply) -> None:
+        if isinstance(message, Ready):
             if not child.ready.done():
-                child.ready.set_result(message[1])
-        elif kind == "load_error":
-            _, text, path, class_name, missing = message
+                child.ready.set_result(message.info)
+        elif isinstance(message, LoadError):
             if not child.ready.done():
-                child.ready.set_exception(ProcessorLoadError(text, path=path, class_name=class_name, missing=missing))
-        elif kind == "reply":
-            _, call_id, ok, value, taken, saves, released = message
-            self._release(child, released)
-            self._store(saves, None)
-            call = child.calls.pop(call_id, None)
+                child.ready.set_exception(ProcessorLoadError(message.message, path=message.path,
+                                                             class_name=message.class_name, missing=message.missing))
+        elif isinstance(message, Reply):
+            self._release(child, message.released)
+            self._store(message.saves, None)
+            call = child.calls.pop(message.call_id, None)
             if call is not None and not call.future.done():
-                if ok:
-                    call.future.set_result(Answer(value, taken))
+                if message.ok:
+                    call.future.set_result(Answer(message.value, message.t_taken_ns))
                 else:
-                    call.future.set_exception(ProcessorRaised(value))
+                    call.future.set_exception(ProcessorRaised(message.value))
 
     def _on_death(self, child: ChildProcess, returncode: int) -> None:
         """The current child is gone: stop autonomy at once (``on_fault``), before anything else."""

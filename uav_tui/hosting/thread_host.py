@@ -10,7 +10,6 @@ import logging
 import os
 import threading
 import time
-import traceback
 from collections import deque
 from collections.abc import Callable
 from concurrent.futures import Future
@@ -18,9 +17,10 @@ from typing import TYPE_CHECKING, Any
 
 from controllers.base import TELEMETRY_FIELDS, Telemetry
 from processors import LoadedProcessor, load_processor
-from processors.base import ProcessorInfo, read_box
+from processors.base import ProcessorInfo
 from processors.frame_telemetry import DEFAULT_SAVE_MAX_HZ, FrameTelemetry
 from sources.buffer import Frame, FrameBuffer
+from uav_tui.hosting.frame_call import call_frame
 from uav_tui.hosting.host import Answer, ProcessedFrame, ProcessorState
 from uav_tui.stats import PipelineStats, RollingStats
 from uav_tui.telemetry import TelemetryManager
@@ -218,29 +218,24 @@ class ProcessorWorker:
 
     def _process(self, frame: Frame) -> ProcessedFrame:
         instance = self.processor.instance
-        start = time.monotonic_ns()
-        self._busy_since_ns = start
-        result = ProcessedFrame(frame=frame, t_start_ns=start)
+        self._busy_since_ns = time.monotonic_ns()
+        result = ProcessedFrame(frame=frame, t_start_ns=self._busy_since_ns)
         self.current = result
         self._begin(instance, frame)
         try:
-            instance.photo_processing(frame.image)
-            result.t_end_ns = time.monotonic_ns()
-            if "getPreparedVector" in self.processor.info.capabilities:
-                result.vector = instance.getPreparedVector()
-                result.t_vector_ns = time.monotonic_ns()
-            result.box = read_box(instance)
-            self.consecutive_errors = 0
-        except Exception:  # noqa: BLE001 - counted and reported, never fatal
-            result.t_end_ns = result.t_end_ns or time.monotonic_ns()
-            result.error = traceback.format_exc()
-            self.stats.errors += 1
-            self.consecutive_errors += 1
+            outcome = call_frame(instance, frame.image, vector="getPreparedVector" in self.processor.info.capabilities)
         finally:
             self._busy_since_ns = None
             self.current = None
+        result.t_start_ns, result.t_end_ns = outcome.t_start_ns, outcome.t_end_ns
+        result.t_vector_ns, result.vector = outcome.t_vector_ns, outcome.vector
+        result.box, result.error = outcome.box, outcome.error
+        if outcome.error is None:
+            self.consecutive_errors = 0
+        else:
+            self.stats.errors += 1
+            self.consecutive_errors += 1
         return result
-
 
     def _begin(self, instance: Any, frame: Frame) -> None:
         """Tell the processor's ``tmMgr`` which frame it is processing and the telemetry at its capture."""

@@ -1,0 +1,65 @@
+"""One frame through a processor, as every host makes the call: the thread host, the processor's process, eval.
+
+``photo_processing(image)`` timed, then ``getPreparedVector()`` when asked for, then its ``box``
+(:func:`processors.base.read_box`); an exception is caught and kept as text, never raised, so that no
+reference to the frame outlives the call (the processor's process reuses a frame's shared-memory slot only
+once no view of it is left).
+"""
+
+from __future__ import annotations
+
+import time
+import traceback
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from processors.base import Box, read_box
+
+
+@dataclass(slots=True)
+class FrameOutcome:
+    """What one call did (monotonic ns)."""
+
+    t_start_ns: int
+    t_end_ns: int
+    """When ``photo_processing`` returned, or when it (or what followed) raised."""
+    t_vector_ns: int = 0
+    """When ``getPreparedVector`` returned (0 when not called)."""
+    vector: Any = None
+    """What ``getPreparedVector`` returned, unchecked."""
+    box: Box | None = None
+    error: str | None = None
+    """The traceback's text when the processor raised."""
+    raised: str = ""
+    """The exception in one line (:func:`describe`) when the processor raised."""
+
+
+def call_frame(instance: Any, image: Any, *, vector: bool,
+               let_through: tuple[type[BaseException], ...] = ()) -> FrameOutcome:
+    """Process ``image`` with ``instance``; ``vector``: call ``getPreparedVector`` too. Exceptions of the types in
+    ``let_through`` propagate (the processor's process ends on a MemoryError); any other is kept in the outcome."""
+    start = time.monotonic_ns()
+    outcome = FrameOutcome(start, 0)
+    try:
+        instance.photo_processing(image)
+        outcome.t_end_ns = time.monotonic_ns()
+        if vector:
+            outcome.vector = instance.getPreparedVector()
+            outcome.t_vector_ns = time.monotonic_ns()
+        outcome.box = read_box(instance)
+    except let_through:
+        raise
+    except Exception as exc:  # noqa: BLE001 - counted and reported by the caller, never fatal
+        outcome.t_end_ns = outcome.t_end_ns or time.monotonic_ns()
+        outcome.error = traceback.format_exc()
+        outcome.raised = describe(exc)
+    return outcome
+
+
+def describe(exc: BaseException) -> str:
+    """``ValueError: text (file.py:12)``: the exception and the line of the innermost frame that raised it."""
+    frames = traceback.extract_tb(exc.__traceback__)
+    where = f" ({Path(frames[-1].filename).name}:{frames[-1].lineno})" if frames else ""
+    text = " ".join(str(exc).split())[:300]
+    return f"{type(exc).__name__}: {text}{where}" if text else f"{type(exc).__name__}{where}"
