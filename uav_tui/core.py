@@ -32,9 +32,10 @@ from uav_tui.errors import KNOWN_ERRORS, NoVehicle, SourceError, UavError
 from uav_tui.events import EventLog
 from uav_tui.geolocate import locate_row
 from uav_tui.hosting.exception_reports import ProcessorErrors
-from uav_tui.hosting.host import ProcessedFrame
+from uav_tui.hosting.host import ProcessedFrame, ProcessorHost
 from uav_tui.hosting.malloc_tuning import tune_this_process
-from uav_tui.hosting.process_host import LOAD_TIMEOUT_S, ProcessWorker
+from uav_tui.hosting.process_host import ProcessWorker
+from uav_tui.hosting.supervisor import LOAD_TIMEOUT_S
 from uav_tui.hosting.thread_host import ProcessorWorker, load_in_thread
 from uav_tui.link import LinkWatch
 from uav_tui.operations import Operations
@@ -51,7 +52,6 @@ if TYPE_CHECKING:  # aiortc and pymavlink are imported only when the side channe
 
 logger = logging.getLogger(__name__)
 
-Worker = ProcessorWorker | ProcessWorker
 """The two hosts of a processor (``isolation = "thread" | "process"``); they have one public surface."""
 
 LOADING_NOTICE_S = 5.0
@@ -81,7 +81,7 @@ class UavCore:
         self.source: CameraSource | None = None
         self.camera: CameraModel | None = None
         """The source's camera model (its own, or the configured one; None: none known); ``tmMgr.camera()``."""
-        self.worker: Worker | None = None
+        self.worker: ProcessorHost | None = None
         self.recorder: Recorder | None = None
         """Writes the run's dataset (None with ``--no-record``)."""
         self.replay: ReplayTimeline | None = None
@@ -183,7 +183,7 @@ class UavCore:
             await self._release()
             raise
 
-    async def _start_worker(self) -> Worker:
+    async def _start_worker(self) -> ProcessorHost:
         """Load the processor where ``isolation`` says: its own process (default) or a thread of this one."""
         config = self.config
         if config.isolation == "thread":

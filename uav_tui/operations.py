@@ -12,8 +12,8 @@ from typing import TYPE_CHECKING, Any, NamedTuple, Protocol
 from uav_tui.autonomy import check_vector
 from uav_tui.commands import VEHICLE_COMMANDS, Command, check_limits
 from uav_tui.errors import CommandError, ProcessorLoadError, SourceError, UavError
+from uav_tui.hosting.child_link import ProcessorRaised
 from uav_tui.hosting.operator_calls import ProcessorCalls
-from uav_tui.hosting.process_host import ProcessorRaised
 from uav_tui.text import describe, shorten
 
 if TYPE_CHECKING:

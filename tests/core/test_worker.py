@@ -25,7 +25,7 @@ from sources.buffer import FrameBuffer
 from sources.synthetic import SyntheticSource
 from tests.videos import create_video_file
 from uav_tui.events import EventLog
-from uav_tui.hosting import process_host
+from uav_tui.hosting import child_link
 from uav_tui.hosting.frame_ring import MAX_SLOTS
 from uav_tui.hosting.host import ProcessedFrame
 from uav_tui.hosting.pipe import Inbox
@@ -408,7 +408,7 @@ async def test_results_closer_together_than_the_poll_period_are_read_in_batches(
     of each waking the loop, none lost or out of order; once they stop, the pipe is watched again, so a lone reply
     is read as it comes, not a poll later; and a child killed while its results are polled is still reported."""
     poll_s = 0.2
-    monkeypatch.setattr(process_host, "RESULTS_POLL_S", poll_s)
+    monkeypatch.setattr(child_link, "RESULTS_POLL_S", poll_s)
     batches: list[int] = []
     read = Inbox.read
 

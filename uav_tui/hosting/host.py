@@ -1,12 +1,22 @@
-"""What both processor hosts hand the platform: a processed frame, an operator call's answer, the host's state."""
+"""What a processor host is to the platform (:class:`ProcessorHost`) and what it hands over: a processed frame, an
+operator call's answer, the host's state."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 from processors.base import Box
 from sources.buffer import Frame
+
+if TYPE_CHECKING:
+    from processors import LoadedProcessor
+    from processors.base import ProcessorInfo
+    from sources.buffer import FrameBuffer
+    from sources.camera_model import CameraModel
+    from uav_tui.stats import PipelineStats, RollingStats
+    from uav_tui.telemetry import TelemetryManager
 
 
 @dataclass(slots=True)
@@ -64,3 +74,62 @@ class ProcessorState:
         if self.memory_mb is not None:
             parts.append(f"{self.memory_mb:.0f} MB")
         return ", ".join(parts)
+
+
+class ProcessorHost(Protocol):
+    """Runs one processor on the newest frame of a buffer: :class:`~uav_tui.hosting.thread_host.ProcessorWorker`
+    (``isolation = "thread"``) and :class:`~uav_tui.hosting.process_host.ProcessWorker` (``"process"``)."""
+
+    isolation: str
+    """``thread`` or ``process``."""
+    stats: RollingStats
+    stage_clock: Callable[[ProcessedFrame], None] | None
+    """Set in a replay: moves a result's stage times onto the replay's clock (before they are counted)."""
+    current: ProcessedFrame | None
+    """The frame whose ``tmMgr.save`` calls are being stored (None between frames)."""
+    last: ProcessedFrame | None
+    """The newest processed frame."""
+    consecutive_errors: int
+    """Frames in a row on which the processor raised."""
+
+    @property
+    def processor(self) -> LoadedProcessor:
+        """What was loaded (``instance`` is None when it lives in another process)."""
+        ...
+
+    @property
+    def busy_s(self) -> float:
+        """Seconds the processor has been on its current frame or call (0 when idle)."""
+        ...
+
+    def bind_telemetry(self, telemetry: TelemetryManager) -> None:
+        """Give the processor its ``tmMgr``: the telemetry at each frame's capture; ``telemetry`` stores saves."""
+        ...
+
+    def attach(self, buffer: FrameBuffer, camera: CameraModel | None = None) -> None:
+        """Take frames from ``buffer`` from now on (a new source, with ``camera`` its model for ``tmMgr.camera()``)."""
+        ...
+
+    async def run(self) -> None:
+        """Keep the processor running until cancelled; then stop it."""
+        ...
+
+    async def call(self, method: str, *args: Any) -> Answer:
+        """Call ``processor.<method>(*args)`` between two frames; what it raised propagates."""
+        ...
+
+    async def reload(self) -> ProcessorInfo:
+        """Load the processor's code as it is now and swap it in; a load error keeps the old one."""
+        ...
+
+    def snapshot(self) -> PipelineStats:
+        """The pipeline's rates and stage times."""
+        ...
+
+    def state(self) -> ProcessorState:
+        """How the host is doing."""
+        ...
+
+    def close(self) -> None:
+        """Stop taking frames; idempotent."""
+        ...
