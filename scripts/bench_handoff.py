@@ -24,6 +24,7 @@ from processors.base import ProcessorInfo  # noqa: E402
 from uav_tui.hosting.child import ChildRunner  # noqa: E402
 from uav_tui.hosting.frame_mailbox import FrameMailbox, Offer  # noqa: E402
 from uav_tui.hosting.pipe import Inbox, send_message  # noqa: E402
+from uav_tui.hosting.wire import pack, unpack  # noqa: E402
 
 SHAPE = (480, 640, 3)
 
@@ -60,10 +61,10 @@ def measure(frames: int) -> dict[str, float]:
             t3 = time.perf_counter_ns()
             result = runner.process(offer)
             t4 = time.perf_counter_ns()
-            send_message(child_end, result)
+            send_message(child_end, pack(result))
             t5 = time.perf_counter_ns()
             for data, buffers in inbox.read():
-                pickle.loads(data, buffers=buffers)
+                unpack(pickle.loads(data, buffers=buffers))
             t6 = time.perf_counter_ns()
             for name, ns in zip(steps, (t1 - t0, t2 - t1, t3 - t2, t4 - t3, t5 - t4, t6 - t5), strict=True):
                 steps[name] += ns

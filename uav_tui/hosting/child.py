@@ -58,7 +58,20 @@ from processors.frame_telemetry import DEFAULT_SAVE_MAX_HZ, FrameTelemetry
 from uav_tui.hosting.frame_call import call_frame
 from uav_tui.hosting.frame_mailbox import FrameMailbox, Offer, Segment
 from uav_tui.hosting.pipe import send_message
-from uav_tui.hosting.wire import Call, Camera, Forget, Load, LoadError, Ready, Reply, Result, Save, ToChild
+from uav_tui.hosting.wire import (
+    Call,
+    Camera,
+    Forget,
+    Load,
+    LoadError,
+    Message,
+    Ready,
+    Reply,
+    Result,
+    Save,
+    pack,
+    unpack,
+)
 
 JOB_SIGNALS = frozenset({signal.SIGINT, signal.SIGQUIT, signal.SIGHUP, signal.SIGTSTP, signal.SIGTTIN, signal.SIGTTOU})
 """What a terminal sends to every process of its job. The platform starts this process with them blocked (a
@@ -237,7 +250,7 @@ class ChildRunner:
         while True:
             try:
                 while self._messages.poll(0):  # a message, or the end of the pipe (recv raises EOFError)
-                    self.handle(self.conn.recv())
+                    self.handle(unpack(self.conn.recv()))
             except (EOFError, OSError):
                 return
             offer = self.mailbox.claim()
@@ -247,11 +260,11 @@ class ChildRunner:
             if offer is None:
                 self._idle.poll()  # a call, a notice, EOF or an offer
                 continue
-            send_message(self.conn, self.process(offer))
+            send_message(self.conn, pack(self.process(offer)))
 
-    def handle(self, message: ToChild) -> None:
+    def handle(self, message: Message) -> None:
         if isinstance(message, Call):
-            send_message(self.conn, self.call(message))
+            send_message(self.conn, pack(self.call(message)))
         elif isinstance(message, Forget):
             self.slots.forget(message.slots)
         elif isinstance(message, Camera):
@@ -294,17 +307,18 @@ def main(fd: int, mailbox_address: str) -> int:
     _start_resource_tracker()
     conn = Connection(fd)
     mailbox = FrameMailbox.attach(mailbox_address)
-    load: Load = conn.recv()
+    load = unpack(conn.recv())
+    assert isinstance(load, Load), load
     try:
         if too_small := _limit_memory(load.memory_mb):
-            send_message(conn, LoadError(too_small, None, load.spec.rpartition(":")[2], None))
+            send_message(conn, pack(LoadError(too_small, None, load.spec.rpartition(":")[2], None)))
             return 0
         try:
             loaded = load_processor(load.spec, load.kwargs)
         except ProcessorLoadError as exc:
-            send_message(conn, LoadError(str(exc), exc.path, exc.class_name, exc.missing))
+            send_message(conn, pack(LoadError(str(exc), exc.path, exc.class_name, exc.missing)))
             return 0
-        send_message(conn, Ready(loaded.info))
+        send_message(conn, pack(Ready(loaded.info)))
         ChildRunner(conn, mailbox, loaded, save_images=load.save_images, save_max_hz=load.save_max_hz).serve()
     except MemoryError:
         traceback.print_exc()

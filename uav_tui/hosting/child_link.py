@@ -19,7 +19,7 @@ from typing import Any
 from processors.errors import ProcessorLoadError
 from uav_tui.hosting.child_process import ChildProcess, PendingCall
 from uav_tui.hosting.host import Answer
-from uav_tui.hosting.wire import Call, FromChild, LoadError, Ready, Reply, Result, Save, ToChild
+from uav_tui.hosting.wire import Call, LoadError, Message, Ready, Reply, Result, Save, ToChild, pack, unpack
 
 logger = logging.getLogger(__name__)
 
@@ -61,7 +61,7 @@ class ChildLink:
         """Send one message to ``child``; False when it is gone (the end of its pipe reports that)."""
         try:
             with self._send_lock:
-                child.conn.send(message)
+                child.conn.send(pack(message))
         except OSError:
             return False
         return True
@@ -96,7 +96,7 @@ class ChildLink:
             return None
         for data, buffers in messages:
             try:
-                message: FromChild = pickle.loads(data, buffers=buffers)
+                message = unpack(pickle.loads(data, buffers=buffers))
             except Exception:  # noqa: BLE001 - a value that cannot be unpickled here: say so, go on
                 logger.exception("ProcessWorker(%s): unreadable message from pid %s", self.spec, child.pid)
                 continue
@@ -128,7 +128,7 @@ class ChildLink:
         else:
             loop.add_reader(child.inbox.fileno(), self._on_readable, child)
 
-    def _on_message(self, child: ChildProcess, message: Ready | LoadError | Reply) -> None:
+    def _on_message(self, child: ChildProcess, message: Message) -> None:
         if isinstance(message, Ready):
             if not child.ready.done():
                 child.ready.set_result(message.info)

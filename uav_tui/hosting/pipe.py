@@ -1,7 +1,7 @@
 """The pipe between the platform and the processor's process: how a message is framed and read.
 
-The child sends each :mod:`~uav_tui.hosting.wire` message with :func:`send_message`; the platform reads
-them with :class:`Inbox` on the event loop, never blocking. The platform's own messages to the child go
+The child sends each :mod:`~uav_tui.hosting.wire` message (packed) with :func:`send_message`; the platform
+reads them with :class:`Inbox` on the event loop, never blocking. The platform's own messages to the child go
 through :meth:`multiprocessing.connection.Connection.send` and the child reads them with ``recv``.
 """
 
@@ -12,14 +12,13 @@ import pickle
 import socket
 import struct
 from multiprocessing.connection import Connection
-
-from uav_tui.hosting.wire import FromChild
+from typing import Any
 
 BUFFER_COUNT = struct.Struct("!I")
 """Leads every frame that carries a pickle (:func:`send_message`): how many out-of-band frames follow it."""
 
 
-def send_message(conn: Connection, message: FromChild) -> None:
+def send_message(conn: Connection, message: tuple[Any, ...]) -> None:
     """Send ``message`` as one frame ``count + pickle`` then ``count`` frames with its arrays' bytes.
 
     Arrays (``tmMgr.save`` images) go out of band: written to the pipe straight from their memory, and

@@ -7,6 +7,11 @@ Platform -> child, pickled by :meth:`multiprocessing.connection.Connection.send`
 
 Frames are not messages: the child claims the newest one in its
 :class:`~uav_tui.hosting.frame_mailbox.FrameMailbox` and answers with a :class:`Result` for that offer's ``gen``.
+
+On the pipe a message is a plain tuple, its kind's number first (:func:`pack`, :func:`unpack`, at both ends):
+pickle takes a NamedTuple apart through Python-level calls, and a result crosses every frame. A ``Result``
+pickled as the NamedTuple took 10.5 us to dump and 4.5 us to load, packed 3.6 and 2.6 us (the untyped tuple it
+replaces: 1.0 and 2.0 us; least of 7 runs of 20,000 on a loaded x86 machine).
 """
 
 from __future__ import annotations
@@ -102,3 +107,17 @@ class Reply(NamedTuple):
 
 ToChild = Load | Call | Forget | Camera
 FromChild = Ready | LoadError | Result | Reply
+Message = ToChild | FromChild
+
+_KINDS: tuple[type[Message], ...] = (Load, Call, Forget, Camera, Ready, LoadError, Result, Reply)
+_NUMBERS = {kind: number for number, kind in enumerate(_KINDS)}
+
+
+def pack(message: Message) -> tuple[Any, ...]:
+    """``message`` as it travels: its kind's number, then its fields."""
+    return (_NUMBERS[type(message)], *message)
+
+
+def unpack(packed: tuple[Any, ...]) -> Message:
+    """The message :func:`pack` made ``packed`` from."""
+    return _KINDS[packed[0]]._make(packed[1:])
