@@ -188,7 +188,8 @@ class UavCore:
         config = self.config
         if config.isolation == "thread":
             processor = await load_in_thread(config.processor, config.processor_args)
-            return ProcessorWorker(processor, self._on_result, save_max_hz=config.recording.save_max_hz)
+            return ProcessorWorker(processor, self._on_result, save_max_hz=config.recording.save_max_hz,
+                                   events=self.events)
         return await ProcessWorker.start(
             config.processor, config.processor_args, self._on_result, events=self.events,
             on_fault=self._on_processor_fault, timeout_s=config.processor_timeout,

@@ -20,8 +20,10 @@ from processors import LoadedProcessor, load_processor
 from processors.base import ProcessorInfo
 from processors.frame_telemetry import DEFAULT_SAVE_MAX_HZ, FrameTelemetry
 from sources.buffer import Frame, FrameBuffer
+from uav_tui.events import EventLog
 from uav_tui.hosting.frame_call import call_frame
 from uav_tui.hosting.host import Answer, ProcessedFrame, ProcessorState
+from uav_tui.hosting.thread_logs import ThreadLogBudget
 from uav_tui.stats import PipelineStats, RollingStats
 from uav_tui.telemetry import TelemetryManager
 
@@ -50,8 +52,10 @@ class ProcessorWorker:
     isolation = "thread"
 
     def __init__(self, processor: LoadedProcessor, on_result: Callable[[ProcessedFrame], None], *,
-                 save_max_hz: float = DEFAULT_SAVE_MAX_HZ) -> None:
+                 save_max_hz: float = DEFAULT_SAVE_MAX_HZ, events: EventLog | None = None) -> None:
         self.processor = processor
+        self.events = events
+        """Where the count of the processor's log records left out is said (None: logged)."""
         self.save_max_hz = save_max_hz
         self.telemetry: TelemetryManager | None = None
         self._fields: tuple[Telemetry | None, dict[str, Any]] = (None, {})
@@ -100,6 +104,9 @@ class ProcessorWorker:
         self._loop = asyncio.get_running_loop()
         self._thread = threading.Thread(target=self._thread_main, name="processor", daemon=True)
         self._thread.start()
+        assert self._thread.ident is not None
+        logs = ThreadLogBudget(self._thread.ident, self._say_left_out)
+        logs.install()
         try:
             await asyncio.Event().wait()
         finally:
@@ -107,6 +114,14 @@ class ProcessorWorker:
             # Let the current call finish before the interpreter exits: OpenCV aborts the process when its
             # code is still running in a thread at shutdown. A hung processor is abandoned after the wait.
             await asyncio.get_running_loop().run_in_executor(None, self._thread.join, JOIN_TIMEOUT_S)
+            logs.remove()
+
+    def _say_left_out(self, count: int) -> None:
+        text = f"{count} more log records of the processor left out (too many at once)"
+        if self.events is not None:
+            self.events.emit("warning", "processor", text)
+        else:
+            logger.warning("%s", text)
 
     async def call(self, method: str, *args: Any) -> Answer:
         """Call ``processor.<method>(*args)`` on the processor thread; its exception propagates."""
