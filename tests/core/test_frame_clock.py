@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import asyncio
 
+import numpy as np
 import pytest
 
 from controllers.base import Telemetry
@@ -47,8 +48,12 @@ async def test_saves_above_the_rate_are_dropped_by_frame_time(tmp_path, isolatio
     saved = frames[frames["saved"]]
     assert len(frames) >= 45 and seconds >= 1.5
     assert 2 * seconds - 1 <= len(saved) <= 2 + 2 * seconds + 1  # a burst of 2, then 2 a second
-    gaps = saved["t_mono_ns"].diff().dropna().iloc[2:] / 1e9
-    assert (gaps >= 0.4).all(), gaps.tolist()
+    # A token bucket (burst 2, 2 a second): any n saves in a row span at least (n - 2) / 2 s of frame time. Not
+    # "every gap >= 0.4 s": after a long gap (frames late under load) the next may come sooner (0.63 s, 0.37 s).
+    times = saved["t_mono_ns"].to_numpy(dtype=np.float64) / 1e9
+    for first in range(len(times)):
+        for last in range(first + 1, len(times)):
+            assert last - first + 1 <= 2 + 2 * (times[last] - times[first]) + 1e-6, times.tolist()
 
 
 def test_the_telemetry_at_a_capture_is_the_newest_update_received_by_then() -> None:

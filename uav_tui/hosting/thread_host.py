@@ -103,10 +103,9 @@ class ProcessorWorker:
             raise RuntimeError("ProcessorWorker.run() is already running")
         self._loop = asyncio.get_running_loop()
         self._thread = threading.Thread(target=self._thread_main, name="processor", daemon=True)
+        logs = ThreadLogBudget(self._thread, self._say_left_out)
+        logs.install()  # before the thread's first record: installed after its start, a frame's records passed
         self._thread.start()
-        assert self._thread.ident is not None
-        logs = ThreadLogBudget(self._thread.ident, self._say_left_out)
-        logs.install()
         try:
             await asyncio.Event().wait()
         finally:

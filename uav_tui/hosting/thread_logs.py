@@ -20,15 +20,15 @@ _VERDICT = "_uav_tui_budget_verdict"
 
 
 class ThreadLogBudget(logging.Filter):
-    """Lets the records made on thread ``thread_id`` through the root logger's handlers within a line budget.
+    """Lets the records made on ``thread`` through the root logger's handlers within a line budget.
 
-    Create it on the event loop's thread (its budget says the count there). Handlers added to the root logger
-    after :meth:`install` are not covered.
+    Create it on the event loop's thread (its budget says the count there), and install it before ``thread``
+    starts. Handlers added to the root logger after :meth:`install` are not covered.
     """
 
-    def __init__(self, thread_id: int, say_left_out: Callable[[int], None]) -> None:
+    def __init__(self, thread: threading.Thread, say_left_out: Callable[[int], None]) -> None:
         super().__init__()
-        self._thread_id = thread_id
+        self._thread = thread
         self._budget: LineBudget[logging.LogRecord] = LineBudget(self._passed, say_left_out)
         self._verdict = False
         self._judging = threading.local()
@@ -47,7 +47,7 @@ class ThreadLogBudget(logging.Filter):
         self._budget.close()
 
     def filter(self, record: logging.LogRecord) -> bool:
-        if record.thread != self._thread_id or getattr(self._judging, "active", False):
+        if record.thread != self._thread.ident or getattr(self._judging, "active", False):
             return True  # another thread's, or said while judging one (the count's event)
         verdict = record.__dict__.get(_VERDICT)
         if verdict is None:
