@@ -33,6 +33,7 @@ from uav_tui.errors import UavError
 from uav_tui.events import Event, EventLog, Level
 from uav_tui.hosting.host import ProcessedFrame
 from uav_tui.recording.crash import CrashRecord
+from uav_tui.recording.reserve import DiskReserve, free_stale_reserves
 from uav_tui.recording.rows import (
     TABLES,
     FrameAligner,
@@ -64,10 +65,6 @@ logger = logging.getLogger(__name__)
 
 PENDING = ".pending"
 """Run sub-folder for images saved before their frame id was known."""
-RESERVE = ".reserved-for-run.json"
-"""A file that holds disk space from the start of the run to its end: freed then, so that the final ``run.json`` is
-written on a disk that filled up meanwhile."""
-RESERVE_BYTES = 256 * 1024
 
 
 class RecordedCore(Protocol):
@@ -121,6 +118,8 @@ class Recorder:
         self.misplaced_saves = 0
         """``tmMgr.save`` calls made outside ``photo_processing`` (ignored)."""
         self.crash: CrashRecord | None = None
+        self.reserve: DiskReserve | None = None
+        """Disk space held for the final ``run.json`` while the run is open (set by :meth:`open`)."""
         """Where a crash of this process writes its stacks while the run is open (set by :meth:`open`)."""
         self._emit: Callable[[Level, str], object] = lambda level, message: None
         self._current: Callable[[], ProcessedFrame | None] = lambda: None
@@ -151,7 +150,10 @@ class Recorder:
         """
         started = started_wall_ns or time.time_ns()
         try:
-            run_dir = new_run_dir(Path(config.runs_dir).expanduser().resolve(), started)
+            runs_dir = Path(config.runs_dir).expanduser().resolve()
+            if runs_dir.is_dir():
+                free_stale_reserves(runs_dir)
+            run_dir = new_run_dir(runs_dir, started)
             (run_dir / "frames").mkdir()
             (run_dir / PENDING).mkdir()
             info = {**info, "start_wall_ns": started, "start_mono_ns": time.monotonic_ns()}
@@ -159,7 +161,7 @@ class Recorder:
                 info["video"] = describe_video()
             recorder = cls(run_dir, config, info, telemetry_expected=telemetry_expected, **kwargs)
             write_json(run_dir / "run.json", recorder.info)
-            (run_dir / RESERVE).write_bytes(bytes(RESERVE_BYTES))
+            recorder.reserve = DiskReserve(run_dir)
         except OSError as exc:
             raise UavError(f"cannot create the run folder under {config.runs_dir}: {exc.strerror or exc}; "
                            "choose another with --runs-dir, or run with --no-record") from exc
@@ -290,7 +292,8 @@ class Recorder:
         self.writer.close()
         # Images of frames whose results never arrived (in flight at the stop) have no row: drop them.
         shutil.rmtree(self.run_dir / PENDING, ignore_errors=True)
-        (self.run_dir / RESERVE).unlink(missing_ok=True)
+        if self.reserve is not None:
+            self.reserve.release()
         self.info.update(end or {}, end_wall_ns=time.time_ns(), recording=self.status())
         try:
             write_json(self.run_dir / "run.json", self.info)
