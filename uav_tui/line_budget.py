@@ -19,6 +19,7 @@ LINES_PER_S = 1.0
 """Lines a second shown in a flood; the others are counted and the count is said."""
 
 T = TypeVar("T")
+S = TypeVar("S", str, bytes)
 
 
 class LineBudget(Generic[T]):
@@ -117,10 +118,44 @@ class LineBudget(Generic[T]):
             self._say_left_out(counted)
 
 
+class LineSplitter(Generic[S]):
+    """Cuts a stream of text (``str``, or ``bytes`` read from a pipe) into lines at ``\n`` only (a ``\r`` is part
+    of its line); a line that reaches ``max_line`` without ending is given as it is, and the rest of it as the lines
+    that follow. Not thread-safe.
+    """
+
+    def __init__(self, newline: S, max_line: int) -> None:
+        self._newline: S = newline
+        self._max_line = max_line
+        self._pieces: list[S] = []
+        """The unfinished line's pieces (joined only when it ends: a write at a time would copy it each time)."""
+        self._chars = 0
+
+    def feed(self, text: S) -> list[S]:
+        """The lines ``text`` finishes, without their ``\n``."""
+        if self._newline not in text and self._chars + len(text) < self._max_line:
+            self._pieces.append(text)
+            self._chars += len(text)
+            return []
+        lines: list[S] = (self._newline[:0].join(self._pieces) + text).split(self._newline)
+        rest = lines.pop()
+        if len(rest) >= self._max_line:
+            lines.append(rest)
+            rest = self._newline[:0]
+        self._pieces, self._chars = [rest], len(rest)
+        return lines
+
+    def rest(self) -> S:
+        """The unfinished line, taken (at the stream's end)."""
+        rest = self._newline[:0].join(self._pieces)
+        self._pieces, self._chars = [], 0
+        return rest
+
+
 class BudgetedText:
-    """A stand-in for ``sys.stdout`` (any thread): what is written is cut into lines, none longer than
-    ``max_line`` characters (one that never ends is taken in pieces), and passed to ``say_line`` within a
-    :class:`LineBudget`; the count of the rest goes to ``say_left_out``. Create it on the event loop.
+    """A stand-in for ``sys.stdout`` (any thread): what is written is cut into lines by a :class:`LineSplitter`,
+    none longer than ``max_line`` characters, and passed to ``say_line`` within a :class:`LineBudget`; the count of
+    the rest goes to ``say_left_out``. Create it on the event loop.
 
     Other file attributes (``encoding``, ``isatty``) are those of ``file``.
     """
@@ -129,23 +164,12 @@ class BudgetedText:
                  max_line: int = 64 * 1024) -> None:
         self._file = file
         self._budget: LineBudget[str] = LineBudget(say_line, say_left_out)
-        self._max_line = max_line
-        self._partial: list[str] = []
-        """The unfinished line's pieces (joined only when it ends: a print at a time would copy it each time)."""
-        self._partial_chars = 0
+        self._lines = LineSplitter("\n", max_line)
         self._lock = threading.Lock()
 
     def write(self, text: str) -> int:
         with self._lock:
-            if "\n" not in text and self._partial_chars + len(text) < self._max_line:
-                self._partial.append(text)
-                self._partial_chars += len(text)
-                return len(text)
-            *lines, rest = ("".join(self._partial) + text).split("\n")
-            if len(rest) >= self._max_line:
-                lines.append(rest)
-                rest = ""
-            self._partial, self._partial_chars = [rest], len(rest)
+            lines = self._lines.feed(text)
         if lines:
             self._budget.lines(lines)
         return len(text)
@@ -156,7 +180,7 @@ class BudgetedText:
     def close(self) -> None:
         """Pass on the unfinished line and say the count. On the loop."""
         with self._lock:
-            rest, self._partial, self._partial_chars = "".join(self._partial), [], 0
+            rest = self._lines.rest()
         if rest:
             self._budget.line(rest)
         self._budget.close()

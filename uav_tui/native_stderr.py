@@ -28,7 +28,7 @@ from collections.abc import Callable, Iterator
 from typing import Any
 
 from uav_tui.events import EventLog, Level
-from uav_tui.line_budget import LineBudget
+from uav_tui.line_budget import LineBudget, LineSplitter
 from uav_tui.text import shorten
 
 LINE_CHARS = 300
@@ -78,7 +78,7 @@ class NativeLines:
         self._fd = fd
         self._events = events
         self._loop = loop
-        self._partial = b""
+        self._lines = LineSplitter(b"\n", LINE_CHARS)
         self._budget = LineBudget(self._emit, self._emit_left_out)
         loop.add_reader(fd, self.flush)
 
@@ -92,17 +92,13 @@ class NativeLines:
             if not chunk:  # every writing end is closed
                 self._loop.remove_reader(self._fd)
                 return
-            *lines, self._partial = (self._partial + chunk).split(b"\n")
-            if len(self._partial) > LINE_CHARS:
-                lines.append(self._partial)
-                self._partial = b""
-            for line in lines:
+            for line in self._lines.feed(chunk):
                 self._line(line)
 
     def close(self) -> None:
         """Emit what is left (a child process may still hold the pipe's other end) and stop reading."""
         self.flush()
-        self._line(self._partial)
+        self._line(self._lines.rest())
         self._budget.close()
         self._loop.remove_reader(self._fd)
         os.close(self._fd)

@@ -5,7 +5,9 @@ from __future__ import annotations
 import asyncio
 import threading
 
-from uav_tui.line_budget import LineBudget
+import pytest
+
+from uav_tui.line_budget import LineBudget, LineSplitter
 
 
 async def test_a_steady_stream_at_the_rate_does_not_starve_the_count() -> None:
@@ -37,3 +39,17 @@ async def test_a_flood_from_another_thread_costs_a_count_said_on_the_loop() -> N
     assert said == ["line 0", "line 1", "line 2"]
     await asyncio.sleep(0.3)  # the count is said 1 / per_s after the first line left out, by the loop
     assert said[3:] == ["99997 left out"] and counted_on == [threading.get_ident()]
+
+
+@pytest.mark.parametrize("newline", ["\n", b"\n"])
+def test_the_splitter_ends_lines_at_newline_only_and_cuts_one_that_never_ends(newline: str | bytes) -> None:
+    """The one splitter of the processor's prints, the TUI's captured prints and native libraries' stderr."""
+    def text(value: str) -> str | bytes:
+        return value if isinstance(newline, str) else value.encode()
+
+    lines = LineSplitter(newline, 8)
+    assert lines.feed(text("ab")) == [] and lines.feed(text("c\rd\nef")) == [text("abc\rd")]  # \r is in its line
+    assert lines.feed(text("ghij")) == []  # 6 of 8
+    assert lines.feed(text("kl")) == [text("efghijkl")]  # reached 8 unfinished: given as it is
+    assert lines.feed(text("\n\nxy")) == [text(""), text("")]
+    assert lines.rest() == text("xy") and lines.rest() == text("")

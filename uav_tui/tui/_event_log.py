@@ -12,7 +12,7 @@ from textual import events
 from textual.widgets import RichLog
 
 from uav_tui.events import Event
-from uav_tui.line_budget import LineBudget
+from uav_tui.line_budget import LineBudget, LineSplitter
 from uav_tui.text import safe, shorten
 
 PRINT_CHARS = 500
@@ -39,8 +39,8 @@ class EventLogView(RichLog):
     def __init__(self, *, id: str | None = None) -> None:
         super().__init__(id=id, max_lines=500, min_width=20, wrap=True, markup=False, auto_scroll=True)
         self._printed = LineBudget(self._show_printed, self._show_left_out)
-        self._partial = {False: "", True: ""}
-        """The end of what was printed to stdout (False) and stderr (True) that is not a whole line yet."""
+        self._lines = {False: LineSplitter("\n", PRINT_CHARS), True: LineSplitter("\n", PRINT_CHARS)}
+        """What was printed to stdout (False) and stderr (True), cut into lines."""
 
     def on_mount(self) -> None:
         self.border_title = "Events"
@@ -55,12 +55,7 @@ class EventLogView(RichLog):
     def on_print(self, event: events.Print) -> None:
         """What is printed in the platform's process (the processor's ``print()``, in either isolation), a line
         at a time within a :class:`LineBudget`: with no terminal of its own, it would be lost."""
-        *lines, rest = (self._partial[event.stderr] + event.text).split("\n")
-        if len(rest) > PRINT_CHARS:
-            lines.append(rest)
-            rest = ""
-        self._partial[event.stderr] = rest
-        for line in lines:
+        for line in self._lines[event.stderr].feed(event.text):
             if line.strip():
                 self._printed.line(("stderr: " if event.stderr else "print: ") + safe(shorten(line, PRINT_CHARS)))
 
