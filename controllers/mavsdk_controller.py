@@ -358,6 +358,16 @@ class MavsdkController:
         await self._command("set_fly_vector", lambda: self._direct.send_message(setpoint))
 
     async def start_offboard(self) -> None:
+        """Switch to velocity control, unless the vehicle reports a mode someone else chose.
+
+        Raises:
+            ControllerError: the vehicle is in a mode that is not the platform's (a pilot switched it as the vector
+                was sent, a mission, a failsafe): their mode wins, it is not taken back.
+        """
+        mode = self.flight_mode_since(-math.inf)
+        if mode is not None and mode not in self.own_modes:
+            raise ControllerError(f"the vehicle is in {mode} mode (a pilot, a mission or a failsafe chose it): "
+                                  "not taken back")
         if self.autopilot == "ardupilot":
             # GUIDED takes velocity targets; they must be renewed within GUID_TIMEOUT (3 s).
             await self._ardupilot_mode("GUIDED", "set_fly_vector")

@@ -60,6 +60,10 @@ async def test_guided_before_arming_and_takeoff_altitude(copter: tuple[MavsdkCon
 
 async def test_vector_in_guided_then_held_in_guided(copter: tuple[MavsdkController, FakeAutopilot]) -> None:
     fc, fake = copter
+    fake.mode = GUIDED  # as after a take-off (a vector from a pilot's mode is refused)
+    async with asyncio.timeout(10):
+        while fc.flight_mode_since(0.0) != "OFFBOARD":  # MAVSDK's name of GUIDED
+            await asyncio.sleep(0.05)
     await fc.set_fly_vector(0.5, 0.25, 0.5)
     async with asyncio.timeout(10):  # a 0.5 s vector; a stream that never ends fails here, not at the suite timeout
         while fc.vector_active:

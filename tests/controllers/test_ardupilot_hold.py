@@ -16,6 +16,7 @@ from collections.abc import AsyncIterator, Callable
 import pytest
 import pytest_asyncio
 
+from controllers.errors import ControllerError
 from controllers.mavsdk_controller import MavsdkController
 from controllers.sim.launcher import SimVehicle
 from controllers.sim.truth import TruthClient
@@ -101,3 +102,20 @@ async def test_altitude_kept_after_a_vector_and_after_hold(copter: tuple[MavsdkC
                                     ("after hold", after_hold, mode_after_hold)):
         assert max(-low, high) < ALLOWED_DRIFT_M, (
             f"{what}: altitude moved {low:+.2f}..{high:+.2f} m in {HOLD_WINDOW_S:g} s in {mode}")
+
+
+async def test_a_vector_sent_as_the_pilot_switches_to_loiter_leaves_the_pilot_in_loiter(
+        copter: tuple[MavsdkController, TruthClient]) -> None:
+    """The pilot flips to LOITER as autonomy's vector goes out (the gate judged it on the telemetry before the
+    switch): the vehicle's own report of LOITER, read right before the switch to GUIDED, wins."""
+    fc, truth = copter
+    await fc.set_fly_vector(0.5, 0.0, 0.5)  # a vector flown and ended: GUIDED, as autonomy leaves it
+    await wait_until(lambda: not fc.vector_active, 10.0, "vector end")
+    truth.request({"cmd": "rc_throttle", "pwm": 1500})
+    truth.request({"cmd": "rc_mode", "mode": "LOITER"})
+    await wait_until(lambda: fc.flight_mode_since(0.0) == "HOLD", 5.0, "the pilot's LOITER reported")
+    with pytest.raises(ControllerError, match="in HOLD mode .*not taken back"):
+        await fc.set_fly_vector(1.0, 0.0, 2.0)  # before: switched back to GUIDED and flew it
+    assert not fc.vector_active
+    await asyncio.sleep(1.0)
+    assert truth.wait_latest()["mode"] == "LOITER"
