@@ -75,6 +75,13 @@ class ReplayTimeline:
         elapsed = time.monotonic_ns() - self._start()
         return self.origin_ns + int(elapsed * self.speed)
 
+    def real_ns(self, t_ns: int) -> int | None:
+        """The instant (this computer's ``time.monotonic_ns()``) the recorded instant ``t_ns`` is due in a paced replay;
+        None in lockstep, where the camera waits for the processor instead of the clock."""
+        if self.speed is None:
+            return None
+        return self._start() + int((t_ns - self.origin_ns) / self.speed)
+
     # -- camera thread ---------------------------------------------------------------------------
 
     def show(self, t_ns: int, stop: threading.Event) -> bool:

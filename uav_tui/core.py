@@ -40,7 +40,7 @@ from uav_tui.hosting.thread_host import ProcessorWorker, load_in_thread
 from uav_tui.link import LinkWatch
 from uav_tui.operations import Operations
 from uav_tui.recording import Recorder, describe
-from uav_tui.replay.gate import ReplayGate, on_replay_clock
+from uav_tui.replay.gate import ReplayGate, stage_clock
 from uav_tui.replay.operator import CommandReplay, recorded_commands
 from uav_tui.status import CoreState, CoreStatus
 from uav_tui.telemetry import TelemetryManager
@@ -143,7 +143,7 @@ class UavCore:
             if isinstance(self.controller, RecordedVehicle):
                 replay = self.replay = self.controller.timeline
                 self.gate = ReplayGate(self.config.safety, self.telemetry, self.events, self.controller)
-                self.worker.stage_clock = on_replay_clock
+                self.worker.stage_clock = stage_clock(replay)
                 self.add_frame_listener(lambda result: replay.frame_done())
                 commands = recorded_commands(self.controller.run_dir)
                 replay.before_show = CommandReplay(self, loop, commands).before_show

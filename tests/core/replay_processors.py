@@ -1,5 +1,7 @@
 """Processors for the replay tests (loaded by spec: ``tests.core.replay_processors:Class``)."""
 
+import time
+
 import numpy as np
 
 
@@ -46,3 +48,11 @@ class Idle:
 
     def photo_processing(self, frame):
         pass
+
+
+class SlowBrightness(Brightness):
+    """Brightness taking 50 ms a frame: frames come faster than it takes them, and wait for it."""
+
+    def photo_processing(self, frame):
+        time.sleep(0.05)
+        super().photo_processing(frame)

@@ -38,6 +38,7 @@ from .recorder_fakes import FakeCore
 
 BRIGHTNESS = "tests.core.replay_processors:Brightness"
 DARKNESS = "tests.core.replay_processors:Darkness"
+SLOW = "tests.core.replay_processors:SlowBrightness"
 WIDTH, HEIGHT = 160, 120
 
 
@@ -269,6 +270,17 @@ def test_a_paced_replay_shows_recorded_frames_at_their_recorded_times(flight, tm
     assert len(frames) > 20 and set(frames["t_mono_ns"]) <= recorded  # a slow processor may skip some
     assert frames["t_mono_ns"].is_monotonic_increasing
     assert frames["decision"].str.startswith("executed").any()  # autonomy was on for part of the flight
+
+
+def test_a_paced_replay_counts_a_frames_wait_for_the_busy_processor_as_a_live_run_does(flight, tmp_path):
+    """Frames come every 17 ms at speed 2 and the processor takes 50 ms: each waits for it, as in a live run. Its
+    processing starts after its capture by that wait (before: at the capture, the wait dropped) and lasts as long."""
+    frames = dataset.load(_replay(flight, SLOW, tmp_path, speed="2").replay).frames
+    wait_ms = (frames["t_start_ns"] - frames["t_mono_ns"]) / 1e6
+    processing_ms = (frames["t_end_ns"] - frames["t_start_ns"]) / 1e6
+    assert len(frames) > 20
+    assert (wait_ms >= 0).all() and wait_ms.median() > 2, wait_ms.describe()
+    assert processing_ms.median() >= 50, processing_ms.describe()
 
 
 def test_replay_without_processor_uses_the_runs_own_and_times_are_on_the_replays_clock(flight, tmp_path, capsys):

@@ -5,10 +5,12 @@ from __future__ import annotations
 import asyncio
 import bisect
 import csv
+from collections.abc import Callable
 from pathlib import Path
 from typing import Protocol
 
 from controllers.base import FlightController, RecordedVehicle
+from controllers.replay_timeline import ReplayTimeline
 from uav_tui.autonomy import AutonomyGate
 from uav_tui.config import SafetyConfig
 from uav_tui.events import EventLog
@@ -52,17 +54,24 @@ def _switch_in_message(row: dict[str, str]) -> bool | None:
     return message.startswith("autonomy ON")
 
 
-def on_replay_clock(result: ProcessedFrame) -> None:
-    """Move a replayed frame's stage times onto the replay's clock, where its capture time is.
+def stage_clock(timeline: ReplayTimeline) -> Callable[[ProcessedFrame], None]:
+    """What moves a replayed frame's stage times onto the replay's clock, where its capture time is.
 
-    A replay shows a frame at its recorded capture time and the processor takes it at once (lockstep
-    waits for it), so processing starts at the capture time and the stages keep their real durations:
-    latency and processing times read as in a live run, not as this computer's uptime minus the recorded one.
+    The stages keep their real durations, and so does the frame's wait for the processor: a paced replay shows a
+    frame when its recorded time comes, and a busy processor takes it later, as in a live run; a frame shown late
+    (a loaded computer) counts the delay as waiting too. Lockstep waits for the processor before it shows a frame,
+    so processing starts at the capture time. Latency and processing times read as in a live run, not as this
+    computer's uptime minus the recorded one.
     """
-    shift = result.frame.t_mono_ns - result.t_start_ns
-    result.t_start_ns += shift
-    result.t_end_ns += shift if result.t_end_ns else 0
-    result.t_vector_ns += shift if result.t_vector_ns else 0
+
+    def on_replay_clock(result: ProcessedFrame) -> None:
+        shown = timeline.real_ns(result.frame.t_mono_ns)
+        shift = result.frame.t_mono_ns - (result.t_start_ns if shown is None else shown)
+        result.t_start_ns += shift
+        result.t_end_ns += shift if result.t_end_ns else 0
+        result.t_vector_ns += shift if result.t_vector_ns else 0
+
+    return on_replay_clock
 
 
 class ReplayGate(AutonomyGate):
