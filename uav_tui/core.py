@@ -19,6 +19,7 @@ import psutil
 from controllers import connect_controller
 from controllers.base import BlockingCalls, FailsafeCheck, FlightController, PoseFeed, RecordedVehicle
 from controllers.replay_timeline import ReplayTimeline
+from processors.frame_telemetry import FrameTelemetry
 from sources import CameraSource, open_source, warm_up_source
 from sources.base import KnowsCameraModel
 from sources.camera_model import CameraModel
@@ -503,4 +504,15 @@ class UavCore:
             vehicle_problem=self.link.vehicle_problem if self.link is not None else "",
             box=box,
             target=target,
+            saves_dropped=self._saves_dropped(),
         )
+
+    def _saves_dropped(self) -> dict[str, int]:
+        """``tmMgr.save`` calls not stored, by why (see ``CoreStatus.saves_dropped``)."""
+        assert self.worker is not None
+        # With thread isolation the processor's tmMgr is here; in its own process it throttles there, uncounted here.
+        tm_mgr = getattr(self.worker.processor.instance, "tmMgr", None)
+        counts = {"throttled": tm_mgr.saves_throttled if isinstance(tm_mgr, FrameTelemetry) else 0,
+                  "not recorded": self.telemetry.saves_dropped,
+                  "outside a frame": self.recorder.misplaced_saves if self.recorder is not None else 0}
+        return {why: count for why, count in counts.items() if count}

@@ -22,7 +22,7 @@ from uav_tui.events import Event
 from uav_tui.geolocate import describe as describe_target
 from uav_tui.line_budget import BudgetedText
 from uav_tui.native_stderr import native_stderr_as_events
-from uav_tui.status import CoreStatus
+from uav_tui.status import CoreStatus, saves_dropped_text
 from uav_tui.terminal_output import TerminalOutput
 from uav_tui.text import escape, safe, shorten
 
@@ -88,6 +88,8 @@ def format_status(status: CoreStatus, elapsed_s: float) -> str:
             line += f" ({status.vehicle_problem})"
     if status.target is not None and (where := describe_target(status.target)):
         line += f" | target {where}"
+    if status.saves_dropped:
+        line += f" | {saves_dropped_text(status.saves_dropped)}"
     line += f" | auto {'ON' if status.autonomy else 'OFF'}"
     if status.last_vector is not None:
         vx, vy, vt = status.last_vector

@@ -22,6 +22,13 @@ class CoreState(enum.Enum):
     STOPPED = "stopped"  # stop() finished: everything released
 
 
+def saves_dropped_text(counts: dict[str, int]) -> str:
+    """``40 saves dropped (38 throttled, 2 outside a frame)``; "" when none was."""
+    if not counts:
+        return ""
+    return f"{sum(counts.values())} saves dropped ({', '.join(f'{n} {why}' for why, n in counts.items())})"
+
+
 @dataclass(frozen=True)
 class CoreStatus:
     """What the TUI, the headless status line and the web page show.
@@ -63,6 +70,10 @@ class CoreStatus:
     """Where ``box`` is on the ground, from the telemetry at that frame's capture; None: no box."""
     last_verdict: Verdict | None = None
     """What ``last_decision`` decided (None before the first vector)."""
+    saves_dropped: dict[str, int] = field(default_factory=dict)
+    """``tmMgr.save`` calls not stored, by why: ``throttled`` (above ``save_max_hz``; counted where the processor runs
+    in the platform's process, ``isolation = "thread"``), ``not recorded`` (recording is off), ``outside a frame``
+    (called outside ``photo_processing``). Only the non-zero counts."""
 
     def __post_init__(self) -> None:
         for f in fields(self):

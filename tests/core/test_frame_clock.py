@@ -12,6 +12,7 @@ from controllers.base import Telemetry
 from uav_tui import dataset
 from uav_tui.config import Config, with_overrides
 from uav_tui.core import UavCore
+from uav_tui.headless import format_status
 from uav_tui.telemetry import TelemetryManager
 
 CLOCK = "tests.core.recorder_processors:FrameClock"
@@ -54,6 +55,23 @@ async def test_saves_above_the_rate_are_dropped_by_frame_time(tmp_path, isolatio
     for first in range(len(times)):
         for last in range(first + 1, len(times)):
             assert last - first + 1 <= 2 + 2 * (times[last] - times[first]) + 1e-6, times.tolist()
+
+
+async def test_saves_dropped_are_counted_in_the_status_and_the_headless_line(tmp_path) -> None:
+    config = with_overrides(Config(), source="synthetic:?fps=30&width=160&height=120", runs_dir=str(tmp_path),
+                            processor=EVERY_FRAME, isolation="thread", record_video=False, save_max_hz=2)
+    core = UavCore(config)
+    await core.start()
+    try:
+        await asyncio.sleep(2.0)
+        status = core.status()
+        stored = status.recording["frames_saved"]
+    finally:
+        await core.stop()
+    throttled = status.saves_dropped["throttled"]  # before: dropped without a word after the first warning
+    assert throttled >= 20 and stored <= 2 + 2 * 2.0 + 1
+    assert f" | {throttled} saves dropped ({throttled} throttled) | " in format_status(status, 2.0)
+    assert status.as_dict()["saves_dropped"] == {"throttled": throttled}
 
 
 def test_the_telemetry_at_a_capture_is_the_newest_update_received_by_then() -> None:

@@ -6,6 +6,7 @@ import dataclasses
 import time
 
 import pytest
+from rich.text import Text
 
 from uav_tui.core import UavCore
 from uav_tui.tui._pipeline import PipelinePanel
@@ -32,3 +33,12 @@ async def test_the_camera_row_keeps_frame_size_and_stall_in_view(make_config, ur
         await pilot.pause(0.3)
         panel = app.query_one(PipelinePanel)
         assert panel.render_line(0).text.rstrip() == row
+
+
+async def test_dropped_saves_are_counted_in_the_pipeline_panels_border(make_config):
+    status = dataclasses.replace(STATUS, saves_dropped={"throttled": 38, "outside a frame": 2})
+    app = UavApp(UavCore(make_config()), status=lambda: status, frames=lambda: (1, FRAME, None))
+    async with app.run_test(size=(80, 24)) as pilot:
+        await pilot.pause(0.3)
+        panel = app.query_one(PipelinePanel)
+        assert Text.from_markup(panel.border_subtitle).plain == "40 saves dropped (38 throttled, 2 outside a frame)"

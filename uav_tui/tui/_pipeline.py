@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from rich.text import Text
 
-from uav_tui.status import CoreStatus
+from uav_tui.status import CoreStatus, saves_dropped_text
 from uav_tui.tui._panel import StatusPanel
 
 MIN_URI = 12
@@ -27,7 +27,7 @@ class PipelinePanel(StatusPanel):
     """How frames flow: camera -> processor, and what is being recorded.
 
     Where the camera row is too narrow, its URI is shortened (:func:`short_uri`) so that the frame size and
-    ``STALLED`` stay in view.
+    ``STALLED`` stay in view. ``tmMgr.save`` calls that were dropped are counted in the bottom border.
     """
 
     TITLE = "Pipeline"
@@ -46,6 +46,8 @@ class PipelinePanel(StatusPanel):
         ]
         if status.recording:
             rows.append(("run", str(status.recording.get("run_dir", "")).rstrip("/").rsplit("/", 1)[-1]))
+        # In the bottom border: the panel's height is fixed (app.tcss), and the rows above fill it.
+        self.border_subtitle = self.styled(saves_dropped_text(status.saves_dropped), "warn")
         rows.insert(0, ("cam", self._camera(status, ["cam", *(label for label, _ in rows)])))
         return self.rows(*rows)
 
