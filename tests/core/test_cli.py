@@ -48,7 +48,7 @@ def test_headless_run_prints_stats_and_exits_zero(tmp_path: Path) -> None:
     result = uav("--no-ui", "--duration", "3", "--source", "synthetic:", "--processor", "template",
                  "--runs-dir", str(tmp_path / "runs"), cwd=tmp_path)
     assert result.returncode == 0, result.stderr
-    lines = [line for line in result.stdout.splitlines() if "proc" in line]
+    lines = [line for line in result.stdout.splitlines() if "fps proc " in line]  # the status lines
     assert len(lines) >= 2
     assert "stopped: --duration 3 s reached" in result.stdout
     fps = float(lines[-1].split("proc")[1].split("fps")[0])
@@ -162,7 +162,7 @@ def headless_job(tmp_path: Path, *flags: str) -> Iterator[subprocess.Popen[str]]
             assert process.stdout is not None
             deadline = time.monotonic() + 30
             while time.monotonic() < deadline and process.poll() is None:
-                if "proc" in process.stdout.readline():  # the loop is running
+                if "fps proc " in process.stdout.readline():  # a status line: the loop is running
                     yield process
                     return
             process.kill()
