@@ -23,7 +23,10 @@ cannot stretch them. Measured at load average 14 with test_isolation.py too: 51 
 420 s of it."""
 
 SOAK = frozenset({"tests/processors/test_csrt_real_video.py", "tests/processors/test_nanotrack_real_video.py"})
-"""Modules marked ``soak``: minutes of real video through the trackers; .ci/run runs them in a step of their own."""
+"""Modules marked ``soak``: minutes of real video through the trackers (correctness bounds, none on time); .ci/run
+runs them on one worker beside the first step, niced."""
+SOAK_TIMEOUT_S = 900
+"""A soak test's hang guard: niced beside the first step on a loaded machine, csrt over person12_1 ran past 120 s."""
 
 
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
@@ -33,6 +36,7 @@ def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
             item.add_marker(pytest.mark.serial)
         if module in SOAK:
             item.add_marker(pytest.mark.soak)
+            item.add_marker(pytest.mark.timeout(SOAK_TIMEOUT_S))
 
 
 @pytest.fixture
