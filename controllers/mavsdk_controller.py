@@ -296,8 +296,11 @@ class MavsdkController:
             "do_orbit", lambda: self._action.do_orbit(radius_m, velocity_ms, behaviour, lat, lon, math.nan)
         )
 
-    async def set_fly_vector(self, vx: float, vy: float, t: float) -> None:
+    async def set_fly_vector(self, vx: float, vy: float, t: float, *, yield_to_others: bool = False) -> None:
         """Fly body-frame (vx forward, vy right) m/s for t s, altitude and yaw held; then zero + hold.
+
+        ``yield_to_others`` (autonomy's vectors, not an operator's command): refused when the vehicle reports, right
+        before the switch to offboard, a mode that is not the platform's own (a pilot switched as it was sent).
 
         Returns once the first setpoint is out and offboard is engaged; a new vector replaces a
         running one without leaving offboard.
@@ -310,7 +313,7 @@ class MavsdkController:
             raise ValueError(f"set_fly_vector({vx}, {vy}, {t}): speeds must be finite and t > 0")
         if self._system is None or self._closed:
             raise ControllerError("set_fly_vector: not connected (call connect() first)")
-        await self._vectors.start(float(vx), float(vy), float(t))
+        await self._vectors.start(float(vx), float(vy), float(t), yield_to_others=yield_to_others)
 
     @property
     def vector_active(self) -> bool:
@@ -357,15 +360,15 @@ class MavsdkController:
         setpoint = velocity_body_setpoint(self._sysid, forward_ms, right_ms)
         await self._command("set_fly_vector", lambda: self._direct.send_message(setpoint))
 
-    async def start_offboard(self) -> None:
-        """Switch to velocity control, unless the vehicle reports a mode someone else chose.
+    async def start_offboard(self, *, yield_to_others: bool = False) -> None:
+        """Switch to velocity control; with ``yield_to_others``, not from a mode someone else chose.
 
         Raises:
-            ControllerError: the vehicle is in a mode that is not the platform's (a pilot switched it as the vector
-                was sent, a mission, a failsafe): their mode wins, it is not taken back.
+            ControllerError: ``yield_to_others`` and the vehicle reports a mode that is not the platform's (a pilot
+                switched it as the vector was sent, a mission, a failsafe): their mode wins, it is not taken back.
         """
         mode = self.flight_mode_since(-math.inf)
-        if mode is not None and mode not in self.own_modes:
+        if yield_to_others and mode is not None and mode not in self.own_modes:
             raise ControllerError(f"the vehicle is in {mode} mode (a pilot, a mission or a failsafe chose it): "
                                   "not taken back")
         if self.autopilot == "ardupilot":

@@ -141,7 +141,7 @@ class ReplayController:
     def last_vector_end(self) -> str:
         return ""
 
-    async def set_fly_vector(self, vx: float, vy: float, t: float) -> None:
+    async def set_fly_vector(self, vx: float, vy: float, t: float, *, yield_to_others: bool = False) -> None:
         raise self._refuse("vector")
 
     async def arm(self) -> None:

@@ -31,8 +31,9 @@ class OffboardPort(Protocol):
         """Send one body-frame velocity setpoint (altitude and yaw held)."""
         ...
 
-    async def start_offboard(self) -> None:
-        """Switch to the velocity-control mode (PX4 OFFBOARD, ArduCopter GUIDED)."""
+    async def start_offboard(self, *, yield_to_others: bool = False) -> None:
+        """Switch to the velocity-control mode (PX4 OFFBOARD, ArduCopter GUIDED); with ``yield_to_others``, not from a
+        mode someone else chose (raises ControllerError)."""
         ...
 
     async def stop_offboard(self) -> None:
@@ -76,10 +77,11 @@ class VectorStream:
         """True while a vector's setpoints are being streamed."""
         return self._task is not None and not self._task.done()
 
-    async def start(self, vx: float, vy: float, t: float) -> None:
+    async def start(self, vx: float, vy: float, t: float, *, yield_to_others: bool = False) -> None:
         """Run (vx, vy) for t seconds; replaces a running vector without leaving offboard.
 
-        Returns once the first setpoint is sent and offboard is engaged.
+        Returns once the first setpoint is sent and offboard is engaged. ``yield_to_others`` (autonomy's vectors):
+        a mode someone else chose meanwhile (a pilot, a failsafe) wins, see ``OffboardPort.start_offboard``.
 
         Raises:
             ControllerError: offboard could not be started (the stream is stopped again).
@@ -94,7 +96,7 @@ class VectorStream:
             if not self.engaged:
                 try:
                     await asyncio.sleep(PRESTREAM_S)
-                    await self._port.start_offboard()
+                    await self._port.start_offboard(yield_to_others=yield_to_others)
                 except BaseException:
                     await self._cancel_task()
                     raise

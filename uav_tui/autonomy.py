@@ -228,7 +228,7 @@ class AutonomyGate:
             if self._why_not(result):  # things changed while it waited for the previous command
                 continue
             try:
-                await self.controller.set_fly_vector(vx, vy, t)
+                await self.controller.set_fly_vector(vx, vy, t, yield_to_others=True)
                 self.executed += 1
                 self._flown = True
             except KNOWN_ERRORS as exc:

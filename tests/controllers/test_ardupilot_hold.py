@@ -115,7 +115,7 @@ async def test_a_vector_sent_as_the_pilot_switches_to_loiter_leaves_the_pilot_in
     truth.request({"cmd": "rc_mode", "mode": "LOITER"})
     await wait_until(lambda: fc.flight_mode_since(0.0) == "HOLD", 5.0, "the pilot's LOITER reported")
     with pytest.raises(ControllerError, match="in HOLD mode .*not taken back"):
-        await fc.set_fly_vector(1.0, 0.0, 2.0)  # before: switched back to GUIDED and flew it
+        await fc.set_fly_vector(1.0, 0.0, 2.0, yield_to_others=True)  # before: switched back to GUIDED and flew it
     assert not fc.vector_active
     await asyncio.sleep(1.0)
     assert truth.wait_latest()["mode"] == "LOITER"
