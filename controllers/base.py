@@ -80,9 +80,9 @@ class FlightController(Protocol):
     in a holding mode itself. A new vector replaces the running one.
 
     Optional capabilities are the small Protocols below (:class:`FailsafeCheck`, :class:`PoseFeed`,
-    :class:`OwnModes`, :class:`LandingTargets`, :class:`BlockingCalls`, :class:`SimulatorOwner`,
-    :class:`RecordedVehicle`); the platform asks ``isinstance(controller, PoseFeed)`` and uses what the
-    answer allows.
+    :class:`OwnModes`, :class:`LandingTargets`, :class:`PrecisionLanding`, :class:`BlockingCalls`,
+    :class:`SimulatorOwner`, :class:`RecordedVehicle`); the platform asks ``isinstance(controller, PoseFeed)``
+    and uses what the answer allows.
     """
 
     description: str
@@ -155,6 +155,16 @@ class LandingTargets(Protocol):
     async def send_landing_target(self, fix: LandingTargetFix) -> dict[str, Any]:
         """Send it converted for the autopilot and stamped with the frame's capture time on its clock; returns
         what was sent."""
+        ...
+
+
+@runtime_checkable
+class PrecisionLanding(Protocol):
+    """A controller that starts a precision landing on the LANDING_TARGETs it is sent."""
+
+    async def precision_land(self) -> str:
+        """Set what the autopilot needs and land on the target; returns what was done, raises ControllerError
+        saying why not."""
         ...
 
 

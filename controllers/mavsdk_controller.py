@@ -29,12 +29,24 @@ from controllers.connection import (
 from controllers.errors import ControllerError
 from controllers.failsafe import STALE_MARGIN_S, FailsafeReport, ParamAccess, check_failsafe
 from controllers.landing_target import LandingTargetError, LandingTargetFix, landing_target_fields
-from controllers.mavlink_commands import landing_target, px4_set_mode, send_command, velocity_body_setpoint
+from controllers.mavlink_commands import (
+    command_long,
+    landing_target,
+    px4_set_mode,
+    send_command,
+    velocity_body_setpoint,
+)
 from controllers.mavsdk_calls import AbandoningExecutor, Subscriptions, bounded, release, use_abandoning_executor
 from controllers.mavsdk_link import LinkMonitor
 from controllers.mavsdk_log import route_mavsdk_log
 from controllers.mavsdk_pose import POSE_RATE_HZ, BootClock, pose_samples, request_pose_rate
 from controllers.mavsdk_telemetry import merged_updates, set_rates
+from controllers.precland import (
+    MAV_CMD_NAV_LAND,
+    PX4_PRECISION_REQUIRED,
+    PrecisionLandingError,
+    check_ardupilot_params,
+)
 from controllers.vector_stream import DEFAULT_RATE_HZ, VectorStream
 
 logger = logging.getLogger(__name__)
@@ -346,6 +358,30 @@ class MavsdkController:
         message = landing_target(self._sysid, fields)
         await self._command("landing_target", lambda: self._direct.send_message(message))
         return fields
+
+    async def precision_land(self) -> str:
+        """Land on the landing target sent with :meth:`send_landing_target` (see :mod:`controllers.precland`).
+
+        ArduPilot: PLND_ENABLED and PLND_TYPE checked, then LAND; PX4: NAV_LAND with precision "required".
+        Returns what was done.
+
+        Raises:
+            PrecisionLandingError: a PLND parameter missing or wrong (named, with the value it needs), or an
+                autopilot that is neither PX4 nor ArduPilot.
+            ControllerError: the landing was refused, or the link is lost.
+        """
+        if self.autopilot == "ardupilot":
+            found = await check_ardupilot_params(
+                lambda name: self._command(f"read {name}", lambda: self._param.get_param_int(name)))
+            await self.land()
+            return "precision landing (LAND, " + ", ".join(f"{k}={v}" for k, v in found.items()) + ")"
+        if self.autopilot != "px4":
+            raise PrecisionLandingError(f"precland: {AUTOPILOT_NAMES[self.autopilot]}: only PX4 and ArduPilot "
+                                        "are known to land on LANDING_TARGET")
+        await self._vectors.stop_and_hold()
+        command = command_long(self._sysid, MAV_CMD_NAV_LAND, 0, PX4_PRECISION_REQUIRED)
+        await self._command("land", lambda: send_command(self._direct, command))
+        return f"precision landing (NAV_LAND, precision {PX4_PRECISION_REQUIRED} = required)"
 
     def _on_attitude(self, message: MavlinkMessage) -> None:
         received = time.monotonic_ns()

@@ -121,6 +121,7 @@ COMMANDS: dict[str, CommandSpec] = {
     "takeoff": CommandSpec("takeoff [ALT]", "take off to ALT metres (default: takeoff_alt)", (_takeoff_alt,), 1,
                            limits=("max_altitude",)),
     "land": CommandSpec("land", "land where it is"),
+    "precland": CommandSpec("precland", "land on the landing target the processor sees (precision landing)"),
     "rtl": CommandSpec("rtl", "return to launch and land"),
     "hold": CommandSpec("hold", "stop and hold position"),
     "orbit": CommandSpec("orbit R V", "orbit the current position at radius R m and speed V m/s",
@@ -140,7 +141,7 @@ COMMANDS: dict[str, CommandSpec] = {
 }
 """Every command word. Keys are bound to these in the TUI; scripts and the web page send them as text."""
 
-VEHICLE_COMMANDS = frozenset({"arm", "disarm", "takeoff", "land", "rtl", "hold", "orbit", "vector"})
+VEHICLE_COMMANDS = frozenset({"arm", "disarm", "takeoff", "land", "precland", "rtl", "hold", "orbit", "vector"})
 """Commands that need a flight controller and pre-empt autonomy."""
 
 

@@ -38,6 +38,7 @@ from uav_tui.hosting.malloc_tuning import tune_this_process
 from uav_tui.hosting.process_host import ProcessWorker
 from uav_tui.hosting.supervisor import LOAD_TIMEOUT_S
 from uav_tui.hosting.thread_host import ProcessorWorker, load_in_thread
+from uav_tui.landing_targets import LandingTargetFeed
 from uav_tui.link import LinkWatch
 from uav_tui.operations import Operations
 from uav_tui.recording import Recorder, describe
@@ -78,6 +79,8 @@ class UavCore:
         self.events = EventLog()
         self.telemetry = TelemetryManager(None)
         self.gate = AutonomyGate(config.safety, self.telemetry, self.events)
+        self.landing = LandingTargetFeed()
+        """The processor's landing targets and the operator's ``precland`` switch."""
         self.controller: FlightController | None = None
         self.source: CameraSource | None = None
         self.camera: CameraModel | None = None
@@ -209,6 +212,7 @@ class UavCore:
     def _on_processor_fault(self, reason: str) -> None:
         """The processor's process died or was killed: autonomy off, and hold if a vector flies."""
         self.processor_error = reason
+        self._stop_precland(f"processor fault: {reason}")
         if self.gate.enabled:
             self._spawn(self.gate.disable("watchdog", reason), "processor fault")
 
@@ -351,6 +355,10 @@ class UavCore:
         """A vehicle command handed the vehicle to ``mode`` (LAND, RETURN_TO_LAUNCH), or to no mode of its own."""
         self.handed_over = mode
 
+    def _stop_precland(self, reason: str) -> None:
+        if self.landing.release(reason):
+            self.events.emit("warning", "autonomy", f"precland off, landing targets no longer sent: {reason}")
+
     def clear_processor_error(self) -> None:
         """The processor was reloaded: its last error is history."""
         self.processor_error = None
@@ -458,6 +466,8 @@ class UavCore:
                                     "MAVLink connection string")
                 if self.gate.enabled:  # any operator command pre-empts autonomy at once
                     await self.gate.disable(origin, f"pre-empted by operator command '{parsed}'", hold=False)
+                if parsed.word != "precland":  # and a precision landing
+                    self._stop_precland(f"pre-empted by operator command '{parsed}'")
             outcome = await self._operations.run(parsed, origin)
         except KNOWN_ERRORS as exc:
             self.events.emit("error", "command", f"{parsed}: {exc}", origin, command=str(parsed))
@@ -493,6 +503,8 @@ class UavCore:
             heartbeat_age_s=self.controller.heartbeat_age_s() if self.controller else None,
             autonomy=self.gate.enabled,
             autonomy_stop_reason=self.gate.stop_reason,
+            precland=self.landing.engaged,
+            precland_stop_reason=self.landing.stop_reason,
             last_vector=self.gate.last_vector,
             last_decision=self.gate.last_decision,
             last_verdict=self.gate.last_decision.verdict,

@@ -9,6 +9,7 @@ from __future__ import annotations
 import asyncio
 from typing import TYPE_CHECKING, Any, NamedTuple, Protocol
 
+from controllers.base import PrecisionLanding
 from uav_tui.autonomy import check_vector
 from uav_tui.commands import VEHICLE_COMMANDS, Command, check_limits
 from uav_tui.errors import CommandError, ProcessorLoadError, SourceError, UavError
@@ -25,9 +26,10 @@ if TYPE_CHECKING:
     from uav_tui.autonomy import AutonomyGate
     from uav_tui.config import Config
     from uav_tui.hosting.host import Answer
+    from uav_tui.landing_targets import LandingTargetFeed
     from uav_tui.recording import Recorder
 
-HANDED_OVER = {"land": "LAND", "rtl": "RETURN_TO_LAUNCH"}
+HANDED_OVER = {"land": "LAND", "precland": "LAND", "rtl": "RETURN_TO_LAUNCH"}
 """Commands that hand the vehicle to the autopilot's own mode (MAVSDK's name): exit leaves it there."""
 
 PLAIN_VEHICLE_CALLS: dict[str, tuple[str, str]] = {
@@ -79,6 +81,9 @@ class OperatedCore(Protocol):
     def recorder(self) -> Recorder | None: ...
 
     @property
+    def landing(self) -> LandingTargetFeed: ...
+
+    @property
     def worker(self) -> CommandedHost | None: ...
 
     async def open_source(self, uri: str) -> CameraSource: ...
@@ -122,6 +127,26 @@ class Operations:
     async def _orbit(self, radius: float, speed: float, *, origin: str) -> str:
         await self._vehicle().do_orbit(radius, speed)
         return f"orbiting at {radius:g} m, {speed:g} m/s"
+
+    async def _precland(self, *, origin: str) -> str:
+        controller = self._vehicle()
+        if not isinstance(controller, PrecisionLanding):
+            raise UavError(f"precland: {controller.description} cannot land on a landing target (use land)")
+        worker = self.core.worker
+        assert worker is not None
+        info = worker.processor.info
+        if "getLandingTarget" not in info.capabilities:
+            raise UavError(f"precland: processor {info.name} has no getLandingTarget() method, so there is no "
+                           "landing target to land on (use a processor that reports one, e.g. precision_land; "
+                           "or land)")
+        landing = self.core.landing
+        landing.check_fresh()
+        landing.engage()  # the targets flow from the moment the autopilot starts landing
+        try:
+            return await controller.precision_land()
+        except BaseException:
+            landing.release("precland failed")
+            raise
 
     async def _vector(self, vx: float, vy: float, t: float, *, origin: str) -> str:
         vector, note = check_vector((vx, vy, t), self.core.config.safety)

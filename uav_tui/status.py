@@ -74,6 +74,10 @@ class CoreStatus:
     """``tmMgr.save`` calls not stored, by why: ``throttled`` (above ``save_max_hz``; counted where the processor runs
     in the platform's process, ``isolation = "thread"``), ``not recorded`` (recording is off), ``outside a frame``
     (called outside ``photo_processing``). Only the non-zero counts."""
+    precland: bool = False
+    """``precland`` is on: the processor's landing targets are sent to the autopilot."""
+    precland_stop_reason: str = ""
+    """Why ``precland`` was turned off last ("" while on or never on)."""
 
     def __post_init__(self) -> None:
         for f in fields(self):

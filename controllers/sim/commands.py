@@ -92,6 +92,8 @@ class CommandHandler:
             return [
                 Param("PLND_ENABLED", M.MAV_PARAM_TYPE_INT8, lambda: int(pad.enabled),
                       lambda value: setattr(pad, "enabled", bool(value))),
+                Param("PLND_TYPE", M.MAV_PARAM_TYPE_INT8, lambda: pad.source_type,
+                      lambda value: setattr(pad, "source_type", int(value))),
                 bind("GUID_TIMEOUT", cfg, "guided_timeout_s"),
                 bind("PILOT_SPD_UP", stick, "speed_up_ms"),
                 bind("PILOT_SPD_DN", stick, "speed_dn_ms"),

@@ -26,6 +26,9 @@ logger = logging.getLogger(__name__)
 STALE_S = 1.0
 """ArduPilot drops a landing target older than this (``AC_PrecLand``: 1 s without a measurement)."""
 
+COMPANION = 1
+"""ArduPilot's PLND_TYPE for a companion computer's LANDING_TARGET."""
+
 _BODY_FRAMES = (mavlink.MAV_FRAME_BODY_FRD, mavlink.MAV_FRAME_LOCAL_FRD)
 
 
@@ -40,6 +43,8 @@ class PadEstimate:
         self.ardupilot = ardupilot
         self.enabled = False
         """ArduPilot: PLND_ENABLED; PX4: the last NAV_LAND asked for precision (param 2 > 0)."""
+        self.source_type = COMPANION
+        """ArduPilot: PLND_TYPE; only a companion's (1) LANDING_TARGET is read."""
         self.position: np.ndarray | None = None
         self.received_ns = 0
         self.received = 0
@@ -58,7 +63,9 @@ class PadEstimate:
 
     def pad(self, now_ns: int) -> np.ndarray | None:
         """The pad's (north, east) while enabled and a target arrived within :data:`STALE_S`."""
-        if not self.enabled or self.position is None or now_ns - self.received_ns > STALE_S * 1e9:
+        if not self.enabled or self.source_type != COMPANION or self.position is None:
+            return None
+        if now_ns - self.received_ns > STALE_S * 1e9:
             return None
         return self.position
 

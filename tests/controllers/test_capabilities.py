@@ -12,6 +12,7 @@ from controllers.base import (
     LandingTargets,
     OwnModes,
     PoseFeed,
+    PrecisionLanding,
     RecordedVehicle,
     SimulatorOwner,
 )
@@ -22,7 +23,8 @@ from controllers.sim_controller import SimController
 from uav_tui.config import RecordingConfig
 from uav_tui.recording import Recorder
 
-CAPABILITIES = (FailsafeCheck, PoseFeed, OwnModes, LandingTargets, BlockingCalls, SimulatorOwner, RecordedVehicle)
+CAPABILITIES = (FailsafeCheck, PoseFeed, OwnModes, LandingTargets, PrecisionLanding, BlockingCalls, SimulatorOwner,
+                RecordedVehicle)
 
 
 def _capabilities(controller: object) -> set[type]:
@@ -32,14 +34,15 @@ def _capabilities(controller: object) -> set[type]:
 def test_a_mavlink_controller_checks_failsafes_feeds_poses_and_says_its_modes() -> None:
     controller = MavsdkController()
     assert isinstance(controller, FlightController)
-    assert _capabilities(controller) == {FailsafeCheck, PoseFeed, OwnModes, LandingTargets, BlockingCalls}
+    assert _capabilities(controller) == {FailsafeCheck, PoseFeed, OwnModes, LandingTargets, PrecisionLanding,
+                                         BlockingCalls}
     assert controller.own_modes == frozenset({"HOLD", "OFFBOARD"}) and controller.unfinished_calls == []
 
 
 def test_the_built_in_vehicle_owns_its_simulator() -> None:
     controller = SimController(SimVehicle())
-    assert _capabilities(controller) == {FailsafeCheck, PoseFeed, OwnModes, LandingTargets, BlockingCalls,
-                                         SimulatorOwner}
+    assert _capabilities(controller) == {FailsafeCheck, PoseFeed, OwnModes, LandingTargets, PrecisionLanding,
+                                         BlockingCalls, SimulatorOwner}
     assert controller.sim.exit_status() is None  # never started
 
 

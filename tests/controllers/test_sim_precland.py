@@ -17,6 +17,7 @@ from pymavlink.dialects.v20 import common as mavlink
 
 from controllers.landing_target import LandingTargetError, LandingTargetFix, rotation_ned_body
 from controllers.mavsdk_controller import MavsdkController
+from controllers.precland import PrecisionLandingError
 from controllers.sim.launcher import SimVehicle
 from controllers.sim.precland import PadEstimate
 from controllers.sim.truth import TruthClient
@@ -59,10 +60,11 @@ async def send_targets(fc: MavsdkController, truth: TruthClient, sent: list[floa
 @pytest.mark.timeout(180)
 @pytest.mark.parametrize("sim_vehicle", [
     {"autopilot": "ardupilot", "extra_args": ["--plnd-enabled"], "wind": (1.5, -1.0), "noise": True},
+    {"autopilot": "px4", "wind": (1.0, 1.0), "noise": True},
     {"autopilot": "ardupilot"},
-], indirect=True, ids=["PLND_ENABLED", "plain-land"])
-async def test_lands_on_the_pad_from_landing_targets(sim_vehicle: SimVehicle) -> None:
-    precise = "--plnd-enabled" in sim_vehicle.extra_args
+], indirect=True, ids=["ardupilot-precland", "px4-precland", "plain-land"])
+async def test_lands_on_the_pad_from_landing_targets(sim_vehicle: SimVehicle, request: pytest.FixtureRequest) -> None:
+    precise = "plain" not in request.node.callspec.id
     fc = MavsdkController()
     truth = sim_vehicle.truth()
     sent: list[float] = []
@@ -75,7 +77,10 @@ async def test_lands_on_the_pad_from_landing_targets(sim_vehicle: SimVehicle) ->
             while (state := truth.latest()) is None or -state.get("d", 0.0) < ALTITUDE_M - 0.3:
                 await asyncio.sleep(0.1)
         sender = asyncio.create_task(send_targets(fc, truth, sent))
-        await fc.land()
+        if precise:
+            assert (await fc.precision_land()).startswith("precision landing")
+        else:
+            await fc.land()
         async with asyncio.timeout(60):
             while (state := truth.latest()) is None or state["in_air"] or state["d"] < -0.05:
                 await asyncio.sleep(0.1)
@@ -91,6 +96,34 @@ async def test_lands_on_the_pad_from_landing_targets(sim_vehicle: SimVehicle) ->
         assert miss < 0.3, f"landed {miss:.2f} m from the pad"
     else:
         assert miss > 2.5, f"a plain LAND came down {miss:.2f} m from the pad: where it was, not on the pad"
+
+
+@pytest.mark.timeout(60)
+@pytest.mark.parametrize("sim_vehicle", [{"autopilot": "ardupilot"}], indirect=True)
+async def test_precland_names_the_plnd_parameter_that_is_wrong_and_does_not_land(sim_vehicle: SimVehicle) -> None:
+    fc = MavsdkController()
+    truth = sim_vehicle.truth()
+    try:
+        await fc.connect(sim_vehicle.connection_string)
+        await arm_when_ready(fc)
+        await fc.takeoff(3.0)
+        with pytest.raises(PrecisionLandingError, match=r"PLND_ENABLED = 0, precision landing needs PLND_ENABLED = 1"):
+            await fc.precision_land()
+        await fc._param.set_param_int("PLND_ENABLED", 1)
+        await fc._param.set_param_int("PLND_TYPE", 4)
+        with pytest.raises(PrecisionLandingError, match=r"PLND_TYPE = 4, .*needs PLND_TYPE = 1 \(companion"):
+            await fc.precision_land()
+        await asyncio.sleep(1.0)
+        state = truth.latest()
+        assert state is not None and state["in_air"] and "LAND" not in state["mode"], "a refused precland landed"
+        await fc._param.set_param_int("PLND_TYPE", 1)
+        assert "PLND_ENABLED=1, PLND_TYPE=1" in await fc.precision_land()
+        await asyncio.sleep(1.0)
+        state = truth.latest()
+        assert state is not None and "LAND" in state["mode"]
+    finally:
+        await fc.close()
+        truth.close()
 
 
 def landing_target(**fields: float) -> mavlink.MAVLink_landing_target_message:

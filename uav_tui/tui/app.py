@@ -55,6 +55,7 @@ class Key:
 KEYS: tuple[Key, ...] = (
     Key("h", "hold", "Hold"),
     Key("l", "land", "Land"),
+    Key("p", "precland", "PrecLand"),
     Key("r", "rtl", "RTL"),
     Key("a", "arm", "Arm", "ARM the motors? Props will spin."),
     Key("t", "takeoff", "Takeoff", "TAKE OFF now?"),
@@ -79,7 +80,7 @@ FUNCTION_KEYS = Binding.Group("processor")
 NEEDS_VEHICLE = VEHICLE_COMMANDS | {"autonomy"}
 """Commands dimmed without a flight controller (``--fc none``)."""
 
-CAPABILITY_OF_COMMAND = {"f": "customize_processing", "roi": "catch_cmd"}
+CAPABILITY_OF_COMMAND = {"f": "customize_processing", "roi": "catch_cmd", "precland": "getLandingTarget"}
 """Commands that only apply when the processor has the method."""
 
 

@@ -52,8 +52,8 @@ STATIC = Path(__file__).with_name("static")
 MAX_VIEWERS = 4
 """Peer connections served at once; each one encodes its own stream."""
 STATUS_PERIOD_S = 0.5
-WEB_COMMANDS = frozenset({"f", "roi", "hold", "land", "rtl", "autonomy off"})
-"""What the page may send: the buttons, target selection and the ways to stop. Arming, takeoff and
+WEB_COMMANDS = frozenset({"f", "roi", "hold", "land", "precland", "rtl", "autonomy off"})
+"""What the page may send: the buttons, target selection, the ways to stop and to land. Arming, takeoff and
 switching autonomy on stay with the operator's terminal."""
 COOKIE = "uav_token"
 _REJECT_LOG_PERIOD_S = 60.0
