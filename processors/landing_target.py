@@ -16,7 +16,7 @@ CAMERA_FRAME = "camera"
 """The one coordinate frame a :class:`LandingTarget` is given in: x right, y down (image), z ahead (optical axis)."""
 
 MAX_DISTANCE_M = 10_000.0
-"""Distances beyond this are not a landing pad; :func:`read_landing_target` reads them as no target."""
+"""Distances beyond this are not a landing pad: :class:`LandingTarget` refuses them."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -76,3 +76,15 @@ class LandingTarget:
         x, y, z = self.direction
         return x * self.distance_m, y * self.distance_m, z * self.distance_m
 
+
+
+def read_landing_target(value: object) -> LandingTarget | None:
+    """What ``getLandingTarget()`` returned, checked: a :class:`LandingTarget` or None.
+
+    Raises:
+        TypeError: anything else (reported as the processor's error; nothing is sent).
+    """
+    if value is None or isinstance(value, LandingTarget):
+        return value
+    raise TypeError(f"getLandingTarget() returned {type(value).__name__} {value!r:.80}: return a "
+                    "processors.LandingTarget or None")

@@ -255,6 +255,12 @@ class AutonomyGate:
                 # Whoever switched modes has the vehicle: a hold from here would override them.
                 await self.disable("watchdog", reason, hold=cause is not StopCause.TAKEN_OVER)
 
+    def fault(self, frame_age: float | None, busy_s: float, errors: int) -> str:
+        """Why whatever the processor drives must stop now (processor stalled or failing, camera stalled, link lost),
+        or "" (``precland``'s landing targets stop on the same faults as vectors)."""
+        failure = self._failure(frame_age, busy_s, errors)
+        return "" if failure is None or failure[0] is StopCause.TAKEN_OVER else failure[1]
+
     def _failure(self, frame_age: float | None, busy_s: float, errors: int) -> tuple[StopCause, str] | None:
         """Why autonomy must stop now, and the reason to show; None: nothing failed."""
         s = self.safety

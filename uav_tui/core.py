@@ -17,7 +17,14 @@ from typing import TYPE_CHECKING, Any
 import psutil
 
 from controllers import connect_controller
-from controllers.base import BlockingCalls, FailsafeCheck, FlightController, PoseFeed, RecordedVehicle
+from controllers.base import (
+    BlockingCalls,
+    FailsafeCheck,
+    FlightController,
+    LandingTargets,
+    PoseFeed,
+    RecordedVehicle,
+)
 from controllers.replay_timeline import ReplayTimeline
 from processors.frame_telemetry import FrameTelemetry
 from sources import CameraSource, open_source, warm_up_source
@@ -25,7 +32,7 @@ from sources.base import KnowsCameraModel
 from sources.camera_model import CameraModel
 from sources.pose import PoseTrack
 from uav_tui import pose_feed
-from uav_tui.autonomy import AutonomyGate, own_modes
+from uav_tui.autonomy import WATCHDOG_PERIOD_S, AutonomyGate, own_modes
 from uav_tui.clock_check import ClockCheck
 from uav_tui.commands import VEHICLE_COMMANDS, Command, parse
 from uav_tui.config import Config
@@ -38,7 +45,7 @@ from uav_tui.hosting.malloc_tuning import tune_this_process
 from uav_tui.hosting.process_host import ProcessWorker
 from uav_tui.hosting.supervisor import LOAD_TIMEOUT_S
 from uav_tui.hosting.thread_host import ProcessorWorker, load_in_thread
-from uav_tui.landing_targets import LandingTargetFeed
+from uav_tui.landing_targets import LandingTargetFeed, LandingTargetSender, landing_fix
 from uav_tui.link import LinkWatch
 from uav_tui.operations import Operations
 from uav_tui.recording import Recorder, describe
@@ -81,6 +88,8 @@ class UavCore:
         self.gate = AutonomyGate(config.safety, self.telemetry, self.events)
         self.landing = LandingTargetFeed()
         """The processor's landing targets and the operator's ``precland`` switch."""
+        self.landing_sender: LandingTargetSender | None = None
+        """Sends the landing targets (None without a controller that takes them)."""
         self.controller: FlightController | None = None
         self.source: CameraSource | None = None
         self.camera: CameraModel | None = None
@@ -152,6 +161,8 @@ class UavCore:
                 commands = recorded_commands(self.controller.run_dir)
                 replay.before_show = CommandReplay(self, loop, commands).before_show
             self.gate.telemetry, self.gate.controller = self.telemetry, self.controller
+            if isinstance(self.controller, LandingTargets):
+                self.landing_sender = LandingTargetSender(self.controller, self.events)
             await self._check_autopilot_failsafe()
             self.worker.bind_telemetry(self.telemetry)
             await camera_ready
@@ -178,6 +189,7 @@ class UavCore:
         worker = self.worker
         self._spawn(self.gate.watch(self._newest_frame_age, lambda: worker.busy_s,
                                     lambda: worker.consecutive_errors), "watchdog")
+        self._spawn(self._watch_precland(), "precland watchdog")
         self.state = CoreState.RUNNING
         self.events.emit("info", "platform", f"started: source {self.config.source}, processor "
                          f"{self.worker.processor.info.name} ({self.config.isolation}), fc {self.config.fc}")
@@ -299,6 +311,8 @@ class UavCore:
                 await side.stop()
 
     async def _cancel_tasks(self) -> None:
+        if self.landing_sender is not None:
+            await self.landing_sender.close()
         for task in self._tasks:
             task.cancel()
         await asyncio.gather(*self._tasks, return_exceptions=True)
@@ -406,8 +420,59 @@ class UavCore:
             self._processor_errors.report(result.error, exception, result.frame.seq)
             self.processor_error = exception
         self.gate.consider(result)
+        self._consider_landing_target(result)
         for listener in tuple(self._frame_listeners):
             listener(result)
+
+    def _consider_landing_target(self, result: ProcessedFrame) -> None:
+        """Send the frame's landing target while ``precland`` or autonomy is on, the frame fresh and the link alive;
+        ``result.landing`` says what was done (frames.csv)."""
+        target = result.landing_target
+        if target is None:
+            return
+        if target.frame_seq is not None and target.frame_seq != result.frame.seq:
+            result.landing = f"not sent: seen in frame {target.frame_seq}, not this one (its capture time is gone)"
+            return
+        capture_ns = result.frame.t_mono_ns
+        self.landing.seen(capture_ns)
+        why = self._landing_target_blocked(capture_ns)
+        result.landing = f"not sent: {why}" if why else "sent"
+        if why:
+            return
+        assert self.landing_sender is not None and self.camera is not None
+        self.landing_sender.send(landing_fix(target, capture_ns, self.camera, self.telemetry.at(capture_ns)[0]))
+
+    def _landing_target_blocked(self, capture_ns: int) -> str:
+        """Why a landing target seen in the frame captured at ``capture_ns`` is not sent now, or ""."""
+        if not (self.landing.engaged or self.gate.enabled):
+            return "precland and autonomy off"
+        if self.landing_sender is None or self.controller is None:
+            return "the flight controller takes no landing targets"
+        if self.camera is None:
+            return "no camera model"
+        age = self.controller.heartbeat_age_s()
+        if age >= self.config.safety.link_timeout:
+            return f"link lost (heartbeat {age:.1f} s old)"
+        frame_age_s = (self.gate.clock() - capture_ns) / 1e9
+        if frame_age_s >= self.config.safety.max_frame_age:
+            return f"frame {frame_age_s:.2f} s old"
+        if self.landing_sender.busy:
+            return "the previous one is still being sent"
+        return ""
+
+    async def _watch_precland(self) -> None:
+        """Turn ``precland`` off on the faults that stop autonomy, and once the vehicle landed and disarmed."""
+        worker = self.worker
+        assert worker is not None
+        while True:
+            await asyncio.sleep(WATCHDOG_PERIOD_S)
+            if not self.landing.engaged:
+                continue
+            fault = self.gate.fault(self._newest_frame_age(), worker.busy_s, worker.consecutive_errors)
+            if not fault and self.telemetry.snapshot().armed is False:
+                fault = "landed and disarmed"
+            if fault:
+                self._stop_precland(fault)
 
     def _newest_frame_age(self) -> float | None:
         frame = self.source.buffer.peek() if self.source is not None else None
@@ -505,6 +570,8 @@ class UavCore:
             autonomy_stop_reason=self.gate.stop_reason,
             precland=self.landing.engaged,
             precland_stop_reason=self.landing.stop_reason,
+            landing_targets_sent=self.landing_sender.sent if self.landing_sender is not None else 0,
+            landing_targets_failed=self.landing_sender.failed if self.landing_sender is not None else 0,
             last_vector=self.gate.last_vector,
             last_decision=self.gate.last_decision,
             last_verdict=self.gate.last_decision.verdict,

@@ -96,6 +96,10 @@ def format_status(status: CoreStatus, elapsed_s: float) -> str:
         line += f" vec {vx:+.2f},{vy:+.2f}m/s {vt:.1f}s"
     if status.last_decision:
         line += f" ({status.last_decision})"
+    if "getLandingTarget" in status.capabilities:
+        line += f" | precland {'ON' if status.precland else 'OFF'} {status.landing_targets_sent} sent"
+        if status.landing_targets_failed:
+            line += f" {status.landing_targets_failed} failed"
     return line
 
 

@@ -1,4 +1,5 @@
-"""The processor's landing targets on the core: when the pad was last seen, and whether ``precland`` is on.
+"""The processor's landing targets on the core: when the pad was last seen, whether ``precland`` is on, and the
+sending of each target to the autopilot (LANDING_TARGET, converted by the controller).
 
 ``precland`` is refused unless the processor reports a landing target (``getLandingTarget``) and saw the pad
 within :data:`FRESH_TARGET_S`: an autopilot told to land precisely without a target lands where it is
@@ -8,10 +9,23 @@ link turns it off again.
 
 from __future__ import annotations
 
+import asyncio
 import time
 from collections.abc import Callable
+from typing import TYPE_CHECKING
 
+from controllers.errors import ControllerError
+from controllers.landing_target import LandingTargetFix
 from uav_tui.errors import UavError
+
+if TYPE_CHECKING:
+    from controllers.base import LandingTargets, Telemetry
+    from processors.landing_target import LandingTarget
+    from sources.camera_model import CameraModel
+    from uav_tui.events import EventLog
+
+SEND_TIMEOUT_S = 1.0
+"""The longest one LANDING_TARGET send may take (a target older than a second is stale to ArduPilot)."""
 
 FRESH_TARGET_S = 1.0
 """``precland`` needs a landing target seen this recently (ArduPilot drops a target older than a second)."""
@@ -57,3 +71,64 @@ class LandingTargetFeed:
         if was:
             self.stop_reason = reason
         return was
+
+
+def landing_fix(target: LandingTarget, capture_ns: int, camera: CameraModel, at_capture: Telemetry) -> LandingTargetFix:
+    """The fix the controller converts for its autopilot: ``target`` with the camera's mounting and the vehicle's
+    attitude and position at the frame's capture (None where the telemetry had none)."""
+    t = at_capture
+    attitude = (t.roll_deg, t.pitch_deg, t.yaw_deg)
+    position = (t.north_m, t.east_m, t.down_m)
+    return LandingTargetFix(
+        capture_ns, target.direction, target.distance_m, camera.rotation_body_camera, camera.mount.offset_m,
+        None if None in attitude else attitude,  # type: ignore[arg-type]
+        None if None in position else position)  # type: ignore[arg-type]
+
+
+class LandingTargetSender:
+    """Sends one landing target at a time to the controller, counting what was sent and what failed.
+
+    A target that arrives while the previous one is still being sent is skipped (the newest frame wins, as for
+    frames). A failure is said once in the event log until a different one comes.
+
+    Args:
+        controller: the flight controller (a :class:`~controllers.base.LandingTargets`).
+        events: the core's event log.
+        timeout_s: the longest one send may take.
+    """
+
+    def __init__(self, controller: LandingTargets, events: EventLog, timeout_s: float = SEND_TIMEOUT_S) -> None:
+        self.controller = controller
+        self.events = events
+        self.timeout_s = timeout_s
+        self.sent = 0
+        self.failed = 0
+        self.last_error = ""
+        self._task: asyncio.Task[None] | None = None
+
+    @property
+    def busy(self) -> bool:
+        return self._task is not None and not self._task.done()
+
+    def send(self, fix: LandingTargetFix) -> None:
+        """Start sending ``fix`` (on the loop); the caller checked :attr:`busy`."""
+        self._task = asyncio.get_running_loop().create_task(self._send(fix), name="landing target")
+
+    async def _send(self, fix: LandingTargetFix) -> None:
+        try:
+            async with asyncio.timeout(self.timeout_s):
+                await self.controller.send_landing_target(fix)
+        except (ControllerError, TimeoutError) as exc:
+            self.failed += 1
+            error = str(exc) or f"no answer within {self.timeout_s:g} s"
+            if error != self.last_error:
+                self.events.emit("warning", "autonomy", f"landing target not sent: {error}")
+            self.last_error = error
+        else:
+            self.sent += 1
+            self.last_error = ""
+
+    async def close(self) -> None:
+        if self._task is not None:
+            self._task.cancel()
+            await asyncio.gather(self._task, return_exceptions=True)

@@ -84,6 +84,9 @@ class OperatedCore(Protocol):
     def landing(self) -> LandingTargetFeed: ...
 
     @property
+    def camera(self) -> CameraModel | None: ...
+
+    @property
     def worker(self) -> CommandedHost | None: ...
 
     async def open_source(self, uri: str) -> CameraSource: ...
@@ -139,6 +142,9 @@ class Operations:
             raise UavError(f"precland: processor {info.name} has no getLandingTarget() method, so there is no "
                            "landing target to land on (use a processor that reports one, e.g. precision_land; "
                            "or land)")
+        if self.core.camera is None:
+            raise UavError("precland: no camera model, so a landing target seen in the image can't be given in the "
+                           "vehicle's frame: set camera_calibration or camera_hfov and camera_mount ([camera])")
         landing = self.core.landing
         landing.check_fresh()
         landing.engage()  # the targets flow from the moment the autopilot starts landing

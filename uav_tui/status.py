@@ -78,6 +78,10 @@ class CoreStatus:
     """``precland`` is on: the processor's landing targets are sent to the autopilot."""
     precland_stop_reason: str = ""
     """Why ``precland`` was turned off last ("" while on or never on)."""
+    landing_targets_sent: int = 0
+    """LANDING_TARGET messages sent to the autopilot."""
+    landing_targets_failed: int = 0
+    """Landing targets the controller could not send (the reason is in the event log)."""
 
     def __post_init__(self) -> None:
         for f in fields(self):

@@ -4,7 +4,7 @@ MAVSDK controller on the built-in simulator."""
 
 from __future__ import annotations
 
-import time
+import asyncio
 from pathlib import Path
 
 import pytest
@@ -14,23 +14,27 @@ from controllers.sim.launcher import SimVehicle
 from tests.core.flight_helpers import flying_core, steering_config, wait_until
 from uav_tui.core import UavCore
 from uav_tui.errors import UavError
+from uav_tui.headless import format_status
 
 PAD_PROCESSOR = '''
 from processors.landing_target import LandingTarget
 
 
 class Pad:
-    """Test processor: after F1 it sees a pad straight along the optical axis, 3 m away; F2 loses it."""
+    """Test processor: after F1 it sees a pad straight along the optical axis, 3 m away; F2 loses it; F3 raises."""
 
     def __init__(self):
         self.tmMgr = None
         self.visible = False
+        self.failing = False
 
     def photo_processing(self, frame):
-        pass
+        if self.failing:
+            raise RuntimeError("simulated algorithm failure")
 
     def customize_processing(self, id):
-        self.visible = id == 1
+        self.visible = id in (1, 3)
+        self.failing = id == 3
 
     def getLandingTarget(self):
         return LandingTarget((0.0, 0.0, 1.0), 3.0) if self.visible else None
@@ -56,15 +60,22 @@ async def test_precland_needs_a_processor_that_reports_landing_targets(tmp_path:
 
 @pytest.mark.timeout(120)
 @pytest.mark.parametrize("sim_vehicle", [{"autopilot": "ardupilot"}], indirect=True)
-async def test_precland_checks_the_target_and_the_plnd_parameters_then_lands(tmp_path: Path,
-                                                                             sim_vehicle: SimVehicle) -> None:
-    async with flying_core(tmp_path, vehicle=sim_vehicle, processor=pad_processor(tmp_path)) as core:
+@pytest.mark.parametrize("isolation", ["process", "thread"])
+async def test_precland_checks_the_target_and_the_plnd_parameters_then_lands(tmp_path: Path, sim_vehicle: SimVehicle,
+                                                                             isolation: str) -> None:
+    async with flying_core(tmp_path, vehicle=sim_vehicle, processor=pad_processor(tmp_path), camera_hfov=60.0,
+                           camera_mount="down", isolation=isolation) as core:
         with pytest.raises(UavError, match="has not seen a landing target yet: bring the pad into view"):
             await core.execute("precland")
-        core.landing.seen(time.monotonic_ns() - 2_000_000_000)
-        with pytest.raises(UavError, match=r"no landing target in the last 1 s \(the last one 2\.\d s ago\)"):
+        await core.execute("f 1")
+        await wait_until(lambda: core.landing.last_seen_ns is not None, 5, "the pad seen")
+        await core.execute("f 2")  # lost
+        await asyncio.sleep(1.3)
+        with pytest.raises(UavError, match=r"no landing target in the last 1 s \(the last one 1\.\d s ago\)"):
             await core.execute("precland")
-        core.landing.seen(time.monotonic_ns())
+        await core.execute("f 1")
+        await asyncio.sleep(0.3)
+        assert core.status().landing_targets_sent == 0  # seen, not sent: precland is off
         with pytest.raises(PrecisionLandingError, match="PLND_ENABLED = 0, precision landing needs PLND_ENABLED = 1"):
             await core.execute("precland")
         status = core.status()
@@ -72,11 +83,21 @@ async def test_precland_checks_the_target_and_the_plnd_parameters_then_lands(tmp
         assert core.truth.latest()["mode"] == "GUIDED"  # type: ignore[attr-defined]
 
         await core.controller._param.set_param_int("PLND_ENABLED", 1)  # type: ignore[union-attr]
-        core.landing.seen(time.monotonic_ns())
         assert "PLND_ENABLED=1, PLND_TYPE=1" in await core.execute("precland")
         assert core.status().precland and core.mode_left_at_exit() == "LAND"
         await wait_until(lambda: core.truth.latest()["mode"] == "LAND", 5, "LAND")  # type: ignore[attr-defined]
+        await wait_until(lambda: core.status().landing_targets_sent >= 5, 5, "landing targets sent")
+        assert "| precland ON " in format_status(core.status(), 1.0)
 
         await core.execute("hold")
         status = core.status()
         assert not status.precland and status.precland_stop_reason == "pre-empted by operator command 'hold'"
+        await asyncio.sleep(0.3)  # a send already under way ends
+        sent = core.status().landing_targets_sent
+        await asyncio.sleep(0.5)
+        assert core.status().landing_targets_sent == sent, "landing targets still sent after hold"
+
+        assert "precision landing" in await core.execute("precland")
+        await core.execute("f 3")  # the processor keeps raising: precland stops as autonomy would
+        await wait_until(lambda: not core.status().precland, 5, "precland off")
+        assert "processor raised" in core.status().precland_stop_reason

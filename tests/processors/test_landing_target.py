@@ -7,6 +7,7 @@ import math
 import pytest
 
 from processors.landing_target import CAMERA_FRAME, LandingTarget
+from uav_tui.hosting.frame_call import call_frame
 
 
 def test_direction_is_normalised_and_angles_follow_it() -> None:
@@ -39,3 +40,27 @@ def test_a_wrong_distance_is_refused(distance: float) -> None:
 def test_only_the_camera_frame_is_accepted() -> None:
     with pytest.raises(ValueError, match="frame"):
         LandingTarget((0.0, 0.0, 1.0), frame="body")
+
+
+class _Returns:
+    """A processor whose getLandingTarget returns ``value``."""
+
+    def __init__(self, value: object) -> None:
+        self.value = value
+
+    def photo_processing(self, frame: object) -> None:
+        pass
+
+    def getLandingTarget(self) -> object:
+        return self.value
+
+
+def test_the_per_frame_call_reads_the_landing_target_and_refuses_anything_else() -> None:
+    target = LandingTarget((0.0, 0.0, 2.0), 4.0)
+    outcome = call_frame(_Returns(target), None, vector=False, landing=True)
+    assert outcome.landing_target == target and outcome.error is None
+    assert call_frame(_Returns(target), None, vector=False).landing_target is None  # not asked: not called
+    wrong = call_frame(_Returns((0.1, 0.2)), None, vector=False, landing=True)
+    assert wrong.landing_target is None
+    assert wrong.raised.startswith("TypeError: getLandingTarget() returned tuple (0.1, 0.2): return a "
+                                   "processors.LandingTarget or None")

@@ -233,6 +233,7 @@ class ChildRunner:
         self.instance.tmMgr = self.telemetry
         self.slots = Slots()
         self.has_vector = "getPreparedVector" in loaded.info.capabilities
+        self.has_landing = "getLandingTarget" in loaded.info.capabilities
         self._telemetry: tuple[bytes, dict[str, Any]] = (b"", {})
         """The last frame's pickled telemetry and its fields (telemetry changes slower than frames)."""
         self._messages = select.poll()
@@ -275,10 +276,11 @@ class ChildRunner:
             self._telemetry = (offer.telemetry, pickle.loads(offer.telemetry) if offer.telemetry else {})
         self.telemetry.begin(offer.seq, offer.t_mono_ns, offer.t_wall_ns, self._telemetry[1], offer.heartbeat_age_s)
         image = self.slots.view(offer.slot, offer.shape)
-        outcome = call_frame(self.instance, image, vector=self.has_vector, let_through=(MemoryError,))
+        outcome = call_frame(self.instance, image, vector=self.has_vector, landing=self.has_landing,
+                             let_through=(MemoryError,))
         del image
         return Result(offer.gen, outcome.t_start_ns, outcome.t_end_ns, outcome.t_vector_ns, _picklable(outcome.vector),
-                      outcome.box, outcome.error, self._take_saves(), self.slots.released())
+                      outcome.landing_target, outcome.box, outcome.error, self._take_saves(), self.slots.released())
 
     def _keep_save(self, image: np.ndarray, extra: dict[str, Any]) -> None:
         # A copy: the image as it is now, not with what photo_processing draws on it afterwards.

@@ -237,12 +237,15 @@ class ProcessorWorker:
         self.current = result
         self._begin(instance, frame)
         try:
-            outcome = call_frame(instance, frame.image, vector="getPreparedVector" in self.processor.info.capabilities)
+            capabilities = self.processor.info.capabilities
+            outcome = call_frame(instance, frame.image, vector="getPreparedVector" in capabilities,
+                                 landing="getLandingTarget" in capabilities)
         finally:
             self._busy_since_ns = None
             self.current = None
         result.t_start_ns, result.t_end_ns = outcome.t_start_ns, outcome.t_end_ns
         result.t_vector_ns, result.vector = outcome.t_vector_ns, outcome.vector
+        result.landing_target = outcome.landing_target
         result.box, result.error = outcome.box, outcome.error
         if outcome.error is None:
             self.consecutive_errors = 0

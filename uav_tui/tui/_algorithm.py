@@ -29,6 +29,11 @@ class AlgorithmPanel(StatusPanel):
         auto = Text(f"{status.vectors_executed} flown, {status.vectors_rejected} rejected")
         if status.autonomy_stop_reason and not status.autonomy:
             auto.append(" ").append(self.styled(f"stopped: {status.autonomy_stop_reason}", "bad"))
+        if "getLandingTarget" in status.capabilities:  # precland: its landing targets sent
+            auto.append("; precland ").append(self.styled("ON", "good") if status.precland else "off")
+            auto.append(f", {status.landing_targets_sent} targets sent")
+            if status.landing_targets_failed:
+                auto.append(" ").append(self.styled(f"{status.landing_targets_failed} failed", "bad"))
         if "getPreparedVector" not in status.capabilities:
             vector = Text("no getPreparedVector")
         else:
