@@ -31,8 +31,9 @@ sys.path.insert(0, str(ROOT))
 
 from sources.camera_model import CameraModel, Mount  # noqa: E402
 from tests.core.flight_helpers import flying_core  # noqa: E402
-from tests.core.geo_helpers import car_views  # noqa: E402
-from uav_tui import dataset, geolocate  # noqa: E402
+from tests.flight.geo_helpers import car_views  # noqa: E402
+from uav_tui.flight import geolocate  # noqa: E402
+from uav_tui.recorded import dataset  # noqa: E402
 
 CASES = {"down_level": (90.0, 0.0), "down_rolling_pitching": (90.0, 15.0), "oblique60_rolling_pitching": (60.0, 15.0)}
 """Camera tilt below the nose and the +- range of roll and pitch."""
@@ -66,7 +67,7 @@ async def flight() -> dict[str, Any]:
     with tempfile.TemporaryDirectory() as folder:
         async with flying_core(Path(folder), altitude=20.0, source="sim:?fps=15&targets=1&target_speed=0",
                                record=True, runs_dir=folder, max_speed=2.0,
-                               processor="tests.core.recorder_processors:RedCar") as core:
+                               processor="tests.recording.recorder_processors:RedCar") as core:
             car_n, car_e, _ = core.source.targets[0].position(0.0)
             home = core.controller.sim.home
             for command in ("vector 0 2 3", "vector 0 -2 3"):

@@ -14,7 +14,7 @@ ROOT = Path(__file__).resolve().parents[1]
 SERIAL = frozenset({
     "tests/core/test_safety.py", "tests/core/test_autopilot_failsafe.py", "tests/core/test_link_loss_exit.py",
     "tests/core/test_sim_camera_mavlink.py", "tests/processors/test_closed_loop.py", "tests/tui/test_tmux.py",
-    "tests/core/test_opencv_pool.py",
+    "tests/hosting/test_opencv_pool.py",
 })
 """Modules marked ``serial``: their tests hold real time to bounds (setpoints at 20 Hz, a failsafe within
 max_t, the camera's pose at 30 FPS, a control loop closing, idle threads' CPU time against spinning ones') or drive

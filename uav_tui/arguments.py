@@ -13,7 +13,7 @@ import sys
 from collections.abc import Sequence
 from typing import Any, NoReturn
 
-from uav_tui.text import safe
+from uav_tui.output.text import safe
 
 
 class ArgumentParser(argparse.ArgumentParser):

@@ -24,7 +24,7 @@ from sources.calibration_boards import Board, CharucoBoard, Chessboard, View
 from uav_tui.arguments import ArgumentParser
 from uav_tui.config import find_config_file, load_config
 from uav_tui.errors import KNOWN_ERRORS, ConfigError, error_line
-from uav_tui.text import safe
+from uav_tui.output.text import safe
 
 HINT_EVERY_S = 5.0
 """How often the advice is repeated while no board is found."""

@@ -15,10 +15,10 @@ import sys
 from pathlib import Path
 
 from uav_tui.arguments import ArgumentParser
-from uav_tui.commands import help_text
 from uav_tui.config import add_config_flags, find_config_file, load_config, overrides_from_args
 from uav_tui.errors import CONFIG_ERRORS, error_line
-from uav_tui.text import SafeFormatter, safe
+from uav_tui.flight.commands import help_text
+from uav_tui.output.text import SafeFormatter, safe
 
 TOOLS = ("sim", "runs", "report", "export", "replay", "eval", "calibrate")
 """Sub-commands; anything else on the command line configures a run."""
@@ -93,13 +93,13 @@ def _run_tool(name: str, argv: list[str]) -> int:
 
         return replay_main(argv)
     if name == "eval":
-        from uav_tui import eval_cli
+        from uav_tui.evaluation import cli as eval_cli
 
         return eval_cli.main(argv)
     if name == "calibrate":
         from uav_tui import calibrate_cli
 
         return calibrate_cli.main(argv)
-    from uav_tui import runs_cli
+    from uav_tui.recorded import runs_cli
 
     return runs_cli.main(name, argv)

@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Any
 from controllers.sim.geo import Home, parse_wind
 from processors.frame_telemetry import DEFAULT_SAVE_MAX_HZ
 from uav_tui.errors import ConfigError
-from uav_tui.text import describe
+from uav_tui.output.text import describe
 from uav_tui.token_strength import GENERATE_TOKEN, MIN_TOKEN_BITS, token_problem
 
 if TYPE_CHECKING:

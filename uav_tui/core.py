@@ -31,14 +31,16 @@ from sources import CameraSource, open_source, warm_up_source
 from sources.base import KnowsCameraModel
 from sources.camera_model import CameraModel
 from sources.pose import PoseTrack
-from uav_tui import pose_feed
-from uav_tui.autonomy import WATCHDOG_PERIOD_S, AutonomyGate, own_modes
-from uav_tui.clock_check import ClockCheck
-from uav_tui.commands import VEHICLE_COMMANDS, Command, parse
 from uav_tui.config import Config
 from uav_tui.errors import KNOWN_ERRORS, NoVehicle, SourceError, UavError
 from uav_tui.events import EventLog
-from uav_tui.geolocate import locate_row
+from uav_tui.flight import pose_feed
+from uav_tui.flight.autonomy import WATCHDOG_PERIOD_S, AutonomyGate, own_modes
+from uav_tui.flight.clock_check import ClockCheck
+from uav_tui.flight.commands import VEHICLE_COMMANDS, Command, parse
+from uav_tui.flight.geolocate import locate_row
+from uav_tui.flight.link import LinkWatch
+from uav_tui.flight.telemetry import TelemetryManager
 from uav_tui.hosting.exception_reports import ProcessorErrors
 from uav_tui.hosting.host import ProcessedFrame, ProcessorHost
 from uav_tui.hosting.malloc_tuning import tune_this_process
@@ -46,14 +48,12 @@ from uav_tui.hosting.process_host import ProcessWorker
 from uav_tui.hosting.supervisor import LOAD_TIMEOUT_S
 from uav_tui.hosting.thread_host import ProcessorWorker, load_in_thread
 from uav_tui.landing_targets import LandingTargetFeed, LandingTargetSender, landing_fix
-from uav_tui.link import LinkWatch
 from uav_tui.operations import Operations
+from uav_tui.output.text import last_line, shorten
 from uav_tui.recording import Recorder, describe
 from uav_tui.replay.gate import ReplayGate, stage_clock
 from uav_tui.replay.operator import CommandReplay, recorded_commands
 from uav_tui.status import CoreState, CoreStatus
-from uav_tui.telemetry import TelemetryManager
-from uav_tui.text import last_line, shorten
 
 if TYPE_CHECKING:  # aiortc and pymavlink are imported only when the side channels are switched on
     from uav_tui.web import WebServer

@@ -11,7 +11,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Literal
 
-from uav_tui.text import safe, shorten
+from uav_tui.output.text import safe, shorten
 
 logger = logging.getLogger(__name__)
 

@@ -14,17 +14,17 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any, TextIO
 
-from uav_tui.commands import Command, check_limits, parse
 from uav_tui.config import Config, SafetyConfig
 from uav_tui.core import UavCore
 from uav_tui.errors import KNOWN_ERRORS, CommandError, error_line
 from uav_tui.events import Event
-from uav_tui.geolocate import describe as describe_target
-from uav_tui.line_budget import BudgetedText
-from uav_tui.native_stderr import native_stderr_as_events
+from uav_tui.flight.commands import Command, check_limits, parse
+from uav_tui.flight.geolocate import describe as describe_target
+from uav_tui.output.line_budget import BudgetedText
+from uav_tui.output.native_stderr import native_stderr_as_events
+from uav_tui.output.terminal_output import TerminalOutput
+from uav_tui.output.text import escape, safe, shorten
 from uav_tui.status import CoreStatus, saves_dropped_text
-from uav_tui.terminal_output import TerminalOutput
-from uav_tui.text import escape, safe, shorten
 
 OUTPUT_BACKLOG_CHARS = 64 * 1024
 """Lines not yet taken by a stalled terminal beyond which new ones are dropped (half a minute of ``--json``

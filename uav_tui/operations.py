@@ -10,12 +10,12 @@ import asyncio
 from typing import TYPE_CHECKING, Any, NamedTuple, Protocol
 
 from controllers.base import PrecisionLanding
-from uav_tui.autonomy import check_vector
-from uav_tui.commands import VEHICLE_COMMANDS, Command, check_limits
 from uav_tui.errors import CommandError, ProcessorLoadError, SourceError, UavError
+from uav_tui.flight.autonomy import check_vector
+from uav_tui.flight.commands import VEHICLE_COMMANDS, Command, check_limits
 from uav_tui.hosting.child_link import ProcessorRaised
 from uav_tui.hosting.operator_calls import ProcessorCalls
-from uav_tui.text import describe, shorten
+from uav_tui.output.text import describe, shorten
 
 if TYPE_CHECKING:
     from controllers.base import FlightController
@@ -23,8 +23,8 @@ if TYPE_CHECKING:
     from processors.base import ProcessorInfo
     from sources import CameraSource
     from sources.camera_model import CameraModel
-    from uav_tui.autonomy import AutonomyGate
     from uav_tui.config import Config
+    from uav_tui.flight.autonomy import AutonomyGate
     from uav_tui.hosting.host import Answer
     from uav_tui.landing_targets import LandingTargetFeed
     from uav_tui.recording import Recorder

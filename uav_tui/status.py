@@ -7,11 +7,11 @@ from dataclasses import asdict, dataclass, field, fields, replace
 from typing import Any
 
 from controllers.base import Telemetry
-from uav_tui.autonomy import Verdict
-from uav_tui.geolocate import GeoFix, describe
+from uav_tui.flight.autonomy import Verdict
+from uav_tui.flight.geolocate import GeoFix, describe
 from uav_tui.hosting.host import ProcessorState
+from uav_tui.output.text import safe
 from uav_tui.stats import PipelineStats
-from uav_tui.text import safe
 
 
 class CoreState(enum.Enum):

@@ -14,7 +14,7 @@ from controllers.sim import px4_modes
 from controllers.sim.guidance import Mode
 from controllers.sim.link import mavlink
 from tests.core.flight_helpers import wait_until
-from uav_tui.telemetry import TelemetryManager
+from uav_tui.flight.telemetry import TelemetryManager
 
 LOOPBACK_HEX = "0100007F"
 """127.0.0.1 as /proc/net/udp writes it."""

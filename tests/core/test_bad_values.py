@@ -8,10 +8,10 @@ from pathlib import Path
 import pytest
 
 from tests.core.flight_helpers import wait_until
-from uav_tui import dataset
 from uav_tui.config import load_config
 from uav_tui.core import UavCore
 from uav_tui.events import MAX_MESSAGE_CHARS
+from uav_tui.recorded import dataset
 
 BAD_PROCESSOR = '''
 HUGE = tuple(range(10**6))

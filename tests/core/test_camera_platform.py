@@ -12,9 +12,9 @@ import pytest
 from sources.camera_model import CameraModelError
 from tests.core.flight_helpers import wait_until
 from tests.sources.test_camera_model import SAMPLE_YAML
-from uav_tui import dataset
 from uav_tui.config import Config, with_overrides
 from uav_tui.core import UavCore
+from uav_tui.recorded import dataset
 from uav_tui.replay.runner import ReplayJob, replay_run
 
 PROCESSOR = "tests.sources.camera_processor:CameraSeen"

@@ -15,18 +15,18 @@ import pytest
 
 from controllers.base import Telemetry
 from sources.buffer import Frame
-from uav_tui.autonomy import AutonomyGate
 from uav_tui.cli import build_parser
 from uav_tui.config import RecordingConfig, SafetyConfig
 from uav_tui.errors import CommandError
 from uav_tui.events import EventLog
+from uav_tui.flight.autonomy import AutonomyGate
+from uav_tui.flight.telemetry import TelemetryManager
 from uav_tui.headless import format_status, load_script
 from uav_tui.hosting.host import ProcessedFrame
+from uav_tui.recorded.runs_cli import main as tools_main
 from uav_tui.recording import Recorder
-from uav_tui.runs_cli import main as tools_main
 from uav_tui.stats import PipelineStats
 from uav_tui.status import CoreStatus
-from uav_tui.telemetry import TelemetryManager
 
 ROOT = Path(__file__).resolve().parents[2]
 

@@ -15,7 +15,7 @@ import pytest
 
 from controllers.sim.launcher import SimVehicle
 from tests.core.flight_helpers import flying_core, wait_until
-from uav_tui import dataset
+from uav_tui.recorded import dataset
 
 PAD_NE = (3.0, 0.0)
 """The marker's centre, metres north and east of home (the simulator's truth)."""

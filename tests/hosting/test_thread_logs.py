@@ -9,7 +9,7 @@ from pathlib import Path
 from tests.core.flight_helpers import wait_until
 from uav_tui.config import load_config
 from uav_tui.core import UavCore
-from uav_tui.line_budget import BURST_LINES
+from uav_tui.output.line_budget import BURST_LINES
 
 CHATTY = '''
 import logging

@@ -24,7 +24,7 @@ def make_config(tmp_path: Path) -> Callable[..., Config]:
     """``make_config(fc="sim", ...)``: synthetic camera, the recording processor, nothing written to the repo."""
     def make(**overrides: Any) -> Config:
         # isolation "thread": these tests read what the processor object received (process isolation has
-        # its own tests in tests/core/test_isolation.py).
+        # its own tests in tests/hosting/test_isolation.py).
         values = {"source": "synthetic:?fps=30", "processor": RECORDING, "fc": "none", "record": False,
                   "runs_dir": str(tmp_path / "runs"), "isolation": "thread", **overrides}
         return load_config(None, values)

@@ -5,10 +5,10 @@ from __future__ import annotations
 import shutil
 from pathlib import Path
 
-from uav_tui.commands import parse
 from uav_tui.core import CoreState
 from uav_tui.errors import CommandError
-from uav_tui.native_stderr import ORIGIN as NATIVE_ORIGIN
+from uav_tui.flight.commands import parse
+from uav_tui.output.native_stderr import ORIGIN as NATIVE_ORIGIN
 from uav_tui.tui.app import KEYS
 from uav_tui.tui.screens import ConfirmScreen
 

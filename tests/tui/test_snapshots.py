@@ -14,9 +14,9 @@ import pytest
 
 from controllers.base import Telemetry
 from sources.synthetic import SyntheticScene
-from uav_tui.autonomy import Verdict
 from uav_tui.core import UavCore
 from uav_tui.events import Event
+from uav_tui.flight.autonomy import Verdict
 from uav_tui.hosting.host import ProcessorState
 from uav_tui.stats import PipelineStats
 from uav_tui.status import CoreStatus

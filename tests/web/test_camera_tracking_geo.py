@@ -11,7 +11,7 @@ from pymavlink.dialects.v20 import common as mavlink
 from tests.core.flight_helpers import flying_core
 from tests.web.conftest import free_port
 from tests.web.test_camera_tracking import GroundStation
-from uav_tui.geolocate import RANGEFINDER_SIGMA_M
+from uav_tui.flight.geolocate import RANGEFINDER_SIGMA_M
 
 ALTITUDE_M = 20.0
 
@@ -20,7 +20,7 @@ async def test_the_ground_station_hears_where_the_car_is(tmp_path) -> None:
     port = free_port(socket.SOCK_DGRAM)
     source = "sim:?fps=15&targets=1&target_speed=0"  # a parked car 6 m north of home
     async with flying_core(tmp_path, altitude=ALTITUDE_M, source=source, camera_mavlink=f"udpin:127.0.0.1:{port}",
-                           processor="tests.core.recorder_processors:RedCar") as core:
+                           processor="tests.recording.recorder_processors:RedCar") as core:
         station = GroundStation(port)
         try:
             car_n, car_e, _ = core.source.targets[0].position(0.0)

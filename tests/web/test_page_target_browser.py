@@ -36,8 +36,8 @@ async def target_line(url: str, wanted: str) -> tuple[str, str]:
 async def test_the_page_shows_where_the_car_is_from_20_m(tmp_path: Path) -> None:
     web = {"web": True, "web_host": "127.0.0.1", "web_port": free_port(), "web_token": TOKEN}
     source = "sim:?fps=15&targets=1&target_speed=0"  # a parked car 6 m north of home
-    async with flying_core(tmp_path, altitude=20.0, source=source, processor="tests.core.recorder_processors:RedCar",
-                           **web) as core:
+    async with flying_core(tmp_path, altitude=20.0, source=source,
+                           processor="tests.recording.recorder_processors:RedCar", **web) as core:
         text, kind = await target_line(core.web.url, " m at ")
         car_n, car_e, _ = core.source.targets[0].position(0.0)
         home = core.controller.sim.home

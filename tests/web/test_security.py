@@ -18,10 +18,10 @@ from yarl import URL
 
 from tests.sources.stream_servers import RtspTestServer
 from tests.web.conftest import TOKEN, free_port, make_core, processor_of
-from uav_tui.commands import parse
 from uav_tui.config import load_config
 from uav_tui.core import UavCore
 from uav_tui.errors import ConfigError
+from uav_tui.flight.commands import parse
 from uav_tui.headless import HeadlessRunner
 from uav_tui.web.throttle import AuthThrottle
 

@@ -3,7 +3,7 @@
 * :mod:`.sequences` finds and reads annotated sequences (``video.mp4`` + ``gt.txt``, or OTB/UAV123 images);
 * :mod:`.trackers` names what is scored (any processor with ``catch_cmd`` and ``box``, or ``cv:NAME``);
 * :mod:`.metrics` turns boxes into success / precision curves;
-* :mod:`.runner` runs one sequence x tracker job (one-pass protocol) and all jobs through :mod:`uav_tui.jobs`;
+* :mod:`.runner` runs one sequence x tracker job (one-pass protocol) and all jobs through :mod:`.jobs`;
 * :mod:`.report` prints the table and writes the JSON and the plots;
 * :mod:`.journal` appends each finished job to ``jobs.jsonl`` and reads them back for ``--resume``.
 """

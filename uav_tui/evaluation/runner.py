@@ -1,4 +1,4 @@
-"""The one-pass protocol for one sequence x tracker job, and all jobs through :func:`uav_tui.jobs.run_jobs`.
+"""The one-pass protocol for one sequence x tracker job, and all jobs through :func:`uav_tui.evaluation.jobs.run_jobs`.
 
 A job starts the processor with ``catch_cmd`` on frame 1's gt box (whole frame pixels), then calls
 ``photo_processing`` on every frame and reads its ``box`` as the platform does
@@ -30,11 +30,11 @@ import numpy as np
 from controllers.base import TELEMETRY_FIELDS
 from processors.detection.onnx_runtime import THREADS_ENV
 from processors.frame_telemetry import FrameTelemetry
+from uav_tui.evaluation.jobs import Progress, run_jobs
 from uav_tui.evaluation.metrics import Scores, score_sequence
 from uav_tui.evaluation.sequences import Sequence
 from uav_tui.evaluation.trackers import TrackerSpec
 from uav_tui.hosting.frame_call import call_frame, describe
-from uav_tui.jobs import Progress, run_jobs
 from uav_tui.recording.rows import extra_json
 
 NO_VEHICLE = {name: None for name in TELEMETRY_FIELDS if name != "heartbeat_age_s"}

@@ -17,6 +17,6 @@
 - :mod:`~uav_tui.hosting.malloc_tuning`, :mod:`~uav_tui.hosting.opencv_pool`: allocator and OpenCV thread pool
   settings for processes that handle images every frame.
 
-The child imports only what it needs from here (``tests/core/test_isolation.py`` lists it): importing this package
+The child imports only what it needs from here (``tests/hosting/test_isolation.py`` lists it): importing this package
 loads nothing else.
 """

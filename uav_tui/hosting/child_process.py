@@ -32,7 +32,7 @@ from uav_tui.hosting.child import LOG_LEVEL_ENV, MEMORY_EXIT_CODE, parse_log_lin
 from uav_tui.hosting.frame_mailbox import FrameMailbox
 from uav_tui.hosting.frame_ring import Slot, ensure_resource_tracker, job_signals_blocked
 from uav_tui.hosting.pipe import Inbox
-from uav_tui.text import safe, shorten
+from uav_tui.output.text import safe, shorten
 
 TAIL_LINES = 30
 """Lines of the child's output kept for the crash report (a faulthandler dump fits)."""
@@ -160,7 +160,7 @@ class ChildProcess:
 
 def spawn(ready: asyncio.Future[ProcessorInfo], output: Callable[[list[bytes]], None]) -> ChildProcess:
     """Start ``python -m uav_tui.hosting.child`` with a pipe and a frame mailbox; its output is read on a thread and its
-    lines given to ``output`` (a :class:`~uav_tui.line_budget.LineBudget`'s ``lines``: see :func:`say_output`).
+    lines given to ``output`` (a :class:`~uav_tui.output.line_budget.LineBudget`'s ``lines``: see :func:`say_output`).
 
     The child has a process group of its own: a terminal's Ctrl-C, Ctrl-Z and hang-up (sent to every process of
     the job) reach only the platform, which decides what happens to the processor. Not a session of its own: the

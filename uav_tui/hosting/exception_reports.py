@@ -4,7 +4,7 @@ A processor that raises on every frame must not print a traceback a frame (90 a 
 event log and the terminal): the first exception of a kind (the method, the exception's type and the
 line that raised it) is said with its traceback; the same kind again is counted, and the count said
 every :data:`SUMMARY_S` (``photo_processing raised ValueError 57 more times in 5 s``), as printed
-lines are (:mod:`uav_tui.line_budget`).
+lines are (:mod:`uav_tui.output.line_budget`).
 """
 
 from __future__ import annotations

@@ -23,11 +23,11 @@ import numpy as np
 from controllers.base import TELEMETRY_FIELDS
 from sources.buffer import Frame, FrameBuffer
 from uav_tui.events import EventLog
+from uav_tui.flight.telemetry import TelemetryManager
 from uav_tui.hosting.child_process import ChildProcess, Offered
 from uav_tui.hosting.frame_mailbox import TELEMETRY_BYTES, MailboxGone, Offer
 from uav_tui.hosting.frame_ring import FrameRing
 from uav_tui.hosting.wire import Camera, Forget, Result, ToChild
-from uav_tui.telemetry import TelemetryManager
 
 if TYPE_CHECKING:
     from sources.camera_model import CameraModel

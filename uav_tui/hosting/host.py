@@ -16,8 +16,8 @@ if TYPE_CHECKING:
     from processors.landing_target import LandingTarget
     from sources.buffer import FrameBuffer
     from sources.camera_model import CameraModel
+    from uav_tui.flight.telemetry import TelemetryManager
     from uav_tui.stats import PipelineStats, RollingStats
-    from uav_tui.telemetry import TelemetryManager
 
 
 @dataclass(slots=True)

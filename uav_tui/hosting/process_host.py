@@ -21,6 +21,7 @@ from processors.frame_telemetry import DEFAULT_SAVE_MAX_HZ
 from sources.buffer import FrameBuffer
 from uav_tui.errors import UavError
 from uav_tui.events import EventLog
+from uav_tui.flight.telemetry import TelemetryManager
 from uav_tui.hosting.child_link import ChildLink
 from uav_tui.hosting.child_process import ChildProcess, rss_mb
 from uav_tui.hosting.frame_feeder import FrameFeeder
@@ -28,7 +29,6 @@ from uav_tui.hosting.host import Answer, ProcessedFrame, ProcessorState
 from uav_tui.hosting.supervisor import ChildSupervisor
 from uav_tui.hosting.wire import Result, Save
 from uav_tui.stats import PipelineStats, RollingStats
-from uav_tui.telemetry import TelemetryManager
 
 if TYPE_CHECKING:
     from sources.camera_model import CameraModel

@@ -29,7 +29,7 @@ from uav_tui.hosting.child_link import ChildLink
 from uav_tui.hosting.child_process import ChildProcess, describe_exit, say_output, spawn
 from uav_tui.hosting.frame_feeder import FrameFeeder
 from uav_tui.hosting.wire import Load
-from uav_tui.line_budget import LineBudget
+from uav_tui.output.line_budget import LineBudget
 
 logger = logging.getLogger(__name__)
 

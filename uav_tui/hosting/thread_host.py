@@ -21,11 +21,11 @@ from processors.base import ProcessorInfo
 from processors.frame_telemetry import DEFAULT_SAVE_MAX_HZ, FrameTelemetry
 from sources.buffer import Frame, FrameBuffer
 from uav_tui.events import EventLog
+from uav_tui.flight.telemetry import TelemetryManager
 from uav_tui.hosting.frame_call import call_frame
 from uav_tui.hosting.host import Answer, ProcessedFrame, ProcessorState
 from uav_tui.hosting.thread_logs import ThreadLogBudget
 from uav_tui.stats import PipelineStats, RollingStats
-from uav_tui.telemetry import TelemetryManager
 
 if TYPE_CHECKING:
     from sources.camera_model import CameraModel

@@ -1,7 +1,7 @@
 """The log records a processor makes on the thread host's thread, within a line budget.
 
 In its own process a processor's log records come to the platform as lines of its output, which pass a
-:class:`~uav_tui.line_budget.LineBudget` with its prints. On a thread of the platform they went straight to the
+:class:`~uav_tui.output.line_budget.LineBudget` with its prints. On a thread of the platform they went straight to the
 platform's log handlers, a flood of them with them. :class:`ThreadLogBudget` is a filter on those handlers: the
 records made on one thread pass within a budget of their own (the burst, then one a second), and the count of
 those left out is said; every other thread's records pass untouched.
@@ -13,7 +13,7 @@ import logging
 import threading
 from collections.abc import Callable
 
-from uav_tui.line_budget import LineBudget
+from uav_tui.output.line_budget import LineBudget
 
 _VERDICT = "_uav_tui_budget_verdict"
 """Set on a record once it was judged, so that each of several handlers does not count it again."""

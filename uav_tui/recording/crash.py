@@ -16,7 +16,7 @@ import re
 import sys
 from pathlib import Path
 
-from uav_tui.text import safe, shorten
+from uav_tui.output.text import safe, shorten
 
 CRASH_FILE = "crash.txt"
 SUMMARY_CHARS = 300

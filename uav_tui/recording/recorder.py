@@ -59,7 +59,7 @@ from uav_tui.recording.writer import MB, DiskWriter, Rename
 if TYPE_CHECKING:
     from sources import CameraSource
     from sources.camera_model import CameraModel
-    from uav_tui.telemetry import TelemetryManager
+    from uav_tui.flight.telemetry import TelemetryManager
 
 logger = logging.getLogger(__name__)
 

@@ -14,11 +14,11 @@ import numpy as np
 
 from controllers.base import TELEMETRY_FIELDS, Telemetry
 from uav_tui.events import Event
-from uav_tui.geolocate import GeoFix, locate_row
+from uav_tui.flight.geolocate import GeoFix, locate_row
 from uav_tui.hosting.host import ProcessedFrame
+from uav_tui.output.text import last_line, shorten
 from uav_tui.recording.interpolate import FIELDS, TelemetryHistory
 from uav_tui.recording.writer import Row
-from uav_tui.text import last_line, shorten
 
 if TYPE_CHECKING:
     from sources.camera_model import CameraModel
@@ -44,7 +44,7 @@ extras as JSON, and how the telemetry columns were obtained (``interpolated``, `
 
 GEO_COLUMNS: tuple[str, ...] = ("target_lat_deg", "target_lon_deg", "target_alt_m", "target_uncertainty_m",
                                  "target_status", "target_height_from")
-"""frames.csv, last: where the centre of ``box`` is on the ground (:mod:`uav_tui.geolocate`, from the camera
+"""frames.csv, last: where the centre of ``box`` is on the ground (:mod:`uav_tui.flight.geolocate`, from the camera
 model and the telemetry at the capture): latitude, longitude, ground altitude AMSL, 1-sigma uncertainty in
 metres, the status (``ok``; empty without a box; else why there is no position), and where the height above
 the ground came from (``rangefinder`` or ``home``: the height above home)."""

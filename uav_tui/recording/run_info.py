@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol
 
 from controllers.base import RecordedVehicle
-from uav_tui.text import redact
+from uav_tui.output.text import redact
 
 if TYPE_CHECKING:
     from controllers.base import FlightController

@@ -34,7 +34,7 @@ from typing import Any, Protocol
 import cv2
 import numpy as np
 
-from uav_tui.text import safe
+from uav_tui.output.text import safe
 
 logger = logging.getLogger(__name__)
 

@@ -10,10 +10,10 @@ from controllers.replay_timeline import parse_speed
 from uav_tui.arguments import ArgumentParser
 from uav_tui.config import find_config_file, load_config, overrides_from_args
 from uav_tui.errors import KNOWN_ERRORS
-from uav_tui.jobs import run_jobs
+from uav_tui.evaluation.jobs import run_jobs
+from uav_tui.output.text import safe
+from uav_tui.recorded.runs_cli import find_run
 from uav_tui.replay.runner import ReplayJob, processor_text, replay_config, replay_run, summary_line
-from uav_tui.runs_cli import find_run
-from uav_tui.text import safe
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -11,11 +11,11 @@ from typing import Protocol
 
 from controllers.base import FlightController, RecordedVehicle
 from controllers.replay_timeline import ReplayTimeline
-from uav_tui.autonomy import AutonomyGate
 from uav_tui.config import SafetyConfig
 from uav_tui.events import EventLog
+from uav_tui.flight.autonomy import AutonomyGate
+from uav_tui.flight.telemetry import TelemetryManager
 from uav_tui.hosting.host import ProcessedFrame
-from uav_tui.telemetry import TelemetryManager
 
 
 class ReplayedController(FlightController, RecordedVehicle, Protocol):

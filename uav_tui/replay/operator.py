@@ -11,8 +11,8 @@ import math
 from pathlib import Path
 from typing import Protocol
 
-from uav_tui.commands import Command, parse
 from uav_tui.errors import KNOWN_ERRORS
+from uav_tui.flight.commands import Command, parse
 from uav_tui.status import CoreState
 
 logger = logging.getLogger(__name__)

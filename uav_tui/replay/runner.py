@@ -49,7 +49,7 @@ class ReplayResult:
 
 
 def replay_run(job: ReplayJob) -> ReplayResult:
-    """Replay ``job.run`` (blocks; a module-level function so :func:`uav_tui.jobs.run_jobs` can ship it)."""
+    """Replay ``job.run`` (blocks; a module-level function so :func:`uav_tui.evaluation.jobs.run_jobs` can ship it)."""
     return asyncio.run(replay(job))
 
 

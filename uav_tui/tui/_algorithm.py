@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from rich.text import Text
 
-from uav_tui.autonomy import Verdict
-from uav_tui.geolocate import describe as describe_target
+from uav_tui.flight.autonomy import Verdict
+from uav_tui.flight.geolocate import describe as describe_target
 from uav_tui.status import CoreStatus
 from uav_tui.tui._panel import StatusPanel
 

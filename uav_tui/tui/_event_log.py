@@ -12,8 +12,8 @@ from textual import events
 from textual.widgets import RichLog
 
 from uav_tui.events import Event
-from uav_tui.line_budget import LineBudget, LineSplitter
-from uav_tui.text import safe, shorten
+from uav_tui.output.line_budget import LineBudget, LineSplitter
+from uav_tui.output.text import safe, shorten
 
 PRINT_CHARS = 500
 """A longer printed line is cut."""

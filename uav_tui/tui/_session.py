@@ -19,10 +19,10 @@ import threading
 from collections.abc import Iterator
 from typing import Any
 
-from uav_tui.commands import Command
 from uav_tui.config import Config
 from uav_tui.core import CoreState, UavCore
 from uav_tui.events import EventLog, Level
+from uav_tui.flight.commands import Command
 from uav_tui.headless import (
     EXIT_ABANDONED,
     EXIT_RECORDING_INCOMPLETE,
@@ -31,7 +31,7 @@ from uav_tui.headless import (
     run_script,
     saved_run_note,
 )
-from uav_tui.native_stderr import native_stderr_as_events
+from uav_tui.output.native_stderr import native_stderr_as_events
 from uav_tui.tui._terminal import CHECK_PERIOD_S, TerminalWatch, driver_for
 from uav_tui.tui.app import LOG_ORIGIN, UavApp
 

@@ -9,7 +9,7 @@ with it the vehicle's hold). So:
 - :class:`TerminalWatch` notices the loss three ways (SIGHUP, a failed write, EIO on a periodic
   ``tcgetattr``), points fds 0, 1, 2 at /dev/null at once, and reports it on the loop, once;
 - :func:`driver_for` gives Textual a driver whose writes never raise and never wait
-  (:class:`~uav_tui.terminal_output.TerminalOutput`: Textual's own writer waits in ``write`` once 30
+  (:class:`~uav_tui.output.terminal_output.TerminalOutput`: Textual's own writer waits in ``write`` once 30
   writes are queued, so a stalled terminal blocked the loop within seconds).
 """
 
@@ -28,8 +28,8 @@ from typing import Any
 
 from textual.drivers.linux_driver import LinuxDriver
 
-from uav_tui.native_stderr import fileno_of
-from uav_tui.terminal_output import TerminalOutput
+from uav_tui.output.native_stderr import fileno_of
+from uav_tui.output.terminal_output import TerminalOutput
 
 logger = logging.getLogger(__name__)
 
@@ -91,7 +91,7 @@ class TerminalWatch:
 
 
 def driver_for(watch: TerminalWatch) -> type[LinuxDriver]:
-    """A LinuxDriver whose screen writes never wait (:class:`~uav_tui.terminal_output.TerminalOutput`) and
+    """A LinuxDriver whose screen writes never wait (:class:`~uav_tui.output.terminal_output.TerminalOutput`) and
     report a lost terminal to ``watch`` instead of raising."""
 
     class HangupSafeDriver(LinuxDriver):
@@ -124,7 +124,7 @@ def _detach_from_terminal() -> None:
     """Point stdin, stdout and stderr at /dev/null: reads and writes on the dead terminal would fail.
 
     Stderr is whichever fd ``sys.__stderr__`` writes on: while native output is captured
-    (:mod:`uav_tui.native_stderr`), fd 2 is its pipe and stays so.
+    (:mod:`uav_tui.output.native_stderr`), fd 2 is its pipe and stays so.
     """
     try:
         null = os.open(os.devnull, os.O_RDWR)

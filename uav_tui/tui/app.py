@@ -1,4 +1,4 @@
-"""``UavApp``: the operator dashboard. Every key sends a command of :mod:`uav_tui.commands` to the core."""
+"""``UavApp``: the operator dashboard. Every key sends a command of :mod:`uav_tui.flight.commands` to the core."""
 
 from __future__ import annotations
 
@@ -14,14 +14,14 @@ from textual.containers import Horizontal, Vertical
 from textual.css.query import NoMatches
 from textual.driver import Driver
 
-from uav_tui.commands import VEHICLE_COMMANDS, parse
 from uav_tui.core import CoreState, UavCore
 from uav_tui.errors import KNOWN_ERRORS, CommandError, error_line
 from uav_tui.events import Event
+from uav_tui.flight.commands import VEHICLE_COMMANDS, parse
 from uav_tui.headless import EXIT_UNHANDLED_ERROR
-from uav_tui.native_stderr import ORIGIN as NATIVE_ORIGIN
+from uav_tui.output.native_stderr import ORIGIN as NATIVE_ORIGIN
+from uav_tui.output.text import safe
 from uav_tui.status import CoreStatus
-from uav_tui.text import safe
 from uav_tui.tui._algorithm import AlgorithmPanel
 from uav_tui.tui._event_log import EventLogView
 from uav_tui.tui._header import StatusBar

@@ -13,8 +13,8 @@ import logging
 import traceback
 
 from uav_tui.events import EventLog
-from uav_tui.line_budget import LineBudget
-from uav_tui.text import shorten
+from uav_tui.output.line_budget import LineBudget
+from uav_tui.output.text import shorten
 
 logger = logging.getLogger(__name__)
 

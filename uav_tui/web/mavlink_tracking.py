@@ -7,7 +7,7 @@ and CAMERA_TRACKING_IMAGE_STATUS reports what the processor tracks (its ``box`` 
 frame, normalised): active with the rectangle, idle when it tracks nothing (or after
 MAV_CMD_CAMERA_STOP_TRACKING), error when its last frame raised; once after each command, then once a
 second. Beside it, CAMERA_TRACKING_GEO_STATUS says where the box's centre is on the ground
-(:mod:`uav_tui.geolocate`, from the telemetry at the frame's capture): active with latitude, longitude,
+(:mod:`uav_tui.flight.geolocate`, from the telemetry at the frame's capture): active with latitude, longitude,
 altitude AMSL, ``h_acc`` (the 1-sigma uncertainty), ``v_acc`` and ``dist`` (straight-line range from the
 vehicle); idle with latitude and longitude 0 and the rest NaN whenever there is no ground position (nothing
 tracked, no camera model, no GPS, a box at the horizon), error as above. Velocity and heading are NaN: a box
@@ -35,12 +35,12 @@ from typing import Any
 from pymavlink.dialects.v20 import common as mavlink
 
 from processors.base import Box
-from uav_tui.commands import Command
 from uav_tui.errors import KNOWN_ERRORS, CommandError, ConfigError, UavError
-from uav_tui.geolocate import HEIGHT_SIGMAS, NO_BOX, OK, GeoFix
-from uav_tui.line_budget import LineBudget
+from uav_tui.flight.commands import Command
+from uav_tui.flight.geolocate import HEIGHT_SIGMAS, NO_BOX, OK, GeoFix
+from uav_tui.output.line_budget import LineBudget
+from uav_tui.output.text import describe
 from uav_tui.status import CoreState
-from uav_tui.text import describe
 from uav_tui.web.failures import HandlerFailures
 from uav_tui.web.roi import point_to_roi, rect_to_roi
 from uav_tui.web.view import ServedCore

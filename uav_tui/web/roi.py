@@ -11,7 +11,7 @@ import math
 from typing import Any
 
 from uav_tui.errors import CommandError
-from uav_tui.text import describe
+from uav_tui.output.text import describe
 
 POINT_BOX_FRACTION = 0.1
 """A single click selects a square this fraction of the frame's shorter side wide."""

@@ -32,13 +32,13 @@ from typing import Any
 from aiohttp import WSCloseCode, web
 from aiortc import RTCConfiguration, RTCPeerConnection, RTCSessionDescription
 
-from uav_tui.commands import Command, parse
 from uav_tui.config import WebConfig
 from uav_tui.errors import KNOWN_ERRORS, CommandError, UavError
 from uav_tui.events import Event
-from uav_tui.line_budget import LineBudget
+from uav_tui.flight.commands import Command, parse
+from uav_tui.output.line_budget import LineBudget
+from uav_tui.output.text import describe, shorten
 from uav_tui.status import CoreState
-from uav_tui.text import describe, shorten
 from uav_tui.web.failures import HandlerFailures
 from uav_tui.web.mdns import adopt_mdns_resolver
 from uav_tui.web.roi import roi_from_message

@@ -7,8 +7,8 @@ from typing import TYPE_CHECKING, Protocol
 
 if TYPE_CHECKING:
     from sources import CameraSource
-    from uav_tui.commands import Command
     from uav_tui.events import EventLog
+    from uav_tui.flight.commands import Command
     from uav_tui.hosting.host import ProcessedFrame
     from uav_tui.status import CoreState, CoreStatus
 

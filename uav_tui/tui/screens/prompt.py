@@ -8,7 +8,7 @@ from textual.containers import Vertical
 from textual.screen import ModalScreen
 from textual.widgets import Input, Label
 
-from uav_tui.commands import COMMANDS
+from uav_tui.flight.commands import COMMANDS
 
 
 class CommandPrompt(ModalScreen[str]):

@@ -1,0 +1,1 @@
+"""The vehicle side of the core: commands, telemetry, the link, the autonomy gate, geo-location."""

@@ -1,0 +1,1 @@
+"""Reading runs back: the dataset, damaged files, reports and plots."""

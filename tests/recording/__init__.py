@@ -1,0 +1,1 @@
+"""What a run writes while it flies: frames, video, telemetry, events, a full disk, a crash."""

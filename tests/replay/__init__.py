@@ -1,0 +1,1 @@
+"""Replaying a recorded flight through a processor."""

@@ -1,0 +1,90 @@
+"""A run's vehicle track and target positions as GeoJSON (QGIS) or KML (Google Earth): ``uav-tui export RUN``.
+
+The track is the telemetry's positions (latitude, longitude, altitude AMSL), the targets are the frames whose box
+was geo-located (``target_status`` ``ok``), each with its time (UTC), frame id and 1-sigma uncertainty.
+"""
+
+from __future__ import annotations
+
+import json
+import xml.etree.ElementTree as ET
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from uav_tui.flight.geolocate import OK
+from uav_tui.recorded.dataset import Dataset
+
+KML_NS = "http://www.opengis.net/kml/2.2"
+
+
+def _track(run: Dataset) -> pd.DataFrame:
+    table = run.telemetry[["lat_deg", "lon_deg", "abs_alt_m"]].dropna()
+    return table[(table["lat_deg"] != 0) | (table["lon_deg"] != 0)]  # 0,0: an autopilot without a fix yet
+
+
+def _targets(run: Dataset) -> pd.DataFrame:
+    located = run.frames[(run.frames["target_status"] == OK).fillna(False)]
+    return located.dropna(subset=["target_lat_deg", "target_lon_deg"])
+
+
+def _when(time: pd.Timestamp) -> str:
+    return time.strftime("%Y-%m-%dT%H:%M:%S.%fZ")
+
+
+def geojson(run: Dataset) -> dict[str, Any]:
+    """A FeatureCollection: the vehicle's track (LineString with ``times``), then one Point per located target."""
+    track = _track(run)
+    features: list[dict[str, Any]] = []
+    if len(track) >= 2:
+        features.append({"type": "Feature", "properties": {"kind": "vehicle", "times": [_when(t) for t in track.index]},
+                         "geometry": {"type": "LineString", "coordinates": [
+                             [round(lon, 8), round(lat, 8), round(alt, 3)] for lat, lon, alt in track.to_numpy()]}})
+    for time, row in _targets(run).iterrows():
+        point = [round(float(row["target_lon_deg"]), 8), round(float(row["target_lat_deg"]), 8)]
+        if pd.notna(row["target_alt_m"]):
+            point.append(round(float(row["target_alt_m"]), 3))
+        features.append({"type": "Feature", "geometry": {"type": "Point", "coordinates": point}, "properties": {
+            "kind": "target", "time": _when(time), "frame_id": int(row["frame_id"]),
+            "uncertainty_m": float(row["target_uncertainty_m"])}})
+    return {"type": "FeatureCollection", "features": features}
+
+
+def kml(run: Dataset) -> str:
+    """A KML 2.2 document: the vehicle's track (LineString, absolute altitude), one timed Placemark per target."""
+    ET.register_namespace("", KML_NS)
+    root = ET.Element(f"{{{KML_NS}}}kml")
+    document = ET.SubElement(root, f"{{{KML_NS}}}Document")
+    ET.SubElement(document, f"{{{KML_NS}}}name").text = run.path.name
+    track = _track(run)
+    if len(track) >= 2:
+        placemark = ET.SubElement(document, f"{{{KML_NS}}}Placemark")
+        ET.SubElement(placemark, f"{{{KML_NS}}}name").text = "vehicle"
+        line = ET.SubElement(placemark, f"{{{KML_NS}}}LineString")
+        ET.SubElement(line, f"{{{KML_NS}}}altitudeMode").text = "absolute"
+        ET.SubElement(line, f"{{{KML_NS}}}coordinates").text = " ".join(
+            f"{lon:.8f},{lat:.8f},{alt:.3f}" for lat, lon, alt in track.to_numpy())
+    for time, row in _targets(run).iterrows():
+        placemark = ET.SubElement(document, f"{{{KML_NS}}}Placemark")
+        ET.SubElement(placemark, f"{{{KML_NS}}}name").text = f"target, frame {int(row['frame_id'])}"
+        ET.SubElement(placemark, f"{{{KML_NS}}}description").text = \
+            f"+-{float(row['target_uncertainty_m']):.1f} m (1 sigma)"
+        ET.SubElement(ET.SubElement(placemark, f"{{{KML_NS}}}TimeStamp"), f"{{{KML_NS}}}when").text = _when(time)
+        point = ET.SubElement(placemark, f"{{{KML_NS}}}Point")
+        ET.SubElement(point, f"{{{KML_NS}}}altitudeMode").text = "clampToGround"
+        ET.SubElement(point, f"{{{KML_NS}}}coordinates").text = \
+            f"{float(row['target_lon_deg']):.8f},{float(row['target_lat_deg']):.8f}"
+    ET.indent(root)
+    return ET.tostring(root, encoding="unicode", xml_declaration=True) + "\n"
+
+
+def write(run: Dataset, formats: list[str]) -> list[Path]:
+    """Write ``track.geojson`` / ``track.kml`` into the run's folder; returns the paths written."""
+    written = []
+    for name in formats:
+        path = run.path / f"track.{name}"
+        text = json.dumps(geojson(run)) if name == "geojson" else kml(run)
+        path.write_text(text, encoding="utf-8")
+        written.append(path)
+    return written
