@@ -94,3 +94,9 @@ def test_no_import_circle_in_the_platform() -> None:
     graph = {name: _imports(path, name, set(paths)) for name, path in paths.items()}
     assert {"uav_tui.operations", "uav_tui.recording", "uav_tui.web"} <= graph["uav_tui.core"]  # edges are seen
     assert _cycle(graph) == []
+
+
+def test_the_platforms_top_level_stays_small() -> None:
+    """A newcomer reads ``uav_tui/`` from its folder listing: at most 15 modules, the rest in packages by subject."""
+    modules = sorted(p.name for p in (ROOT / "uav_tui").glob("*.py") if p.name not in ("__init__.py", "__main__.py"))
+    assert len(modules) <= 15, modules
