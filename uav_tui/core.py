@@ -11,66 +11,44 @@ import functools
 import logging
 import time
 from collections.abc import Callable
-from dataclasses import asdict
 from typing import TYPE_CHECKING, Any
 
 import psutil
 
 from controllers import connect_controller
-from controllers.base import (
-    BlockingCalls,
-    FailsafeCheck,
-    FlightController,
-    LandingTargets,
-    PoseFeed,
-    RecordedVehicle,
-)
+from controllers.base import BlockingCalls, FlightController, LandingTargets, PoseFeed, RecordedVehicle
 from controllers.replay_timeline import ReplayTimeline
-from processors.frame_telemetry import FrameTelemetry
 from sources import CameraSource, open_source, warm_up_source
 from sources.base import KnowsCameraModel
 from sources.camera_model import CameraModel
 from sources.pose import PoseTrack
 from uav_tui.config import Config
-from uav_tui.errors import KNOWN_ERRORS, NoVehicle, SourceError, UavError
+from uav_tui.errors import SourceError
 from uav_tui.events import EventLog
 from uav_tui.flight import pose_feed
-from uav_tui.flight.autonomy import WATCHDOG_PERIOD_S, AutonomyGate, own_modes
+from uav_tui.flight.autonomy import WATCHDOG_PERIOD_S, AutonomyGate
 from uav_tui.flight.clock_check import ClockCheck
-from uav_tui.flight.commands import VEHICLE_COMMANDS, Command, parse
-from uav_tui.flight.geolocate import locate_row
+from uav_tui.flight.commands import Command
+from uav_tui.flight.exit_hold import hold_before_exit, mode_left_at_exit
 from uav_tui.flight.link import LinkWatch
 from uav_tui.flight.telemetry import TelemetryManager
 from uav_tui.hosting.exception_reports import ProcessorErrors
 from uav_tui.hosting.host import ProcessedFrame, ProcessorHost
 from uav_tui.hosting.malloc_tuning import tune_this_process
-from uav_tui.hosting.process_host import ProcessWorker
-from uav_tui.hosting.supervisor import LOAD_TIMEOUT_S
-from uav_tui.hosting.thread_host import ProcessorWorker, load_in_thread
+from uav_tui.hosting.start import start_host
 from uav_tui.landing_targets import LandingTargetFeed, LandingTargetSender, landing_fix
 from uav_tui.operations import Operations
 from uav_tui.output.text import last_line, shorten
 from uav_tui.recording import Recorder, describe
 from uav_tui.replay.gate import ReplayGate, stage_clock
 from uav_tui.replay.operator import CommandReplay, recorded_commands
-from uav_tui.status import CoreState, CoreStatus
+from uav_tui.status import CoreState, CoreStatus, core_status
 
 if TYPE_CHECKING:  # aiortc and pymavlink are imported only when the side channels are switched on
     from uav_tui.web import WebServer
     from uav_tui.web.mavlink_tracking import CameraTracking
 
 logger = logging.getLogger(__name__)
-
-"""The two hosts of a processor (``isolation = "thread" | "process"``); they have one public surface."""
-
-LOADING_NOTICE_S = 5.0
-"""How often a processor still loading is said to be (``loading processor X ... (10 s)``)."""
-
-LEFT_ALONE_AT_EXIT = frozenset({"LAND", "RETURN_TO_LAUNCH", "MISSION", "MANUAL", "STABILIZED", "ALTCTL", "ACRO",
-                                "RATTITUDE"})
-"""Flight modes (MAVSDK's names) a hold before exit would interrupt: the vehicle landing or returning by
-itself (the operator's ``land``/``rtl`` or a failsafe), a mission, a pilot flying by hand. Exit holds the
-vehicle in any other mode, where something uav-tui started (a vector, an orbit, a takeoff) may be flying it."""
 
 
 class UavCore:
@@ -143,11 +121,7 @@ class UavCore:
         # The camera's one-off preparation (the sim: camera's ground) overlaps loading and connecting.
         camera_ready = loop.run_in_executor(None, warm_up_source, self.config.source)
         try:
-            notices = asyncio.create_task(self._say_loading(), name="loading notices")
-            try:
-                self.worker = await self._start_worker()
-            finally:
-                notices.cancel()
+            self.worker = await start_host(self.config, self._on_result, self.events, self._on_processor_fault)
             self.controller = await connect_controller(self.config.fc, heartbeat_timeout=self.config.connect_timeout,
                                                        sim_vehicle=self.config.sim.vehicle())
             self.telemetry = TelemetryManager(self.controller)
@@ -163,7 +137,7 @@ class UavCore:
             self.gate.telemetry, self.gate.controller = self.telemetry, self.controller
             if isinstance(self.controller, LandingTargets):
                 self.landing_sender = LandingTargetSender(self.controller, self.events)
-            await self._check_autopilot_failsafe()
+            await self.gate.check_autopilot_failsafe()
             self.worker.bind_telemetry(self.telemetry)
             await camera_ready
             self.source = await self.open_source(self.config.source)
@@ -199,45 +173,12 @@ class UavCore:
             await self._release()
             raise
 
-    async def _start_worker(self) -> ProcessorHost:
-        """Load the processor where ``isolation`` says: its own process (default) or a thread of this one."""
-        config = self.config
-        if config.isolation == "thread":
-            processor = await load_in_thread(config.processor, config.processor_args)
-            return ProcessorWorker(processor, self._on_result, save_max_hz=config.recording.save_max_hz,
-                                   events=self.events)
-        return await ProcessWorker.start(
-            config.processor, config.processor_args, self._on_result, events=self.events,
-            on_fault=self._on_processor_fault, timeout_s=config.processor_timeout,
-            memory_mb=config.processor_memory_mb or None, save_images=config.recording.record,
-            save_max_hz=config.recording.save_max_hz)
-
-    async def _say_loading(self) -> None:
-        """While the processor loads, say so every :data:`LOADING_NOTICE_S` (a slow ``__init__`` is not silence)."""
-        started = time.monotonic()
-        limit = f"; given up at {LOAD_TIMEOUT_S:g} s" if self.config.isolation == "process" else ""
-        while True:
-            await asyncio.sleep(LOADING_NOTICE_S)
-            self.events.emit("info", "processor", f"loading processor {self.config.processor} ... "
-                             f"({time.monotonic() - started:.0f} s{limit})")
-
     def _on_processor_fault(self, reason: str) -> None:
         """The processor's process died or was killed: autonomy off, and hold if a vector flies."""
         self.processor_error = reason
-        self._stop_precland(f"processor fault: {reason}")
+        self.stop_precland(f"processor fault: {reason}")
         if self.gate.enabled:
             self._spawn(self.gate.disable("watchdog", reason), "processor fault")
-
-    async def _check_autopilot_failsafe(self) -> None:
-        """Read (and set) the autopilot's offboard-loss failsafe; autonomy is refused while it is too slow."""
-        if not isinstance(self.controller, FailsafeCheck):
-            return
-        safety = self.config.safety
-        report = await self.controller.check_failsafe(safety.max_t, tune=safety.tune_autopilot_failsafe)
-        self.events.emit("info", "autonomy", report.summary())
-        if not report.ok:
-            self.gate.refusal = "; ".join(report.problems)
-            self.events.emit("error", "autonomy", f"autonomy will be refused: {self.gate.refusal}")
 
     async def _start_side_channels(self) -> None:
         """The web page and MAVLink click-to-track, when configured (aiortc is imported only then)."""
@@ -258,7 +199,7 @@ class UavCore:
         """Hold the vehicle if something uav-tui started could be flying it, then release everything. Idempotent.
 
         A vehicle that lands, returns, flies a mission or is flown by hand is left to it
-        (:data:`LEFT_ALONE_AT_EXIT`).
+        (:data:`~uav_tui.flight.exit_hold.LEFT_ALONE_AT_EXIT`).
         """
         if self.state is CoreState.STOPPED:
             return
@@ -267,32 +208,12 @@ class UavCore:
         await self.gate.disable("platform", reason if self.gate.enabled else None, hold=False)
         vehicle = self.telemetry.snapshot()
         if self.controller is not None and (self.controller.vector_active or vehicle.in_air):
-            await self._hold_before_exit(self.controller)
+            await hold_before_exit(self.controller, self.mode_left_at_exit(), self.events)
         await self._release()
 
     def mode_left_at_exit(self) -> str | None:
-        """The mode the vehicle is left in at exit (:data:`LEFT_ALONE_AT_EXIT`), or None: it is held first.
-
-        Right after uav-tui's own ``land`` or ``rtl`` the autopilot may not have reported its new mode
-        yet (PX4 says it in its next heartbeat, up to a second later): that command's mode counts, unless
-        vectors fly the vehicle again.
-        """
-        mode = self.telemetry.snapshot().flight_mode
-        if mode in LEFT_ALONE_AT_EXIT or (mode == "HOLD" and mode not in own_modes(self.controller)):
-            return mode  # HOLD not of the platform's making: ArduCopter's LOITER or BRAKE, a pilot's
-        if self.handed_over is not None and not (self.controller is not None and self.controller.vector_active):
-            return self.handed_over
-        return None
-
-    async def _hold_before_exit(self, controller: FlightController) -> None:
-        if mode := self.mode_left_at_exit():
-            self.events.emit("info", "platform", f"vehicle left in {mode} mode at exit: a hold would interrupt it")
-            return
-        try:
-            await asyncio.wait_for(controller.hold(), 5)
-            self.events.emit("info", "platform", "vehicle put in hold before exit")
-        except KNOWN_ERRORS + (TimeoutError,) as exc:
-            self.events.emit("error", "platform", f"hold before exit failed: {exc!r}")
+        """The mode the vehicle is left in at exit, or None: it is held first (:func:`.mode_left_at_exit`)."""
+        return mode_left_at_exit(self.telemetry.snapshot().flight_mode, self.controller, self.handed_over)
 
     async def _release(self) -> None:
         """Release every part, each one even if another failed (a bug, reported): the dataset is always closed."""
@@ -369,7 +290,8 @@ class UavCore:
         """A vehicle command handed the vehicle to ``mode`` (LAND, RETURN_TO_LAUNCH), or to no mode of its own."""
         self.handed_over = mode
 
-    def _stop_precland(self, reason: str) -> None:
+    def stop_precland(self, reason: str) -> None:
+        """Stop sending landing targets (a fault, another operator command); said when it was on."""
         if self.landing.release(reason):
             self.events.emit("warning", "autonomy", f"precland off, landing targets no longer sent: {reason}")
 
@@ -472,7 +394,7 @@ class UavCore:
             if not fault and self.telemetry.snapshot().armed is False:
                 fault = "landed and disarmed"
             if fault:
-                self._stop_precland(fault)
+                self.stop_precland(fault)
 
     def _newest_frame_age(self) -> float | None:
         frame = self.source.buffer.peek() if self.source is not None else None
@@ -518,80 +440,10 @@ class UavCore:
 
     async def execute(self, command: Command | str, origin: str = "script") -> str:
         """Run one operator command; returns what happened, raises UavError saying why it could not."""
-        parsed = parse(command) if isinstance(command, str) else command
-        if parsed is None:
-            return ""
-        if self.state is not CoreState.RUNNING:
-            raise UavError(f"{parsed}: the platform is not running")
-        self.events.emit("info", "command", str(parsed), origin)
-        try:
-            if parsed.word in VEHICLE_COMMANDS:
-                if self.controller is None:
-                    raise NoVehicle(f"{parsed.word}: no flight controller (--fc none); use --fc sim or a "
-                                    "MAVLink connection string")
-                if self.gate.enabled:  # any operator command pre-empts autonomy at once
-                    await self.gate.disable(origin, f"pre-empted by operator command '{parsed}'", hold=False)
-                if parsed.word != "precland":  # and a precision landing
-                    self._stop_precland(f"pre-empted by operator command '{parsed}'")
-            outcome = await self._operations.run(parsed, origin)
-        except KNOWN_ERRORS as exc:
-            self.events.emit("error", "command", f"{parsed}: {exc}", origin, command=str(parsed))
-            raise
-        if outcome.message:
-            self.events.emit("info", "command", outcome.message, origin, command=str(parsed),
-                             t_mono_ns=outcome.t_mono_ns)
-        return outcome.message
+        return await self._operations.execute(command, origin)
 
     # -- status ----------------------------------------------------------------------------------
 
     def status(self) -> CoreStatus:
         """Everything an interface shows, as one immutable snapshot."""
-        assert self.worker is not None and self.source is not None
-        loaded = self.worker.processor
-        telemetry = self.telemetry.snapshot()
-        last = self.worker.last
-        box = last.box if last is not None else None
-        # the box where it was seen: with the telemetry at that frame's capture, not the newest (~20 us)
-        target = None if last is None or box is None else \
-            locate_row(self.camera, box, asdict(self.telemetry.at(last.frame.t_mono_ns)[0]))
-        return CoreStatus(
-            telemetry=telemetry,
-            pipeline=self.worker.snapshot(),
-            source_uri=self.source.get_properties().get("uri", self.config.source),
-            source=self.source.get_properties(),
-            processor=loaded.info.name,
-            capabilities=loaded.info.capabilities,
-            processor_error=self.processor_error,
-            processor_state=self.worker.state(),
-            fc=self.config.fc,
-            fc_description=self.controller.description if self.controller is not None else "none",
-            heartbeat_age_s=self.controller.heartbeat_age_s() if self.controller else None,
-            autonomy=self.gate.enabled,
-            autonomy_stop_reason=self.gate.stop_reason,
-            precland=self.landing.engaged,
-            precland_stop_reason=self.landing.stop_reason,
-            landing_targets_sent=self.landing_sender.sent if self.landing_sender is not None else 0,
-            landing_targets_failed=self.landing_sender.failed if self.landing_sender is not None else 0,
-            last_vector=self.gate.last_vector,
-            last_decision=self.gate.last_decision,
-            last_verdict=self.gate.last_decision.verdict,
-            vectors_executed=self.gate.executed,
-            vectors_rejected=self.gate.rejected,
-            recording=self.recorder.status() if self.recorder is not None else {},
-            startup_s=self.startup_s,
-            link_lost=self.link is not None and self.link.lost,
-            vehicle_problem=self.link.vehicle_problem if self.link is not None else "",
-            box=box,
-            target=target,
-            saves_dropped=self._saves_dropped(),
-        )
-
-    def _saves_dropped(self) -> dict[str, int]:
-        """``tmMgr.save`` calls not stored, by why (see ``CoreStatus.saves_dropped``)."""
-        assert self.worker is not None
-        # With thread isolation the processor's tmMgr is here; in its own process it throttles there, uncounted here.
-        tm_mgr = getattr(self.worker.processor.instance, "tmMgr", None)
-        counts = {"throttled": tm_mgr.saves_throttled if isinstance(tm_mgr, FrameTelemetry) else 0,
-                  "not recorded": self.telemetry.saves_dropped,
-                  "outside a frame": self.recorder.misplaced_saves if self.recorder is not None else 0}
-        return {why: count for why, count in counts.items() if count}
+        return core_status(self)

@@ -1,4 +1,4 @@
-"""What each operator command does to a running core (``UavCore.execute`` parses, logs and dispatches).
+"""What each operator command does to a running core: :meth:`Operations.execute` parses, logs and dispatches.
 
 The commands see the core through :class:`OperatedCore`: what they read, and the core's own methods
 for what they change (the vehicle handed over, the processor's error cleared, the camera switched).
@@ -10,12 +10,13 @@ import asyncio
 from typing import TYPE_CHECKING, Any, NamedTuple, Protocol
 
 from controllers.base import PrecisionLanding
-from uav_tui.errors import CommandError, ProcessorLoadError, SourceError, UavError
+from uav_tui.errors import KNOWN_ERRORS, CommandError, NoVehicle, ProcessorLoadError, SourceError, UavError
 from uav_tui.flight.autonomy import check_vector
-from uav_tui.flight.commands import VEHICLE_COMMANDS, Command, check_limits
+from uav_tui.flight.commands import VEHICLE_COMMANDS, Command, check_limits, parse
 from uav_tui.hosting.child_link import ProcessorRaised
 from uav_tui.hosting.operator_calls import ProcessorCalls
 from uav_tui.output.text import describe, shorten
+from uav_tui.status import CoreState
 
 if TYPE_CHECKING:
     from controllers.base import FlightController
@@ -24,6 +25,7 @@ if TYPE_CHECKING:
     from sources import CameraSource
     from sources.camera_model import CameraModel
     from uav_tui.config import Config
+    from uav_tui.events import EventLog
     from uav_tui.flight.autonomy import AutonomyGate
     from uav_tui.hosting.host import Answer
     from uav_tui.landing_targets import LandingTargetFeed
@@ -69,6 +71,12 @@ class OperatedCore(Protocol):
     def config(self) -> Config: ...
 
     @property
+    def state(self) -> CoreState: ...
+
+    @property
+    def events(self) -> EventLog: ...
+
+    @property
     def gate(self) -> AutonomyGate: ...
 
     @property
@@ -101,6 +109,8 @@ class OperatedCore(Protocol):
 
     def request_quit(self) -> None: ...
 
+    def stop_precland(self, reason: str) -> None: ...
+
 
 class Operations:
     """One coroutine per command word; each returns what happened or raises UavError saying why not."""
@@ -109,7 +119,39 @@ class Operations:
         self.core = core
         self._processor_calls = ProcessorCalls()
 
+    async def execute(self, command: Command | str, origin: str) -> str:
+        """Run one operator command; returns what happened, raises UavError saying why it could not.
+
+        Logged as it comes and as it ends (or fails); a vehicle command needs a flight controller and
+        pre-empts autonomy at once.
+        """
+        parsed = parse(command) if isinstance(command, str) else command
+        if parsed is None:
+            return ""
+        core = self.core
+        if core.state is not CoreState.RUNNING:
+            raise UavError(f"{parsed}: the platform is not running")
+        core.events.emit("info", "command", str(parsed), origin)
+        try:
+            if parsed.word in VEHICLE_COMMANDS:
+                if core.controller is None:
+                    raise NoVehicle(f"{parsed.word}: no flight controller (--fc none); use --fc sim or a "
+                                    "MAVLink connection string")
+                if core.gate.enabled:  # any operator command pre-empts autonomy at once
+                    await core.gate.disable(origin, f"pre-empted by operator command '{parsed}'", hold=False)
+                if parsed.word != "precland":  # and a precision landing
+                    core.stop_precland(f"pre-empted by operator command '{parsed}'")
+            outcome = await self.run(parsed, origin)
+        except KNOWN_ERRORS as exc:
+            core.events.emit("error", "command", f"{parsed}: {exc}", origin, command=str(parsed))
+            raise
+        if outcome.message:
+            core.events.emit("info", "command", outcome.message, origin, command=str(parsed),
+                             t_mono_ns=outcome.t_mono_ns)
+        return outcome.message
+
     async def run(self, command: Command, origin: str) -> Outcome:
+        """Do what ``command`` says, unlogged (:meth:`execute` logs)."""
         check_limits(command, self.core.config.safety)
         plain = PLAIN_VEHICLE_CALLS.get(command.word)
         if plain is not None:

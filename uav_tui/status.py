@@ -4,14 +4,26 @@ from __future__ import annotations
 
 import enum
 from dataclasses import asdict, dataclass, field, fields, replace
-from typing import Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 from controllers.base import Telemetry
+from processors.frame_telemetry import FrameTelemetry
 from uav_tui.flight.autonomy import Verdict
-from uav_tui.flight.geolocate import GeoFix, describe
+from uav_tui.flight.geolocate import GeoFix, describe, locate_row
 from uav_tui.hosting.host import ProcessorState
 from uav_tui.output.text import safe
 from uav_tui.stats import PipelineStats
+
+if TYPE_CHECKING:
+    from controllers.base import FlightController
+    from sources import CameraSource
+    from sources.camera_model import CameraModel
+    from uav_tui.config import Config
+    from uav_tui.flight.autonomy import AutonomyGate
+    from uav_tui.flight.link import LinkWatch
+    from uav_tui.flight.telemetry import TelemetryManager
+    from uav_tui.hosting.host import ProcessorHost
+    from uav_tui.landing_targets import LandingTargetFeed, LandingTargetSender
 
 
 class CoreState(enum.Enum):
@@ -103,3 +115,90 @@ class CoreStatus:
             data["target"].update(distance_m=self.target.distance_m, bearing_deg=self.target.bearing_deg,
                                   range_m=self.target.range_m, description=describe(self.target))
         return data
+
+
+class RecorderStatus(Protocol):
+    misplaced_saves: int
+
+    def status(self) -> dict[str, Any]: ...
+
+
+class ObservedCore(Protocol):
+    """What :func:`core_status` reads of a running :class:`~uav_tui.core.UavCore`."""
+
+    config: Config
+    telemetry: TelemetryManager
+    gate: AutonomyGate
+    camera: CameraModel | None
+    processor_error: str | None
+    startup_s: float | None
+    landing: LandingTargetFeed
+    landing_sender: LandingTargetSender | None
+
+    @property
+    def worker(self) -> ProcessorHost | None: ...
+
+    @property
+    def source(self) -> CameraSource | None: ...
+
+    @property
+    def controller(self) -> FlightController | None: ...
+
+    @property
+    def recorder(self) -> RecorderStatus | None: ...
+
+    @property
+    def link(self) -> LinkWatch | None: ...
+
+
+def core_status(core: ObservedCore) -> CoreStatus:
+    """Everything an interface shows of a running core, as one immutable snapshot."""
+    worker, source, controller, gate, link = core.worker, core.source, core.controller, core.gate, core.link
+    assert worker is not None and source is not None
+    last = worker.last
+    box = last.box if last is not None else None
+    # the box where it was seen: with the telemetry at that frame's capture, not the newest (~20 us)
+    target = None if last is None or box is None else \
+        locate_row(core.camera, box, asdict(core.telemetry.at(last.frame.t_mono_ns)[0]))
+    return CoreStatus(
+        telemetry=core.telemetry.snapshot(),
+        pipeline=worker.snapshot(),
+        source_uri=source.get_properties().get("uri", core.config.source),
+        source=source.get_properties(),
+        processor=worker.processor.info.name,
+        capabilities=worker.processor.info.capabilities,
+        processor_error=core.processor_error,
+        processor_state=worker.state(),
+        fc=core.config.fc,
+        fc_description=controller.description if controller is not None else "none",
+        heartbeat_age_s=controller.heartbeat_age_s() if controller else None,
+        autonomy=gate.enabled,
+        autonomy_stop_reason=gate.stop_reason,
+        precland=core.landing.engaged,
+        precland_stop_reason=core.landing.stop_reason,
+        landing_targets_sent=core.landing_sender.sent if core.landing_sender is not None else 0,
+        landing_targets_failed=core.landing_sender.failed if core.landing_sender is not None else 0,
+        last_vector=gate.last_vector,
+        last_decision=gate.last_decision,
+        last_verdict=gate.last_decision.verdict,
+        vectors_executed=gate.executed,
+        vectors_rejected=gate.rejected,
+        recording=core.recorder.status() if core.recorder is not None else {},
+        startup_s=core.startup_s,
+        link_lost=link is not None and link.lost,
+        vehicle_problem=link.vehicle_problem if link is not None else "",
+        box=box,
+        target=target,
+        saves_dropped=_saves_dropped(core),
+    )
+
+
+def _saves_dropped(core: ObservedCore) -> dict[str, int]:
+    """``tmMgr.save`` calls not stored, by why (see ``CoreStatus.saves_dropped``)."""
+    assert core.worker is not None
+    # With thread isolation the processor's tmMgr is here; in its own process it throttles there, uncounted here.
+    tm_mgr = getattr(core.worker.processor.instance, "tmMgr", None)
+    counts = {"throttled": tm_mgr.saves_throttled if isinstance(tm_mgr, FrameTelemetry) else 0,
+              "not recorded": core.telemetry.saves_dropped,
+              "outside a frame": core.recorder.misplaced_saves if core.recorder is not None else 0}
+    return {why: count for why, count in counts.items() if count}

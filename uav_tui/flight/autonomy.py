@@ -18,7 +18,7 @@ from collections.abc import Callable
 from numbers import Real
 from typing import Any
 
-from controllers.base import FlightController, OwnModes
+from controllers.base import FailsafeCheck, FlightController, OwnModes
 from uav_tui.config import SafetyConfig
 from uav_tui.errors import KNOWN_ERRORS, UavError
 from uav_tui.events import EventLog, Level, Repeats
@@ -144,6 +144,16 @@ class AutonomyGate:
         """A vector was sent since autonomy was last switched on."""
         self.clock: Callable[[], int] = time.monotonic_ns
         """Monotonic ns that frame ages are measured against (a replay's recorded clock in a replay)."""
+
+    async def check_autopilot_failsafe(self) -> None:
+        """Read (and set) the autopilot's offboard-loss failsafe; autonomy is refused while it is too slow."""
+        if not isinstance(self.controller, FailsafeCheck):
+            return
+        report = await self.controller.check_failsafe(self.safety.max_t, tune=self.safety.tune_autopilot_failsafe)
+        self.events.emit("info", "autonomy", report.summary())
+        if not report.ok:
+            self.refusal = "; ".join(report.problems)
+            self.events.emit("error", "autonomy", f"autonomy will be refused: {self.refusal}")
 
     def enable(self, origin: str) -> None:
         if self.controller is None:

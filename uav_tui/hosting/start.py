@@ -1,0 +1,43 @@
+"""Starting the processor's host where ``isolation`` says, and saying so while the processor loads."""
+
+from __future__ import annotations
+
+import asyncio
+import time
+from collections.abc import Callable
+
+from uav_tui.config import Config
+from uav_tui.events import EventLog
+from uav_tui.hosting.host import ProcessedFrame, ProcessorHost
+from uav_tui.hosting.process_host import ProcessWorker
+from uav_tui.hosting.supervisor import LOAD_TIMEOUT_S
+from uav_tui.hosting.thread_host import ProcessorWorker, load_in_thread
+
+LOADING_NOTICE_S = 5.0
+"""How often a processor still loading is said to be (``loading processor X ... (10 s)``)."""
+
+
+async def start_host(config: Config, on_result: Callable[[ProcessedFrame], None], events: EventLog,
+                     on_fault: Callable[[str], None]) -> ProcessorHost:
+    """Load the processor in its own process (default) or a thread of this one; said every
+    :data:`LOADING_NOTICE_S` while it loads (a slow ``__init__`` is not silence)."""
+    notices = asyncio.create_task(_say_loading(config, events), name="loading notices")
+    try:
+        if config.isolation == "thread":
+            processor = await load_in_thread(config.processor, config.processor_args)
+            return ProcessorWorker(processor, on_result, save_max_hz=config.recording.save_max_hz, events=events)
+        return await ProcessWorker.start(
+            config.processor, config.processor_args, on_result, events=events, on_fault=on_fault,
+            timeout_s=config.processor_timeout, memory_mb=config.processor_memory_mb or None,
+            save_images=config.recording.record, save_max_hz=config.recording.save_max_hz)
+    finally:
+        notices.cancel()
+
+
+async def _say_loading(config: Config, events: EventLog) -> None:
+    started = time.monotonic()
+    limit = f"; given up at {LOAD_TIMEOUT_S:g} s" if config.isolation == "process" else ""
+    while True:
+        await asyncio.sleep(LOADING_NOTICE_S)
+        events.emit("info", "processor", f"loading processor {config.processor} ... "
+                    f"({time.monotonic() - started:.0f} s{limit})")
