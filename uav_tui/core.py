@@ -26,7 +26,7 @@ from uav_tui.config import Config
 from uav_tui.errors import SourceError
 from uav_tui.events import EventLog
 from uav_tui.flight import pose_feed
-from uav_tui.flight.autonomy import WATCHDOG_PERIOD_S, AutonomyGate
+from uav_tui.flight.autonomy import AutonomyGate
 from uav_tui.flight.clock_check import ClockCheck
 from uav_tui.flight.commands import Command
 from uav_tui.flight.exit_hold import hold_before_exit, mode_left_at_exit
@@ -36,7 +36,7 @@ from uav_tui.hosting.exception_reports import ProcessorErrors
 from uav_tui.hosting.host import ProcessedFrame, ProcessorHost
 from uav_tui.hosting.malloc_tuning import tune_this_process
 from uav_tui.hosting.start import start_host
-from uav_tui.landing_targets import LandingTargetFeed, LandingTargetSender, landing_fix
+from uav_tui.landing_targets import LandingTargetFeed, LandingTargetSender, consider_landing_target, watch_precland
 from uav_tui.operations import Operations
 from uav_tui.output.text import last_line, shorten
 from uav_tui.recording import Recorder, describe
@@ -161,9 +161,9 @@ class UavCore:
             self._spawn(self.link.run(), "link")
         self._spawn(self.gate.run(), "autonomy")
         worker = self.worker
-        self._spawn(self.gate.watch(self._newest_frame_age, lambda: worker.busy_s,
+        self._spawn(self.gate.watch(self.newest_frame_age, lambda: worker.busy_s,
                                     lambda: worker.consecutive_errors), "watchdog")
-        self._spawn(self._watch_precland(), "precland watchdog")
+        self._spawn(watch_precland(self), "precland watchdog")
         self.state = CoreState.RUNNING
         self.events.emit("info", "platform", f"started: source {self.config.source}, processor "
                          f"{self.worker.processor.info.name} ({self.config.isolation}), fc {self.config.fc}")
@@ -342,61 +342,12 @@ class UavCore:
             self._processor_errors.report(result.error, exception, result.frame.seq)
             self.processor_error = exception
         self.gate.consider(result)
-        self._consider_landing_target(result)
+        consider_landing_target(self, result)
         for listener in tuple(self._frame_listeners):
             listener(result)
 
-    def _consider_landing_target(self, result: ProcessedFrame) -> None:
-        """Send the frame's landing target while ``precland`` or autonomy is on, the frame fresh and the link alive;
-        ``result.landing`` says what was done (frames.csv)."""
-        target = result.landing_target
-        if target is None:
-            return
-        if target.frame_seq is not None and target.frame_seq != result.frame.seq:
-            result.landing = f"not sent: seen in frame {target.frame_seq}, not this one (its capture time is gone)"
-            return
-        capture_ns = result.frame.t_mono_ns
-        self.landing.seen(capture_ns)
-        why = self._landing_target_blocked(capture_ns)
-        result.landing = f"not sent: {why}" if why else "sent"
-        if why:
-            return
-        assert self.landing_sender is not None and self.camera is not None
-        self.landing_sender.send(landing_fix(target, capture_ns, self.camera, self.telemetry.at(capture_ns)[0]))
-
-    def _landing_target_blocked(self, capture_ns: int) -> str:
-        """Why a landing target seen in the frame captured at ``capture_ns`` is not sent now, or ""."""
-        if not (self.landing.engaged or self.gate.enabled):
-            return "precland and autonomy off"
-        if self.landing_sender is None or self.controller is None:
-            return "the flight controller takes no landing targets"
-        if self.camera is None:
-            return "no camera model"
-        age = self.controller.heartbeat_age_s()
-        if age >= self.config.safety.link_timeout:
-            return f"link lost (heartbeat {age:.1f} s old)"
-        frame_age_s = (self.gate.clock() - capture_ns) / 1e9
-        if frame_age_s >= self.config.safety.max_frame_age:
-            return f"frame {frame_age_s:.2f} s old"
-        if self.landing_sender.busy:
-            return "the previous one is still being sent"
-        return ""
-
-    async def _watch_precland(self) -> None:
-        """Turn ``precland`` off on the faults that stop autonomy, and once the vehicle landed and disarmed."""
-        worker = self.worker
-        assert worker is not None
-        while True:
-            await asyncio.sleep(WATCHDOG_PERIOD_S)
-            if not self.landing.engaged:
-                continue
-            fault = self.gate.fault(self._newest_frame_age(), worker.busy_s, worker.consecutive_errors)
-            if not fault and self.telemetry.snapshot().armed is False:
-                fault = "landed and disarmed"
-            if fault:
-                self.stop_precland(fault)
-
-    def _newest_frame_age(self) -> float | None:
+    def newest_frame_age(self) -> float | None:
+        """Seconds since the newest frame's capture (on the gate's clock), None before the first."""
         frame = self.source.buffer.peek() if self.source is not None else None
         return None if frame is None else (self.gate.clock() - frame.t_mono_ns) / 1e9
 

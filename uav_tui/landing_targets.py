@@ -12,17 +12,22 @@ from __future__ import annotations
 import asyncio
 import time
 from collections.abc import Callable
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Protocol
 
 from controllers.errors import ControllerError
 from controllers.landing_target import LandingTargetFix
 from uav_tui.errors import UavError
+from uav_tui.flight.autonomy import WATCHDOG_PERIOD_S
 
 if TYPE_CHECKING:
-    from controllers.base import LandingTargets, Telemetry
+    from controllers.base import FlightController, LandingTargets, Telemetry
     from processors.landing_target import LandingTarget
     from sources.camera_model import CameraModel
+    from uav_tui.config import Config
     from uav_tui.events import EventLog
+    from uav_tui.flight.autonomy import AutonomyGate
+    from uav_tui.flight.telemetry import TelemetryManager
+    from uav_tui.hosting.host import ProcessedFrame, ProcessorHost
 
 SEND_TIMEOUT_S = 1.0
 """The longest one LANDING_TARGET send may take (a target older than a second is stale to ArduPilot)."""
@@ -132,3 +137,75 @@ class LandingTargetSender:
         if self._task is not None:
             self._task.cancel()
             await asyncio.gather(self._task, return_exceptions=True)
+
+
+class LandingCore(Protocol):
+    """What the landing-target relay reads of the core, and how it stops ``precland``."""
+
+    config: Config
+    telemetry: TelemetryManager
+    gate: AutonomyGate
+    camera: CameraModel | None
+    landing: LandingTargetFeed
+    landing_sender: LandingTargetSender | None
+
+    @property
+    def controller(self) -> FlightController | None: ...
+
+    @property
+    def worker(self) -> ProcessorHost | None: ...
+
+    def newest_frame_age(self) -> float | None: ...
+
+    def stop_precland(self, reason: str) -> None: ...
+
+
+def consider_landing_target(core: LandingCore, result: ProcessedFrame) -> None:
+    """Send the frame's landing target while ``precland`` or autonomy is on, the frame fresh and the link alive;
+    ``result.landing`` says what was done (frames.csv)."""
+    target = result.landing_target
+    if target is None:
+        return
+    if target.frame_seq is not None and target.frame_seq != result.frame.seq:
+        result.landing = f"not sent: seen in frame {target.frame_seq}, not this one (its capture time is gone)"
+        return
+    capture_ns = result.frame.t_mono_ns
+    core.landing.seen(capture_ns)
+    why = _blocked(core, capture_ns)
+    result.landing = f"not sent: {why}" if why else "sent"
+    if why:
+        return
+    assert core.landing_sender is not None and core.camera is not None
+    core.landing_sender.send(landing_fix(target, capture_ns, core.camera, core.telemetry.at(capture_ns)[0]))
+
+def _blocked(core: LandingCore, capture_ns: int) -> str:
+    """Why a landing target seen in the frame captured at ``capture_ns`` is not sent now, or ""."""
+    if not (core.landing.engaged or core.gate.enabled):
+        return "precland and autonomy off"
+    if core.landing_sender is None or core.controller is None:
+        return "the flight controller takes no landing targets"
+    if core.camera is None:
+        return "no camera model"
+    age = core.controller.heartbeat_age_s()
+    if age >= core.config.safety.link_timeout:
+        return f"link lost (heartbeat {age:.1f} s old)"
+    frame_age_s = (core.gate.clock() - capture_ns) / 1e9
+    if frame_age_s >= core.config.safety.max_frame_age:
+        return f"frame {frame_age_s:.2f} s old"
+    if core.landing_sender.busy:
+        return "the previous one is still being sent"
+    return ""
+
+async def watch_precland(core: LandingCore) -> None:
+    """Turn ``precland`` off on the faults that stop autonomy, and once the vehicle landed and disarmed."""
+    worker = core.worker
+    assert worker is not None
+    while True:
+        await asyncio.sleep(WATCHDOG_PERIOD_S)
+        if not core.landing.engaged:
+            continue
+        fault = core.gate.fault(core.newest_frame_age(), worker.busy_s, worker.consecutive_errors)
+        if not fault and core.telemetry.snapshot().armed is False:
+            fault = "landed and disarmed"
+        if fault:
+            core.stop_precland(fault)
