@@ -34,7 +34,7 @@ class _Vehicle:
     def heartbeat_age_s(self) -> float:
         return 0.0
 
-    async def set_fly_vector(self, vx: float, vy: float, t: float) -> None:
+    async def set_fly_vector(self, vx: float, vy: float, t: float, *, yield_to_others: bool = False) -> None:
         self.vectors.append((vx, vy, t))
         self.vector_active = True
 
