@@ -81,6 +81,24 @@ class ProcessorState:
         return ", ".join(parts)
 
 
+class DeliversResults:
+    """What both hosts do with a finished frame, on the loop: its stage times moved onto a replay's clock
+    (``stage_clock``), counted in ``stats``, kept as ``last``, handed to the core."""
+
+    stats: RollingStats
+    stage_clock: Callable[[ProcessedFrame], None] | None
+    last: ProcessedFrame | None
+    _on_result: Callable[[ProcessedFrame], None]
+
+    def _deliver(self, result: ProcessedFrame) -> None:
+        if self.stage_clock is not None:
+            self.stage_clock(result)
+        self.stats.add(result.frame.seq, result.frame.t_mono_ns, result.t_start_ns, result.t_end_ns,
+                       result.t_vector_ns or result.t_end_ns)
+        self.last = result
+        self._on_result(result)
+
+
 class ProcessorHost(Protocol):
     """Runs one processor on the newest frame of a buffer: :class:`~uav_tui.hosting.thread_host.ProcessorWorker`
     (``isolation = "thread"``) and :class:`~uav_tui.hosting.process_host.ProcessWorker` (``"process"``)."""

@@ -25,7 +25,7 @@ from uav_tui.flight.telemetry import TelemetryManager
 from uav_tui.hosting.child_link import ChildLink
 from uav_tui.hosting.child_process import ChildProcess, rss_mb
 from uav_tui.hosting.frame_feeder import FrameFeeder
-from uav_tui.hosting.host import Answer, ProcessedFrame, ProcessorState
+from uav_tui.hosting.host import Answer, DeliversResults, ProcessedFrame, ProcessorState
 from uav_tui.hosting.supervisor import ChildSupervisor
 from uav_tui.hosting.wire import Result, Save
 from uav_tui.stats import PipelineStats, RollingStats
@@ -34,7 +34,7 @@ if TYPE_CHECKING:
     from sources.camera_model import CameraModel
 
 
-class ProcessWorker:
+class ProcessWorker(DeliversResults):
     """Runs a processor in a child process, always on the newest frame of a buffer.
 
     Create with :meth:`start` (loads the processor in its process; raises ProcessorLoadError).
@@ -180,12 +180,7 @@ class ProcessWorker:
             self.consecutive_errors += 1
         else:
             self.consecutive_errors = 0
-        if self.stage_clock is not None:
-            self.stage_clock(result)
-        self.stats.add(result.frame.seq, result.frame.t_mono_ns, result.t_start_ns, result.t_end_ns,
-                       result.t_vector_ns or result.t_end_ns)
-        self.last = result
-        self._on_result(result)
+        self._deliver(result)
 
     def _spent(self, child: ChildProcess, saves: list[Save], released: list[str]) -> None:
         """A reply's slots let go and its ``tmMgr.save`` calls."""

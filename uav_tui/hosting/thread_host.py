@@ -23,7 +23,7 @@ from sources.buffer import Frame, FrameBuffer
 from uav_tui.events import EventLog
 from uav_tui.flight.telemetry import TelemetryManager
 from uav_tui.hosting.frame_call import call_frame
-from uav_tui.hosting.host import Answer, ProcessedFrame, ProcessorState
+from uav_tui.hosting.host import Answer, DeliversResults, ProcessedFrame, ProcessorState
 from uav_tui.hosting.thread_logs import ThreadLogBudget
 from uav_tui.stats import PipelineStats, RollingStats
 
@@ -36,7 +36,7 @@ JOIN_TIMEOUT_S = 2.0
 """How long stopping waits for the processor's current call before abandoning it."""
 
 
-class ProcessorWorker:
+class ProcessorWorker(DeliversResults):
     """Runs a processor on one dedicated thread, always on the newest frame of a buffer.
 
     The thread waits on the frame buffer itself, processes the newest frame and posts the result to
@@ -180,14 +180,6 @@ class ProcessorWorker:
             self._jobs.append((job, future))
             self._wake.notify()
         return asyncio.wrap_future(future)
-
-    def _deliver(self, result: ProcessedFrame) -> None:
-        if self.stage_clock is not None:
-            self.stage_clock(result)
-        self.stats.add(result.frame.seq, result.frame.t_mono_ns, result.t_start_ns, result.t_end_ns,
-                       result.t_vector_ns or result.t_end_ns)
-        self.last = result
-        self._on_result(result)
 
     def _on_frame(self, frame: Frame) -> None:  # capture thread
         with self._wake:
