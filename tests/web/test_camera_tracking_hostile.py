@@ -91,9 +91,11 @@ async def test_a_flood_is_counted_in_a_bounded_number_of_lines(platform: tuple[i
         packet = station.mav.command_long_encode(1, 100, mavlink.MAV_CMD_CAMERA_TRACK_POINT, 0, 0.5, 0.5, 0.05,
                                                  0, 0, 0, 0).pack(station.mav)  # each one calls the processor
         flood = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        try:
-            for _ in range(30_000):  # bounded: about a second on loopback
-                flood.sendto(packet, station.address)
+        try:  # 30,000 in bursts a receive buffer holds (the kernel drops the rest of a burst unread)
+            for _ in range(300):
+                for _ in range(100):
+                    flood.sendto(packet, station.address)
+                await asyncio.sleep(0.002)
         finally:
             flood.close()
         await asyncio.sleep(2.5)  # the count is said within a second of the last drop
@@ -103,6 +105,8 @@ async def test_a_flood_is_counted_in_a_bounded_number_of_lines(platform: tuple[i
     printed = output.read_text().splitlines()
     lines = [line for line in printed if "camera component: drop" in line]
     assert 2 <= len(lines) <= 12 and "is something flooding" in lines[0], lines[:20]
-    dropped = sum(int(re.search(r"dropped (\d+) more command", line)[1]) for line in lines[1:])
-    assert dropped > 1000, lines  # each count says how many it stands for
+    counts = [re.search(r"dropped (\d+) more commands? \((\d+) in all\)", line) for line in lines[1:]]
+    dropped = sum(int(count[1]) for count in counts)
+    assert int(counts[-1][2]) == dropped + 1, lines  # each count says how many it stands for
+    assert dropped > 300, lines  # how many arrive is the kernel's call under load: 887 to 29,000 seen
     assert len(printed) < 150  # the commands taken (a few a second) and their outcomes included
