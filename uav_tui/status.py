@@ -7,7 +7,6 @@ from dataclasses import asdict, dataclass, field, fields, replace
 from typing import TYPE_CHECKING, Any, Protocol
 
 from controllers.base import Telemetry
-from processors.frame_telemetry import FrameTelemetry
 from uav_tui.flight.autonomy import Verdict
 from uav_tui.flight.geolocate import GeoFix, describe, locate_row
 from uav_tui.hosting.host import ProcessorState
@@ -83,9 +82,8 @@ class CoreStatus:
     last_verdict: Verdict | None = None
     """What ``last_decision`` decided (None before the first vector)."""
     saves_dropped: dict[str, int] = field(default_factory=dict)
-    """``tmMgr.save`` calls not stored, by why: ``throttled`` (above ``save_max_hz``; counted where the processor runs
-    in the platform's process, ``isolation = "thread"``), ``not recorded`` (recording is off), ``outside a frame``
-    (called outside ``photo_processing``). Only the non-zero counts."""
+    """``tmMgr.save`` calls not stored, by why: ``throttled`` (above ``save_max_hz``), ``not recorded`` (recording
+    is off), ``outside a frame`` (called outside ``photo_processing``). Only the non-zero counts."""
     precland: bool = False
     """``precland`` is on: the processor's landing targets are sent to the autopilot."""
     precland_stop_reason: str = ""
@@ -196,9 +194,7 @@ def core_status(core: ObservedCore) -> CoreStatus:
 def _saves_dropped(core: ObservedCore) -> dict[str, int]:
     """``tmMgr.save`` calls not stored, by why (see ``CoreStatus.saves_dropped``)."""
     assert core.worker is not None
-    # With thread isolation the processor's tmMgr is here; in its own process it throttles there, uncounted here.
-    tm_mgr = getattr(core.worker.processor.instance, "tmMgr", None)
-    counts = {"throttled": tm_mgr.saves_throttled if isinstance(tm_mgr, FrameTelemetry) else 0,
+    counts = {"throttled": core.worker.saves_throttled,
               "not recorded": core.telemetry.saves_dropped,
               "outside a frame": core.recorder.misplaced_saves if core.recorder is not None else 0}
     return {why: count for why, count in counts.items() if count}

@@ -57,9 +57,10 @@ async def test_saves_above_the_rate_are_dropped_by_frame_time(tmp_path, isolatio
             assert last - first + 1 <= 2 + 2 * (times[last] - times[first]) + 1e-6, times.tolist()
 
 
-async def test_saves_dropped_are_counted_in_the_status_and_the_headless_line(tmp_path) -> None:
+@pytest.mark.parametrize("isolation", ["thread", "process"])
+async def test_saves_dropped_are_counted_in_the_status_and_the_headless_line(tmp_path, isolation: str) -> None:
     config = with_overrides(Config(), source="synthetic:?fps=30&width=160&height=120", runs_dir=str(tmp_path),
-                            processor=EVERY_FRAME, isolation="thread", record_video=False, save_max_hz=2)
+                            processor=EVERY_FRAME, isolation=isolation, record_video=False, save_max_hz=2)
     core = UavCore(config)
     await core.start()
     try:
@@ -68,8 +69,10 @@ async def test_saves_dropped_are_counted_in_the_status_and_the_headless_line(tmp
         stored = status.recording["frames_saved"]
     finally:
         await core.stop()
-    throttled = status.saves_dropped["throttled"]  # before: dropped without a word after the first warning
+    # Before: dropped without a word after the first warning; in a process of its own, not counted at all.
+    throttled = status.saves_dropped["throttled"]
     assert throttled >= 20 and stored <= 2 + 2 * 2.0 + 1
+    assert throttled + stored >= status.pipeline.frames_processed - 2  # every frame saved once: stored or dropped
     assert f" | {throttled} saves dropped ({throttled} throttled) | " in format_status(status, 2.0)
     assert status.as_dict()["saves_dropped"] == {"throttled": throttled}
 

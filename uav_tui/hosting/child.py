@@ -230,6 +230,7 @@ class ChildRunner:
         """The ``tmMgr.save`` calls since the last message (sent with the next result or reply)."""
         self.save_images = save_images
         self.telemetry = FrameTelemetry(self._keep_save, save_max_hz=save_max_hz)
+        self._throttled_sent = 0
         self.instance.tmMgr = self.telemetry
         self.slots = Slots()
         self.has_vector = "getPreparedVector" in loaded.info.capabilities
@@ -280,7 +281,8 @@ class ChildRunner:
                              let_through=(MemoryError,))
         del image
         return Result(offer.gen, outcome.t_start_ns, outcome.t_end_ns, outcome.t_vector_ns, _picklable(outcome.vector),
-                      outcome.landing_target, outcome.box, outcome.error, self._take_saves(), self.slots.released())
+                      outcome.landing_target, outcome.box, outcome.error, self._take_saves(), self._take_throttled(),
+                      self.slots.released())
 
     def _keep_save(self, image: np.ndarray, extra: dict[str, Any]) -> None:
         # A copy: the image as it is now, not with what photo_processing draws on it afterwards.
@@ -290,6 +292,12 @@ class ChildRunner:
     def _take_saves(self) -> list[Save]:
         saves, self.saves = self.saves, []
         return saves
+
+    def _take_throttled(self) -> int:
+        """``tmMgr.save`` calls throttled since the last result."""
+        total = self.telemetry.saves_throttled
+        count, self._throttled_sent = total - self._throttled_sent, total
+        return count
 
     def call(self, call: Call) -> Reply:
         taken = time.monotonic_ns()

@@ -116,6 +116,10 @@ class ProcessorHost(Protocol):
     """Frames in a row on which the processor raised."""
 
     @property
+    def saves_throttled(self) -> int:
+        """``tmMgr.save`` calls dropped above ``save_max_hz``, wherever the processor runs."""
+
+    @property
     def processor(self) -> LoadedProcessor:
         """What was loaded (``instance`` is None when it lives in another process)."""
         ...

@@ -66,6 +66,8 @@ class ProcessWorker(DeliversResults):
         """The frame whose ``tmMgr.save`` requests are being stored (None between frames)."""
         self.last: ProcessedFrame | None = None
         self.consecutive_errors = 0
+        self.saves_throttled = 0
+        """``tmMgr.save`` calls the children dropped above ``save_max_hz`` (every child, restarts included)."""
         self.telemetry: TelemetryManager | None = None
         self.events = events
         self.timeout_s = timeout_s
@@ -167,6 +169,7 @@ class ProcessWorker(DeliversResults):
     # -- what the child sends back (on the loop) ---------------------------------------------------
 
     def _take_result(self, child: ChildProcess, message: Result) -> None:
+        self.saves_throttled += message.saves_throttled  # dropped in the child, whatever became of the frame
         frame = self._feeder.take(child, message)
         if frame is None:
             return

@@ -156,6 +156,12 @@ class ProcessorWorker(DeliversResults):
         return self.stats.snapshot(captured, self._busy_since_ns)
 
     @property
+    def saves_throttled(self) -> int:
+        """``tmMgr.save`` calls its ``tmMgr`` dropped above ``save_max_hz``."""
+        tm = getattr(self.processor.instance, "tmMgr", None)
+        return tm.saves_throttled if isinstance(tm, FrameTelemetry) else 0
+
+    @property
     def busy_s(self) -> float:
         """Seconds the current call into the processor has been running (0 when idle)."""
         since = self._busy_since_ns

@@ -91,6 +91,8 @@ class Result(NamedTuple):
     """Traceback text if the processor raised."""
     saves: list[Save]
     """The ``tmMgr.save`` calls made since the last message."""
+    saves_throttled: int
+    """``tmMgr.save`` calls dropped above ``save_max_hz`` since the last result (in the child, before any copy)."""
     released: list[str]
     """Slots the child no longer references: a processor may keep a frame (the previous one, for optical flow) and
     the platform must not reuse its slot until it lets go."""
