@@ -52,7 +52,8 @@ async def test_huge_and_overflowing_vectors_are_described_briefly_counted_and_re
     assert "(0, 1, 2, 3, ...) (1000000 items)" in rejections[0] and len(rejections[0]) < 200
     assert "the previous message repeated 14 more times" in rejections[1]
     assert "too large for a float" in rejections[2] and len(rejections[2]) < 200
-    errors = [e.message for e in core.events.recent if e.kind == "processor"]
+    errors = [e.message for e in core.events.recent  # not "loading processor ... (5 s ...)", when slow to start
+              if e.kind == "processor" and not e.message.startswith("loading processor")]
     assert len(errors[0]) < MAX_MESSAGE_CHARS + 100 and errors[0].startswith("frame ")  # in full once, then counted
     assert all(m.startswith("photo_processing raised ValueError ") for m in errors[1:]), errors
     assert all(len(m) < 1000 for m in errors[1:]) and not [m for m in errors if "\x1b" in m]

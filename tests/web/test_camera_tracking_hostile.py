@@ -105,8 +105,12 @@ async def test_a_flood_is_counted_in_a_bounded_number_of_lines(platform: tuple[i
     printed = output.read_text().splitlines()
     lines = [line for line in printed if "camera component: drop" in line]
     assert 2 <= len(lines) <= 12 and "is something flooding" in lines[0], lines[:20]
-    counts = [re.search(r"dropped (\d+) more commands? \((\d+) in all\)", line) for line in lines[1:]]
-    dropped = sum(int(count[1]) for count in counts)
-    assert int(counts[-1][2]) == dropped + 1, lines  # each count says how many it stands for
+    # A pause of a second in the flood (a loaded machine) says the first drop again: each such line stands for one.
+    said = sum("is something flooding" in line for line in lines)
+    counts = [re.search(r"dropped (\d+) more commands? \((\d+) in all\)", line) for line in lines]
+    counted = [count for count in counts if count is not None]
+    assert said + len(counted) == len(lines) and counted, lines
+    dropped = said + sum(int(count[1]) for count in counted)
+    assert int(counted[-1][2]) == dropped, lines  # each count says how many it stands for
     assert dropped > 300, lines  # how many arrive is the kernel's call under load: 887 to 29,000 seen
     assert len(printed) < 150  # the commands taken (a few a second) and their outcomes included
