@@ -16,16 +16,13 @@ from typing import TYPE_CHECKING, Any
 import psutil
 
 from controllers import connect_controller
-from controllers.base import BlockingCalls, FlightController, LandingTargets, PoseFeed, RecordedVehicle
+from controllers.base import BlockingCalls, FlightController, LandingTargets, RecordedVehicle
 from controllers.replay_timeline import ReplayTimeline
-from sources import CameraSource, open_source, warm_up_source
-from sources.base import KnowsCameraModel
+from sources import CameraSource
 from sources.camera_model import CameraModel
-from sources.pose import PoseTrack
+from uav_tui.camera.active import ActiveCamera
 from uav_tui.config import Config
-from uav_tui.errors import SourceError
 from uav_tui.events import EventLog
-from uav_tui.flight import pose_feed
 from uav_tui.flight.autonomy import AutonomyGate
 from uav_tui.flight.clock_check import ClockCheck
 from uav_tui.flight.commands import Command
@@ -39,10 +36,11 @@ from uav_tui.hosting.start import start_host
 from uav_tui.landing_targets import LandingTargetFeed, LandingTargetSender, consider_landing_target, watch_precland
 from uav_tui.operations import Operations
 from uav_tui.output.text import last_line, shorten
-from uav_tui.recording import Recorder, describe
+from uav_tui.recording import NotRecording, Recorder, describe
 from uav_tui.replay.gate import ReplayGate, stage_clock
 from uav_tui.replay.operator import CommandReplay, recorded_commands
 from uav_tui.status import CoreState, CoreStatus, core_status
+from uav_tui.web.side_channels import SideChannels
 
 if TYPE_CHECKING:  # aiortc and pymavlink are imported only when the side channels are switched on
     from uav_tui.web import WebServer
@@ -69,9 +67,8 @@ class UavCore:
         self.landing_sender: LandingTargetSender | None = None
         """Sends the landing targets (None without a controller that takes them)."""
         self.controller: FlightController | None = None
-        self.source: CameraSource | None = None
-        self.camera: CameraModel | None = None
-        """The source's camera model (its own, or the configured one; None: none known); ``tmMgr.camera()``."""
+        self.active_camera = ActiveCamera(config.camera, self.events, self._spawn)
+        """The source frames come from and its camera model (``source`` and ``camera`` read it)."""
         self.worker: ProcessorHost | None = None
         self.recorder: Recorder | None = None
         """Writes the run's dataset (None with ``--no-record``)."""
@@ -88,15 +85,10 @@ class UavCore:
         """Seconds from the process start to the first processed frame (None until it is processed)."""
         self._frame_listeners: list[Callable[[ProcessedFrame], None]] = []
         self._tasks: list[asyncio.Task[Any]] = []
-        self._told_not_recording = False
         self._processor_errors = ProcessorErrors(self.events)
         self._operations = Operations(self)
-        self.web: WebServer | None = None
-        """The web page's WebServer (``web.url`` has the token) when ``web`` is on, else None."""
-        self.camera_tracking: CameraTracking | None = None
-        """The MAVLink camera component when ``camera_mavlink`` is set, else None."""
-        self.pose_track: PoseTrack | None = None
-        """The vehicle's pose from telemetry, once a ``sim:`` camera asked for it."""
+        self.side_channels = SideChannels(config.web, self.events)
+        """The web page and MAVLink click-to-track, when configured (``web`` and ``camera_tracking`` read it)."""
         self.link: LinkWatch | None = None
         """Link-loss / recovery events and the dead-simulator report (None without a flight controller)."""
         self.abandoned_calls: list[str] = []
@@ -119,7 +111,7 @@ class UavCore:
         self.started_wall_ns = time.time_ns()
         tune_this_process()  # the processor's own process gets the same at its start
         # The camera's one-off preparation (the sim: camera's ground) overlaps loading and connecting.
-        camera_ready = loop.run_in_executor(None, warm_up_source, self.config.source)
+        camera_ready = self.active_camera.warm_up(self.config.source)
         try:
             self.worker = await start_host(self.config, self._on_result, self.events, self._on_processor_fault)
             self.controller = await connect_controller(self.config.fc, heartbeat_timeout=self.config.connect_timeout,
@@ -135,13 +127,13 @@ class UavCore:
                 commands = recorded_commands(self.controller.run_dir)
                 replay.before_show = CommandReplay(self, loop, commands).before_show
             self.gate.telemetry, self.gate.controller = self.telemetry, self.controller
+            self.active_camera.controller, self.active_camera.replay = self.controller, self.replay
             if isinstance(self.controller, LandingTargets):
                 self.landing_sender = LandingTargetSender(self.controller, self.events)
             await self.gate.check_autopilot_failsafe()
             self.worker.bind_telemetry(self.telemetry)
             await camera_ready
-            self.source = await self.open_source(self.config.source)
-            self.camera = self.camera_model(self.source)
+            source = await self.active_camera.start(self.config.source)
             if self.config.recording.record:
                 self.recorder = await loop.run_in_executor(None, functools.partial(
                     Recorder.open, self.config.recording, describe(self),
@@ -149,11 +141,11 @@ class UavCore:
                     replayed=self.replay is not None))
                 self.recorder.attach(self)
             else:
-                self.telemetry.saver = self._save_without_recording
+                self.telemetry.saver = NotRecording(self.events)
         except BaseException:
             await self._release()
             raise
-        self.worker.attach(self.source.buffer, self.camera)
+        self.worker.attach(source.buffer, self.camera)
         self._spawn(self.worker.run(), "processor")
         self._spawn(self.telemetry.run(), "telemetry")
         if self.controller is not None:
@@ -168,7 +160,7 @@ class UavCore:
         self.events.emit("info", "platform", f"started: source {self.config.source}, processor "
                          f"{self.worker.processor.info.name} ({self.config.isolation}), fc {self.config.fc}")
         try:
-            await self._start_side_channels()
+            await self.side_channels.start(self)
         except BaseException:
             await self._release()
             raise
@@ -179,21 +171,6 @@ class UavCore:
         self.stop_precland(f"processor fault: {reason}")
         if self.gate.enabled:
             self._spawn(self.gate.disable("watchdog", reason), "processor fault")
-
-    async def _start_side_channels(self) -> None:
-        """The web page and MAVLink click-to-track, when configured (aiortc is imported only then)."""
-        if self.config.web.web:
-            from uav_tui.web import WebServer
-
-            self.web = WebServer(self, self.config.web)
-            await self.web.start()
-            self.events.emit("info", "web", f"web page: {self.web.url}")
-        if self.config.web.camera_mavlink:
-            from uav_tui.web.mavlink_tracking import CameraTracking
-
-            self.camera_tracking = CameraTracking(self, self.config.web.camera_mavlink)
-            await self.camera_tracking.start()
-            self.events.emit("info", "web", f"camera tracking on {self.config.web.camera_mavlink}")
 
     async def stop(self, reason: str = "quit") -> None:
         """Hold the vehicle if something uav-tui started could be flying it, then release everything. Idempotent.
@@ -217,19 +194,14 @@ class UavCore:
 
     async def _release(self) -> None:
         """Release every part, each one even if another failed (a bug, reported): the dataset is always closed."""
-        for part, release in (("side channels", self._stop_side_channels), ("tasks", self._cancel_tasks),
-                              ("processor", self._close_worker), ("camera", self._close_source),
+        for part, release in (("side channels", self.side_channels.stop), ("tasks", self._cancel_tasks),
+                              ("processor", self._close_worker), ("camera", self.active_camera.close),
                               ("flight controller", self._close_controller), ("recorder", self._close_recorder)):
             try:
                 await release()
             except Exception as exc:  # noqa: BLE001 - reported; the parts after it must still be released
                 self.fail(f"releasing the {part}", exc)
         self.state = CoreState.STOPPED
-
-    async def _stop_side_channels(self) -> None:
-        for side in (self.web, self.camera_tracking):
-            if side is not None:
-                await side.stop()
 
     async def _cancel_tasks(self) -> None:
         if self.landing_sender is not None:
@@ -242,10 +214,6 @@ class UavCore:
     async def _close_worker(self) -> None:
         if self.worker is not None:
             self.worker.close()
-
-    async def _close_source(self) -> None:
-        if self.source is not None:
-            await asyncio.get_running_loop().run_in_executor(None, self.source.close)
 
     async def _close_controller(self) -> None:
         if self.controller is not None:
@@ -260,12 +228,6 @@ class UavCore:
         if self.recorder is not None:
             self.telemetry.saver = None
             await asyncio.get_running_loop().run_in_executor(None, self.recorder.close)
-
-    def _save_without_recording(self, frame: Any, extra: dict[str, Any]) -> None:
-        """``tmMgr.save`` with ``--no-record``: say so once in the event log (not on the terminal)."""
-        if not self._told_not_recording:
-            self._told_not_recording = True
-            self.events.emit("info", "recorder", "recording is off (--no-record): tmMgr.save() stores nothing")
 
     def _spawn(self, coro: Any, name: str) -> None:
         task = asyncio.create_task(coro, name=name)
@@ -285,6 +247,26 @@ class UavCore:
         self.quit_requested.set()
 
     # -- state the helpers change through the core ------------------------------------------------
+
+    @property
+    def source(self) -> CameraSource | None:
+        """The camera frames come from now (None before it is open)."""
+        return self.active_camera.source
+
+    @property
+    def camera(self) -> CameraModel | None:
+        """The source's camera model (its own, or the configured one; None: none known); ``tmMgr.camera()``."""
+        return self.active_camera.model
+
+    @property
+    def web(self) -> WebServer | None:
+        """The web page's WebServer (``web.url`` has the token) when ``web`` is on, else None."""
+        return self.side_channels.web
+
+    @property
+    def camera_tracking(self) -> CameraTracking | None:
+        """The MAVLink camera component when ``camera_mavlink`` is set, else None."""
+        return self.side_channels.camera_tracking
 
     def hand_over(self, mode: str | None) -> None:
         """A vehicle command handed the vehicle to ``mode`` (LAND, RETURN_TO_LAUNCH), or to no mode of its own."""
@@ -306,7 +288,7 @@ class UavCore:
     def switch_source(self, source: CameraSource, camera: CameraModel | None) -> CameraSource | None:
         """Take frames from ``source`` (with its camera model) from now on; returns the old source, still open."""
         assert self.worker is not None
-        old, self.source, self.camera = self.source, source, camera
+        old = self.active_camera.switch(source, camera)
         if self.recorder is not None:
             self.recorder.watch(source)  # before the worker attaches: each frame is copied before it is drawn on
         self.worker.attach(source.buffer, camera)
@@ -348,44 +330,7 @@ class UavCore:
 
     def newest_frame_age(self) -> float | None:
         """Seconds since the newest frame's capture (on the gate's clock), None before the first."""
-        frame = self.source.buffer.peek() if self.source is not None else None
-        return None if frame is None else (self.gate.clock() - frame.t_mono_ns) / 1e9
-
-    async def open_source(self, uri: str) -> CameraSource:
-        """Open the camera ``uri`` names (in a thread: opening can block), with the vehicle's pose for sim:."""
-        context: dict[str, Any] = {}
-        if uri.startswith("sim:"):
-            context["pose_provider"] = await self._vehicle_pose()
-        if uri.startswith("run:") and self.replay is not None:
-            context["timeline"] = self.replay
-        return await asyncio.get_running_loop().run_in_executor(None, functools.partial(open_source, uri, **context))
-
-    def camera_model(self, source: CameraSource) -> CameraModel | None:
-        """``source``'s own model (``sim:``), else the configured one (``[camera]``), said in the event log.
-
-        Raises CameraModelError when the model is for another frame size than the source gives.
-        """
-        width, height = source.get_frame_size()
-        own = source.camera_model() if isinstance(source, KnowsCameraModel) else None
-        model = own or self.config.camera.model(width, height)
-        if model is not None and width and height:
-            model.check_size(width, height)
-        self.events.emit("info", "source", f"camera model: {model.describe()}" if model is not None else
-                         "no camera model: set camera_calibration or camera_hfov ([camera]) to give processors one")
-        return model
-
-    async def _vehicle_pose(self) -> PoseTrack:
-        """The pose track fed from the controller's telemetry, started on first use (any MAVLink autopilot)."""
-        if self.pose_track is None:
-            if not isinstance(self.controller, PoseFeed):
-                raise SourceError("the sim: camera draws the vehicle's view from its MAVLink telemetry: use it with "
-                                  "--fc sim or a MAVLink connection string (e.g. udpin://0.0.0.0:14540)")
-            self.pose_track = PoseTrack()
-            self._spawn(pose_feed.feed(self.controller.pose_samples(), self.pose_track), "pose")
-            if not await pose_feed.wait_first_pose(self.pose_track):
-                self.events.emit("warning", "source", "no position/attitude telemetry yet: the sim: camera shows "
-                                 "a hover at 10 m until it comes")
-        return self.pose_track
+        return self.active_camera.newest_frame_age(self.gate.clock)
 
     # -- commands --------------------------------------------------------------------------------
 

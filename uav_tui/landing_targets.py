@@ -145,9 +145,11 @@ class LandingCore(Protocol):
     config: Config
     telemetry: TelemetryManager
     gate: AutonomyGate
-    camera: CameraModel | None
     landing: LandingTargetFeed
     landing_sender: LandingTargetSender | None
+
+    @property
+    def camera(self) -> CameraModel | None: ...
 
     @property
     def controller(self) -> FlightController | None: ...

@@ -53,6 +53,14 @@ class Outcome(NamedTuple):
     processor began it: the frames it started after that saw it (a replay gives it before the same frame)."""
 
 
+class CameraOpener(Protocol):
+    """How the ``source`` command opens a camera and picks its model (:class:`~uav_tui.camera.active.ActiveCamera`)."""
+
+    async def open(self, uri: str) -> CameraSource: ...
+
+    def model_of(self, source: CameraSource) -> CameraModel | None: ...
+
+
 class CommandedHost(Protocol):
     """What commands use of the processor's host (thread or process)."""
 
@@ -97,9 +105,8 @@ class OperatedCore(Protocol):
     @property
     def worker(self) -> CommandedHost | None: ...
 
-    async def open_source(self, uri: str) -> CameraSource: ...
-
-    def camera_model(self, source: CameraSource) -> CameraModel | None: ...
+    @property
+    def active_camera(self) -> CameraOpener: ...
 
     def switch_source(self, source: CameraSource, camera: CameraModel | None) -> CameraSource | None: ...
 
@@ -241,9 +248,9 @@ class Operations:
 
     async def _source(self, uri: str, *, origin: str) -> str:
         core = self.core
-        new = await core.open_source(uri)
+        new = await core.active_camera.open(uri)
         try:
-            camera = core.camera_model(new)
+            camera = core.active_camera.model_of(new)
         except SourceError:
             await asyncio.get_running_loop().run_in_executor(None, new.close)
             raise

@@ -127,11 +127,13 @@ class ObservedCore(Protocol):
     config: Config
     telemetry: TelemetryManager
     gate: AutonomyGate
-    camera: CameraModel | None
     processor_error: str | None
     startup_s: float | None
     landing: LandingTargetFeed
     landing_sender: LandingTargetSender | None
+
+    @property
+    def camera(self) -> CameraModel | None: ...
 
     @property
     def worker(self) -> ProcessorHost | None: ...

@@ -1,2 +1,2 @@
-"""The vehicle side of the core: telemetry, the link, commands, the autonomy gate, the pose feed, the
-autopilot's clock, and where the target is on the ground."""
+"""The vehicle side of the core: telemetry, the link, commands, the autonomy gate, the autopilot's
+clock, and where the target is on the ground."""

@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from uav_tui.recording.recorder import Recorder
+from uav_tui.recording.recorder import NotRecording, Recorder
 from uav_tui.recording.rows import EVENT_COLUMNS, FRAME_COLUMNS, TELEMETRY_COLUMNS, image_name
 from uav_tui.recording.run_info import describe
 
-__all__ = ["EVENT_COLUMNS", "FRAME_COLUMNS", "TELEMETRY_COLUMNS", "Recorder", "describe", "image_name"]
+__all__ = ["EVENT_COLUMNS", "FRAME_COLUMNS", "NotRecording", "TELEMETRY_COLUMNS", "Recorder", "describe", "image_name"]

@@ -67,6 +67,19 @@ PENDING = ".pending"
 """Run sub-folder for images saved before their frame id was known."""
 
 
+class NotRecording:
+    """``tmMgr.save`` with ``--no-record``: says once in the event log (not on the terminal) that it stores nothing."""
+
+    def __init__(self, events: EventLog) -> None:
+        self.events = events
+        self.told = False
+
+    def __call__(self, frame: Any, extra: dict[str, Any]) -> None:
+        if not self.told:
+            self.told = True
+            self.events.emit("info", "recorder", "recording is off (--no-record): tmMgr.save() stores nothing")
+
+
 class RecordedCore(Protocol):
     """What the recorder reads of the core it records (:meth:`Recorder.attach`)."""
 
