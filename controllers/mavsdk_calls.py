@@ -9,6 +9,7 @@ interpreter exits, so the process could never exit and kept the serial port. Her
   thread per call, and a shutdown that does not wait for calls still blocked;
 - :func:`bounded` is the one wrapper every MAVSDK call goes through: a timeout, MAVSDK's errors
   translated to ours, and a log line for each call it abandons;
+- :class:`Command` is a controller's :func:`bounded` call, as the parts it hands it to see it;
 - :class:`Subscriptions` reads MAVSDK's subscriptions in tasks that unsubscribe when they end;
 - :func:`release` destroys MAVSDK at close, unless a call is still inside it: then it is let go.
 """
@@ -22,7 +23,7 @@ import threading
 import weakref
 from collections.abc import AsyncGenerator, Awaitable, Callable
 from concurrent.futures import Future, ThreadPoolExecutor
-from typing import Any, TypeVar
+from typing import Any, Protocol, TypeVar
 
 from controllers.mavsdk_errors import map_mavsdk_errors
 
@@ -112,6 +113,13 @@ async def bounded(
         except TimeoutError:
             logger.warning("MAVSDK call %s: no answer within %.1f s; abandoned", name, timeout_s)
             raise
+
+
+class Command(Protocol):
+    """A controller's way to make one MAVSDK call: :func:`bounded`, with its timeout and link, after its own checks
+    (connected, not closed)."""
+
+    async def __call__(self, name: str, call: Callable[[], Awaitable[T]]) -> T: ...
 
 
 class Subscriptions:

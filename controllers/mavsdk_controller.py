@@ -3,50 +3,31 @@
 from __future__ import annotations
 
 import asyncio
-import contextlib
-import json
 import logging
 import math
-import time
 from collections.abc import AsyncIterator, Awaitable, Callable
 from typing import Any, TypeVar
 
-from mavsdk.asyncio import Autopilot, ComponentType, Configuration, Mavsdk, MavsdkConnectionError, System
+from mavsdk.asyncio import ComponentType, Configuration, Mavsdk, System
 from mavsdk.asyncio.plugins.action import ActionAsync, OrbitYawBehavior
-from mavsdk.asyncio.plugins.mavlink_direct import MavlinkDirectAsync, MavlinkMessage
+from mavsdk.asyncio.plugins.mavlink_direct import MavlinkDirectAsync
 from mavsdk.asyncio.plugins.param import ParamAsync
 from mavsdk.asyncio.plugins.telemetry import TelemetryAsync
 
 from controllers import ardupilot
 from controllers.base import PoseSample
-from controllers.connection import (
-    Connection,
-    check_serial_device,
-    connection_failed,
-    no_heartbeat_error,
-    parse_connection,
-)
+from controllers.connection import Connection, check_serial_device, parse_connection
 from controllers.errors import ControllerError
 from controllers.failsafe import STALE_MARGIN_S, FailsafeReport, ParamAccess, check_failsafe
-from controllers.landing_target import LandingTargetError, LandingTargetFix, landing_target_fields
-from controllers.mavlink_commands import (
-    command_long,
-    landing_target,
-    px4_set_mode,
-    send_command,
-    velocity_body_setpoint,
-)
+from controllers.landing_target import LandingTargetFix
+from controllers.mavsdk_attach import AUTOPILOT_NAMES, SETUP_TIMEOUT_S, ask_for_telemetry, reach_autopilot
 from controllers.mavsdk_calls import AbandoningExecutor, Subscriptions, bounded, release, use_abandoning_executor
+from controllers.mavsdk_landing import MavsdkLanding
 from controllers.mavsdk_link import LinkMonitor
 from controllers.mavsdk_log import route_mavsdk_log
-from controllers.mavsdk_pose import POSE_RATE_HZ, BootClock, pose_samples, request_pose_rate
-from controllers.mavsdk_telemetry import merged_updates, set_rates
-from controllers.precland import (
-    MAV_CMD_NAV_LAND,
-    PX4_PRECISION_REQUIRED,
-    PrecisionLandingError,
-    check_ardupilot_params,
-)
+from controllers.mavsdk_offboard import MavsdkOffboard
+from controllers.mavsdk_pose import POSE_RATE_HZ, pose_samples, request_pose_rate
+from controllers.mavsdk_telemetry import merged_updates
 from controllers.vector_stream import DEFAULT_RATE_HZ, VectorStream
 
 logger = logging.getLogger(__name__)
@@ -56,9 +37,6 @@ T = TypeVar("T")
 COMMAND_TIMEOUT_S = 10.0
 """Upper bound on any one command; MAVSDK's own retries end well before it."""
 
-SETUP_TIMEOUT_S = 5.0
-"""Upper bound on asking for telemetry rates after connecting."""
-
 CLOSE_HOLD_TIMEOUT_S = 2.0
 """close() during a vector: how long it tries to put the vehicle in hold before letting go."""
 
@@ -67,8 +45,6 @@ PARAM_TIMEOUT_S = 5.0
 
 RELEASE_TIMEOUT_S = 2.0
 """close(): how long MAVSDK may take to release its connections before it is abandoned."""
-
-AUTOPILOT_NAMES = {"px4": "PX4", "ardupilot": "ArduPilot", "unknown": "unknown autopilot"}
 
 
 class MavsdkController:
@@ -106,9 +82,11 @@ class MavsdkController:
         self._stop = asyncio.Event()
         self._subscriptions = Subscriptions()
         self._closed = False
-        self._vectors = VectorStream(self, rate_hz=vector_rate_hz, name="MavsdkController")
-        self._boot_clock = BootClock()
-        """The autopilot's clock (``time_boot_ms`` of its ATTITUDE) against ours: LANDING_TARGET's time_usec."""
+        self._offboard = MavsdkOffboard(self, self._command)
+        """Velocity control: the setpoints, and the switches into and out of the velocity-control mode."""
+        self._vectors = VectorStream(self._offboard, rate_hz=vector_rate_hz, name="MavsdkController")
+        self._landing: MavsdkLanding | None = None
+        """LANDING_TARGET on the autopilot's clock, and the precision landing (once connected)."""
 
     # ---- connection ------------------------------------------------------------------------------
 
@@ -140,41 +118,16 @@ class MavsdkController:
 
     async def _attach(self, conn: Connection, heartbeat_timeout: float) -> None:
         assert self._mavsdk is not None
-        try:
-            async with asyncio.timeout(SETUP_TIMEOUT_S):
-                await self._mavsdk.add_any_connection(conn.url)
-        except MavsdkConnectionError as exc:
-            raise connection_failed(conn, str(exc)) from exc
-        except TimeoutError as exc:
-            raise connection_failed(conn, f"MAVSDK did not open it within {SETUP_TIMEOUT_S:g} s") from exc
-        system = None
-        with contextlib.suppress(TimeoutError):  # belt and braces over MAVSDK's own timeout
-            async with asyncio.timeout(heartbeat_timeout + 2.0):
-                system = await self._mavsdk.first_autopilot(timeout_s=heartbeat_timeout)
-        if system is None:
-            raise await no_heartbeat_error(conn, heartbeat_timeout)
-        self._system = system
-        self._sysid = await system.get_system_id()
-        kind = await system.autopilot_type()
-        self.autopilot = {Autopilot.PX4: "px4", Autopilot.ARDUPILOT: "ardupilot"}.get(kind, "unknown")
-        self._action = ActionAsync(system)
-        self._telemetry = TelemetryAsync(system)
-        self._param = ParamAsync(system)
-        self._direct = MavlinkDirectAsync(system)
+        reached = await reach_autopilot(self._mavsdk, conn, heartbeat_timeout)
+        self._system, self._sysid, self.autopilot = reached.system, reached.sysid, reached.autopilot
+        self._action, self._telemetry, self._param, self._direct = (reached.action, reached.telemetry, reached.param,
+                                                                    reached.direct)
         self._link = LinkMonitor(self._direct, self._telemetry, self._sysid, self._subscriptions)
         self._link.start()
-        self._subscriptions.read(self._direct.subscribe_message("ATTITUDE"), self._on_attitude, "mavsdk-boot-clock")
-        await self._ask_for_telemetry()
-
-    async def _ask_for_telemetry(self) -> None:
-        if self.autopilot == "ardupilot":
-            await bounded("request_data_stream", lambda: ardupilot.request_streams(self._direct, self._sysid),
-                          SETUP_TIMEOUT_S, self.heartbeat_age_s)
-        try:
-            async with asyncio.timeout(SETUP_TIMEOUT_S):
-                await set_rates(self._telemetry)
-        except TimeoutError:
-            logger.warning("telemetry rates: no answer within %.0f s; keeping the current rates", SETUP_TIMEOUT_S)
+        self._landing, self._offboard.reached = MavsdkLanding(reached, self._command), reached
+        self._subscriptions.read(self._direct.subscribe_message("ATTITUDE"), self._landing.on_attitude,
+                                 "mavsdk-boot-clock")
+        await ask_for_telemetry(reached, self.heartbeat_age_s)
 
     @property
     def own_modes(self) -> frozenset[str]:
@@ -246,16 +199,8 @@ class MavsdkController:
             raise ControllerError(f"{name}: not connected (call connect() first)")
         return await bounded(name, call, self._command_timeout_s, self.heartbeat_age_s)
 
-    async def _guided(self, command: str) -> None:
-        """ArduCopter: switch to GUIDED first (arming, take-off and velocity targets need it)."""
-        if self.autopilot == "ardupilot":
-            await self._ardupilot_mode("GUIDED", command)
-
-    async def _ardupilot_mode(self, mode: str, command: str) -> None:
-        await self._command(command, lambda: ardupilot.set_mode(self._direct, self._sysid, mode))
-
     async def arm(self) -> None:
-        await self._guided("arm")
+        await self._offboard.guided("arm")
         await self._command("arm", self._action.arm)
 
     async def disarm(self) -> None:
@@ -265,7 +210,7 @@ class MavsdkController:
     async def takeoff(self, altitude_m: float | None = None) -> None:
         await self._vectors.stop_and_hold()
         if self.autopilot == "ardupilot":
-            await self._guided("takeoff")
+            await self._offboard.guided("takeoff")
             alt = altitude_m if altitude_m is not None else ardupilot.DEFAULT_TAKEOFF_ALT_M
             await self._command("takeoff", lambda: ardupilot.takeoff(self._direct, self._sysid, alt))
             return
@@ -285,7 +230,7 @@ class MavsdkController:
         if self._vectors.active or self._vectors.engaged:
             await self._vectors.stop_and_hold()  # zero first, then the holding mode
         else:
-            await self.stop_offboard()
+            await self._offboard.stop_offboard()
 
     async def do_orbit(self, radius_m: float, velocity_ms: float) -> None:
         await self._vectors.stop_and_hold()
@@ -340,86 +285,19 @@ class MavsdkController:
     # ---- landing target -------------------------------------------------------------------------
 
     async def send_landing_target(self, fix: LandingTargetFix) -> dict[str, Any]:
-        """Send LANDING_TARGET for a target seen in the frame captured at ``fix.capture_mono_ns``.
-
-        Converted for this autopilot (:mod:`controllers.landing_target`: ArduPilot angles in BODY_FRD, PX4 the
-        local NED position), ``time_usec`` the capture on the autopilot's clock (µs since its boot, mapped from
-        its ATTITUDE messages). Returns the fields sent.
-
-        Raises:
-            LandingTargetError: the autopilot's clock is not known yet, or the fix can't be given to it.
-            ControllerError: not connected, or the send failed.
-        """
-        time_usec = self._boot_clock.boot_us(fix.capture_mono_ns)
-        if time_usec is None:
-            raise LandingTargetError("landing target: no ATTITUDE from the autopilot yet, so its clock is unknown: "
-                                     "not sent")
-        fields = landing_target_fields(self.autopilot, fix, time_usec)
-        message = landing_target(self._sysid, fields)
-        await self._command("landing_target", lambda: self._direct.send_message(message))
-        return fields
+        """Send LANDING_TARGET for a target seen in the frame captured at ``fix.capture_mono_ns``; returns the fields
+        sent (see :meth:`MavsdkLanding.send <controllers.mavsdk_landing.MavsdkLanding.send>`)."""
+        return await self._connected_landing("landing_target").send(fix)
 
     async def precision_land(self) -> str:
-        """Land on the landing target sent with :meth:`send_landing_target` (see :mod:`controllers.precland`).
+        """Land on the landing target sent with :meth:`send_landing_target`; returns what was done (see
+        :meth:`MavsdkLanding.precision_land <controllers.mavsdk_landing.MavsdkLanding.precision_land>`)."""
+        return await self._connected_landing("precland").precision_land(self.land, self._vectors.stop_and_hold)
 
-        ArduPilot: PLND_ENABLED and PLND_TYPE checked, then LAND; PX4: NAV_LAND with precision "required".
-        Returns what was done.
-
-        Raises:
-            PrecisionLandingError: a PLND parameter missing or wrong (named, with the value it needs), or an
-                autopilot that is neither PX4 nor ArduPilot.
-            ControllerError: the landing was refused, or the link is lost.
-        """
-        if self.autopilot == "ardupilot":
-            found = await check_ardupilot_params(
-                lambda name: self._command(f"read {name}", lambda: self._param.get_param_int(name)))
-            await self.land()
-            return "precision landing (LAND, " + ", ".join(f"{k}={v}" for k, v in found.items()) + ")"
-        if self.autopilot != "px4":
-            raise PrecisionLandingError(f"precland: {AUTOPILOT_NAMES[self.autopilot]}: only PX4 and ArduPilot "
-                                        "are known to land on LANDING_TARGET")
-        await self._vectors.stop_and_hold()
-        command = command_long(self._sysid, MAV_CMD_NAV_LAND, 0, PX4_PRECISION_REQUIRED)
-        await self._command("land", lambda: send_command(self._direct, command))
-        return f"precision landing (NAV_LAND, precision {PX4_PRECISION_REQUIRED} = required)"
-
-    def _on_attitude(self, message: MavlinkMessage) -> None:
-        received = time.monotonic_ns()
-        if message.system_id != self._sysid:
-            return
-        with contextlib.suppress(ValueError, KeyError, TypeError):
-            self._boot_clock.observe(int(json.loads(message.fields_json)["time_boot_ms"]), received)
-
-    # ---- OffboardPort (used by VectorStream) -----------------------------------------------------
-
-    async def send_velocity_body(self, forward_ms: float, right_ms: float) -> None:
-        setpoint = velocity_body_setpoint(self._sysid, forward_ms, right_ms)
-        await self._command("set_fly_vector", lambda: self._direct.send_message(setpoint))
-
-    async def start_offboard(self, *, yield_to_others: bool = False) -> None:
-        """Switch to velocity control; with ``yield_to_others``, not from a mode someone else chose.
-
-        Raises:
-            ControllerError: ``yield_to_others`` and the vehicle reports a mode that is not the platform's (a pilot
-                switched it as the vector was sent, a mission, a failsafe): their mode wins, it is not taken back.
-        """
-        mode = self.flight_mode_since(-math.inf)
-        if yield_to_others and mode is not None and mode not in self.own_modes:
-            raise ControllerError(f"the vehicle is in {mode} mode (a pilot, a mission or a failsafe chose it): "
-                                  "not taken back")
-        if self.autopilot == "ardupilot":
-            # GUIDED takes velocity targets; they must be renewed within GUID_TIMEOUT (3 s).
-            await self._ardupilot_mode("GUIDED", "set_fly_vector")
-        else:
-            # PX4 accepts OFFBOARD only while setpoints stream (VectorStream streams first).
-            command = px4_set_mode(self._sysid, "OFFBOARD")
-            await self._command("set_fly_vector", lambda: send_command(self._direct, command))
-
-    async def stop_offboard(self) -> None:
-        if self.autopilot == "ardupilot":  # not LOITER: it flies the RC throttle (see ardupilot.hold)
-            await self._command("hold", lambda: ardupilot.hold(self._direct, self._sysid))
-        else:  # PX4 HOLD (Auto Loiter): automatic, the sticks only matter when a pilot moves them to take over
-            await self._command("hold", self._action.hold)
+    def _connected_landing(self, name: str) -> MavsdkLanding:
+        if self._landing is None or self._closed:
+            raise ControllerError(f"{name}: not connected (call connect() first)")
+        return self._landing
 
     # ---- telemetry -------------------------------------------------------------------------------
 

@@ -25,7 +25,7 @@ PRESTREAM_S = 0.1
 
 
 class OffboardPort(Protocol):
-    """What a VectorStream needs from the autopilot side (implemented by the MAVSDK controller)."""
+    """What a VectorStream needs from the autopilot side (:class:`~controllers.mavsdk_offboard.MavsdkOffboard`)."""
 
     async def send_velocity_body(self, forward_ms: float, right_ms: float) -> None:
         """Send one body-frame velocity setpoint (altitude and yaw held)."""
