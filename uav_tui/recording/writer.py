@@ -8,18 +8,14 @@ the queue is full, the disk is full, the run folder reached its size cap or the 
 floor, the item is dropped and counted, and the first drop of each kind is reported once through
 ``on_problem``.
 
-CSV files only ever receive whole lines: rows are collected in memory and appended every
-``flush_s`` with one ``write`` per file; a failed or short write is cut back to the last whole line.
-A process killed with SIGKILL therefore leaves valid CSV up to its last flush. JPEGs are written to a
-temporary name and renamed, so a frame file is either complete or absent.
+CSV files only ever receive whole lines (:class:`~uav_tui.recording.csv_files.CsvFiles`): rows are
+appended every ``flush_s``, so a process killed with SIGKILL leaves valid CSV up to its last flush.
+JPEGs are written to a temporary name and renamed, so a frame file is either complete or absent.
 """
 
 from __future__ import annotations
 
-import contextlib
-import csv
 import errno
-import io
 import logging
 import os
 import queue
@@ -34,7 +30,7 @@ from typing import Any, Protocol
 import cv2
 import numpy as np
 
-from uav_tui.output.text import safe
+from uav_tui.recording.csv_files import CsvFiles
 
 logger = logging.getLogger(__name__)
 
@@ -123,15 +119,12 @@ class DiskWriter:
                  on_problem: Callable[[str, str], None] | None = None, max_items: int = 4096,
                  max_image_bytes: int = 48 * MB, flush_s: float = 0.5) -> None:
         self.run_dir = Path(run_dir)
-        self.tables = {name: list(columns) for name, columns in tables.items()}
         self.stages = list(stages)
         self.jpeg_quality = jpeg_quality
         self.max_disk_bytes = max_disk_bytes
         self.min_free_bytes = min_free_bytes
         self.flush_s = flush_s
         self.max_image_bytes = max_image_bytes
-        self.rows_written = dict.fromkeys(tables, 0)
-        """Rows on disk per table."""
         self.images_written = 0
         self.bytes_written = 0
         """Everything this writer put on disk (run folder size, apart from run.json)."""
@@ -146,8 +139,7 @@ class DiskWriter:
         self._lock = threading.Lock()
         self._image_bytes_queued = 0
         self._free_bytes = self._disk_free()
-        self._pending: dict[str, list[list[Any]]] = {name: [] for name in tables}
-        self._files: dict[str, tuple[int, int]] = {}  # table -> (fd, size)
+        self._csv = CsvFiles(self.run_dir, tables, self._write)
         self._thread = threading.Thread(target=self._run, name=f"recorder-writer:{self.run_dir.name}", daemon=True)
         self._closed = False
 
@@ -221,6 +213,11 @@ class DiskWriter:
         return None
 
     @property
+    def rows_written(self) -> dict[str, int]:
+        """Rows on disk per table."""
+        return self._csv.rows_written
+
+    @property
     def dropped_total(self) -> int:
         return sum(self.dropped.values())
 
@@ -289,14 +286,12 @@ class DiskWriter:
         for stage in self.stages:
             self._collect(stage.drain)
         self._flush()
-        for fd, _ in self._files.values():
-            os.close(fd)
-        self._files.clear()
+        self._csv.close()
 
     def _handle(self, item: Any) -> None:
         try:
             if isinstance(item, Row):
-                self._pending[item.table].append(item.values)
+                self._csv.add(item.table, item.values)
             elif isinstance(item, Rename):
                 source = self.run_dir / item.source
                 if source.exists():
@@ -316,7 +311,7 @@ class DiskWriter:
     def _collect(self, produce: Callable[..., Iterable[Row]], *args: Any) -> None:
         try:
             for row in produce(*args):
-                self._pending[row.table].append(row.values)
+                self._csv.add(row.table, row.values)
         except Exception as exc:  # noqa: BLE001 - the writer must outlive a failing stage (a video write, say)
             self._failed(produce.__qualname__, exc)
 
@@ -357,52 +352,19 @@ class DiskWriter:
             handle.write(data)
 
     def _flush(self) -> None:
-        for table, rows in self._pending.items():
-            if rows:
-                self._pending[table] = []
-                self._append(table, rows)
-
-    def _append(self, table: str, rows: list[list[Any]]) -> None:
-        refused = self._space_refused()
-        if refused is not None:
-            self._drop(refused, len(rows), f"{table}.csv")
-            return
-        buffer = io.StringIO()
-        writer = csv.writer(buffer, lineterminator="\n")
-        if table not in self._files:
-            writer.writerow(self.tables[table])
-        # Text from outside (processor strings, paths, messages) reaches the file redacted and escaped.
-        writer.writerows([safe(v) if isinstance(v, str) else v for v in row] for row in rows)
-        data = buffer.getvalue().encode()
-        try:
-            fd, size = self._files.get(table) or (self._open(table), 0)
-        except OSError as exc:
-            self._drop(_reason(exc), len(rows), f"{table}.csv: {exc}", f"{table}.csv rows")
-            return
-        self._files[table] = (fd, size)
-        written = 0
-        try:
-            while written < len(data):
-                written += self._write(fd, data[written:])
-        except OSError as exc:
-            with contextlib.suppress(OSError):
-                os.ftruncate(fd, size)  # cut back to the last whole line
-                os.lseek(fd, size, os.SEEK_SET)
-            if size == 0:  # not even the header made it: write it again next time
-                del self._files[table]
-                os.close(fd)
-            self._drop(_reason(exc), len(rows), f"{table}.csv: {exc}", f"{table}.csv rows")
-            return
-        self._files[table] = (fd, size + written)
-        self.rows_written[table] += len(rows)
-        self.bytes_written += written
+        for table, rows in self._csv.take_pending():
+            refused = self._space_refused()
+            if refused is not None:
+                self._drop(refused, len(rows), f"{table}.csv")
+                continue
+            try:
+                self.bytes_written += self._csv.append(table, rows)
+            except OSError as exc:
+                self._drop(_reason(exc), len(rows), f"{table}.csv: {exc}", f"{table}.csv rows")
 
     def _write(self, fd: int, data: bytes) -> int:
         """One ``os.write`` (the seam a full-disk test writer overrides)."""
         return os.write(fd, data)
-
-    def _open(self, table: str) -> int:
-        return os.open(self.run_dir / f"{table}.csv", os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644)
 
     def _disk_free(self) -> int:
         try:
