@@ -1,0 +1,189 @@
+"""What uav-tui can be told: one frozen dataclass per ``uav.toml`` section, each key with its help, range and
+parser (read by :mod:`~uav_tui.config.loading` and :mod:`~uav_tui.config.flags`)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import MISSING, dataclass, field
+from typing import TYPE_CHECKING, Any
+
+from controllers.sim.geo import Home, parse_wind
+from processors.frame_telemetry import DEFAULT_SAVE_MAX_HZ
+from uav_tui.errors import ConfigError
+from uav_tui.token_strength import GENERATE_TOKEN, MIN_TOKEN_BITS
+
+if TYPE_CHECKING:
+    from sources.camera_model import CameraModel
+
+
+def _key(help: str, *, minimum: float | None = None, maximum: float | None = None, default: Any = MISSING,
+         factory: Any = MISSING, parse: Callable[[str], Any] | None = None, metavar: str | None = None) -> Any:
+    metadata = {"help": help, "min": minimum, "max": maximum, "parse": parse, "metavar": metavar}
+    if factory is not MISSING:
+        return field(default_factory=factory, metadata=metadata)
+    return field(default=default, metadata=metadata)
+
+
+@dataclass(frozen=True)
+class SafetyConfig:
+    """Limits the platform enforces on every vector (the manual's safety rules, docs/safety.md)."""
+
+    max_speed: float = _key("largest |vx|, |vy| executed, m/s", minimum=0.05, maximum=20, default=1.0)
+    max_t: float = _key("longest vector duration, s; also the processor-stall limit", minimum=0.1, maximum=10,
+                        default=2.0)
+    max_frame_age: float = _key("a vector from a frame older than this (s) is not executed", minimum=0.01,
+                                maximum=5, default=0.5)
+    link_timeout: float = _key("heartbeat age (s) after which the link counts as lost", minimum=0.2, maximum=30,
+                               default=1.5)
+    camera_stall: float = _key("no new frame for this long (s) stops autonomy", minimum=0.1, maximum=30,
+                               default=1.0)
+    max_processor_errors: int = _key("consecutive processor exceptions that stop autonomy", minimum=1,
+                                     maximum=1000, default=3)
+    takeoff_alt: float = _key("default takeoff altitude, m", minimum=1, maximum=120, default=5.0)
+    tune_autopilot_failsafe: bool = _key("at connect, set the autopilot's offboard-loss failsafe (COM_OF_LOSS_T, "
+                                         "COM_OBL_RC_ACT, GUID_TIMEOUT) when it would fly a dead platform's last "
+                                         "command longer than max_t + 0.5 s; off: refuse autonomy instead",
+                                         default=True)
+    max_altitude: float = _key("highest altitude a takeoff command may ask for, m", minimum=1, maximum=10000,
+                               default=120.0)
+    max_orbit_radius: float = _key("largest orbit radius a command may ask for, m", minimum=1, maximum=10000,
+                                   default=100.0)
+    max_orbit_speed: float = _key("largest orbit speed a command may ask for, m/s", minimum=0.1, maximum=30,
+                                  default=5.0)
+
+    def __post_init__(self) -> None:
+        if self.takeoff_alt > self.max_altitude:
+            raise ConfigError(f"takeoff_alt = {self.takeoff_alt:g} is above max_altitude = {self.max_altitude:g}; "
+                              "lower takeoff_alt or raise max_altitude", key="takeoff_alt")
+
+
+@dataclass(frozen=True)
+class RecordingConfig:
+    """The flight dataset written under ``runs_dir``."""
+
+    record: bool = _key("record the run (telemetry, frames, events)", default=True)
+    runs_dir: str = _key("folder that holds one sub-folder per run", default="runs")
+    record_video: bool = _key("record the camera stream as one video with an index (video.ts, video.csv)",
+                              default=True)
+    record_every: int = _key("also save every Nth raw frame (0 = only frames the processor saves)", minimum=0,
+                             maximum=100000, default=0)
+    jpeg_quality: int = _key("JPEG quality of saved frames", minimum=10, maximum=100, default=90)
+    save_max_hz: float = _key("tmMgr.save calls stored per second of the frames' time; more are dropped "
+                              "with one warning (0 = no limit)", minimum=0, maximum=1000,
+                              default=DEFAULT_SAVE_MAX_HZ)
+    max_disk_mb: float = _key("stop saving frames when the run folder reaches this size (0 = no cap)",
+                              minimum=0, maximum=1e7, default=0)
+    min_free_mb: float = _key("stop saving frames when the disk has less free space than this", minimum=0,
+                              maximum=1e7, default=200)
+
+
+@dataclass(frozen=True)
+class WebConfig:
+    """The optional WebRTC side page."""
+
+    web: bool = _key("serve the WebRTC page", default=False)
+    web_host: str = _key("address the page binds to", default="0.0.0.0")
+    web_port: int = _key("port of the page", minimum=1, maximum=65535, default=8080)
+    web_token: str = _key(f"access token with at least {MIN_TOKEN_BITS} bits of entropy (make one: {GENERATE_TOKEN}); "
+                          "empty = a random one per start", default="")
+    web_origins: str = _key("other page origins allowed to send commands, comma-separated, e.g. "
+                            "https://gcs.local:8443 (the page's own origin is always allowed)", default="")
+    web_width: int = _key("width of the streamed video, px", minimum=64, maximum=4096, default=640)
+    web_fps: float = _key("frame rate of the streamed video", minimum=1, maximum=60, default=15)
+    camera_mavlink: str = _key("MAVLink camera endpoint for ground-station click-to-track, e.g. "
+                               "udpin:0.0.0.0:14580 (empty = off)", default="")
+
+
+def _home(text: str) -> Home | None:
+    return Home.parse(text) if text.strip() else None
+
+
+@dataclass(frozen=True)
+class SimConfig:
+    """The built-in simulated vehicle (``fc = "sim"``); ``uav-tui sim`` takes the same options."""
+
+    home: str = _key("where the simulated vehicle boots: LAT,LON,ALT (empty: PX4 SITL's Zurich home)", default="",
+                     parse=_home, metavar="LAT,LON,ALT")
+    wind: str = _key("steady wind on the simulated vehicle: N,E in m/s", default="0,0", parse=parse_wind,
+                     metavar="N,E")
+    noise: bool = _key("add sensor noise to the simulated vehicle's telemetry", default=False)
+    seed: int = _key("random seed of the simulated vehicle's noise", minimum=0, maximum=2**31 - 1, default=0)
+
+    def vehicle(self) -> dict[str, Any]:
+        """The arguments of :class:`controllers.sim.launcher.SimVehicle` these settings give."""
+        return {"home": _home(self.home), "wind": parse_wind(self.wind), "seed": self.seed, "noise": self.noise}
+
+
+def _calibration_file(path: str) -> None:
+    if path.strip():
+        from sources.calibration import read_calibration  # OpenCV: only when a file is configured
+
+        read_calibration(path)
+
+
+def _mount(mount: str, offset: str = "") -> Any:
+    from sources.camera_model import Mount
+
+    return Mount.parse(mount, offset)
+
+
+@dataclass(frozen=True)
+class CameraConfig:
+    """The camera model of a source that does not state its own (``sim:`` and ``run:`` do): file, or field of view."""
+
+    camera_calibration: str = _key("OpenCV calibration file (uav-tui calibrate writes one); empty: camera_hfov",
+                                   default="", parse=_calibration_file, metavar="FILE")
+    camera_hfov: float = _key("the camera's horizontal field of view, degrees, without a calibration file "
+                              "(0 = unknown: no camera model)", minimum=0, maximum=170, default=0.0)
+    camera_mount: str = _key("how the camera is mounted: down, forward, or its tilt below the nose in degrees",
+                             default="down", parse=_mount, metavar="down|forward|DEG")
+    camera_offset: str = _key("where the camera is from the vehicle's centre: forward, right, down in metres",
+                              default="0,0,0", parse=lambda text: _mount("down", text), metavar="F,R,D")
+
+    def model(self, width: int, height: int) -> CameraModel | None:
+        """The configured model for frames of ``width`` x ``height``; None when neither file nor hfov is given."""
+        from sources.calibration import load_model
+        from sources.camera_model import CameraModel
+
+        mount = _mount(self.camera_mount, self.camera_offset)
+        if self.camera_calibration.strip():
+            return load_model(self.camera_calibration, mount)
+        if self.camera_hfov > 0:
+            return CameraModel.from_hfov(width, height, self.camera_hfov, mount,
+                                         origin=f"camera_hfov {self.camera_hfov:g} deg (no distortion)")
+        return None
+
+
+@dataclass(frozen=True)
+class Config:
+    """Everything uav-tui can be told. The first three keys are the three plug-in levels."""
+
+    source: str = _key("camera URI: file:PATH, synthetic:, usb:0, picam:0, rtsp://..., sim:", default="synthetic:")
+    processor: str = _key("processor: short name, module:Class or path/file.py:Class", default="template")
+    fc: str = _key("flight controller: MAVLink connection string, 'sim' (built-in vehicle) or 'none'",
+                   default="none")
+    connect_timeout: float = _key("seconds to wait for the autopilot's first heartbeat", minimum=0.5, maximum=300,
+                                  default=10.0)
+    processor_args: dict[str, Any] = _key("keyword arguments for the processor's constructor", factory=dict)
+    isolation: str = _key("where the processor runs: 'process' (its own process: a hang or crash cannot take the "
+                          "platform down) or 'thread' (in the platform, for debugging with breakpoints)",
+                          default="process")
+    processor_timeout: float = _key("a processor call unanswered this long (s) gets its process killed and restarted",
+                                    minimum=0.5, maximum=600, default=5.0)
+    processor_call_timeout: float = _key("operator calls into the processor (F-keys, target selection) fail after "
+                                         "this long (s)", minimum=0.05, maximum=60, default=1.0)
+    processor_memory_mb: float = _key("cap on the processor process's address space, MB (RLIMIT_AS; 0 = no cap)",
+                                      minimum=0, maximum=1e6, default=0)
+    safety: SafetyConfig = field(default_factory=SafetyConfig)
+    recording: RecordingConfig = field(default_factory=RecordingConfig)
+    web: WebConfig = field(default_factory=WebConfig)
+    sim: SimConfig = field(default_factory=SimConfig)
+    camera: CameraConfig = field(default_factory=CameraConfig)
+
+
+ISOLATION_MODES = ("process", "thread")
+"""Values of ``isolation``."""
+
+SECTIONS = {"safety": SafetyConfig, "recording": RecordingConfig, "web": WebConfig, "sim": SimConfig,
+            "camera": CameraConfig}
+"""TOML table name -> the dataclass its keys go to."""
