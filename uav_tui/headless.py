@@ -166,7 +166,7 @@ class HeadlessRunner:
 
     def _printed(self, output: TerminalOutput) -> TerminalOutput | BudgetedText:
         """Where ``print()`` goes: ``output``; with thread isolation, where the processor prints in this process,
-        within a line budget (with process isolation its output has one already: ``ProcessWorker``)."""
+        within a line budget (with process isolation its output has one already: ``SubprocessHost``)."""
         if self.core.config.isolation != "thread":
             return output
         return BudgetedText(output, lambda line: output.write(shorten(safe(line), PRINTED_CHARS) + "\n"),

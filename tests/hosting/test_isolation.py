@@ -30,7 +30,7 @@ from uav_tui.errors import ConfigError, ProcessorLoadError, UavError
 from uav_tui.events import EventLog
 from uav_tui.headless import format_status
 from uav_tui.hosting.host import ProcessedFrame
-from uav_tui.hosting.process_host import ProcessWorker
+from uav_tui.hosting.process_host import SubprocessHost
 from uav_tui.recorded import dataset
 
 MAX_T = 1.5
@@ -110,7 +110,7 @@ def held(core: UavCore) -> bool:
 
 async def test_the_processor_process_loads_no_platform_module(tmp_path: Path) -> None:
     (tmp_path / "modules.py").write_text(MODULES)
-    worker = await ProcessWorker.start(f"{tmp_path}/modules.py:Modules", {}, print, events=EventLog(),
+    worker = await SubprocessHost.start(f"{tmp_path}/modules.py:Modules", {}, print, events=EventLog(),
                                        on_fault=print)
     try:
         loaded = (await worker.call("customize_processing", 1)).value
@@ -351,7 +351,7 @@ class CrashLoop:
 async def test_after_five_restarts_in_a_minute_it_gives_up_and_says_so(tmp_path: Path) -> None:
     (tmp_path / "crash_loop.py").write_text(CRASH_LOOP)
     events, faults = EventLog(), []
-    worker = await ProcessWorker.start(f"{tmp_path}/crash_loop.py:CrashLoop", {"marker": str(tmp_path / "died")},
+    worker = await SubprocessHost.start(f"{tmp_path}/crash_loop.py:CrashLoop", {"marker": str(tmp_path / "died")},
                                        print, events=events, on_fault=faults.append, first_backoff_s=0.05)
     buffer = FrameBuffer()
     worker.attach(buffer)
@@ -395,7 +395,7 @@ async def test_a_replay_goes_on_with_the_restarted_processor_after_the_frame_the
     video = create_video_file(tmp_path / "clip.mp4", width=64, height=48)
     source = open_source(f"file:{video}?realtime=0")
     results: list[ProcessedFrame] = []
-    worker = await ProcessWorker.start(f"{tmp_path}/dies_once.py:DiesOnce", {"marker": str(tmp_path / "died")},
+    worker = await SubprocessHost.start(f"{tmp_path}/dies_once.py:DiesOnce", {"marker": str(tmp_path / "died")},
                                        results.append, events=EventLog(), on_fault=print, first_backoff_s=0.05)
     worker.attach(source.buffer)
     task = asyncio.create_task(worker.run())

@@ -21,7 +21,7 @@ import pytest
 from tests.core.flight_helpers import wait_until
 from uav_tui.events import EventLog
 from uav_tui.hosting.frame_ring import job_signals_blocked
-from uav_tui.hosting.process_host import ProcessWorker
+from uav_tui.hosting.process_host import SubprocessHost
 from uav_tui.recording import run_info
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -65,7 +65,7 @@ def test_the_block_is_undone_in_this_thread_after_the_start() -> None:
 async def test_the_processors_process_unblocks_the_job_signals_once_started(tmp_path: Path) -> None:
     """It inherits the block; left so, any process it starts would keep it too."""
     (tmp_path / "idle.py").write_text("class Idle:\n    def photo_processing(self, frame):\n        pass\n")
-    worker = await ProcessWorker.start(f"{tmp_path}/idle.py:Idle", {}, print, events=EventLog(), on_fault=print)
+    worker = await SubprocessHost.start(f"{tmp_path}/idle.py:Idle", {}, print, events=EventLog(), on_fault=print)
     try:
         child = next(p for p in psutil.Process().children() if "uav_tui.hosting.child" in p.cmdline())
 

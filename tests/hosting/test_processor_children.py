@@ -19,7 +19,7 @@ import numpy as np
 from sources.buffer import FrameBuffer
 from tests.core.flight_helpers import wait_until
 from uav_tui.events import EventLog
-from uav_tui.hosting.process_host import ProcessWorker
+from uav_tui.hosting.process_host import SubprocessHost
 
 SPAWNER = '''
 import multiprocessing, os, subprocess, sys, time
@@ -68,10 +68,10 @@ def started(marker: Path) -> list[list[int]]:
     return [[int(pid) for pid in line.split()] for line in marker.read_text().splitlines()] if marker.exists() else []
 
 
-async def start_spawner(tmp_path: Path, **options: object) -> tuple[ProcessWorker, Path, list[str]]:
+async def start_spawner(tmp_path: Path, **options: object) -> tuple[SubprocessHost, Path, list[str]]:
     (tmp_path / "spawner.py").write_text(SPAWNER)
     marker, faults = tmp_path / "pids", []
-    worker = await ProcessWorker.start(f"{tmp_path}/spawner.py:Spawner", {"marker": str(marker)}, print,
+    worker = await SubprocessHost.start(f"{tmp_path}/spawner.py:Spawner", {"marker": str(marker)}, print,
                                        events=EventLog(), on_fault=faults.append, first_backoff_s=0.05, **options)
     return worker, marker, faults
 

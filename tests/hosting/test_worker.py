@@ -30,10 +30,10 @@ from uav_tui.hosting import child_link
 from uav_tui.hosting.frame_ring import MAX_SLOTS
 from uav_tui.hosting.host import ProcessedFrame
 from uav_tui.hosting.pipe import Inbox
-from uav_tui.hosting.process_host import ProcessWorker
-from uav_tui.hosting.thread_host import ProcessorWorker
+from uav_tui.hosting.process_host import SubprocessHost
+from uav_tui.hosting.thread_host import ThreadHost
 
-Worker = ProcessorWorker | ProcessWorker
+Worker = ThreadHost | SubprocessHost
 BOTH = pytest.mark.parametrize("isolation", ["process", "thread"])
 """Run a test with the processor in its own process and on a platform thread."""
 
@@ -118,9 +118,9 @@ async def running_worker(isolation: str, spec: str, on_result: Callable[[Process
                          kwargs: dict[str, Any] | None = None) -> AsyncIterator[Worker]:
     """A started worker of either kind (its ``run()`` task is the caller's)."""
     if isolation == "thread":
-        worker: Worker = ProcessorWorker(load_processor(spec, kwargs), on_result)
+        worker: Worker = ThreadHost(load_processor(spec, kwargs), on_result)
     else:
-        worker = await ProcessWorker.start(spec, kwargs or {}, on_result, events=EventLog(), on_fault=print)
+        worker = await SubprocessHost.start(spec, kwargs or {}, on_result, events=EventLog(), on_fault=print)
     try:
         yield worker
     finally:
@@ -167,7 +167,7 @@ async def test_saved_images_are_sent_only_when_the_platform_records(save_images:
     results: list[ProcessedFrame] = []
     assert source.open()
     try:
-        worker = await ProcessWorker.start("tests.recording.recorder_processors:SaveEveryFrame", {}, results.append,
+        worker = await SubprocessHost.start("tests.recording.recorder_processors:SaveEveryFrame", {}, results.append,
                                            events=EventLog(), on_fault=print, save_images=save_images,
                                            save_max_hz=0)
         try:
@@ -423,7 +423,7 @@ async def test_results_closer_together_than_the_poll_period_are_read_in_batches(
     video = create_video_file(tmp_path / "clip.mp4", frames=20)
     seqs: list[int] = []
     faults: list[str] = []
-    worker = await ProcessWorker.start(f"{tmp_path}/idle.py:Idle", {}, lambda result: seqs.append(result.frame.seq),
+    worker = await SubprocessHost.start(f"{tmp_path}/idle.py:Idle", {}, lambda result: seqs.append(result.frame.seq),
                                        events=EventLog(), on_fault=faults.append)
     task = asyncio.create_task(worker.run())
     try:

@@ -98,7 +98,7 @@ class ChildLink:
             try:
                 message = unpack(pickle.loads(data, buffers=buffers))
             except Exception:  # noqa: BLE001 - a value that cannot be unpickled here: say so, go on
-                logger.exception("ProcessWorker(%s): unreadable message from pid %s", self.spec, child.pid)
+                logger.exception("SubprocessHost(%s): unreadable message from pid %s", self.spec, child.pid)
                 continue
             if isinstance(message, Result):
                 self._on_result(child, message)

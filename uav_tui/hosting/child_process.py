@@ -1,6 +1,6 @@
 """One processor process as the platform sees it: how it is started, what it printed, how it ended.
 
-:class:`ChildProcess` is the handle :class:`~uav_tui.hosting.process_host.ProcessWorker` keeps per child:
+:class:`ChildProcess` is the handle :class:`~uav_tui.hosting.process_host.SubprocessHost` keeps per child:
 the process, its pipe and frame mailbox, the frames and calls it has been offered, the slots it may still reference, and
 the last lines of its output (stdout and stderr together, forwarded escaped to the platform's stdout
 the way ``print()`` reaches it with thread isolation, and kept for the crash report). Its log records

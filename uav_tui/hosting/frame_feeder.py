@@ -192,7 +192,7 @@ class FrameFeeder:
         except Exception as exc:  # a bug here must not stop the camera: say so once, go on
             self.hand_over_failures += 1
             if self.hand_over_failures == 1:
-                logger.exception("ProcessWorker(%s): handing a frame over failed (logged once)", self.spec)
+                logger.exception("SubprocessHost(%s): handing a frame over failed (logged once)", self.spec)
                 self.events.emit("error", "processor", f"frames cannot be handed to the processor: {exc!r}")
 
     def _offer_newest(self, *, may_copy: bool) -> None:
@@ -277,7 +277,7 @@ class FrameFeeder:
             data = pickle.dumps({name: getattr(latest, name) for name in TELEMETRY_FIELDS
                                  if name != "heartbeat_age_s"})
             if len(data) > TELEMETRY_BYTES:  # never seen: the fields are numbers and short names
-                logger.warning("ProcessWorker: telemetry of %d bytes does not fit the frame mailbox; not attached",
+                logger.warning("SubprocessHost: telemetry of %d bytes does not fit the frame mailbox; not attached",
                                len(data))
                 data = b""
             self._pickled_telemetry = (latest, data)

@@ -100,8 +100,8 @@ class DeliversResults:
 
 
 class ProcessorHost(Protocol):
-    """Runs one processor on the newest frame of a buffer: :class:`~uav_tui.hosting.thread_host.ProcessorWorker`
-    (``isolation = "thread"``) and :class:`~uav_tui.hosting.process_host.ProcessWorker` (``"process"``)."""
+    """Runs one processor on the newest frame of a buffer: :class:`~uav_tui.hosting.thread_host.ThreadHost`
+    (``isolation = "thread"``) and :class:`~uav_tui.hosting.process_host.SubprocessHost` (``"process"``)."""
 
     isolation: str
     """``thread`` or ``process``."""

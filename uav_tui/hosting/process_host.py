@@ -1,7 +1,7 @@
 """The process host (``isolation = "process"``): the processor in its own process, same surface as
-:class:`~uav_tui.hosting.thread_host.ProcessorWorker`, nothing shared.
+:class:`~uav_tui.hosting.thread_host.ThreadHost`, nothing shared.
 
-:class:`ProcessWorker` joins three parts, each in a module of its own: frame feeding
+:class:`SubprocessHost` joins three parts, each in a module of its own: frame feeding
 (:class:`~uav_tui.hosting.frame_feeder.FrameFeeder`: shared-memory frames offered in the child's mailbox), the
 link to the child (:class:`~uav_tui.hosting.child_link.ChildLink`: messages of :mod:`uav_tui.hosting.wire` down
 and up its pipe), and the watchdog and restarts (:class:`~uav_tui.hosting.supervisor.ChildSupervisor`). What is
@@ -34,7 +34,7 @@ if TYPE_CHECKING:
     from sources.camera_model import CameraModel
 
 
-class ProcessWorker(DeliversResults):
+class SubprocessHost(DeliversResults):
     """Runs a processor in a child process, always on the newest frame of a buffer.
 
     Create with :meth:`start` (loads the processor in its process; raises ProcessorLoadError).
@@ -82,7 +82,7 @@ class ProcessWorker(DeliversResults):
 
     @classmethod
     async def start(cls, spec: str, kwargs: dict[str, Any], on_result: Callable[[ProcessedFrame], None],
-                    **options: Any) -> ProcessWorker:
+                    **options: Any) -> SubprocessHost:
         """Start the child and wait until the processor is constructed (ProcessorLoadError if it cannot be)."""
         worker = cls(spec, kwargs, on_result, **options)
         try:
@@ -113,7 +113,7 @@ class ProcessWorker(DeliversResults):
     async def run(self) -> None:
         """The watchdog: kill a child silent for longer than ``timeout_s``; until cancelled, then stop all."""
         if self._running:
-            raise RuntimeError("ProcessWorker.run() is already running")
+            raise RuntimeError("SubprocessHost.run() is already running")
         self._running = True
         try:
             await self._supervisor.watch()

@@ -9,9 +9,9 @@ from collections.abc import Callable
 from uav_tui.config import Config
 from uav_tui.events import EventLog
 from uav_tui.hosting.host import ProcessedFrame, ProcessorHost
-from uav_tui.hosting.process_host import ProcessWorker
+from uav_tui.hosting.process_host import SubprocessHost
 from uav_tui.hosting.supervisor import LOAD_TIMEOUT_S
-from uav_tui.hosting.thread_host import ProcessorWorker, load_in_thread
+from uav_tui.hosting.thread_host import ThreadHost, load_in_thread
 
 LOADING_NOTICE_S = 5.0
 """How often a processor still loading is said to be (``loading processor X ... (10 s)``)."""
@@ -25,8 +25,8 @@ async def start_host(config: Config, on_result: Callable[[ProcessedFrame], None]
     try:
         if config.isolation == "thread":
             processor = await load_in_thread(config.processor, config.processor_args)
-            return ProcessorWorker(processor, on_result, save_max_hz=config.recording.save_max_hz, events=events)
-        return await ProcessWorker.start(
+            return ThreadHost(processor, on_result, save_max_hz=config.recording.save_max_hz, events=events)
+        return await SubprocessHost.start(
             config.processor, config.processor_args, on_result, events=events, on_fault=on_fault,
             timeout_s=config.processor_timeout, memory_mb=config.processor_memory_mb or None,
             save_images=config.recording.record, save_max_hz=config.recording.save_max_hz)

@@ -45,7 +45,7 @@ class ChildSupervisor:
     """Starts the children, watches them, reports their ends and restarts the processor.
 
     The current child is the one :class:`~uav_tui.hosting.frame_feeder.FrameFeeder` feeds (``feeder.child``).
-    Arguments as :class:`~uav_tui.hosting.process_host.ProcessWorker`'s.
+    Arguments as :class:`~uav_tui.hosting.process_host.SubprocessHost`'s.
     """
 
     def __init__(self, spec: str, kwargs: dict[str, Any], *, link: ChildLink, feeder: FrameFeeder, events: EventLog,
@@ -154,7 +154,7 @@ class ChildSupervisor:
         deadline = time.monotonic() + timeout
         for child in list(self.children):  # the loop removes those it saw end
             if not child.join_threads(max(0.0, deadline - time.monotonic())):
-                logger.error("ProcessWorker(%s): pid %s %s", self.spec, child.pid, "still holds its output open: a "
+                logger.error("SubprocessHost(%s): pid %s %s", self.spec, child.pid, "still holds its output open: a "
                              "process it started left its group" if child.ended.is_set() else "did not exit")
 
     def _say_left_out(self, count: int) -> None:

@@ -36,7 +36,7 @@ JOIN_TIMEOUT_S = 2.0
 """How long stopping waits for the processor's current call before abandoning it."""
 
 
-class ProcessorWorker(DeliversResults):
+class ThreadHost(DeliversResults):
     """Runs a processor on one dedicated thread, always on the newest frame of a buffer.
 
     The thread waits on the frame buffer itself, processes the newest frame and posts the result to
@@ -46,7 +46,7 @@ class ProcessorWorker(DeliversResults):
     the same thread between two frames, so researchers never need a lock.
 
     This is ``isolation = "thread"``: a breakpoint in the processor works, but a processor that holds
-    the GIL, hangs or crashes takes the platform with it (see :class:`~uav_tui.hosting.process_host.ProcessWorker`).
+    the GIL, hangs or crashes takes the platform with it (see :class:`~uav_tui.hosting.process_host.SubprocessHost`).
     """
 
     isolation = "thread"
@@ -100,7 +100,7 @@ class ProcessorWorker(DeliversResults):
     async def run(self) -> None:
         """Start the processor thread and keep it running until cancelled."""
         if self._thread is not None:
-            raise RuntimeError("ProcessorWorker.run() is already running")
+            raise RuntimeError("ThreadHost.run() is already running")
         self._loop = asyncio.get_running_loop()
         self._thread = threading.Thread(target=self._thread_main, name="processor", daemon=True)
         logs = ThreadLogBudget(self._thread, self._say_left_out)
