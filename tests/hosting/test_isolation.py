@@ -17,11 +17,8 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
 import pytest
 
-from sources import open_source
-from sources.buffer import FrameBuffer
 from tests.core.flight_helpers import fly_under_autonomy, flying_core, speed, wait_until
 from tests.videos import create_video_file
 from uav_tui.config import load_config
@@ -29,7 +26,6 @@ from uav_tui.core import UavCore
 from uav_tui.errors import ConfigError, ProcessorLoadError, UavError
 from uav_tui.events import EventLog
 from uav_tui.headless import format_status
-from uav_tui.hosting.host import ProcessedFrame
 from uav_tui.hosting.process_host import SubprocessHost
 from uav_tui.recorded import dataset
 
@@ -328,82 +324,3 @@ def test_isolation_accepts_only_process_or_thread() -> None:
     assert load_config(None, {"isolation": "thread"}).isolation == "thread"
     with pytest.raises(ConfigError, match="isolation must be one of process, thread, got 'procss'"):
         load_config(None, {"isolation": "procss"})
-
-
-CRASH_LOOP = '''
-import os
-from pathlib import Path
-
-class CrashLoop:
-    """Dies on its first frame; every later construction fails."""
-
-    def __init__(self, marker):
-        if Path(marker).exists():
-            raise RuntimeError("still broken")
-        self.marker = marker
-
-    def photo_processing(self, frame):
-        Path(self.marker).touch()
-        os._exit(3)
-'''
-
-
-async def test_after_five_restarts_in_a_minute_it_gives_up_and_says_so(tmp_path: Path) -> None:
-    (tmp_path / "crash_loop.py").write_text(CRASH_LOOP)
-    events, faults = EventLog(), []
-    worker = await SubprocessHost.start(f"{tmp_path}/crash_loop.py:CrashLoop", {"marker": str(tmp_path / "died")},
-                                       print, events=events, on_fault=faults.append, first_backoff_s=0.05)
-    buffer = FrameBuffer()
-    worker.attach(buffer)
-    task = asyncio.create_task(worker.run())
-    try:
-        buffer.put(np.zeros((4, 4, 3), np.uint8))
-        await wait_until(lambda: worker.state().state.startswith("crashed: "), 30, "the platform to give up")
-    finally:
-        task.cancel()
-        await asyncio.gather(task, return_exceptions=True)
-    messages = [e.message for e in events.recent]
-    restarts = [m.split(":")[0] for m in messages if m.startswith("restart ")]
-    assert restarts == [f"restart {n} failed" for n in range(1, 6)]
-    assert any(m.startswith("gave up: 5 restarts within 60 s") for m in messages)
-    assert worker.state().state == "crashed: restart failed: " + messages[-2].partition(" failed: ")[2]
-    assert len(faults) == 1 and "exited with code 3" in faults[0]  # autonomy was stopped once, at the death
-
-
-DIES_ONCE = '''
-import os
-from pathlib import Path
-
-class DiesOnce:
-    """Dies on its third frame, the first time it runs."""
-
-    def __init__(self, marker):
-        self.marker, self.frames = Path(marker), 0
-
-    def photo_processing(self, frame):
-        self.frames += 1
-        if self.frames == 3 and not self.marker.exists():
-            self.marker.touch()
-            os._exit(3)
-'''
-
-
-async def test_a_replay_goes_on_with_the_restarted_processor_after_the_frame_the_dead_one_had(tmp_path: Path) -> None:
-    """``realtime=0`` waits for each frame's claim; a child that dies on frame 3 (it had claimed it) is replaced
-    and the replay resumes with the restarted one at frame 4: only the frame it died on is lost."""
-    (tmp_path / "dies_once.py").write_text(DIES_ONCE)
-    video = create_video_file(tmp_path / "clip.mp4", width=64, height=48)
-    source = open_source(f"file:{video}?realtime=0")
-    results: list[ProcessedFrame] = []
-    worker = await SubprocessHost.start(f"{tmp_path}/dies_once.py:DiesOnce", {"marker": str(tmp_path / "died")},
-                                       results.append, events=EventLog(), on_fault=print, first_backoff_s=0.05)
-    worker.attach(source.buffer)
-    task = asyncio.create_task(worker.run())
-    try:
-        await wait_until(lambda: len(results) >= 10, 30, "ten frames from the restarted processor")
-    finally:
-        task.cancel()
-        await asyncio.gather(task, return_exceptions=True)
-        source.close()
-    seqs = [r.frame.seq for r in results]
-    assert seqs == [1, 2, *range(4, len(seqs) + 2)]
