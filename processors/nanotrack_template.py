@@ -34,6 +34,13 @@ class SelectedTemplate:
 
     def tracker_at(self, work: np.ndarray, box: Box) -> cv2.TrackerNano:
         """A NanoTrack at ``box`` (work-frame pixels) whose template is the selected view; call ``update`` next."""
+        tracker = create_nanotrack()
+        tracker.init(self.pasted(work, box), tuple(int(round(v)) for v in box))
+        return tracker
+
+    def pasted(self, work: np.ndarray, box: Box) -> np.ndarray:
+        """A copy of ``work`` with the selected view (resized to ``box``'s) where a NanoTrack started on ``box``
+        cuts its template from."""
         x, y, w, h = box
         side = exemplar_side(w, h)
         patch = cv2.resize(self.view, (side, side), interpolation=cv2.INTER_AREA)
@@ -43,6 +50,4 @@ class SelectedTemplate:
         ix1, iy1 = min(x0 + side, image.shape[1]), min(y0 + side, image.shape[0])
         if ix1 > ix0 and iy1 > iy0:
             image[iy0:iy1, ix0:ix1] = patch[iy0 - y0 : iy1 - y0, ix0 - x0 : ix1 - x0]
-        tracker = create_nanotrack()
-        tracker.init(image, tuple(int(round(v)) for v in box))
-        return tracker
+        return image
