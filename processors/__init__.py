@@ -10,6 +10,7 @@ from __future__ import annotations
 from typing import Any
 
 from processors.base import OPTIONAL_METHODS, FrameProcessor, ProcessorInfo, validate_processor
+from processors.gimbal import GimbalPointing
 from processors.landing_target import LandingTarget
 from processors.loading import ENTRY_POINT_GROUP, LoadedProcessor, load
 
@@ -24,7 +25,8 @@ BUILTINS: dict[str, str] = {
 """Short names of the built-in processors."""
 
 __all__ = [
-    "BUILTINS", "ENTRY_POINT_GROUP", "OPTIONAL_METHODS", "FrameProcessor", "LandingTarget", "LoadedProcessor",
+    "BUILTINS", "ENTRY_POINT_GROUP", "OPTIONAL_METHODS", "FrameProcessor", "GimbalPointing", "LandingTarget",
+    "LoadedProcessor",
     "ProcessorInfo",
     "load_processor", "validate_processor",
 ]

@@ -1,4 +1,4 @@
-"""The frame-processor contract: one required method, four optional ones, names as published."""
+"""The frame-processor contract: one required method, five optional ones, names as published."""
 
 from __future__ import annotations
 
@@ -11,12 +11,13 @@ import numpy as np
 
 from processors.errors import ProcessorLoadError
 
-OPTIONAL_METHODS = ("catch_cmd", "customize_processing", "getPreparedVector", "getLandingTarget")
+OPTIONAL_METHODS = ("catch_cmd", "customize_processing", "getPreparedVector", "getLandingTarget",
+                    "getGimbalPointing")
 """Detected once at load time; a processor without ``getPreparedVector`` never moves the vehicle, one without
-``getLandingTarget`` never sends a landing target."""
+``getLandingTarget`` never sends a landing target, one without ``getGimbalPointing`` never turns the gimbal."""
 
 _SIGNATURES = ("catch_cmd(self, roi)", "customize_processing(self, id)", "getPreparedVector(self)",
-               "getLandingTarget(self)")
+               "getLandingTarget(self)", "getGimbalPointing(self)")
 
 Box = tuple[int, int, int, int]
 """``(x, y, w, h)`` in frame pixels, (x, y) the top-left corner."""
@@ -34,6 +35,8 @@ class FrameProcessor(Protocol):
         getPreparedVector()       (vx, vy, t): body-frame m/s, vx forward, vy right, t seconds; or None
         getLandingTarget()        the landing pad seen in the frame just processed, a
                                   :class:`~processors.landing_target.LandingTarget`; or None
+        getGimbalPointing()       where the camera should turn after the frame just processed, a
+                                  :class:`~processors.gimbal.GimbalPointing` (rates or angles); or None
 
     ``tmMgr`` is set by the platform after construction (a :class:`~processors.frame_telemetry.FrameTelemetry`:
     ``snapshot()``, the telemetry at the frame's capture with its ``frame_seq`` and ``frame_t_ns``, the clock

@@ -165,7 +165,7 @@ class LandingCore(Protocol):
 def consider_landing_target(core: LandingCore, result: ProcessedFrame) -> None:
     """Send the frame's landing target while ``precland`` or autonomy is on, the frame fresh and the link alive;
     ``result.landing`` says what was done (frames.csv)."""
-    target = result.landing_target
+    target = result.outputs.landing_target
     if target is None:
         return
     if target.frame_seq is not None and target.frame_seq != result.frame.seq:

@@ -57,10 +57,10 @@ class _Returns:
 
 def test_the_per_frame_call_reads_the_landing_target_and_refuses_anything_else() -> None:
     target = LandingTarget((0.0, 0.0, 2.0), 4.0)
-    outcome = call_frame(_Returns(target), None, vector=False, landing=True)
-    assert outcome.landing_target == target and outcome.error is None
-    assert call_frame(_Returns(target), None, vector=False).landing_target is None  # not asked: not called
-    wrong = call_frame(_Returns((0.1, 0.2)), None, vector=False, landing=True)
-    assert wrong.landing_target is None
+    outcome = call_frame(_Returns(target), None, vector=False, outputs=["getLandingTarget"])
+    assert outcome.outputs.landing_target == target and outcome.error is None
+    assert call_frame(_Returns(target), None, vector=False).outputs.landing_target is None  # not asked: not called
+    wrong = call_frame(_Returns((0.1, 0.2)), None, vector=False, outputs=["getLandingTarget"])
+    assert wrong.outputs.landing_target is None
     assert wrong.raised.startswith("TypeError: getLandingTarget() returned tuple (0.1, 0.2): return a "
                                    "processors.LandingTarget or None")

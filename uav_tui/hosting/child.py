@@ -55,6 +55,7 @@ import numpy as np
 from processors import load_processor
 from processors.errors import ProcessorLoadError
 from processors.frame_telemetry import DEFAULT_SAVE_MAX_HZ, FrameTelemetry
+from processors.outputs import output_methods
 from uav_tui.hosting.frame_call import call_frame
 from uav_tui.hosting.frame_mailbox import FrameMailbox, Offer, Segment
 from uav_tui.hosting.pipe import send_message
@@ -234,7 +235,7 @@ class ChildRunner:
         self.instance.tmMgr = self.telemetry
         self.slots = Slots()
         self.has_vector = "getPreparedVector" in loaded.info.capabilities
-        self.has_landing = "getLandingTarget" in loaded.info.capabilities
+        self.outputs = output_methods(loaded.info.capabilities)
         self._telemetry: tuple[bytes, dict[str, Any]] = (b"", {})
         """The last frame's pickled telemetry and its fields (telemetry changes slower than frames)."""
         self._messages = select.poll()
@@ -277,11 +278,11 @@ class ChildRunner:
             self._telemetry = (offer.telemetry, pickle.loads(offer.telemetry) if offer.telemetry else {})
         self.telemetry.begin(offer.seq, offer.t_mono_ns, offer.t_wall_ns, self._telemetry[1], offer.heartbeat_age_s)
         image = self.slots.view(offer.slot, offer.shape)
-        outcome = call_frame(self.instance, image, vector=self.has_vector, landing=self.has_landing,
+        outcome = call_frame(self.instance, image, vector=self.has_vector, outputs=self.outputs,
                              let_through=(MemoryError,))
         del image
         return Result(offer.gen, outcome.t_start_ns, outcome.t_end_ns, outcome.t_vector_ns, _picklable(outcome.vector),
-                      outcome.landing_target, outcome.box, outcome.error, self._take_saves(), self._take_throttled(),
+                      outcome.outputs, outcome.box, outcome.error, self._take_saves(), self._take_throttled(),
                       self.slots.released())
 
     def _keep_save(self, image: np.ndarray, extra: dict[str, Any]) -> None:

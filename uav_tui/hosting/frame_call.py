@@ -1,7 +1,7 @@
 """One frame through a processor, as every host makes the call: the thread host, the processor's process, eval.
 
-``photo_processing(image)`` timed, then ``getPreparedVector()`` and ``getLandingTarget()`` when asked for, then its
-``box``
+``photo_processing(image)`` timed, then ``getPreparedVector()`` and the output methods (``getLandingTarget()``,
+``getGimbalPointing()``: :mod:`processors.outputs`) when asked for, then its ``box``
 (:func:`processors.base.read_box`); an exception is caught and kept as text, never raised, so that no
 reference to the frame outlives the call (the processor's process reuses a frame's shared-memory slot only
 once no view of it is left).
@@ -11,12 +11,13 @@ from __future__ import annotations
 
 import time
 import traceback
+from collections.abc import Collection
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from processors.base import Box, read_box
-from processors.landing_target import LandingTarget, read_landing_target
+from processors.outputs import NO_OUTPUTS, FrameOutputs, read_outputs
 
 
 @dataclass(slots=True)
@@ -30,8 +31,8 @@ class FrameOutcome:
     """When ``getPreparedVector`` returned (0 when not called)."""
     vector: Any = None
     """What ``getPreparedVector`` returned, unchecked."""
-    landing_target: LandingTarget | None = None
-    """What ``getLandingTarget`` returned (None when not called or no pad)."""
+    outputs: FrameOutputs = NO_OUTPUTS
+    """What the output methods returned, checked (None each when not called or nothing this frame)."""
     box: Box | None = None
     error: str | None = None
     """The traceback's text when the processor raised."""
@@ -39,11 +40,12 @@ class FrameOutcome:
     """The exception in one line (:func:`describe`) when the processor raised."""
 
 
-def call_frame(instance: Any, image: Any, *, vector: bool, landing: bool = False,
+def call_frame(instance: Any, image: Any, *, vector: bool, outputs: Collection[str] = (),
                let_through: tuple[type[BaseException], ...] = ()) -> FrameOutcome:
-    """Process ``image`` with ``instance``; ``vector``: call ``getPreparedVector`` too, ``landing``:
-    ``getLandingTarget`` (anything but a LandingTarget or None is the processor's error). Exceptions of the types in
-    ``let_through`` propagate (the processor's process ends on a MemoryError); any other is kept in the outcome."""
+    """Process ``image`` with ``instance``; ``vector``: call ``getPreparedVector`` too; ``outputs``: these output
+    methods (:func:`processors.outputs.read_outputs`: a value of the wrong type is the processor's error). Exceptions
+    of the types in ``let_through`` propagate (the processor's process ends on a MemoryError); any other is kept in
+    the outcome."""
     start = time.monotonic_ns()
     outcome = FrameOutcome(start, 0)
     try:
@@ -52,8 +54,7 @@ def call_frame(instance: Any, image: Any, *, vector: bool, landing: bool = False
         if vector:
             outcome.vector = instance.getPreparedVector()
             outcome.t_vector_ns = time.monotonic_ns()
-        if landing:
-            outcome.landing_target = read_landing_target(instance.getLandingTarget())
+        outcome.outputs = read_outputs(instance, outputs)
         outcome.box = read_box(instance)
     except let_through:
         raise

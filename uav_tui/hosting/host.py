@@ -8,12 +8,12 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Protocol
 
 from processors.base import Box
+from processors.outputs import NO_OUTPUTS, FrameOutputs
 from sources.buffer import Frame
 
 if TYPE_CHECKING:
     from processors import LoadedProcessor
     from processors.base import ProcessorInfo
-    from processors.landing_target import LandingTarget
     from sources.buffer import FrameBuffer
     from sources.camera_model import CameraModel
     from uav_tui.flight.telemetry import TelemetryManager
@@ -32,14 +32,17 @@ class ProcessedFrame:
     """When getPreparedVector returned (0 if the processor has none)."""
     vector: Any = None
     """What getPreparedVector returned, unchecked (the autonomy gate validates it)."""
-    landing_target: LandingTarget | None = None
-    """What getLandingTarget returned (None without the method, or no pad in this frame)."""
+    outputs: FrameOutputs = NO_OUTPUTS
+    """What the output methods returned: ``outputs.landing_target`` (getLandingTarget), ``outputs.gimbal``
+    (getGimbalPointing); None each without the method, or nothing in this frame."""
     error: str | None = None
     """Traceback text if the processor raised."""
     decision: str = ""
     """What the autonomy gate did with the vector: ``executed`` or why not."""
     landing: str = ""
     """What the platform did with the landing target: ``sent`` or why not ("" without one)."""
+    gimbal: str = ""
+    """What the platform did with the gimbal pointing: ``sent`` or why not ("" without one)."""
     extra: dict[str, Any] = field(default_factory=dict)
     """Fields the processor stored with ``tmMgr.save(frame, **extra)`` for this frame."""
     saved: bool = False

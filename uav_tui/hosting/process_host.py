@@ -175,7 +175,7 @@ class SubprocessHost(DeliversResults):
             return
         result = ProcessedFrame(frame=frame, t_start_ns=message.t_start_ns, t_end_ns=message.t_end_ns,
                                 t_vector_ns=message.t_vector_ns, vector=message.vector,
-                                landing_target=message.landing_target, error=message.error,
+                                outputs=message.outputs, error=message.error,
                                 box=message.box)
         self._store(message.saves, result)
         if result.error:

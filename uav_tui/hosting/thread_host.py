@@ -19,6 +19,7 @@ from controllers.base import TELEMETRY_FIELDS, Telemetry
 from processors import LoadedProcessor, load_processor
 from processors.base import ProcessorInfo
 from processors.frame_telemetry import DEFAULT_SAVE_MAX_HZ, FrameTelemetry
+from processors.outputs import output_methods
 from sources.buffer import Frame, FrameBuffer
 from uav_tui.events import EventLog
 from uav_tui.flight.telemetry import TelemetryManager
@@ -237,13 +238,13 @@ class ThreadHost(DeliversResults):
         try:
             capabilities = self.processor.info.capabilities
             outcome = call_frame(instance, frame.image, vector="getPreparedVector" in capabilities,
-                                 landing="getLandingTarget" in capabilities)
+                                 outputs=output_methods(capabilities))
         finally:
             self._busy_since_ns = None
             self.current = None
         result.t_start_ns, result.t_end_ns = outcome.t_start_ns, outcome.t_end_ns
         result.t_vector_ns, result.vector = outcome.t_vector_ns, outcome.vector
-        result.landing_target = outcome.landing_target
+        result.outputs = outcome.outputs
         result.box, result.error = outcome.box, outcome.error
         if outcome.error is None:
             self.consecutive_errors = 0

@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 import numpy as np
 
 from processors.base import Box, ProcessorInfo
-from processors.landing_target import LandingTarget
+from processors.outputs import FrameOutputs
 
 if TYPE_CHECKING:
     from sources.camera_model import CameraModel
@@ -84,8 +84,8 @@ class Result(NamedTuple):
     t_end_ns: int
     t_vector_ns: int
     vector: Any
-    landing_target: LandingTarget | None
-    """What ``getLandingTarget`` returned, checked (None without the method, or no pad)."""
+    outputs: FrameOutputs
+    """What the output methods returned, checked (:mod:`processors.outputs`)."""
     box: Box | None
     error: str | None
     """Traceback text if the processor raised."""
