@@ -15,9 +15,11 @@ if TYPE_CHECKING:
 
 @dataclass(frozen=True, slots=True)
 class PoseSample:
-    """One position (``north_m, east_m, down_m``) or attitude (``roll, pitch, yaw`` degrees) sample."""
+    """One position (``north_m, east_m, down_m``), attitude (``roll, pitch, yaw`` degrees) or gimbal attitude sample
+    (``roll, pitch, yaw`` degrees: roll and pitch from the horizon, yaw from the vehicle's nose for ``gimbal``, from
+    north for ``gimbal_earth``)."""
 
-    kind: Literal["position", "attitude"]
+    kind: Literal["position", "attitude", "gimbal", "gimbal_earth"]
     t_mono_ns: int
     """When the autopilot measured it, on this computer's ``time.monotonic_ns()`` clock."""
     values: tuple[float, float, float]
@@ -62,6 +64,11 @@ class Telemetry:
     satellites: int | None = None
     health_ok: bool | None = None
     heartbeat_age_s: float | None = None
+    gimbal_roll_deg: float | None = None
+    gimbal_pitch_deg: float | None = None
+    """The gimbal's attitude where there is one (gimbal protocol v2): roll and pitch from the horizon (pitch
+    positive up), yaw from north; the camera on it looks along its forward axis."""
+    gimbal_yaw_deg: float | None = None
 
 
 TELEMETRY_FIELDS: tuple[str, ...] = tuple(f.name for f in fields(Telemetry))
@@ -80,9 +87,9 @@ class FlightController(Protocol):
     in a holding mode itself. A new vector replaces the running one.
 
     Optional capabilities are the small Protocols below (:class:`FailsafeCheck`, :class:`PoseFeed`,
-    :class:`OwnModes`, :class:`LandingTargets`, :class:`PrecisionLanding`, :class:`BlockingCalls`,
-    :class:`SimulatorOwner`, :class:`RecordedVehicle`); the platform asks ``isinstance(controller, PoseFeed)``
-    and uses what the answer allows.
+    :class:`OwnModes`, :class:`LandingTargets`, :class:`GimbalControl`, :class:`PrecisionLanding`,
+    :class:`BlockingCalls`, :class:`SimulatorOwner`, :class:`RecordedVehicle`); the platform asks
+    ``isinstance(controller, PoseFeed)`` and uses what the answer allows.
     """
 
     description: str
@@ -155,6 +162,25 @@ class LandingTargets(Protocol):
     async def send_landing_target(self, fix: LandingTargetFix) -> dict[str, Any]:
         """Send it converted for the autopilot and stamped with the frame's capture time on its clock; returns
         what was sent."""
+        ...
+
+
+@runtime_checkable
+class GimbalControl(Protocol):
+    """A controller that points a gimbal (MAVLink gimbal protocol v2)."""
+
+    async def point_gimbal(self, mode: str, pitch: float, yaw: float) -> None:
+        """Take control of the gimbal if not held yet, then send the setpoint: ``mode`` ``rate`` (deg/s) or ``angle``
+        (degrees, yaw from the nose), pitch positive up. Raises ControllerError (NotSupported: no gimbal)."""
+        ...
+
+    async def release_gimbal(self) -> None:
+        """Stop the gimbal and release control; nothing when control is not held."""
+        ...
+
+    @property
+    def gimbal_controlled(self) -> bool:
+        """Control of the gimbal is held."""
         ...
 
 

@@ -22,6 +22,7 @@ from controllers.failsafe import STALE_MARGIN_S, FailsafeReport, ParamAccess, ch
 from controllers.landing_target import LandingTargetFix
 from controllers.mavsdk_attach import AUTOPILOT_NAMES, SETUP_TIMEOUT_S, ask_for_telemetry, reach_autopilot
 from controllers.mavsdk_calls import AbandoningExecutor, Subscriptions, bounded, release, use_abandoning_executor
+from controllers.mavsdk_gimbal import MavsdkGimbal
 from controllers.mavsdk_landing import MavsdkLanding
 from controllers.mavsdk_link import LinkMonitor
 from controllers.mavsdk_log import route_mavsdk_log
@@ -86,6 +87,7 @@ class MavsdkController:
         """Velocity control: the setpoints, and the switches into and out of the velocity-control mode."""
         self._vectors = VectorStream(self._offboard, rate_hz=vector_rate_hz, name="MavsdkController")
         self._landing: MavsdkLanding | None = None
+        self._gimbal: MavsdkGimbal | None = None
         """LANDING_TARGET on the autopilot's clock, and the precision landing (once connected)."""
 
     # ---- connection ------------------------------------------------------------------------------
@@ -125,6 +127,8 @@ class MavsdkController:
         self._link = LinkMonitor(self._direct, self._telemetry, self._sysid, self._subscriptions)
         self._link.start()
         self._landing, self._offboard.reached = MavsdkLanding(reached, self._command), reached
+        self._gimbal = MavsdkGimbal(reached.system, self._command)
+        self._gimbal.watch_list(self._subscriptions)
         self._subscriptions.read(self._direct.subscribe_message("ATTITUDE"), self._landing.on_attitude,
                                  "mavsdk-boot-clock")
         await ask_for_telemetry(reached, self.heartbeat_age_s)
@@ -165,6 +169,7 @@ class MavsdkController:
             except (ControllerError, TimeoutError) as exc:
                 logger.error("MavsdkController: could not put the vehicle in hold while closing: %s",
                              str(exc) or f"no answer within {CLOSE_HOLD_TIMEOUT_S:g} s")
+        await self._release_gimbal_at_close()
         self._closed = True
         self._stop.set()
         await self._vectors.cancel()
@@ -173,6 +178,14 @@ class MavsdkController:
         if mavsdk is not None and self._executor is not None:
             await release(mavsdk, self._executor, RELEASE_TIMEOUT_S)
         logger.info("MavsdkController closed (%s)", self.description)
+
+    async def _release_gimbal_at_close(self) -> None:
+        try:
+            async with asyncio.timeout(CLOSE_HOLD_TIMEOUT_S):
+                await self.release_gimbal()
+        except (ControllerError, TimeoutError) as exc:
+            logger.error("MavsdkController: could not release the gimbal while closing: %s",
+                         str(exc) or f"no answer within {CLOSE_HOLD_TIMEOUT_S:g} s")
 
     @property
     def unfinished_calls(self) -> list[str]:
@@ -299,13 +312,33 @@ class MavsdkController:
             raise ControllerError(f"{name}: not connected (call connect() first)")
         return self._landing
 
+    # ---- gimbal (controllers.mavsdk_gimbal) -------------------------------------------------------
+
+    async def point_gimbal(self, mode: str, pitch: float, yaw: float) -> None:
+        """Take control of the gimbal if not held, then stream the setpoint (:meth:`MavsdkGimbal.point`)."""
+        if self._gimbal is None or self._closed:
+            raise ControllerError("gimbal: not connected (call connect() first)")
+        await self._gimbal.point(mode, pitch, yaw)
+
+    async def release_gimbal(self) -> None:
+        """Stop the gimbal and release control if held (:meth:`MavsdkGimbal.release`)."""
+        if self._gimbal is not None:
+            await self._gimbal.release()
+
+    @property
+    def gimbal_controlled(self) -> bool:
+        return self._gimbal is not None and self._gimbal.controlled
+
     # ---- telemetry -------------------------------------------------------------------------------
 
     async def telemetry(self) -> AsyncIterator[dict[str, Any]]:
         """Partial telemetry updates keyed by Telemetry field names; ends when the controller closes."""
         if self._system is None:
             raise ControllerError("telemetry: not connected (call connect() first)")
-        async for update in merged_updates(self._telemetry, self.heartbeat_age_s, self._stop, self._subscriptions):
+        gimbal = self._gimbal
+        more = [] if gimbal is None else [lambda put: gimbal.read_attitude(self._subscriptions, put)]
+        async for update in merged_updates(self._telemetry, self.heartbeat_age_s, self._stop, self._subscriptions,
+                                           more):
             yield update
 
     async def pose_samples(self, rate_hz: float = POSE_RATE_HZ) -> AsyncIterator[PoseSample]:

@@ -1,4 +1,5 @@
-"""The vehicle's pose at a camera's pace: LOCAL_POSITION_NED and ATTITUDE from any MAVLink autopilot.
+"""The vehicle's pose at a camera's pace: LOCAL_POSITION_NED, ATTITUDE and (where there is a gimbal)
+GIMBAL_DEVICE_ATTITUDE_STATUS from any MAVLink autopilot.
 
 Asked for at :data:`POSE_RATE_HZ` with MAV_CMD_SET_MESSAGE_INTERVAL, as a ground station asks
 (PX4, ArduPilot and the built-in simulator all honour it; ArduPilot's REQUEST_DATA_STREAM, sent at
@@ -23,11 +24,12 @@ from mavsdk.asyncio.plugins.mavlink_direct import MavlinkDirectAsync, MavlinkMes
 from controllers.base import PoseSample
 from controllers.mavlink_commands import command_long, send_command
 from controllers.mavsdk_calls import Subscriptions
+from controllers.quaternion import euler
 
 logger = logging.getLogger(__name__)
 
 MAV_CMD_SET_MESSAGE_INTERVAL = 511
-POSE_MESSAGES = {"LOCAL_POSITION_NED": 32, "ATTITUDE": 30}
+POSE_MESSAGES = {"LOCAL_POSITION_NED": 32, "ATTITUDE": 30, "GIMBAL_DEVICE_ATTITUDE_STATUS": 285}
 """Message name -> MAVLink id."""
 
 POSE_RATE_HZ = 50.0
@@ -92,14 +94,25 @@ async def request_pose_rate(direct: MavlinkDirectAsync, target_system: int, rate
     await asyncio.gather(*(one(name, message_id) for name, message_id in POSE_MESSAGES.items()))
 
 
-def parse_pose_message(message: MavlinkMessage) -> tuple[Literal["position", "attitude"], int,
-                                                          tuple[float, float, float]] | None:
-    """(kind, time_boot_ms, values) from a LOCAL_POSITION_NED or ATTITUDE message; None if malformed."""
+YAW_IN_EARTH_FRAME, YAW_IN_VEHICLE_FRAME, YAW_LOCK = 64, 32, 16
+"""GIMBAL_DEVICE_FLAGS that say which frame a gimbal's yaw is in (older devices: YAW_LOCK alone means earth)."""
+
+PoseKind = Literal["position", "attitude", "gimbal", "gimbal_earth"]
+
+
+def parse_pose_message(message: MavlinkMessage) -> tuple[PoseKind, int, tuple[float, float, float]] | None:
+    """(kind, time_boot_ms, values) from a LOCAL_POSITION_NED, ATTITUDE or GIMBAL_DEVICE_ATTITUDE_STATUS message;
+    None if malformed."""
     try:
         fields = json.loads(message.fields_json)
         boot_ms = int(fields["time_boot_ms"])
         if message.message_name == "LOCAL_POSITION_NED":
             return "position", boot_ms, (float(fields["x"]), float(fields["y"]), float(fields["z"]))
+        if message.message_name == "GIMBAL_DEVICE_ATTITUDE_STATUS":
+            flags = int(fields["flags"])
+            earth = bool(flags & YAW_IN_EARTH_FRAME or not flags & YAW_IN_VEHICLE_FRAME and flags & YAW_LOCK)
+            roll, pitch, yaw = (math.degrees(a) for a in euler(fields["q"]))
+            return ("gimbal_earth" if earth else "gimbal"), boot_ms, (roll, pitch, yaw)
         roll, pitch, yaw = (math.degrees(float(fields[name])) for name in ("roll", "pitch", "yaw"))
         return "attitude", boot_ms, (roll, pitch, yaw)
     except (ValueError, KeyError, TypeError):

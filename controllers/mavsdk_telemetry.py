@@ -19,7 +19,7 @@ import asyncio
 import logging
 import math
 import time
-from collections.abc import AsyncIterator, Callable
+from collections.abc import AsyncIterator, Callable, Sequence
 from typing import Any
 
 from mavsdk.asyncio.plugins.telemetry import TelemetryAsync
@@ -157,9 +157,11 @@ async def set_rates(telemetry: TelemetryAsync, rates: dict[str, float] = RATES_H
 
 
 async def merged_updates(
-    telemetry: TelemetryAsync, heartbeat_age_s: Callable[[], float], stop: asyncio.Event, subscriptions: Subscriptions
+    telemetry: TelemetryAsync, heartbeat_age_s: Callable[[], float], stop: asyncio.Event, subscriptions: Subscriptions,
+    more: Sequence[Callable[[Callable[[Update], None]], asyncio.Task[None]]] = (),
 ) -> AsyncIterator[Update]:
-    """Yield partial updates from every stream in :data:`STREAMS` plus a heartbeat-age tick.
+    """Yield partial updates from every stream in :data:`STREAMS`, from each of ``more`` (started with the function
+    that takes an update; returns its reader task) plus a heartbeat-age tick.
 
     Ends when ``stop`` is set. Subscriptions are cancelled when the consumer stops iterating, and by
     ``subscriptions.close()``.
@@ -182,7 +184,7 @@ async def merged_updates(
         await stop.wait()
         queue.put_nowait(None)
 
-    tasks = [pump(n, c) for n, c in STREAMS.items()]
+    tasks = [pump(n, c) for n, c in STREAMS.items()] + [start(queue.put_nowait) for start in more]
     tasks += [asyncio.create_task(tick(), name="telemetry-heartbeat"), asyncio.create_task(end_on_stop())]
     try:
         while (update := await queue.get()) is not None:

@@ -32,6 +32,9 @@ class PoseAt:
 
     pose: Pose
     extrapolated_s: float
+    gimbal: tuple[float, float, float] | None = None
+    """The gimbal's attitude at that instant (roll, pitch from the horizon; yaw from the vehicle's nose; degrees),
+    None without gimbal telemetry."""
 
 
 class PoseProvider(Protocol):
@@ -92,6 +95,7 @@ class PoseTrack:
         self._lock = threading.Lock()
         self._position = _Series((False, False, False), history)
         self._attitude = _Series((True, True, True), history)
+        self._gimbal = _Series((True, True, True), history)
 
     def add_position(self, t_mono_ns: int, north_m: float, east_m: float, down_m: float) -> None:
         """A local-position sample (m, NED from home) valid at ``t_mono_ns``."""
@@ -105,10 +109,25 @@ class PoseTrack:
             with self._lock:
                 self._attitude.add(t_mono_ns, (roll_deg, pitch_deg, yaw_deg))
 
+    def add_gimbal(self, t_mono_ns: int, roll_deg: float, pitch_deg: float, yaw_deg: float, *,
+                   earth: bool = False) -> None:
+        """A gimbal attitude sample (degrees; roll, pitch from the horizon; yaw from the nose, or from north with
+        ``earth``: turned into the nose's frame with the vehicle's heading then, dropped before the first attitude)."""
+        if not all(math.isfinite(v) for v in (roll_deg, pitch_deg, yaw_deg)):
+            return
+        with self._lock:
+            if earth:
+                if not self._attitude.times:
+                    return
+                yaw_deg = (yaw_deg - self._attitude.at(t_mono_ns)[0][2] + 180.0) % 360.0 - 180.0
+            self._gimbal.add(t_mono_ns, (roll_deg, pitch_deg, yaw_deg))
+
     def __call__(self, t_mono_ns: int) -> PoseAt | None:
         with self._lock:
             if not self._position.times or not self._attitude.times:
                 return None
             (n, e, d), position_lead = self._position.at(t_mono_ns)
             (roll, pitch, yaw), attitude_lead = self._attitude.at(t_mono_ns)
-        return PoseAt(Pose(n, e, d, roll, pitch, yaw), max(position_lead, attitude_lead))
+            gimbal = self._gimbal.at(t_mono_ns)[0] if self._gimbal.times else None
+        return PoseAt(Pose(n, e, d, roll, pitch, yaw), max(position_lead, attitude_lead),
+                      gimbal)  # type: ignore[arg-type]

@@ -43,7 +43,10 @@ class Cmd:
         self.id = msg.command
         self.src = (msg.get_srcSystem(), msg.get_srcComponent())
         self.p = [msg.param1, msg.param2, msg.param3, msg.param4]
-        if msg.get_type() == "COMMAND_INT":
+        is_int = msg.get_type() == "COMMAND_INT"
+        self.p5 = float(msg.x if is_int else msg.param5)
+        """Parameter 5 as sent (COMMAND_INT: ``x``, unscaled): flags, for the gimbal commands."""
+        if is_int:
             self.x = None if msg.x in _INT_UNSET else msg.x * 1e-7
             self.y = None if msg.y in _INT_UNSET else msg.y * 1e-7
             self.z = msg.z
@@ -71,6 +74,8 @@ class CommandHandler:
             M.MAV_CMD_SET_MESSAGE_INTERVAL: self._message_interval,
             M.MAV_CMD_REQUEST_MESSAGE: self._request_message,
             M.MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES: self._capabilities,
+            M.MAV_CMD_DO_GIMBAL_MANAGER_CONFIGURE: lambda c: self.s.gimbal.configure(c.p[0], c.p[1], c.src),
+            M.MAV_CMD_DO_GIMBAL_MANAGER_PITCHYAW: self._gimbal_pitchyaw,
         }
         self.params = ParamStore(self._param_list())
         self._after_ack: list[mavlink.MAVLink_message] = []
@@ -267,6 +272,10 @@ class CommandHandler:
             return UNSUPPORTED
         self._after_ack.append(self.s.streams.build(msg_id))
         return ACCEPTED
+
+    def _gimbal_pitchyaw(self, cmd: Cmd) -> int:
+        flags = int(cmd.p5) if math.isfinite(cmd.p5) else 0
+        return self.s.gimbal.pitchyaw(cmd.p, flags, cmd.src, math.degrees(self.v.attitude()[2]))
 
     def _capabilities(self, cmd: Cmd) -> int:
         self._after_ack.append(self.s.streams.autopilot_version())

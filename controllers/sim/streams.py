@@ -10,8 +10,10 @@ from collections.abc import Callable
 import numpy as np
 from pymavlink.dialects.v20 import common as mavlink
 
+from controllers.quaternion import quaternion
 from controllers.sim.dialect import DIALECTS, Dialect
 from controllers.sim.geo import Home
+from controllers.sim.gimbal import SimGimbal
 from controllers.sim.guidance import Mode
 from controllers.sim.physics import Multicopter
 
@@ -30,6 +32,8 @@ DEFAULT_RATES_HZ: dict[int, float] = {
     M.MAVLINK_MSG_ID_VFR_HUD: 4.0,
     M.MAVLINK_MSG_ID_SYSTEM_TIME: 1.0,
     M.MAVLINK_MSG_ID_DISTANCE_SENSOR: 10.0,
+    M.MAVLINK_MSG_ID_GIMBAL_DEVICE_ATTITUDE_STATUS: 20.0,
+    M.MAVLINK_MSG_ID_GIMBAL_MANAGER_STATUS: 5.0,
 }
 """Streamed at boot, in Hz."""
 RANGEFINDER_CM = (5, 4000)
@@ -70,7 +74,8 @@ class TelemetryStreams:
     """Builds telemetry messages from a :class:`Multicopter` and decides which are due."""
 
     def __init__(self, encoder: mavlink.MAVLink, vehicle: Multicopter, home: Home, *,
-                 gps_clock_offset_s: float = 0.0, dialect: Dialect = DIALECTS["px4"]) -> None:
+                 gps_clock_offset_s: float = 0.0, dialect: Dialect = DIALECTS["px4"],
+                 gimbal: SimGimbal | None = None) -> None:
         self.enc = encoder
         self.dialect = dialect
         self.v = vehicle
@@ -78,6 +83,7 @@ class TelemetryStreams:
         self.gps_clock_offset_s = gps_clock_offset_s
         """How far the UTC time in SYSTEM_TIME is from this computer's clock (a ground computer's clock is wrong)."""
         self._boot_ns = time.monotonic_ns()
+        self.gimbal = gimbal or SimGimbal()
         self._builders: dict[int, Callable[[], mavlink.MAVLink_message]] = {
             M.MAVLINK_MSG_ID_HEARTBEAT: self.heartbeat,
             M.MAVLINK_MSG_ID_SYS_STATUS: self.sys_status,
@@ -94,8 +100,19 @@ class TelemetryStreams:
             M.MAVLINK_MSG_ID_DISTANCE_SENSOR: self.distance_sensor,
             M.MAVLINK_MSG_ID_AUTOPILOT_VERSION: self.autopilot_version,
         }
+        g = self.gimbal
+        for mid, build in ((M.MAVLINK_MSG_ID_GIMBAL_DEVICE_ATTITUDE_STATUS, g.attitude_status),
+                           (M.MAVLINK_MSG_ID_GIMBAL_MANAGER_STATUS, g.manager_status),
+                           (M.MAVLINK_MSG_ID_GIMBAL_MANAGER_INFORMATION, g.manager_information),
+                           (M.MAVLINK_MSG_ID_GIMBAL_DEVICE_INFORMATION, g.device_information)):
+            self._builders[mid] = self._stamped(build)
         self._interval = {mid: 1.0 / hz for mid, hz in DEFAULT_RATES_HZ.items()}
         self._next = dict.fromkeys(self._interval, 0.0)
+
+    def _stamped(self, build: Callable[[mavlink.MAVLink, int], mavlink.MAVLink_message],
+                 ) -> Callable[[], mavlink.MAVLink_message]:
+        """A builder of this encoder's message stamped with the boot time (the gimbal's messages)."""
+        return lambda: build(self.enc, self.boot_ms())
 
     # ------------------------------------------------------------ scheduling
     def can_build(self, msg_id: int) -> bool:
@@ -183,19 +200,8 @@ class TelemetryStreams:
 
     def attitude_quaternion(self) -> mavlink.MAVLink_message:
         _, _, (roll, pitch, yaw) = self._nav()
-        cr, sr = math.cos(roll / 2), math.sin(roll / 2)
-        cp, sp = math.cos(pitch / 2), math.sin(pitch / 2)
-        cy, sy = math.cos(yaw / 2), math.sin(yaw / 2)
-        return self.enc.attitude_quaternion_encode(
-            self.boot_ms(),
-            cr * cp * cy + sr * sp * sy,
-            sr * cp * cy - cr * sp * sy,
-            cr * sp * cy + sr * cp * sy,
-            cr * cp * sy - sr * sp * cy,
-            0.0,
-            0.0,
-            self.v.yaw_rate,
-        )
+        return self.enc.attitude_quaternion_encode(self.boot_ms(), *quaternion(roll, pitch, yaw), 0.0, 0.0,
+                                                   self.v.yaw_rate)
 
     def global_position_int(self) -> mavlink.MAVLink_message:
         pos, vel, (_, _, yaw) = self._nav()

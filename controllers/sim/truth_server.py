@@ -52,6 +52,7 @@ def truth_dict(v: Multicopter, server: SimVehicleServer) -> dict[str, Any]:
         "wind_n": float(v.wind[0]),
         "wind_e": float(v.wind[1]),
         "rc_throttle": v.guidance.stick.pwm if v.guidance.stick is not None else None,
+        **server.gimbal.truth(),
     }
 
 

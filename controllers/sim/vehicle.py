@@ -5,6 +5,7 @@ ground-truth side channel."""
 from __future__ import annotations
 
 import logging
+import math
 import os
 import threading
 import time
@@ -16,6 +17,7 @@ from pymavlink.dialects.v20 import common as mavlink
 from controllers.sim.commands import CommandHandler
 from controllers.sim.dialect import DIALECTS
 from controllers.sim.geo import Home
+from controllers.sim.gimbal import SimGimbal
 from controllers.sim.guidance import OFFBOARD_LOSS_ACTIONS, Mode, OffboardSetpoint, ThrottleStick
 from controllers.sim.link import MavlinkLink
 from controllers.sim.physics import Multicopter, PhysicsConfig
@@ -74,8 +76,10 @@ class SimVehicleServer:
         self.pad = PadEstimate(self.dialect.ardupilot)
         self.pad.enabled = config.precland_enabled and self.dialect.ardupilot
         self.vehicle.guidance.pad = lambda: self.pad.pad(time.monotonic_ns())
+        self.gimbal = SimGimbal()
         self.streams = TelemetryStreams(self.link.encoder, self.vehicle, config.home,
-                                        gps_clock_offset_s=config.gps_clock_offset_s, dialect=self.dialect)
+                                        gps_clock_offset_s=config.gps_clock_offset_s, dialect=self.dialect,
+                                        gimbal=self.gimbal)
         self.commands = CommandHandler(self)
         self.truth = TruthServer(self, config.truth_port)
         self.setpoint: OffboardSetpoint | None = None
@@ -132,6 +136,8 @@ class SimVehicleServer:
             self._on_setpoint(msg, t_ns)
         elif kind == "LANDING_TARGET":
             self.pad.on_message(msg, t_ns, self.vehicle.pos.copy(), self.vehicle.attitude())
+        elif kind == "GIMBAL_MANAGER_SET_ATTITUDE":
+            self.gimbal.set_attitude(msg, math.degrees(self.vehicle.attitude()[2]))
         elif kind in ("COMMAND_LONG", "COMMAND_INT"):
             self.commands.on_command(msg)
         elif kind in ("PARAM_REQUEST_READ", "PARAM_REQUEST_LIST", "PARAM_SET"):
@@ -190,6 +196,7 @@ class SimVehicleServer:
                 while next_tick <= now and steps < 5:
                     with self.lock:
                         self.vehicle.step(dt)
+                        self.gimbal.step(dt)
                     next_tick += dt
                     steps += 1
                 if next_tick <= now:

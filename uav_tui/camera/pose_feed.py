@@ -18,8 +18,10 @@ async def feed(samples: AsyncIterator[PoseSample], track: PoseTrack) -> None:
     async for sample in samples:
         if sample.kind == "position":
             track.add_position(sample.t_mono_ns, *sample.values)
-        else:
+        elif sample.kind == "attitude":
             track.add_attitude(sample.t_mono_ns, *sample.values)
+        else:
+            track.add_gimbal(sample.t_mono_ns, *sample.values, earth=sample.kind == "gimbal_earth")
 
 
 async def wait_first_pose(track: PoseTrack, timeout_s: float = FIRST_POSE_TIMEOUT_S) -> bool:

@@ -19,6 +19,7 @@ from controllers.base import Telemetry
 CONTINUOUS: tuple[str, ...] = (
     "fc_boot_ms", "lat_deg", "lon_deg", "abs_alt_m", "rel_alt_m", "roll_deg", "pitch_deg", "yaw_deg",
     "north_m", "east_m", "down_m", "vn_ms", "ve_ms", "vd_ms", "battery_v", "battery_pct", "rangefinder_m",
+    "gimbal_roll_deg", "gimbal_pitch_deg", "gimbal_yaw_deg",
 )
 """Fields interpolated linearly."""
 
@@ -26,7 +27,7 @@ GAPS = frozenset({"rangefinder_m"})
 """Continuous fields whose None after a value is news (a rangefinder out of its range): kept as a gap, so no
 line is drawn across it and an instant next to it has no value."""
 
-ANGLES = frozenset({"roll_deg", "pitch_deg", "yaw_deg"})
+ANGLES = frozenset({"roll_deg", "pitch_deg", "yaw_deg", "gimbal_roll_deg", "gimbal_pitch_deg", "gimbal_yaw_deg"})
 """Continuous fields in degrees that wrap at +-180: interpolated the short way round."""
 
 DISCRETE: tuple[str, ...] = ("flight_mode", "armed", "in_air", "gps_fix", "satellites", "health_ok")
