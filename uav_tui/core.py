@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Any
 import psutil
 
 from controllers import connect_controller
-from controllers.base import BlockingCalls, FlightController, LandingTargets, RecordedVehicle
+from controllers.base import BlockingCalls, FlightController, GimbalControl, LandingTargets, RecordedVehicle
 from controllers.replay_timeline import ReplayTimeline
 from sources import CameraSource
 from sources.camera_model import CameraModel
@@ -27,6 +27,7 @@ from uav_tui.flight.autonomy import AutonomyGate
 from uav_tui.flight.clock_check import ClockCheck
 from uav_tui.flight.commands import Command
 from uav_tui.flight.exit_hold import hold_before_exit, mode_left_at_exit
+from uav_tui.flight.gimbal_relay import GimbalRelay, consider_gimbal
 from uav_tui.flight.link import LinkWatch
 from uav_tui.flight.telemetry import TelemetryManager
 from uav_tui.hosting.exception_reports import ProcessorErrors
@@ -66,6 +67,8 @@ class UavCore:
         """The processor's landing targets and the operator's ``precland`` switch."""
         self.landing_sender: LandingTargetSender | None = None
         """Sends the landing targets (None without a controller that takes them)."""
+        self.gimbal_relay: GimbalRelay | None = None
+        """Sends the processor's gimbal pointing (None without a controller that points a gimbal)."""
         self.controller: FlightController | None = None
         self.active_camera = ActiveCamera(config.camera, self.events, self._spawn)
         """The source frames come from and its camera model (``source`` and ``camera`` read it)."""
@@ -130,6 +133,8 @@ class UavCore:
             self.active_camera.controller, self.active_camera.replay = self.controller, self.replay
             if isinstance(self.controller, LandingTargets):
                 self.landing_sender = LandingTargetSender(self.controller, self.events)
+            if isinstance(self.controller, GimbalControl):
+                self.gimbal_relay = GimbalRelay(self.controller, self.gate, self.config.safety, self.events)
             await self.gate.check_autopilot_failsafe()
             self.worker.bind_telemetry(self.telemetry)
             await camera_ready
@@ -206,6 +211,8 @@ class UavCore:
     async def _cancel_tasks(self) -> None:
         if self.landing_sender is not None:
             await self.landing_sender.close()
+        if self.gimbal_relay is not None:
+            await self.gimbal_relay.close()
         for task in self._tasks:
             task.cancel()
         await asyncio.gather(*self._tasks, return_exceptions=True)
@@ -325,6 +332,7 @@ class UavCore:
             self.processor_error = exception
         self.gate.consider(result)
         consider_landing_target(self, result)
+        consider_gimbal(self.gimbal_relay, result)
         for listener in tuple(self._frame_listeners):
             listener(result)
 

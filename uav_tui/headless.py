@@ -100,6 +100,8 @@ def format_status(status: CoreStatus, elapsed_s: float) -> str:
         line += f" | precland {'ON' if status.precland else 'OFF'} {status.landing_targets_sent} sent"
         if status.landing_targets_failed:
             line += f" {status.landing_targets_failed} failed"
+    if gimbal := status.gimbal_summary():
+        line += f" | {gimbal}"
     return line
 
 

@@ -14,10 +14,10 @@ import time
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Protocol
 
-from controllers.errors import ControllerError
 from controllers.landing_target import LandingTargetFix
 from uav_tui.errors import UavError
 from uav_tui.flight.autonomy import WATCHDOG_PERIOD_S
+from uav_tui.flight.relay import SEND_TIMEOUT_S, OneAtATime, not_now
 
 if TYPE_CHECKING:
     from controllers.base import FlightController, LandingTargets, Telemetry
@@ -28,9 +28,6 @@ if TYPE_CHECKING:
     from uav_tui.flight.autonomy import AutonomyGate
     from uav_tui.flight.telemetry import TelemetryManager
     from uav_tui.hosting.host import ProcessedFrame, ProcessorHost
-
-SEND_TIMEOUT_S = 1.0
-"""The longest one LANDING_TARGET send may take (a target older than a second is stale to ArduPilot)."""
 
 FRESH_TARGET_S = 1.0
 """``precland`` needs a landing target seen this recently (ArduPilot drops a target older than a second)."""
@@ -90,11 +87,8 @@ def landing_fix(target: LandingTarget, capture_ns: int, camera: CameraModel, at_
         None if None in position else position)  # type: ignore[arg-type]
 
 
-class LandingTargetSender:
-    """Sends one landing target at a time to the controller, counting what was sent and what failed.
-
-    A target that arrives while the previous one is still being sent is skipped (the newest frame wins, as for
-    frames). A failure is said once in the event log until a different one comes.
+class LandingTargetSender(OneAtATime):
+    """Sends one landing target at a time to the controller (:class:`~uav_tui.flight.relay.OneAtATime`).
 
     Args:
         controller: the flight controller (a :class:`~controllers.base.LandingTargets`).
@@ -103,40 +97,12 @@ class LandingTargetSender:
     """
 
     def __init__(self, controller: LandingTargets, events: EventLog, timeout_s: float = SEND_TIMEOUT_S) -> None:
+        super().__init__(events, "landing target", timeout_s)
         self.controller = controller
-        self.events = events
-        self.timeout_s = timeout_s
-        self.sent = 0
-        self.failed = 0
-        self.last_error = ""
-        self._task: asyncio.Task[None] | None = None
-
-    @property
-    def busy(self) -> bool:
-        return self._task is not None and not self._task.done()
 
     def send(self, fix: LandingTargetFix) -> None:
         """Start sending ``fix`` (on the loop); the caller checked :attr:`busy`."""
-        self._task = asyncio.get_running_loop().create_task(self._send(fix), name="landing target")
-
-    async def _send(self, fix: LandingTargetFix) -> None:
-        try:
-            async with asyncio.timeout(self.timeout_s):
-                await self.controller.send_landing_target(fix)
-        except (ControllerError, TimeoutError) as exc:
-            self.failed += 1
-            error = str(exc) or f"no answer within {self.timeout_s:g} s"
-            if error != self.last_error:
-                self.events.emit("warning", "autonomy", f"landing target not sent: {error}")
-            self.last_error = error
-        else:
-            self.sent += 1
-            self.last_error = ""
-
-    async def close(self) -> None:
-        if self._task is not None:
-            self._task.cancel()
-            await asyncio.gather(self._task, return_exceptions=True)
+        self.start(lambda: self.controller.send_landing_target(fix))
 
 
 class LandingCore(Protocol):
@@ -188,15 +154,7 @@ def _blocked(core: LandingCore, capture_ns: int) -> str:
         return "the flight controller takes no landing targets"
     if core.camera is None:
         return "no camera model"
-    age = core.controller.heartbeat_age_s()
-    if age >= core.config.safety.link_timeout:
-        return f"link lost (heartbeat {age:.1f} s old)"
-    frame_age_s = (core.gate.clock() - capture_ns) / 1e9
-    if frame_age_s >= core.config.safety.max_frame_age:
-        return f"frame {frame_age_s:.2f} s old"
-    if core.landing_sender.busy:
-        return "the previous one is still being sent"
-    return ""
+    return not_now(core.controller, core.config.safety, (core.gate.clock() - capture_ns) / 1e9, core.landing_sender)
 
 async def watch_precland(core: LandingCore) -> None:
     """Turn ``precland`` off on the faults that stop autonomy, and once the vehicle landed and disarmed."""

@@ -19,6 +19,7 @@ if TYPE_CHECKING:
     from sources.camera_model import CameraModel
     from uav_tui.config import Config
     from uav_tui.flight.autonomy import AutonomyGate
+    from uav_tui.flight.gimbal_relay import GimbalRelay
     from uav_tui.flight.link import LinkWatch
     from uav_tui.flight.telemetry import TelemetryManager
     from uav_tui.hosting.host import ProcessorHost
@@ -92,6 +93,12 @@ class CoreStatus:
     """LANDING_TARGET messages sent to the autopilot."""
     landing_targets_failed: int = 0
     """Landing targets the controller could not send (the reason is in the event log)."""
+    gimbal_sent: int = 0
+    """Gimbal setpoints sent (the processor's ``getGimbalPointing``)."""
+    gimbal_failed: int = 0
+    """Gimbal setpoints the controller could not send (the reason is in the event log)."""
+    gimbal_controlled: bool = False
+    """The platform holds control of the gimbal."""
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -103,6 +110,18 @@ class CoreStatus:
         if self.processor_state is not None:
             object.__setattr__(self, "processor_state", replace(self.processor_state,
                                                                 state=safe(self.processor_state.state)))
+
+    def gimbal_summary(self) -> str:
+        """``gimbal P-45 Y120 (controlled, 210 sent)``: the gimbal's attitude (pitch from the horizon, yaw from north)
+        where there is one, and what the processor's pointing did; "" with neither."""
+        t = self.telemetry
+        parts = []
+        if t.gimbal_pitch_deg is not None and t.gimbal_yaw_deg is not None:
+            parts.append(f"P{t.gimbal_pitch_deg:+.0f} Y{t.gimbal_yaw_deg % 360:03.0f}")
+        if "getGimbalPointing" in self.capabilities:
+            sent = f"{self.gimbal_sent} sent" + (f", {self.gimbal_failed} failed" if self.gimbal_failed else "")
+            parts.append(f"({'controlled, ' if self.gimbal_controlled else ''}{sent})")
+        return "gimbal " + " ".join(parts) if parts else ""
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready form (for ``--json`` and the web page)."""
@@ -131,6 +150,7 @@ class ObservedCore(Protocol):
     startup_s: float | None
     landing: LandingTargetFeed
     landing_sender: LandingTargetSender | None
+    gimbal_relay: GimbalRelay | None
 
     @property
     def camera(self) -> CameraModel | None: ...
@@ -178,6 +198,9 @@ def core_status(core: ObservedCore) -> CoreStatus:
         precland_stop_reason=core.landing.stop_reason,
         landing_targets_sent=core.landing_sender.sent if core.landing_sender is not None else 0,
         landing_targets_failed=core.landing_sender.failed if core.landing_sender is not None else 0,
+        gimbal_sent=core.gimbal_relay.sent if core.gimbal_relay is not None else 0,
+        gimbal_failed=core.gimbal_relay.failed if core.gimbal_relay is not None else 0,
+        gimbal_controlled=core.gimbal_relay is not None and core.gimbal_relay.controller.gimbal_controlled,
         last_vector=gate.last_vector,
         last_decision=gate.last_decision,
         last_verdict=gate.last_decision.verdict,

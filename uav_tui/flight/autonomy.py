@@ -144,6 +144,9 @@ class AutonomyGate:
         """A vector was sent since autonomy was last switched on."""
         self.clock: Callable[[], int] = time.monotonic_ns
         """Monotonic ns that frame ages are measured against (a replay's recorded clock in a replay)."""
+        self.stop_listeners: list[Callable[[str], None]] = []
+        """Called with the reason each time autonomy is turned off (or told off again, at exit): what else the
+        processor drives stops with the vectors (the gimbal)."""
 
     async def check_autopilot_failsafe(self) -> None:
         """Read (and set) the autopilot's offboard-loss failsafe; autonomy is refused while it is too slow."""
@@ -171,6 +174,8 @@ class AutonomyGate:
         was_enabled, self.enabled, self._pending = self.enabled, False, None
         if reason is not None:
             self.stop_reason = reason
+        for listener in self.stop_listeners:
+            listener(reason or "operator")
         if was_enabled or reason is not None:
             level: Level = "info" if reason is None else "warning"
             self.events.emit(level, "autonomy", f"autonomy OFF: {reason or 'operator'}", origin, autonomy=False)

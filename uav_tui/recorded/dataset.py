@@ -36,8 +36,8 @@ from uav_tui.errors import UavError
 from uav_tui.recorded.run_files import Problem, read_json, read_table
 from uav_tui.recording.rows import EVENT_COLUMNS, FRAME_COLUMNS, TELEMETRY_COLUMNS
 
-_TEXT = ("flight_mode", "gps_fix", "decision", "landing", "error", "image", "extra", "telemetry", "level", "kind",
-         "origin", "message", "command", "target_status", "target_height_from")
+_TEXT = ("flight_mode", "gps_fix", "decision", "landing", "gimbal", "error", "image", "extra", "telemetry", "level",
+         "kind", "origin", "message", "command", "target_status", "target_height_from")
 _FLAGS = ("armed", "in_air", "health_ok", "saved", "autonomy")
 _INTEGERS = ("fc_boot_ms", "fc_clock_offset_ms", "satellites", "frame_id", "seq", "box_x", "box_y", "box_w", "box_h")
 

@@ -33,13 +33,14 @@ or error row reports on; ``autonomy`` is True or False where autonomy was switch
 
 FRAME_OWN_COLUMNS: tuple[str, ...] = (
     "frame_id", "seq", "t_wall_ns", "t_mono_ns", "t_start_ns", "t_end_ns", "t_vector_ns", "vx", "vy", "vt",
-    "box_x", "box_y", "box_w", "box_h", "decision", "landing", "error", "saved", "image", "extra", "telemetry",
+    "box_x", "box_y", "box_w", "box_h", "decision", "landing", "gimbal", "error", "saved", "image", "extra",
+    "telemetry",
 )
 """frames.csv, the frame's own part: ids, capture times (wall + monotonic ns), processing stage times
 (monotonic ns), the vector, the processor's ``box`` (frame pixels, empty when None), the autonomy
-decision, what was done with the processor's landing target (``sent`` or ``not sent: why``; empty without
-one), the last line of an exception, whether and where the image was saved, the ``tmMgr.save``
-extras as JSON, and how the telemetry columns were obtained (``interpolated``, ``held``, ``before``,
+decision, what was done with the processor's landing target and with its gimbal pointing (each ``sent`` or
+``not sent: why``; empty without one), the last line of an exception, whether and where the image was saved,
+the ``tmMgr.save`` extras as JSON, and how the telemetry columns were obtained (``interpolated``, ``held``, ``before``,
 ``none``; see :meth:`TelemetryHistory.at`)."""
 
 GEO_COLUMNS: tuple[str, ...] = ("target_lat_deg", "target_lon_deg", "target_alt_m", "target_uncertainty_m",
@@ -104,8 +105,8 @@ def frame_record(result: ProcessedFrame, frame_id: int, image: str, extra_json: 
     error = shorten(last_line(result.error), MAX_ERROR_CHARS) if result.error else ""
     box = result.box or (None, None, None, None)
     values = [frame_id, frame.seq, frame.t_wall_ns, frame.t_mono_ns, result.t_start_ns, result.t_end_ns,
-              result.t_vector_ns or None, vx, vy, vt, *box, result.decision, result.landing, error, bool(image), image,
-              extra_json]
+              result.t_vector_ns or None, vx, vy, vt, *box, result.decision, result.landing, result.gimbal, error,
+              bool(image), image, extra_json]
     return FrameRecord(values, frame.t_mono_ns, camera)
 
 

@@ -34,6 +34,8 @@ class AlgorithmPanel(StatusPanel):
             auto.append(f", {status.landing_targets_sent} targets sent")
             if status.landing_targets_failed:
                 auto.append(" ").append(self.styled(f"{status.landing_targets_failed} failed", "bad"))
+        if gimbal := status.gimbal_summary():
+            auto.append(f"; {gimbal}")
         if "getPreparedVector" not in status.capabilities:
             vector = Text("no getPreparedVector")
         else:

@@ -1,0 +1,137 @@
+"""The processor's gimbal pointing on its way to the autopilot, with the same gate as vectors.
+
+A frame's :class:`~processors.gimbal.GimbalPointing` is sent (the controller takes control of the gimbal on the
+first, then streams setpoints) only while the operator has autonomy on, the link is alive and the frame is fresh;
+the vehicle does not have to fly (a gimbal follows a target while the vehicle holds). Whenever autonomy stops (an
+operator command such as ``land`` or ``hold``, a processor fault, the watchdog, the platform's exit) the gimbal is
+stopped and control released. A processor that stops returning a pointing stops a gimbal it had turning at a rate.
+What was done is each frame's ``gimbal`` (frames.csv).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+from typing import TYPE_CHECKING
+
+from controllers.base import GimbalControl
+from controllers.errors import ControllerError
+from processors.gimbal import RATE, GimbalPointing
+from uav_tui.flight.relay import OneAtATime, not_now
+
+if TYPE_CHECKING:
+    from controllers.base import FlightController
+    from uav_tui.config import SafetyConfig
+    from uav_tui.events import EventLog
+    from uav_tui.flight.autonomy import AutonomyGate
+    from uav_tui.hosting.host import ProcessedFrame
+
+logger = logging.getLogger(__name__)
+
+RELEASE_TIMEOUT_S = 2.0
+"""The longest stopping and releasing the gimbal may take."""
+
+STOP = GimbalPointing.rates(0.0, 0.0)
+
+
+class GimbalRelay:
+    """Sends each frame's gimbal pointing while the gate allows it; stops and releases the gimbal when it stops.
+
+    Args:
+        controller: the flight controller; a :class:`~controllers.base.GimbalControl`, else TypeError.
+        gate: the autonomy gate (its switch and clock; :meth:`stop` is added to its stop listeners).
+        safety: link timeout and frame age limits.
+        events: the core's event log.
+    """
+
+    def __init__(self, controller: FlightController, gate: AutonomyGate, safety: SafetyConfig,
+                 events: EventLog) -> None:
+        if not isinstance(controller, GimbalControl):
+            raise TypeError(f"{controller.description} has no gimbal control")
+        self.vehicle = controller
+        self.controller: GimbalControl = controller
+        self.gate = gate
+        self.safety = safety
+        self.events = events
+        self.sender = OneAtATime(events, "gimbal setpoint")
+        self.turning = False
+        """The last setpoint sent was a non-zero rate: the gimbal turns until told otherwise."""
+        self.releases = 0
+        """Times the gimbal was stopped and released."""
+        self._release: asyncio.Task[None] | None = None
+        self._epoch = 0
+        """Counts stops: a send begun before a stop is dropped after it."""
+        gate.stop_listeners.append(self.stop)
+
+    def consider(self, result: ProcessedFrame) -> None:
+        """Send ``result``'s pointing if the gate allows it now; ``result.gimbal`` says what was done."""
+        pointing = result.outputs.gimbal
+        if pointing is None:
+            if self.turning and not self._blocked(result):
+                self._send(STOP)
+                result.gimbal = "stopped (no pointing)"
+            return
+        why = self._blocked(result)
+        result.gimbal = f"not sent: {why}" if why else "sent"
+        if not why:
+            self._send(pointing)
+
+    def _blocked(self, result: ProcessedFrame) -> str:
+        if not self.gate.enabled:
+            return "autonomy off"
+        if self._release is not None and not self._release.done():
+            return "the gimbal is being released"
+        return not_now(self.vehicle, self.safety, (self.gate.clock() - result.frame.t_mono_ns) / 1e9, self.sender)
+
+    def _send(self, pointing: GimbalPointing) -> None:
+        epoch = self._epoch
+        self.turning = pointing.mode == RATE and (pointing.pitch, pointing.yaw) != (0.0, 0.0)
+
+        async def send() -> None:
+            if epoch == self._epoch:  # no stop since the frame was judged
+                await self.controller.point_gimbal(pointing.mode, pointing.pitch, pointing.yaw)
+
+        self.sender.start(send)
+
+    def stop(self, reason: str) -> None:
+        """Autonomy stopped for ``reason``: stop the gimbal and release control (in a task; :meth:`close` waits)."""
+        self._epoch += 1
+        self.turning = False
+        if self._release is None or self._release.done():
+            self._release = asyncio.get_running_loop().create_task(self._stop(reason), name="gimbal release")
+
+    async def _stop(self, reason: str) -> None:
+        await self.sender.settle()  # a send under way ends first: nothing takes control back after the release
+        if not self.controller.gimbal_controlled:
+            return
+        try:
+            async with asyncio.timeout(RELEASE_TIMEOUT_S):
+                await self.controller.release_gimbal()
+        except (ControllerError, TimeoutError) as exc:
+            self.events.emit("error", "autonomy", f"gimbal not released ({reason}): "
+                             f"{exc or f'no answer within {RELEASE_TIMEOUT_S:g} s'}")
+        else:
+            self.releases += 1
+            self.events.emit("info", "autonomy", f"gimbal stopped and released: {reason}")
+
+    @property
+    def sent(self) -> int:
+        return self.sender.sent
+
+    @property
+    def failed(self) -> int:
+        return self.sender.failed
+
+    async def close(self) -> None:
+        """Wait for a release under way (the platform's exit: before the controller closes)."""
+        if self._release is not None:
+            await asyncio.gather(self._release, return_exceptions=True)
+        await self.sender.close()
+
+
+def consider_gimbal(relay: GimbalRelay | None, result: ProcessedFrame) -> None:
+    """Relay ``result``'s gimbal pointing (``relay`` None: the flight controller has no gimbal control)."""
+    if relay is not None:
+        relay.consider(result)
+    elif result.outputs.gimbal is not None:
+        result.gimbal = "not sent: the flight controller has no gimbal control"
