@@ -22,6 +22,9 @@ from sources.sim_geometry import rotation_body_camera
 MOUNTS = {"down": 90.0, "forward": 0.0}
 """Named mounts and their tilt below the vehicle's nose, degrees."""
 
+GIMBAL = "gimbal"
+"""The named mount of a camera on the gimbal (:attr:`Mount.gimbal`)."""
+
 _UNDISTORT_CRITERIA = (1 | 2, 30, 1e-10)
 """cv2.TERM_CRITERIA_COUNT | EPS: undistortion iterates to 1e-10 (normalized units), so pixel -> ray -> pixel returns
 the pixel. (OpenCV is imported only by a model with distortion: a processor process that never uses it is spared.)"""
@@ -35,22 +38,31 @@ class CameraModelError(SourceError, ValueError):
 
 @dataclass(frozen=True)
 class Mount:
-    """How the camera sits on the vehicle: tilt below the nose (degrees) and offset from its centre (FRD, m)."""
+    """How the camera sits on the vehicle: tilt below the nose (degrees) and offset from its centre (FRD, m).
+
+    ``gimbal``: the camera rides the vehicle's gimbal, so its attitude is the gimbal's (the ``gimbal_*`` telemetry:
+    pitch from the horizon, yaw from north), not the vehicle's; ``tilt_deg`` is then 0, the gimbal's forward axis.
+    """
 
     tilt_deg: float = 90.0
     offset_m: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    gimbal: bool = False
 
     @classmethod
     def parse(cls, mount: str, offset: str = "") -> Mount:
-        """``down``, ``forward`` or a tilt in degrees below the nose (``45``); ``offset`` ``F,R,D`` metres or empty.
+        """``down``, ``forward``, ``gimbal`` or a tilt in degrees below the nose (``45``); ``offset`` ``F,R,D``
+        metres or empty.
 
         Raises ValueError with what is expected.
         """
         text = mount.strip().lower()
+        on_gimbal = text == GIMBAL
+        if on_gimbal:
+            text = "forward"
         try:
             tilt = MOUNTS[text] if text in MOUNTS else float(text)
         except ValueError:
-            raise ValueError(f"mount {mount!r} must be down, forward or a tilt below the nose in degrees "
+            raise ValueError(f"mount {mount!r} must be down, forward, gimbal or a tilt below the nose in degrees "
                              "(90 = down, 0 = forward)") from None
         if not -90 <= tilt <= 180:
             raise ValueError(f"mount tilt {tilt:g} must be -90..180 degrees below the nose (90 = down)")
@@ -62,11 +74,11 @@ class Mount:
         if len(values) != 3 or not all(math.isfinite(v) and abs(v) <= 10 for v in values):
             raise ValueError(f"offset {offset!r} must be F,R,D in metres from the vehicle's centre, each within "
                              "10 m (e.g. 0.1,0,0.05)")
-        return cls(tilt, values)
+        return cls(tilt, values, on_gimbal)
 
     def describe(self) -> str:
         tilted = f"tilted {self.tilt_deg:g} deg below the nose"
-        name = next((n for n, t in MOUNTS.items() if t == self.tilt_deg), tilted)
+        name = GIMBAL if self.gimbal else next((n for n, t in MOUNTS.items() if t == self.tilt_deg), tilted)
         offset = "" if not any(self.offset_m) else " at {:g},{:g},{:g} m (FRD)".format(*self.offset_m)
         return name + offset
 
@@ -130,14 +142,15 @@ class CameraModel:
         """Plain numbers and text (``run.json``); :meth:`from_dict` reads it back."""
         return {"width": self.width, "height": self.height, "fx": self.fx, "fy": self.fy, "cx": self.cx,
                 "cy": self.cy, "distortion": list(self.distortion), "tilt_deg": self.mount.tilt_deg,
-                "offset_m": list(self.mount.offset_m), "origin": self.origin, "rms_px": self.rms_px}
+                "offset_m": list(self.mount.offset_m), "gimbal": self.mount.gimbal, "origin": self.origin,
+                "rms_px": self.rms_px}
 
     @classmethod
     def from_dict(cls, data: dict[str, Any], origin: str | None = None) -> CameraModel:
         """The model :meth:`to_dict` wrote; CameraModelError when a value is missing or wrong."""
         try:
             forward, right, down = (float(v) for v in data["offset_m"])
-            mount = Mount(float(data["tilt_deg"]), (forward, right, down))
+            mount = Mount(float(data["tilt_deg"]), (forward, right, down), bool(data.get("gimbal", False)))
             rms = data.get("rms_px")
             return cls(int(data["width"]), int(data["height"]), float(data["fx"]), float(data["fy"]),
                        float(data["cx"]), float(data["cy"]), tuple(float(c) for c in data["distortion"]), mount,

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from sources.base import CaptureSource
-from sources.camera_model import CameraModel, Mount
+from sources.camera_model import GIMBAL, CameraModel, Mount
 from sources.errors import SourceUriError
 from sources.ground import default_ground
 from sources.pacing import Pacer
@@ -27,16 +27,23 @@ from sources.uri import SourceUri
 
 logger = logging.getLogger(__name__)
 
-MOUNT_TILT_DEG = {"down": 90.0, "forward": 0.0}
-"""Camera tilt below the vehicle's nose for each named mount; ``tilt=`` overrides it."""
+MOUNT_TILT_DEG = {"down": 90.0, "forward": 0.0, GIMBAL: 0.0}
+"""Camera tilt below the vehicle's nose (on the gimbal: below the gimbal's forward axis) for each named mount;
+``tilt=`` overrides it."""
+
+UNKNOWN_GIMBAL = (0.0, -45.0, 0.0)
+"""The gimbal's attitude drawn before any gimbal telemetry came (roll, pitch, yaw from the nose): 45 degrees down
+ahead, where the built-in simulator's gimbal looks at boot."""
 
 
 class SimCameraSource(CaptureSource):
     """A pinhole camera over a textured ground, at the pose ``pose_provider`` reports.
 
-    URI: ``sim:[?width=640&height=480&fps=30&hfov=62&mount=down|forward&tilt=DEG&targets=N
+    URI: ``sim:[?width=640&height=480&fps=30&hfov=62&mount=down|forward|gimbal&tilt=DEG&targets=N
     &target_speed=1.0&noise=2&seed=0&marker=ID&marker_dict=4x4_50&marker_size=0.5&marker_at=N,E]``; ``marker``
-    lays a landing pad (:class:`sources.sim_marker.GroundMarker`) on the ground. Without a pose (no provider,
+    lays a landing pad (:class:`sources.sim_marker.GroundMarker`) on the ground; ``mount=gimbal`` puts the camera on
+    the vehicle's gimbal: it looks with the gimbal's attitude from the pose provider (45 degrees down ahead until
+    the first gimbal sample). Without a pose (no provider,
     or no telemetry yet) it renders a hover at 10 m over the origin, so the pipeline always has frames. Its
     properties report, at the newest frame, the pose it was drawn from, each target's ``n``, ``e`` and ground
     ``corners``, and the marker.
@@ -46,8 +53,11 @@ class SimCameraSource(CaptureSource):
 
     def __init__(self, uri: str = "sim:", *, camera: PinholeCamera | None = None, fps: float = 30.0,
                  targets: int = 0, target_speed: float = 1.0, noise: float = 2.0, seed: int = 0,
-                 pose_provider: PoseProvider | None = None, marker: GroundMarker | None = None) -> None:
+                 pose_provider: PoseProvider | None = None, marker: GroundMarker | None = None,
+                 on_gimbal: bool = False) -> None:
         self.camera = camera or PinholeCamera()
+        self.on_gimbal = on_gimbal
+        """The camera rides the vehicle's gimbal (``mount=gimbal``)."""
         self.marker = marker
         super().__init__(uri, f"pinhole {self.camera.hfov_deg:g} deg, tilt {self.camera.tilt_deg:g} deg")
         self.width, self.height, self.fps = self.camera.width, self.camera.height, fps
@@ -70,7 +80,8 @@ class SimCameraSource(CaptureSource):
                  **_context: Any) -> SimCameraSource:
         mount = uri.take_str("mount", "down") or "down"
         if mount not in MOUNT_TILT_DEG:
-            raise SourceUriError(f"camera URI {uri.text!r}: mount={mount!r} must be down or forward", key="source")
+            raise SourceUriError(f"camera URI {uri.text!r}: mount={mount!r} must be down, forward or gimbal",
+                                 key="source")
         hfov = uri.take_float("hfov", 62.0) or 62.0
         if not 1 <= hfov <= 170:
             raise SourceUriError(f"camera URI {uri.text!r}: hfov={hfov:g} must be 1..170 degrees", key="source")
@@ -79,7 +90,7 @@ class SimCameraSource(CaptureSource):
         source = cls(uri.text, camera=camera, fps=uri.take_float("fps", 30.0) or 30.0,
                      targets=uri.take_int("targets", 0) or 0, target_speed=uri.take_float("target_speed", 1.0) or 0.0,
                      noise=uri.take_float("noise", 2.0) or 0.0, seed=uri.take_int("seed", 0) or 0,
-                     pose_provider=pose_provider, marker=_marker(uri))
+                     pose_provider=pose_provider, marker=_marker(uri), on_gimbal=mount == GIMBAL)
         uri.finish()
         return source
 
@@ -93,7 +104,7 @@ class SimCameraSource(CaptureSource):
         cam = self.camera
         k = cam.intrinsics
         return CameraModel(cam.width, cam.height, float(k[0, 0]), float(k[1, 1]), float(k[0, 2]), float(k[1, 2]), (),
-                           Mount(cam.tilt_deg), "sim: renderer (exact)")
+                           Mount(cam.tilt_deg, gimbal=self.on_gimbal), "sim: renderer (exact)")
 
     def _open_device(self) -> None:
         self._pacer = Pacer(self.fps, self._stop)
@@ -118,16 +129,23 @@ class SimCameraSource(CaptureSource):
 
     def _pose_at(self, t_mono_ns: int) -> tuple[Pose, bool]:
         if self.pose_provider is None:
-            return Pose(), False
+            return self._looking(Pose(), None), False
         try:
             found: PoseAt | None = self.pose_provider(t_mono_ns)
         except Exception as exc:  # noqa: BLE001 - a broken provider must not stop the camera
             self._fail(f"pose provider failed: {exc}")
             return self.pose, self.pose_from_vehicle
         if found is None:
-            return Pose(), False
+            return self._looking(Pose(), None), False
         self.pose_extrapolated_s = found.extrapolated_s
-        return found.pose, True
+        return self._looking(found.pose, found.gimbal), True
+
+    def _looking(self, pose: Pose, gimbal: tuple[float, float, float] | None) -> Pose:
+        """The pose the camera is drawn from: the vehicle's, or on the gimbal, its attitude at the vehicle's place."""
+        if not self.on_gimbal:
+            return pose
+        roll, pitch, yaw = gimbal or UNKNOWN_GIMBAL
+        return Pose(pose.n, pose.e, pose.d, roll, pitch, pose.yaw + yaw)
 
     def _extra_properties(self) -> dict[str, Any]:
         p = self.pose

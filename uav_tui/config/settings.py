@@ -135,8 +135,9 @@ class CameraConfig:
                                    default="", parse=_calibration_file, metavar="FILE")
     camera_hfov: float = _key("the camera's horizontal field of view, degrees, without a calibration file "
                               "(0 = unknown: no camera model)", minimum=0, maximum=170, default=0.0)
-    camera_mount: str = _key("how the camera is mounted: down, forward, or its tilt below the nose in degrees",
-                             default="down", parse=_mount, metavar="down|forward|DEG")
+    camera_mount: str = _key("how the camera is mounted: down, forward, gimbal (on the vehicle's gimbal), or its "
+                             "tilt below the nose in degrees", default="down", parse=_mount,
+                             metavar="down|forward|gimbal|DEG")
     camera_offset: str = _key("where the camera is from the vehicle's centre: forward, right, down in metres",
                               default="0,0,0", parse=lambda text: _mount("down", text), metavar="F,R,D")
 

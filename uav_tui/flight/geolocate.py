@@ -169,14 +169,19 @@ def locate_row(camera: CameraModel | None, box: tuple[float, float, float, float
     """:func:`locate` with telemetry fields by name (a frame row's interpolated values, ``Telemetry`` as a dict).
 
     The height above the ground is the rangefinder's (``rangefinder_m``, along the body's down axis, times the
-    cosines of roll and pitch) when there is one, else ``rel_alt_m``, the height above home.
+    cosines of roll and pitch) when there is one, else ``rel_alt_m``, the height above home. A camera on the gimbal
+    (``camera.mount.gimbal``) looks with the gimbal's attitude (``gimbal_roll_deg``, ``gimbal_pitch_deg``,
+    ``gimbal_yaw_deg``; status ``no_attitude`` while there is none), not the vehicle's.
     """
     roll, pitch, reading = telemetry.get("roll_deg"), telemetry.get("pitch_deg"), telemetry.get("rangefinder_m")
     if reading is not None and roll is not None and pitch is not None and _known(reading, roll, pitch):
         height, source = reading * math.cos(math.radians(roll)) * math.cos(math.radians(pitch)), FROM_RANGEFINDER
     else:
         height, source = telemetry.get("rel_alt_m"), FROM_HOME
-    return locate(camera, box, roll_deg=roll, pitch_deg=pitch, yaw_deg=telemetry.get("yaw_deg"),
+    looking = ("gimbal_roll_deg", "gimbal_pitch_deg", "gimbal_yaw_deg") if camera is not None and camera.mount.gimbal \
+        else ("roll_deg", "pitch_deg", "yaw_deg")
+    roll, pitch, yaw = (telemetry.get(name) for name in looking)
+    return locate(camera, box, roll_deg=roll, pitch_deg=pitch, yaw_deg=yaw,
                   lat_deg=telemetry.get("lat_deg"), lon_deg=telemetry.get("lon_deg"), height_m=height,
                   abs_alt_m=telemetry.get("abs_alt_m"), height_from=source)
 
