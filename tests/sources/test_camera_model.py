@@ -179,7 +179,7 @@ def test_the_camera_configuration_forms_parse(tmp_path: Path) -> None:
 
 
 @pytest.mark.parametrize(("argv", "problem"), [
-    (("--camera-mount", "sideways"), "--camera-mount: mount 'sideways' must be down, forward or a tilt"),
+    (("--camera-mount", "sideways"), "--camera-mount: mount 'sideways' must be down, forward, gimbal or a tilt"),
     (("--camera-offset", "0.1,0"), "--camera-offset: offset '0.1,0' must be F,R,D in metres"),
     (("--camera-hfov", "200"), "--camera-hfov = 200.0 is out of range"),
     (("--camera-calibration", "/nonexistent/camera.yaml"), "does not exist; make one with: uav-tui calibrate"),
