@@ -76,6 +76,8 @@ class CSRTTrackingProcessor(TargetFollower):
         mode: "fast" or "paper" (see above and the module's ``_MODES``).
         camera: "down" or "forward".
         gain, dead_band, max_speed, vector_t: steering (see processors.steering.Steering).
+        follow: "vehicle" (vectors) or "gimbal" (the vehicle holds, the gimbal keeps the target centred:
+            ``gimbal_gain`` deg/s per degree off centre, at most ``gimbal_max_rate``; see processors.follow).
         loss_ratio, loss_score: a frame is evidence of loss when its appearance score is below both
             ``loss_ratio`` x the target's recent median and ``loss_score``.
         max_jump: centre jump in one frame, in box sizes, that is evidence of loss.
@@ -96,6 +98,9 @@ class CSRTTrackingProcessor(TargetFollower):
         dead_band: float = 0.05,
         max_speed: float = 1.0,
         vector_t: float = 0.5,
+        follow: str = "vehicle",
+        gimbal_gain: float = 2.0,
+        gimbal_max_rate: float = 60.0,
         loss_ratio: float = 0.5,
         loss_score: float = 0.45,
         max_jump: float = 1.0,
@@ -118,7 +123,8 @@ class CSRTTrackingProcessor(TargetFollower):
         unknown = sorted(key for key in self._cfg["csrt"] if not hasattr(cv2.TrackerCSRT.Params(), key))
         if unknown:
             raise ValueError(f"csrt: TrackerCSRT_Params has no field {', '.join(unknown)}")
-        super().__init__(camera, gain, dead_band, max_speed, vector_t)
+        super().__init__(camera, gain, dead_band, max_speed, vector_t, follow=follow, gimbal_gain=gimbal_gain,
+                         gimbal_max_rate=gimbal_max_rate)
         self.mode = mode
         self.loss_ratio, self.loss_score = loss_ratio, loss_score
         self.max_jump, self.lost_after = max_jump, max(1, int(lost_after))

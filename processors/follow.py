@@ -1,23 +1,30 @@
-"""What the tracking processors share: selecting a target, the F1-F4 buttons, the vector towards it, the overlay.
+"""What the tracking processors share: selecting a target, the F1-F4 buttons, the vector (or the gimbal rates)
+towards it, the overlay.
 
 :class:`TargetFollower` implements the published methods (``catch_cmd``, ``customize_processing``,
-``getPreparedVector``, ``photo_processing``) once; a tracker (``csrt``, ``nanotrack``) supplies the tracking
-through four hooks and the ``box``/``selected`` properties.
+``getPreparedVector``, ``getGimbalPointing``, ``photo_processing``) once; a tracker (``csrt``, ``nanotrack``)
+supplies the tracking through four hooks and the ``box``/``selected`` properties.
 """
 
 from __future__ import annotations
 
 import logging
+from typing import Any
 
 import cv2
 import numpy as np
 
+from processors.gimbal import GimbalPointing
+from processors.gimbal_steering import GimbalSteering
 from processors.steering import Box, Steering, Vector, as_box, draw_target
 
 logger = logging.getLogger(__name__)
 
 MIN_ROI = 4
 """Shortest side, in frame pixels, of a selection that is taken."""
+
+FOLLOW_MODES = ("vehicle", "gimbal")
+"""What keeps the target centred: the vehicle's vectors, or the gimbal's rates while the vehicle holds."""
 
 
 class TargetFollower:
@@ -33,6 +40,10 @@ class TargetFollower:
     horizontally and at its selection-time size (``camera="forward"``); ``t`` = ``vector_t`` s.
     ``getPreparedVector`` returns None when no target is selected or it is lost.
 
+    ``follow="gimbal"``: the vehicle holds (no vector) and ``getGimbalPointing`` returns the rates that turn the
+    gimbal towards the target (:class:`~processors.gimbal_steering.GimbalSteering`: ``gimbal_gain`` deg/s per
+    degree off centre, at most ``gimbal_max_rate``); None when no target is tracked (the platform stops the gimbal).
+
     Operator buttons:
         F1: drop the target (stop following).
         F2: search for the target now (on the next frame, even while tracking).
@@ -40,9 +51,15 @@ class TargetFollower:
         F4: gain / 1.25.
     """
 
-    def __init__(self, camera: str, gain: float, dead_band: float, max_speed: float, vector_t: float) -> None:
-        self.tmMgr = None
+    def __init__(self, camera: str, gain: float, dead_band: float, max_speed: float, vector_t: float, *,
+                 follow: str = "vehicle", gimbal_gain: float = 2.0, gimbal_max_rate: float = 60.0) -> None:
+        if follow not in FOLLOW_MODES:
+            raise ValueError(f"follow must be one of {', '.join(FOLLOW_MODES)}, got {follow!r}")
+        self.tmMgr: Any = None
         self.steering = Steering(camera, gain, dead_band, max_speed, vector_t)
+        self.follow = follow
+        self.gimbal_steering = GimbalSteering(gimbal_gain, max_rate=gimbal_max_rate)
+        self._pointing: GimbalPointing | None = None
         self.score = 0.0
         """The tracker's confidence in the last box (diagnostics, drawn beside it)."""
         self._pending_roi: Box | None = None
@@ -72,7 +89,12 @@ class TargetFollower:
         elif self.selected:
             self._track(frame)
         box = self.box
-        self._vector = self.steering.vector(box, (frame.shape[1], frame.shape[0]), self._ref_height) if box else None
+        size = (frame.shape[1], frame.shape[0])
+        if self.follow == "gimbal":
+            self._vector = None
+            self._pointing = self._gimbal_rates(box, size) if box else None
+        else:
+            self._vector = self.steering.vector(box, size, self._ref_height) if box else None
         self._draw(frame, box)
 
     def catch_cmd(self, roi: tuple[int, int, int, int]) -> None:
@@ -87,7 +109,7 @@ class TargetFollower:
         """F1 drop target, F2 search now, F3 gain up, F4 gain down."""
         if id == 1:
             self._drop()
-            self._vector = None
+            self._vector = self._pointing = None
             logger.info("%s: target dropped", type(self).__name__)
         elif id == 2:
             self._search_now()
@@ -97,8 +119,12 @@ class TargetFollower:
             self.steering.scale_gain(1 / 1.25)
 
     def getPreparedVector(self) -> Vector | None:
-        """(vx, vy, t) towards the target, or None when there is no tracked target."""
+        """(vx, vy, t) towards the target, or None when there is no tracked target (or ``follow="gimbal"``)."""
         return self._vector
+
+    def getGimbalPointing(self) -> GimbalPointing | None:
+        """With ``follow="gimbal"``, the rates that turn the gimbal towards the target; else, or untracked, None."""
+        return self._pointing
 
     # ---- state ----------------------------------------------------------------------------------
     @property
@@ -132,6 +158,17 @@ class TargetFollower:
         self._force_search = True
 
     # ---- internals ------------------------------------------------------------------------------
+    def _gimbal_rates(self, box: Box, size: tuple[int, int]) -> GimbalPointing:
+        """Rates towards ``box`` with the frame's camera model and the gimbal's attitude at its capture, when known."""
+        tm = self.tmMgr
+        camera = tm.camera() if tm is not None and hasattr(tm, "camera") else None
+        t = tm.snapshot() if tm is not None and hasattr(tm, "snapshot") else None
+        pitch, yaw, heading = (getattr(t, name, None) for name in ("gimbal_pitch_deg", "gimbal_yaw_deg", "yaw_deg"))
+        gimbal = None
+        if pitch is not None and yaw is not None and heading is not None:
+            gimbal = (float(pitch), float(yaw) - float(heading))  # yaw from the nose
+        return self.gimbal_steering.rates(box, size, camera, gimbal)
+
     def _work_frame(self, frame: np.ndarray) -> np.ndarray:
         """``frame`` shrunk by ``_shrink``: INTER_AREA on whole k x k blocks, its fast path."""
         k = self._shrink

@@ -77,6 +77,8 @@ class NanoTrackProcessor(TargetFollower):
     Args:
         camera: "down" or "forward".
         gain, dead_band, max_speed, vector_t: steering (see processors.steering.Steering).
+        follow: "vehicle" (vectors) or "gimbal" (the vehicle holds, the gimbal keeps the target centred:
+            ``gimbal_gain`` deg/s per degree off centre, at most ``gimbal_max_rate``; see processors.follow).
         loss_ratio, loss_score: appearance evidence: below both ``loss_ratio`` x the recent median and ``loss_score``.
         score_spread: NanoTrack-score evidence: this many spreads below its running median.
         jump, jump_factor: a step of the box (centre, in box sizes) that is checked against the motion.
@@ -92,6 +94,9 @@ class NanoTrackProcessor(TargetFollower):
         dead_band: float = 0.05,
         max_speed: float = 1.0,
         vector_t: float = 0.5,
+        follow: str = "vehicle",
+        gimbal_gain: float = 2.0,
+        gimbal_max_rate: float = 60.0,
         loss_ratio: float = 0.5,
         loss_score: float = 0.45,
         score_spread: float = 2.0,
@@ -101,7 +106,8 @@ class NanoTrackProcessor(TargetFollower):
         accept_ratio: float = 0.75,
         wide_every: int = 5,
     ) -> None:
-        super().__init__(camera, gain, dead_band, max_speed, vector_t)
+        super().__init__(camera, gain, dead_band, max_speed, vector_t, follow=follow, gimbal_gain=gimbal_gain,
+                         gimbal_max_rate=gimbal_max_rate)
         self.loss_ratio, self.loss_score, self.score_spread = loss_ratio, loss_score, score_spread
         self.jump, self.jump_factor = jump, jump_factor
         self.lost_after, self.accept_ratio = max(1, int(lost_after)), accept_ratio
