@@ -5,7 +5,7 @@ from __future__ import annotations
 import inspect
 import math
 from dataclasses import dataclass
-from typing import Any, Protocol, runtime_checkable
+from typing import Any, Protocol, TypeVar, runtime_checkable
 
 import numpy as np
 
@@ -18,6 +18,8 @@ OPTIONAL_METHODS = ("catch_cmd", "customize_processing", "getPreparedVector", "g
 
 _SIGNATURES = ("catch_cmd(self, roi)", "customize_processing(self, id)", "getPreparedVector(self)",
                "getLandingTarget(self)", "getGimbalPointing(self)")
+
+T = TypeVar("T")
 
 Box = tuple[int, int, int, int]
 """``(x, y, w, h)`` in frame pixels, (x, y) the top-left corner."""
@@ -97,6 +99,18 @@ def _require_arity(method: Any, count: int, where: str, path: str | None, class_
                                  path=path, class_name=class_name, missing=signature) from None
     except ValueError:  # builtins without a signature: accept
         pass
+
+
+def read_output(value: object, kind: type[T], method: str, hint: str) -> T | None:
+    """What an output method (``method``) returned, checked: a ``kind`` or None.
+
+    Raises:
+        TypeError: anything else, saying what was returned and ``hint`` (what to return instead); it is reported
+            as the processor's error and nothing is sent.
+    """
+    if value is None or isinstance(value, kind):
+        return value
+    raise TypeError(f"{method} returned {type(value).__name__} {value!r:.80}: return {hint}")
 
 
 def read_box(instance: object) -> Box | None:

@@ -14,6 +14,8 @@ from dataclasses import dataclass
 from numbers import Real
 from typing import Literal
 
+from processors.base import read_output
+
 RATE: Literal["rate"] = "rate"
 ANGLE: Literal["angle"] = "angle"
 
@@ -81,7 +83,5 @@ def read_gimbal_pointing(value: object) -> GimbalPointing | None:
     Raises:
         TypeError: anything else (reported as the processor's error; nothing is sent).
     """
-    if value is None or isinstance(value, GimbalPointing):
-        return value
-    raise TypeError(f"getGimbalPointing() returned {type(value).__name__} {value!r:.80}: return "
-                    "processors.GimbalPointing.rates(pitch, yaw) or .angles(pitch, yaw), or None")
+    return read_output(value, GimbalPointing, "getGimbalPointing()",
+                       "processors.GimbalPointing.rates(pitch, yaw) or .angles(pitch, yaw), or None")

@@ -12,6 +12,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from processors.base import read_output
+
 CAMERA_FRAME = "camera"
 """The one coordinate frame a :class:`LandingTarget` is given in: x right, y down (image), z ahead (optical axis)."""
 
@@ -84,7 +86,4 @@ def read_landing_target(value: object) -> LandingTarget | None:
     Raises:
         TypeError: anything else (reported as the processor's error; nothing is sent).
     """
-    if value is None or isinstance(value, LandingTarget):
-        return value
-    raise TypeError(f"getLandingTarget() returned {type(value).__name__} {value!r:.80}: return a "
-                    "processors.LandingTarget or None")
+    return read_output(value, LandingTarget, "getLandingTarget()", "a processors.LandingTarget or None")

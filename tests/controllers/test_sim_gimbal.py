@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import asyncio
 import math
-import time
 from typing import Any
 
 import pytest
@@ -15,7 +14,7 @@ from controllers.mavsdk_controller import MavsdkController
 from controllers.quaternion import euler, quaternion
 from controllers.sim.gimbal import MAX_RATE_DEG_S, NEUTRAL_PITCH_DEG, PITCH_LIMITS_DEG, SimGimbal
 from controllers.sim.launcher import SimVehicle
-from controllers.sim.truth import TruthClient
+from tests.controllers.test_sim_mavsdk import wait_truth
 
 ME, OTHER = (245, 190), (1, 42)
 
@@ -64,17 +63,6 @@ def test_angles_are_approached_at_the_motor_speed_within_the_limits() -> None:
     assert gimbal.setpoint.yaw_deg == pytest.approx(60)
 
 
-async def _truth_until(truth: TruthClient, check: Any, timeout: float, what: str) -> dict[str, Any]:
-    deadline = time.monotonic() + timeout
-    state = truth.latest()
-    while time.monotonic() < deadline:
-        state = truth.latest()
-        if state is not None and check(state):
-            return state
-        await asyncio.sleep(0.02)
-    raise AssertionError(f"{what} not reached within {timeout} s; last truth: {state}")
-
-
 async def test_the_controller_points_the_gimbal_reports_it_and_releases_it(sim_vehicle: SimVehicle) -> None:
     truth = sim_vehicle.truth()
     fc = MavsdkController()
@@ -90,18 +78,18 @@ async def test_the_controller_points_the_gimbal_reports_it_and_releases_it(sim_v
     try:
         await fc.point_gimbal("rate", 30.0, -45.0)
         assert fc.gimbal_controlled
-        moving = await _truth_until(truth, lambda s: s["gimbal_controlled"] and s["gimbal_yaw"] < -20, 5.0,
+        moving = await wait_truth(truth, lambda s: s["gimbal_controlled"] and s["gimbal_yaw"] < -20, 5.0,
                                     "gimbal turning left")
         assert moving["gimbal_pitch_rate"] == pytest.approx(30.0) and moving["gimbal_yaw_rate"] == pytest.approx(-45)
         await fc.release_gimbal()
-        stopped = await _truth_until(truth, lambda s: not s["gimbal_controlled"], 3.0, "control released")
+        stopped = await wait_truth(truth, lambda s: not s["gimbal_controlled"], 3.0, "control released")
         await asyncio.sleep(0.3)
         still = truth.latest()
         assert still is not None and (still["gimbal_pitch_rate"], still["gimbal_yaw_rate"]) == (0.0, 0.0)
         assert still["gimbal_yaw"] == pytest.approx(stopped["gimbal_yaw"], abs=0.5)  # stopped where it was
         assert not fc.gimbal_controlled
         await fc.point_gimbal("angle", -30.0, 20.0)  # control is taken again
-        await _truth_until(truth, lambda s: abs(s["gimbal_pitch"] + 30) < 0.5 and abs(s["gimbal_yaw"] - 20) < 0.5,
+        await wait_truth(truth, lambda s: abs(s["gimbal_pitch"] + 30) < 0.5 and abs(s["gimbal_yaw"] - 20) < 0.5,
                            3.0, "gimbal at -30, 20")
         await asyncio.sleep(0.3)
         last = reports[-1]  # the attitude as telemetry: yaw from north (the vehicle's heading plus the gimbal's)
