@@ -34,8 +34,9 @@ TELEMETRY_HZ = 10.0
 """The gimbal's attitude goes to telemetry at most this often (the ``sim:`` camera reads it at the pose's rate from
 GIMBAL_DEVICE_ATTITUDE_STATUS itself; every telemetry update is a telemetry.csv row)."""
 
-DISCOVERY_WAIT_S = 2.0
-"""How long a first setpoint waits for MAVSDK to list a gimbal (it asks each component once per heartbeat)."""
+DISCOVERY_WAIT_S = 10.0
+"""How long a first setpoint waits for MAVSDK to list a gimbal: it asks each component once per heartbeat (measured:
+the built-in simulator's within 2 s of connecting, ArduCopter's and PX4's SITL in 5 s)."""
 
 
 def attitude_update(attitude: Any) -> dict[str, float]:

@@ -31,6 +31,10 @@ logger = logging.getLogger(__name__)
 RELEASE_TIMEOUT_S = 2.0
 """The longest stopping and releasing the gimbal may take."""
 
+SEND_TIMEOUT_S = 3.0
+"""The longest one setpoint may take; the first also waits for MAVSDK to find the gimbal and takes control (a
+command acknowledged), later ones are streamed (no answer)."""
+
 STOP = GimbalPointing.rates(0.0, 0.0)
 
 
@@ -53,7 +57,7 @@ class GimbalRelay:
         self.gate = gate
         self.safety = safety
         self.events = events
-        self.sender = OneAtATime(events, "gimbal setpoint")
+        self.sender = OneAtATime(events, "gimbal setpoint", SEND_TIMEOUT_S)
         self.turning = False
         """The last setpoint sent was a non-zero rate: the gimbal turns until told otherwise."""
         self.releases = 0
