@@ -11,7 +11,6 @@ What was done is each frame's ``gimbal`` (frames.csv).
 from __future__ import annotations
 
 import asyncio
-import logging
 from typing import TYPE_CHECKING
 
 from controllers.base import GimbalControl
@@ -25,8 +24,6 @@ if TYPE_CHECKING:
     from uav_tui.events import EventLog
     from uav_tui.flight.autonomy import AutonomyGate
     from uav_tui.hosting.host import ProcessedFrame
-
-logger = logging.getLogger(__name__)
 
 RELEASE_TIMEOUT_S = 2.0
 """The longest stopping and releasing the gimbal may take."""
