@@ -2,11 +2,13 @@
 built): ArduCopter with a servo mount, as ArduPilot's autotest sets one up; PX4 with gimbal protocol v2 input.
 
 Each: MAVSDK finds the gimbal, control is taken, rates and angles move the attitude the autopilot reports (in
-telemetry), and the release leaves nobody in control (GIMBAL_MANAGER_STATUS, read through MAVSDK)."""
+telemetry, and as the pose samples a ``sim:?mount=gimbal`` camera draws from), and the release leaves nobody in
+control (GIMBAL_MANAGER_STATUS, read through MAVSDK)."""
 
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import time
 from collections.abc import Callable, Iterator
 from contextlib import AbstractContextManager
@@ -70,6 +72,11 @@ async def test_the_autopilot_s_gimbal_is_pointed_reported_and_released(sitl: Sit
         await _until(lambda: abs(latest["gimbal_pitch_deg"] + 45) < 1
                      and abs((latest["gimbal_yaw_deg"] - latest["yaw_deg"] - 20 + 180) % 360 - 180) < 2,
                      10, "pitch -45, yaw 20 right of the nose", lambda: latest)
+        async with asyncio.timeout(5), contextlib.aclosing(fc.pose_samples()) as samples:
+            async for sample in samples:  # what the sim: camera on the gimbal draws from, yaw from the nose
+                if sample.kind == "gimbal":
+                    assert sample.values[1:] == pytest.approx((-45.0, 20.0), abs=1.0)
+                    break
         assert fc._gimbal is not None and fc._gimbal.gimbal_id is not None
         plugin, gimbal_id = fc._gimbal._plugin, fc._gimbal.gimbal_id
         await _until(lambda: fc.gimbal_controlled, 1, "controlled", lambda: None)
