@@ -128,6 +128,7 @@ class CoreStatus:
         data = asdict(self)
         data["capabilities"] = sorted(self.capabilities)
         data["last_verdict"] = self.last_verdict.value if self.last_verdict is not None else None
+        data["gimbal"] = self.gimbal_summary()
         if self.target is not None:
             data["target"].update(distance_m=self.target.distance_m, bearing_deg=self.target.bearing_deg,
                                   range_m=self.target.range_m, description=describe(self.target))

@@ -94,6 +94,7 @@ async def test_a_tracker_keeps_a_driving_car_centred_with_the_gimbal_while_the_v
         assert core.gimbal_relay is not None and core.gimbal_relay.sent > 30
         status = core.status().gimbal_summary()
         assert status.startswith("gimbal P-") and "controlled" in status, status
+        assert core.status().as_dict()["gimbal"].startswith("gimbal P-")  # --json and the web page's status line
         run_dir = core.recorder.run_dir  # type: ignore[union-attr]
     run = dataset.load(run_dir)
     sent = run.frames[run.frames.gimbal == "sent"]

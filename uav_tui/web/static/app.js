@@ -161,6 +161,7 @@ function showStatus(message) {
   showTracked(s.box, message.frame);
   showTarget(s.target);
   if (s.last_decision) line += ` | ${s.last_decision}`;
+  if (s.gimbal) line += ` | ${s.gimbal}`;
   const host = s.processor_state;
   if (host) {
     line += host.isolation === "thread" ? " | processor in a platform thread" :
