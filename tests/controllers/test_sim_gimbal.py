@@ -100,4 +100,4 @@ async def test_the_controller_points_the_gimbal_reports_it_and_releases_it(sim_v
         reader.cancel()
         await asyncio.gather(reader, return_exceptions=True)
         await fc.close()
-    assert not truth.latest()["gimbal_controlled"]  # type: ignore[index]  # close() released it
+    await wait_truth(truth, lambda s: not s["gimbal_controlled"], 2.0, "released by close()")
