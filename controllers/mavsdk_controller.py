@@ -87,8 +87,9 @@ class MavsdkController:
         """Velocity control: the setpoints, and the switches into and out of the velocity-control mode."""
         self._vectors = VectorStream(self._offboard, rate_hz=vector_rate_hz, name="MavsdkController")
         self._landing: MavsdkLanding | None = None
-        self._gimbal: MavsdkGimbal | None = None
         """LANDING_TARGET on the autopilot's clock, and the precision landing (once connected)."""
+        self._gimbal: MavsdkGimbal | None = None
+        """The vehicle's gimbal, when it has one (once connected)."""
 
     # ---- connection ------------------------------------------------------------------------------
 
@@ -163,13 +164,8 @@ class MavsdkController:
         if self._closed:
             return
         if self._vectors.active or self._vectors.engaged:
-            try:
-                async with asyncio.timeout(CLOSE_HOLD_TIMEOUT_S):
-                    await self._vectors.stop_and_hold()
-            except (ControllerError, TimeoutError) as exc:
-                logger.error("MavsdkController: could not put the vehicle in hold while closing: %s",
-                             str(exc) or f"no answer within {CLOSE_HOLD_TIMEOUT_S:g} s")
-        await self._release_gimbal_at_close()
+            await _best_effort("put the vehicle in hold", self._vectors.stop_and_hold)
+        await _best_effort("release the gimbal", self.release_gimbal)
         self._closed = True
         self._stop.set()
         await self._vectors.cancel()
@@ -178,14 +174,6 @@ class MavsdkController:
         if mavsdk is not None and self._executor is not None:
             await release(mavsdk, self._executor, RELEASE_TIMEOUT_S)
         logger.info("MavsdkController closed (%s)", self.description)
-
-    async def _release_gimbal_at_close(self) -> None:
-        try:
-            async with asyncio.timeout(CLOSE_HOLD_TIMEOUT_S):
-                await self.release_gimbal()
-        except (ControllerError, TimeoutError) as exc:
-            logger.error("MavsdkController: could not release the gimbal while closing: %s",
-                         str(exc) or f"no answer within {CLOSE_HOLD_TIMEOUT_S:g} s")
 
     @property
     def unfinished_calls(self) -> list[str]:
@@ -257,14 +245,9 @@ class MavsdkController:
         # COMMAND_INT x = INT32_MIN (not INT32_MAX, "current position"). Altitude NaN: keep the current one
         # (MAVSDK labels z GLOBAL_RELATIVE_ALT while the API takes AMSL; NaN avoids the ambiguity).
         here = await self._command("do_orbit", self._telemetry.position)
-        lat, lon, behaviour = (
-            here.latitude_deg,
-            here.longitude_deg,
-            OrbitYawBehavior.HOLD_FRONT_TO_CIRCLE_CENTER,
-        )
-        await self._command(
-            "do_orbit", lambda: self._action.do_orbit(radius_m, velocity_ms, behaviour, lat, lon, math.nan)
-        )
+        facing = OrbitYawBehavior.HOLD_FRONT_TO_CIRCLE_CENTER
+        await self._command("do_orbit", lambda: self._action.do_orbit(radius_m, velocity_ms, facing, here.latitude_deg,
+                                                                      here.longitude_deg, math.nan))
 
     async def set_fly_vector(self, vx: float, vy: float, t: float, *, yield_to_others: bool = False) -> None:
         """Fly body-frame (vx forward, vy right) m/s for t s, altitude and yaw held; then zero + hold.
@@ -349,10 +332,16 @@ class MavsdkController:
         """
         if self._system is None:
             raise ControllerError("pose_samples: not connected (call connect() first)")
-        try:
-            async with asyncio.timeout(SETUP_TIMEOUT_S):
-                await request_pose_rate(self._direct, self._sysid, rate_hz)
-        except TimeoutError:
-            logger.warning("pose rate: no answer within %.0f s; keeping the current rates", SETUP_TIMEOUT_S)
+        await request_pose_rate(self._direct, self._sysid, rate_hz, SETUP_TIMEOUT_S)
         async for sample in pose_samples(self._direct, self._sysid, self._stop, self._subscriptions):
             yield sample
+
+
+async def _best_effort(what: str, call: Callable[[], Awaitable[object]]) -> None:
+    """Run ``call`` while closing, bounded; what goes wrong is logged, and closing goes on."""
+    try:
+        async with asyncio.timeout(CLOSE_HOLD_TIMEOUT_S):
+            await call()
+    except (ControllerError, TimeoutError) as exc:
+        logger.error("MavsdkController: could not %s while closing: %s", what,
+                     str(exc) or f"no answer within {CLOSE_HOLD_TIMEOUT_S:g} s")

@@ -81,8 +81,10 @@ def message_interval_command(target_system: int, message_id: int, rate_hz: float
     return command_long(target_system, MAV_CMD_SET_MESSAGE_INTERVAL, message_id, 1e6 / rate_hz)
 
 
-async def request_pose_rate(direct: MavlinkDirectAsync, target_system: int, rate_hz: float = POSE_RATE_HZ) -> None:
-    """Ask for both pose messages at ``rate_hz``; a refusal is logged (the default rate still works)."""
+async def request_pose_rate(direct: MavlinkDirectAsync, target_system: int, rate_hz: float = POSE_RATE_HZ,
+                            timeout_s: float = 10.0) -> None:
+    """Ask for both pose messages at ``rate_hz``; a refusal, or no answer within ``timeout_s``, is logged (the
+    default rate still works)."""
 
     async def one(name: str, message_id: int) -> None:
         try:
@@ -91,7 +93,11 @@ async def request_pose_rate(direct: MavlinkDirectAsync, target_system: int, rate
             logger.warning("autopilot refused %s at %g Hz (%s); the sim: camera interpolates what comes", name,
                            rate_hz, exc)
 
-    await asyncio.gather(*(one(name, message_id) for name, message_id in POSE_MESSAGES.items()))
+    try:
+        async with asyncio.timeout(timeout_s):
+            await asyncio.gather(*(one(name, message_id) for name, message_id in POSE_MESSAGES.items()))
+    except TimeoutError:
+        logger.warning("pose rate: no answer within %.0f s; keeping the current rates", timeout_s)
 
 
 YAW_IN_EARTH_FRAME, YAW_IN_VEHICLE_FRAME, YAW_LOCK = 64, 32, 16

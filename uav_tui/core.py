@@ -209,10 +209,9 @@ class UavCore:
         self.state = CoreState.STOPPED
 
     async def _cancel_tasks(self) -> None:
-        if self.landing_sender is not None:
-            await self.landing_sender.close()
-        if self.gimbal_relay is not None:
-            await self.gimbal_relay.close()
+        for relay in (self.landing_sender, self.gimbal_relay):
+            if relay is not None:
+                await relay.close()
         for task in self._tasks:
             task.cancel()
         await asyncio.gather(*self._tasks, return_exceptions=True)
