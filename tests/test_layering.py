@@ -100,3 +100,17 @@ def test_the_platforms_top_level_stays_small() -> None:
     """A newcomer reads ``uav_tui/`` from its folder listing: at most 15 modules, the rest in packages by subject."""
     modules = sorted(p.name for p in (ROOT / "uav_tui").glob("*.py") if p.name not in ("__init__.py", "__main__.py"))
     assert len(modules) <= 15, modules
+
+
+def test_modules_and_classes_stay_readable_in_one_sitting() -> None:
+    """No module over 400 lines and no class over 300, in the code and its tests (#40): past that, split by job."""
+    too_long = []
+    for path in sorted(p for folder in ("uav_tui", "controllers", "processors", "sources", "tests", "scripts")
+                       for p in (ROOT / folder).rglob("*.py")):
+        text = path.read_text()
+        if (lines := len(text.splitlines())) > 400:
+            too_long.append(f"{path.relative_to(ROOT)}: {lines} lines")
+        for node in ast.walk(ast.parse(text)):
+            if isinstance(node, ast.ClassDef) and (lines := (node.end_lineno or 0) - node.lineno + 1) > 300:
+                too_long.append(f"{path.relative_to(ROOT)}: class {node.name}, {lines} lines")
+    assert too_long == []
