@@ -16,6 +16,7 @@ Requests (the simulator replies to the sender with one JSON object; an "id" in t
     {"cmd": "rc_mode", "mode": M}  -> {"ok": true, "state": TRUTH}; M in POSCTL, HOLD, RTL, LAND, LOITER, as an RC pilot
     {"cmd": "rc_throttle", "pwm": P}  -> {"ok": true, "state": TRUTH}; the RC throttle (ardupilot dialect), 800..2200
     {"cmd": "setpoints", "since_mono_ns": T}  -> {"ok": true, "records": [REC, ...], "more": bool}
+    {"cmd": "landing_targets", "since_mono_ns": T}  -> {"ok": true, "records": [LT, ...], "more": bool}
     anything else             -> {"ok": false, "error": "..."}
 
 TRUTH (streamed datagrams carry no "id" and no "ok"):
@@ -32,4 +33,9 @@ TRUTH (streamed datagrams carry no "id" and no "ok"):
 REC (one per SET_POSITION_TARGET_LOCAL_NED received, oldest first, at most 400 per reply):
     t_mono_ns                 time.monotonic_ns() when the simulator read the datagram
     vx, vy, vz, frame         the velocity fields and MAV_FRAME as sent
+
+LT (one per LANDING_TARGET received, oldest first, at most 400 per reply):
+    t_mono_ns                 time.monotonic_ns() when the simulator read the datagram
+    time_usec, frame, position_valid   as sent (time_usec: the capture on the simulator's boot clock, time_boot_ms)
+    used                      the dialect took a pad position from it (else it was dropped, as the autopilot would)
 """

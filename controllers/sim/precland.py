@@ -15,6 +15,8 @@ from __future__ import annotations
 
 import logging
 import math
+from collections import deque
+from dataclasses import asdict, dataclass
 
 import numpy as np
 from pymavlink.dialects.v20 import common as mavlink
@@ -30,6 +32,21 @@ COMPANION = 1
 """ArduPilot's PLND_TYPE for a companion computer's LANDING_TARGET."""
 
 _BODY_FRAMES = (mavlink.MAV_FRAME_BODY_FRD, mavlink.MAV_FRAME_LOCAL_FRD)
+
+
+@dataclass(frozen=True, slots=True)
+class LandingTargetRecord:
+    """Arrival of one LANDING_TARGET, stamped with time.monotonic_ns() when the datagram was read."""
+
+    t_mono_ns: int
+    time_usec: int
+    frame: int
+    position_valid: int
+    used: bool
+    """The dialect read a pad position from it (else it was dropped, as the autopilot would)."""
+
+    def as_dict(self) -> dict[str, int | bool]:
+        return asdict(self)
 
 
 class PadEstimate:
@@ -49,12 +66,16 @@ class PadEstimate:
         self.received_ns = 0
         self.received = 0
         self.rejected = 0
+        self.log: deque[LandingTargetRecord] = deque(maxlen=20_000)
+        """Every LANDING_TARGET that arrived, oldest first (the truth channel's ``landing_targets``)."""
 
     def on_message(self, msg: mavlink.MAVLink_message, t_ns: int, pos: np.ndarray,
                    attitude: tuple[float, float, float]) -> None:
         """A LANDING_TARGET that arrived at ``t_ns`` while the vehicle was at ``pos`` (NED) with ``attitude``
         (roll, pitch, yaw radians)."""
         pad = self._ardupilot(msg, pos, attitude) if self.ardupilot else self._px4(msg)
+        self.log.append(LandingTargetRecord(t_ns, int(msg.time_usec), int(msg.frame), int(msg.position_valid),
+                                            pad is not None))
         if pad is None:
             self.rejected += 1
             return

@@ -174,13 +174,14 @@ class TruthServer:
                     return {"ok": False, "error": f"rc_throttle: pwm {pwm} outside 800..2200"}
                 v.guidance.stick.pwm = pwm
                 return {"ok": True, "cmd": "rc_throttle", "state": self.snapshot()}
-            if cmd == "setpoints":
+            if cmd in ("setpoints", "landing_targets"):
                 since = int(req.get("since_mono_ns", 0))
-                records = [r.as_dict() for r in s.setpoint_log if r.t_mono_ns > since]
+                log = s.setpoint_log if cmd == "setpoints" else s.pad.log
+                records = [r.as_dict() for r in log if r.t_mono_ns > since]
                 more = len(records) > MAX_SETPOINT_RECORDS
                 return {
                     "ok": True,
-                    "cmd": "setpoints",
+                    "cmd": cmd,
                     "records": records[:MAX_SETPOINT_RECORDS],
                     "more": more,
                 }
