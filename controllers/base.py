@@ -193,6 +193,11 @@ class PrecisionLanding(Protocol):
         saying why not."""
         ...
 
+    @property
+    def landing_modes(self) -> frozenset[str]:
+        """The flight modes (MAVSDK's names) the vehicle reports while it lands on the target."""
+        ...
+
 
 @runtime_checkable
 class BlockingCalls(Protocol):

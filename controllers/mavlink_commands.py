@@ -22,7 +22,7 @@ MAV_FRAME_BODY_NED = 8
 VELOCITY_ONLY_MASK = 0b111 | (0b111 << 6) | (1 << 10)
 """type_mask: ignore position, acceleration and yaw; use velocity and yaw rate (as MAVSDK does)."""
 
-PX4_MODES = {"OFFBOARD": (6, 0), "HOLD": (4, 3)}
+PX4_MODES = {"OFFBOARD": (6, 0), "HOLD": (4, 3), "PRECLAND": (4, 9)}
 """PX4 (main_mode, sub_mode) for DO_SET_MODE param2/param3."""
 
 MAV_RESULTS = {

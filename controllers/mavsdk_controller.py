@@ -29,6 +29,7 @@ from controllers.mavsdk_log import route_mavsdk_log
 from controllers.mavsdk_offboard import MavsdkOffboard
 from controllers.mavsdk_pose import POSE_RATE_HZ, pose_samples, request_pose_rate
 from controllers.mavsdk_telemetry import merged_updates
+from controllers.precland import LANDING_MODES
 from controllers.vector_stream import DEFAULT_RATE_HZ, VectorStream
 
 logger = logging.getLogger(__name__)
@@ -289,6 +290,11 @@ class MavsdkController:
         """Land on the landing target sent with :meth:`send_landing_target`; returns what was done (see
         :meth:`MavsdkLanding.precision_land <controllers.mavsdk_landing.MavsdkLanding.precision_land>`)."""
         return await self._connected_landing("precland").precision_land(self.land, self._vectors.stop_and_hold)
+
+    @property
+    def landing_modes(self) -> frozenset[str]:
+        """The flight modes (MAVSDK's names) the vehicle reports while it lands precisely."""
+        return LANDING_MODES.get(self.autopilot, frozenset({"LAND"}))
 
     def _connected_landing(self, name: str) -> MavsdkLanding:
         if self._landing is None or self._closed:

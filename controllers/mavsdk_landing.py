@@ -12,16 +12,11 @@ from typing import Any
 from mavsdk.asyncio.plugins.mavlink_direct import MavlinkMessage
 
 from controllers.landing_target import LandingTargetError, LandingTargetFix, landing_target_fields
-from controllers.mavlink_commands import command_long, landing_target, send_command
+from controllers.mavlink_commands import landing_target, px4_set_mode, send_command
 from controllers.mavsdk_attach import AUTOPILOT_NAMES, ReachedAutopilot
 from controllers.mavsdk_calls import Command
 from controllers.mavsdk_pose import BootClock
-from controllers.precland import (
-    MAV_CMD_NAV_LAND,
-    PX4_PRECISION_REQUIRED,
-    PrecisionLandingError,
-    check_ardupilot_params,
-)
+from controllers.precland import PrecisionLandingError, check_ardupilot_params
 
 
 class MavsdkLanding:
@@ -71,7 +66,7 @@ class MavsdkLanding:
         """Land on the landing target sent with :meth:`send`; returns what was done.
 
         ArduPilot: PLND_ENABLED and PLND_TYPE checked, then ``land()``; PX4: ``stop_and_hold()`` (a running vector
-        ends), then NAV_LAND with precision "required".
+        ends), then its Precision Land mode.
 
         Raises:
             PrecisionLandingError: a PLND parameter missing or wrong (named, with the value it needs), or an
@@ -88,6 +83,6 @@ class MavsdkLanding:
             raise PrecisionLandingError(f"precland: {AUTOPILOT_NAMES[reached.autopilot]}: only PX4 and ArduPilot "
                                         "are known to land on LANDING_TARGET")
         await stop_and_hold()
-        command = command_long(reached.sysid, MAV_CMD_NAV_LAND, 0, PX4_PRECISION_REQUIRED)
-        await self._command("land", lambda: send_command(reached.direct, command))
-        return f"precision landing (NAV_LAND, precision {PX4_PRECISION_REQUIRED} = required)"
+        command = px4_set_mode(reached.sysid, "PRECLAND")
+        await self._command("precision land", lambda: send_command(reached.direct, command))
+        return "precision landing (PX4's Precision Land mode)"

@@ -3,7 +3,11 @@
 * **ArduPilot**: ``PLND_ENABLED = 1`` and ``PLND_TYPE = 1`` (companion computer), both read before LAND is asked
   for; the autopilot reads them at boot, so a wrong value is reported (set it and reboot), never changed here.
   In LAND it then flies over the target while it descends.
-* **PX4**: ``MAV_CMD_NAV_LAND`` with param 2 = 2, precision landing "required" (1 would be "opportunistic").
+* **PX4**: its Precision Land flight mode (``AUTO_PRECLAND``, DO_SET_MODE main 4 sub 9): it flies over the
+  target (``landing_target_pose``, from LANDING_TARGET) and descends onto it. ``MAV_CMD_NAV_LAND`` with param 2
+  (precision "opportunistic"/"required") is read only in a mission: outside one, PX4 v1.16's Commander turns it
+  into plain LAND at the current position (measured on its SITL: it came down 3 m from the target).
+  MAVSDK 4 has no name for that mode and reports it as ``UNKNOWN``.
 """
 
 from __future__ import annotations
@@ -13,9 +17,9 @@ from typing import Any
 
 from controllers.errors import ControllerError
 
-MAV_CMD_NAV_LAND = 21
-PX4_PRECISION_REQUIRED = 2
-"""NAV_LAND param 2: 0 no precision landing, 1 opportunistic, 2 required."""
+LANDING_MODES = {"ardupilot": frozenset({"LAND"}), "px4": frozenset({"UNKNOWN"})}
+"""The flight modes (MAVSDK's names) each autopilot reports while it lands precisely: PX4's Precision Land is
+``UNKNOWN`` to MAVSDK 4."""
 
 ARDUPILOT_PARAMS = {"PLND_ENABLED": (1, "precision landing on"), "PLND_TYPE": (1, "companion computer: "
                                                                                 "LANDING_TARGET from uav-tui")}

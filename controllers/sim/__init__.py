@@ -25,7 +25,8 @@ TRUTH (streamed datagrams carry no "id" and no "ok"):
     n, e, d, vn, ve, vd       local NED position (m, origin at home, d = 0 on the ground) and velocity (m/s)
     roll, pitch, yaw          degrees, yaw from north clockwise
     armed, in_air             booleans
-    mode                      MANUAL, POSCTL, HOLD, TAKEOFF, LAND, RTL, OFFBOARD or ORBIT; GUIDED, LOITER (ardupilot)
+    mode                      MANUAL, POSCTL, HOLD, TAKEOFF, LAND, RTL, OFFBOARD or ORBIT; PRECLAND (px4);
+                              GUIDED, LOITER (ardupilot)
     lat, lon, alt             degrees, degrees, metres AMSL
     battery, wind_n, wind_e   remaining fraction 0..1, steady wind m/s
     rc_throttle               the RC throttle input in the ardupilot dialect (default 1000, SITL's), else null

@@ -128,9 +128,8 @@ class CommandHandler:
         ]
 
     def _land(self, cmd: Cmd) -> None:
-        """NAV_LAND; on PX4, param 2 asks for precision landing (1 opportunistic, 2 required)."""
-        if not self.s.dialect.ardupilot:
-            self.s.pad.enabled = cmd.p[1] > 0
+        """NAV_LAND: LAND where the vehicle is. PX4 reads param 2 (precision) only in a mission: its Commander makes
+        this a plain LAND (precision landing is its PRECLAND mode, DO_SET_MODE)."""
         self.v.guidance.land()
 
     def _set_loss_action(self, value: float) -> None:
@@ -212,8 +211,8 @@ class CommandHandler:
             self.v.set_offboard(self.s.setpoint)
         elif mode == Mode.TAKEOFF:
             self.v.takeoff(None)
-        elif mode == Mode.LAND:
-            g.land()
+        elif mode in (Mode.LAND, Mode.PRECLAND):
+            g.land(mode)
         elif mode == Mode.RTL:
             g.rtl()
         elif mode == Mode.GUIDED:

@@ -1,8 +1,9 @@
 """Flight modes of the simulated vehicle: each turns the vehicle state into a velocity demand.
 
 Modes follow PX4's behaviour: HOLD brakes to a stop and keeps that position, TAKEOFF climbs to the
-takeoff altitude and then holds, LAND descends and disarms on touchdown, RTL climbs to the RTL
-altitude, flies home and lands, ORBIT circles a centre, OFFBOARD follows the newest setpoint.
+takeoff altitude and then holds, LAND descends and disarms on touchdown, PRECLAND (PX4's Precision Land)
+lands on the pad LANDING_TARGET gives, RTL climbs to the RTL altitude, flies home and lands, ORBIT circles a
+centre, OFFBOARD follows the newest setpoint.
 Two are ArduCopter's (the ``ardupilot`` dialect): GUIDED follows the newest setpoint and otherwise
 holds its stopping point, LOITER holds its position but climbs or sinks with the RC throttle stick.
 """
@@ -29,6 +30,7 @@ class Mode(StrEnum):
     HOLD = "HOLD"
     TAKEOFF = "TAKEOFF"
     LAND = "LAND"
+    PRECLAND = "PRECLAND"
     RTL = "RTL"
     OFFBOARD = "OFFBOARD"
     ORBIT = "ORBIT"
@@ -116,6 +118,8 @@ class Guidance:
         """What a finished takeoff holds in: PX4 switches to HOLD, ArduCopter stays in GUIDED."""
         self.pad: Callable[[], np.ndarray | None] | None = None
         """The landing pad's (north, east) from precision landing now, or None (see :mod:`controllers.sim.precland`)."""
+        self.precision_modes = frozenset({Mode.PRECLAND})
+        """The modes that land on :attr:`pad`: PX4's Precision Land; ArduCopter's LAND (with PLND_ENABLED)."""
 
     # ------------------------------------------------------------ transitions
     def _enter(self, mode: Mode) -> None:
@@ -162,8 +166,9 @@ class Guidance:
         self._enter(Mode.TAKEOFF)
         self.target = np.array([self.v.pos[0], self.v.pos[1], -altitude_m])
 
-    def land(self) -> None:
-        self._enter(Mode.LAND)
+    def land(self, mode: Mode = Mode.LAND) -> None:
+        """LAND, or PRECLAND (PX4's Precision Land)."""
+        self._enter(mode)
         self.target = self._stopping_point()
 
     def rtl(self) -> None:
@@ -191,6 +196,7 @@ class Guidance:
         handler = {
             Mode.TAKEOFF: self._takeoff,
             Mode.LAND: self._land,
+            Mode.PRECLAND: self._land,
             Mode.RTL: self._rtl,
             Mode.ORBIT: self._orbit,
             Mode.OFFBOARD: self._offboard,
@@ -246,7 +252,7 @@ class Guidance:
         return cfg.fast_descent_ms if self.v.altitude > cfg.land_alt1_m else cfg.land_speed_ms
 
     def _land(self) -> Demand:
-        pad = self.pad() if self.pad is not None else None
+        pad = self.pad() if self.pad is not None and self.mode in self.precision_modes else None
         if pad is not None:  # precision landing: over the newest estimate of the pad (kept once it goes stale)
             self.target[:2] = pad
         vel = self._toward(self.target, self.v.cfg.cruise_speed_ms, 0.0, 0.0)

@@ -4,8 +4,8 @@
   only; angles give the line of sight ``(-tan(angle_y), tan(angle_x), 1)`` in the body frame, ``position_valid``
   gives ``x, y, z`` in it. Turned by the vehicle's attitude, it meets the pad ``distance`` away (or, without one,
   at the ground: the simulator's rangefinder).
-* PX4 dialect (``landing_target_pose``): ``position_valid = 1`` in ``MAV_FRAME_LOCAL_NED``; precision landing is
-  asked for by ``MAV_CMD_NAV_LAND`` param 2 (1 opportunistic, 2 required).
+* PX4 dialect (``landing_target_pose``): ``position_valid = 1`` in ``MAV_FRAME_LOCAL_NED``, always taken; its
+  Precision Land mode (PRECLAND) lands on it, a plain LAND (also ``MAV_CMD_NAV_LAND`` with param 2) does not.
 
 A target is used for :data:`STALE_S` after it arrived; LAND then flies over the newest pad estimate while it
 descends and, once the target is stale, keeps to the last estimate.
@@ -58,8 +58,8 @@ class PadEstimate:
 
     def __init__(self, ardupilot: bool) -> None:
         self.ardupilot = ardupilot
-        self.enabled = False
-        """ArduPilot: PLND_ENABLED; PX4: the last NAV_LAND asked for precision (param 2 > 0)."""
+        self.enabled = not ardupilot
+        """ArduPilot: PLND_ENABLED; PX4 always takes the target (its PRECLAND mode decides to land on it)."""
         self.source_type = COMPANION
         """ArduPilot: PLND_TYPE; only a companion's (1) LANDING_TARGET is read."""
         self.position: np.ndarray | None = None

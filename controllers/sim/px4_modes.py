@@ -17,6 +17,7 @@ _TO_PX4: dict[Mode, tuple[int, int]] = {
     Mode.HOLD: (MAIN_AUTO, 3),
     Mode.RTL: (MAIN_AUTO, 5),
     Mode.LAND: (MAIN_AUTO, 6),
+    Mode.PRECLAND: (MAIN_AUTO, 9),
     Mode.OFFBOARD: (MAIN_OFFBOARD, 0),
 }
 _FROM_PX4 = {v: k for k, v in _TO_PX4.items()}

@@ -65,7 +65,7 @@ def landed_state(v: Multicopter) -> int:
         return M.MAV_LANDED_STATE_TAKEOFF
     if not v.in_air:
         return M.MAV_LANDED_STATE_ON_GROUND
-    if v.mode == Mode.LAND or (v.mode == Mode.RTL and v.guidance.rtl_phase == "land"):
+    if v.mode in (Mode.LAND, Mode.PRECLAND) or (v.mode == Mode.RTL and v.guidance.rtl_phase == "land"):
         return M.MAV_LANDED_STATE_LANDING
     return M.MAV_LANDED_STATE_IN_AIR
 

@@ -74,7 +74,9 @@ class SimVehicleServer:
             self.vehicle.guidance.hold_mode = Mode.GUIDED
         self.link = MavlinkLink(config.mavlink_port)
         self.pad = PadEstimate(self.dialect.ardupilot)
-        self.pad.enabled = config.precland_enabled and self.dialect.ardupilot
+        if self.dialect.ardupilot:
+            self.pad.enabled = config.precland_enabled
+            self.vehicle.guidance.precision_modes = frozenset({Mode.LAND})
         self.vehicle.guidance.pad = lambda: self.pad.pad(time.monotonic_ns())
         self.gimbal = SimGimbal()
         self.streams = TelemetryStreams(self.link.encoder, self.vehicle, config.home,

@@ -18,7 +18,10 @@ from pymavlink.dialects.v20 import common as mavlink
 from controllers.landing_target import LandingTargetError, LandingTargetFix, rotation_ned_body
 from controllers.mavsdk_controller import MavsdkController
 from controllers.precland import PrecisionLandingError
+from controllers.sim import px4_modes
+from controllers.sim.guidance import Mode
 from controllers.sim.launcher import SimVehicle
+from controllers.sim.physics import Multicopter
 from controllers.sim.precland import PadEstimate
 from controllers.sim.truth import TruthClient
 from tests.controllers.test_landing_target import NADIR
@@ -147,12 +150,26 @@ def test_ardupilot_reads_angles_in_the_body_frame_and_drops_other_frames() -> No
     assert estimate.pad(2_000 + 1_100_000_000) is None  # stale after a second
 
 
-def test_px4_reads_only_a_local_ned_position_and_only_for_a_precision_land() -> None:
+def test_px4_reads_only_a_local_ned_position() -> None:
     estimate = PadEstimate(ardupilot=False)
     estimate.on_message(landing_target(frame=mavlink.MAV_FRAME_LOCAL_NED, position_valid=1, x=3.0, y=-1.0), 0,
                         np.zeros(3), (0.0, 0.0, 0.0))
-    assert estimate.pad(0) is None  # a plain LAND (NAV_LAND param 2 = 0) ignores it
-    estimate.enabled = True
     assert estimate.pad(0) == pytest.approx([3.0, -1.0])
     estimate.on_message(landing_target(angle_x=0.1), 0, np.zeros(3), (0.0, 0.0, 0.0))  # angles: the IR-LOCK path
     assert estimate.rejected == 1
+    assert [record.used for record in estimate.log] == [True, False]
+
+
+def test_px4_lands_on_the_pad_in_its_precision_land_mode_only() -> None:
+    """PX4's NAV_LAND (param 2 is read in missions only) lands where it is; Precision Land (4, 9) on the pad."""
+    assert px4_modes.mode_from_command(4, 9) is Mode.PRECLAND
+    assert px4_modes.custom_mode(Mode.PRECLAND) == 9 << 24 | 4 << 16
+    vehicle = Multicopter()
+    vehicle.armed, vehicle.in_air = True, True
+    vehicle.pos[:] = (0.0, 0.0, -10.0)
+    vehicle.guidance.pad = lambda: np.array([3.0, 0.0])
+    vehicle.guidance.land()
+    assert np.hypot(*vehicle.guidance.demand()[0][:2]) < 1e-9  # plain LAND: straight down
+    vehicle.guidance.land(Mode.PRECLAND)
+    north, east, down = vehicle.guidance.demand()[0]
+    assert north > 1.0 and abs(east) < 1e-9 and down > 0  # over the pad while descending
