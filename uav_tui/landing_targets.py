@@ -3,8 +3,8 @@ sending of each target to the autopilot (LANDING_TARGET, converted by the contro
 
 ``precland`` is refused unless the processor reports a landing target (``getLandingTarget``) and saw the pad
 within :data:`FRESH_TARGET_S`: an autopilot told to land precisely without a target lands where it is
-(ArduPilot) or searches for one (PX4). Once it is on, any other vehicle command, a processor fault or a lost
-link turns it off again.
+(ArduPilot) or searches for one (PX4). Once it is on, any other vehicle command, a processor fault, a lost
+link, or the vehicle leaving its precision-landing mode (a pilot's switch, a failsafe) turns it off again.
 """
 
 from __future__ import annotations
@@ -14,6 +14,7 @@ import time
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Protocol
 
+from controllers.base import PrecisionLanding
 from controllers.landing_target import LandingTargetFix
 from uav_tui.errors import UavError
 from uav_tui.flight.autonomy import WATCHDOG_PERIOD_S
@@ -32,6 +33,10 @@ if TYPE_CHECKING:
 FRESH_TARGET_S = 1.0
 """``precland`` needs a landing target seen this recently (ArduPilot drops a target older than a second)."""
 
+MODE_REPORTED_WITHIN_S = 3.0
+"""After ``precland`` the vehicle must report its precision-landing mode this soon (PX4 says its mode once a
+second; a pilot's switch made as ``precland`` was sent would otherwise go unseen)."""
+
 
 class LandingTargetFeed:
     """When the newest landing target was seen, and the operator's ``precland`` switch.
@@ -48,6 +53,10 @@ class LandingTargetFeed:
         """Why ``precland`` was turned off last ("" while on, or before it was ever on)."""
         self.last_seen_ns: int | None = None
         """Capture time (monotonic ns) of the newest frame the processor saw the pad in."""
+        self.engaged_ns = 0
+        """When ``precland`` was last turned on (monotonic ns)."""
+        self.mode_reported = False
+        """The vehicle has reported its precision-landing mode since ``precland`` was turned on."""
 
     def seen(self, capture_ns: int) -> None:
         """The processor saw the pad in the frame captured at ``capture_ns``."""
@@ -66,6 +75,23 @@ class LandingTargetFeed:
 
     def engage(self) -> None:
         self.engaged, self.stop_reason = True, ""
+        self.engaged_ns, self.mode_reported = self.clock(), False
+
+    def left_mode(self, mode: str | None, landing_modes: frozenset[str]) -> str:
+        """Why ``precland`` must end, the vehicle reporting ``mode`` (None: not known), or "" while it lands in one
+        of ``landing_modes``: once it reported one of them, any other mode is someone else's choice (a pilot, a
+        failsafe), and it must report one within :data:`MODE_REPORTED_WITHIN_S`."""
+        wanted = "/".join(sorted(landing_modes))
+        if mode in landing_modes:
+            self.mode_reported = True
+            return ""
+        if self.mode_reported and mode is not None:
+            return f"the vehicle left {wanted} for {mode}: a pilot, a mission or a failsafe took it"
+        waited_s = (self.clock() - self.engaged_ns) / 1e9
+        if not self.mode_reported and waited_s > MODE_REPORTED_WITHIN_S:
+            return (f"the vehicle did not report {wanted} within {MODE_REPORTED_WITHIN_S:g} s of precland "
+                    f"(it reports {mode or 'no mode'})")
+        return ""
 
     def release(self, reason: str) -> bool:
         """Turn ``precland`` off for ``reason``; True if it was on."""
@@ -157,7 +183,8 @@ def _blocked(core: LandingCore, capture_ns: int) -> str:
     return not_now(core.controller, core.config.safety, (core.gate.clock() - capture_ns) / 1e9, core.landing_sender)
 
 async def watch_precland(core: LandingCore) -> None:
-    """Turn ``precland`` off on the faults that stop autonomy, and once the vehicle landed and disarmed."""
+    """Turn ``precland`` off on the faults that stop autonomy, once the vehicle landed and disarmed, and when it
+    leaves its precision-landing mode (:meth:`LandingTargetFeed.left_mode`)."""
     worker = core.worker
     assert worker is not None
     while True:
@@ -165,7 +192,10 @@ async def watch_precland(core: LandingCore) -> None:
         if not core.landing.engaged:
             continue
         fault = core.gate.fault(core.newest_frame_age(), worker.busy_s, worker.consecutive_errors)
-        if not fault and core.telemetry.snapshot().armed is False:
+        snapshot = core.telemetry.snapshot()
+        if not fault and snapshot.armed is False:
             fault = "landed and disarmed"
+        if not fault and isinstance(core.controller, PrecisionLanding):
+            fault = core.landing.left_mode(snapshot.flight_mode, core.controller.landing_modes)
         if fault:
             core.stop_precland(fault)

@@ -1,11 +1,13 @@
 """``precland``: refused, saying why, without a landing target or with the autopilot not set up; otherwise the
-autopilot lands on the target, and any other vehicle command turns it off. Through a real core and the real
-MAVSDK controller on the built-in simulator."""
+autopilot lands on the target, and any other vehicle command, or a pilot's mode switch, turns it off. Through a
+real core and the real MAVSDK controller on the built-in simulator."""
 
 from __future__ import annotations
 
 import asyncio
+import time
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -15,6 +17,7 @@ from tests.core.flight_helpers import flying_core, steering_config, wait_until
 from uav_tui.core import UavCore
 from uav_tui.errors import UavError
 from uav_tui.headless import format_status
+from uav_tui.landing_targets import LandingTargetFeed
 
 PAD_PROCESSOR = '''
 from processors.landing_target import LandingTarget
@@ -101,3 +104,55 @@ async def test_precland_checks_the_target_and_the_plnd_parameters_then_lands(tmp
         await core.execute("f 3")  # the processor keeps raising: precland stops as autonomy would
         await wait_until(lambda: not core.status().precland, 5, "precland off")
         assert "processor raised" in core.status().precland_stop_reason
+
+
+def landing_targets_since(sim: SimVehicle, since_mono_ns: int) -> list[dict[str, Any]]:
+    """The LANDING_TARGETs the simulator received after ``since_mono_ns`` (its own log, not the platform's)."""
+    reply = sim.truth().request({"cmd": "landing_targets", "since_mono_ns": since_mono_ns})
+    return reply["records"]
+
+
+@pytest.mark.timeout(120)
+@pytest.mark.parametrize("sim_vehicle", [{"autopilot": "ardupilot", "extra_args": ["--plnd-enabled"]}],
+                         indirect=True)
+async def test_a_pilot_taking_the_vehicle_out_of_land_stops_the_landing_targets(tmp_path: Path,
+                                                                                sim_vehicle: SimVehicle) -> None:
+    async with flying_core(tmp_path, vehicle=sim_vehicle, processor=pad_processor(tmp_path), camera_hfov=60.0,
+                           camera_mount="down") as core:
+        truth = core.truth  # type: ignore[attr-defined]
+        await core.execute("f 1")
+        await wait_until(lambda: core.landing.last_seen_ns is not None, 5, "the pad seen")
+        engaged_ns = time.monotonic_ns()
+        await core.execute("precland")
+        await wait_until(lambda: core.telemetry.snapshot().flight_mode == "LAND", 5, "LAND reported")
+        await asyncio.sleep(0.5)
+        assert core.status().precland and len(landing_targets_since(sim_vehicle, engaged_ns)) >= 5
+
+        truth.request({"cmd": "rc_throttle", "pwm": 1500})  # the pilot's stick at mid: LOITER holds the height
+        truth.request({"cmd": "rc_mode", "mode": "LOITER"})  # the pilot's mode switch: no MAVLink client asked
+        await wait_until(lambda: not core.status().precland, 5, "precland off")
+        stopped_ns = time.monotonic_ns()
+        reason = core.status().precland_stop_reason
+        assert reason == "the vehicle left LAND for HOLD: a pilot, a mission or a failsafe took it"  # LOITER: HOLD
+        said = [e.message for e in core.events.recent if e.level == "warning"]
+        assert f"precland off, landing targets no longer sent: {reason}" in said
+        await asyncio.sleep(1.5)
+        late = landing_targets_since(sim_vehicle, stopped_ns + 300_000_000)  # a send under way may still arrive
+        assert late == [], f"{len(late)} LANDING_TARGETs reached the autopilot after precland stopped"
+        assert truth.latest()["mode"] == "LOITER"  # the pilot keeps the vehicle: no hold from the platform
+
+
+def test_precland_ends_when_the_vehicle_leaves_its_landing_mode_or_never_reports_it() -> None:
+    now = [0]
+    feed = LandingTargetFeed(clock=lambda: now[0])
+    feed.engage()
+    modes = frozenset({"LAND"})
+    assert feed.left_mode("OFFBOARD", modes) == ""  # the old mode, reported before the switch shows
+    now[0] = 2_000_000_000
+    assert feed.left_mode("LAND", modes) == "" and feed.left_mode(None, modes) == ""
+    now[0] = 60_000_000_000
+    assert feed.left_mode("LAND", modes) == ""
+    assert feed.left_mode("HOLD", modes) == "the vehicle left LAND for HOLD: a pilot, a mission or a failsafe took it"
+    feed.engage()
+    now[0] += 3_100_000_000
+    assert feed.left_mode("HOLD", modes) == "the vehicle did not report LAND within 3 s of precland (it reports HOLD)"
