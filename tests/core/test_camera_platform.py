@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import asyncio
 import math
+import re
 from pathlib import Path
 
 import pytest
@@ -14,6 +15,7 @@ from tests.core.flight_helpers import wait_until
 from tests.sources.test_camera_model import SAMPLE_YAML
 from uav_tui.config import Config, with_overrides
 from uav_tui.core import UavCore
+from uav_tui.errors import ConfigError
 from uav_tui.recorded import dataset
 from uav_tui.replay.runner import ReplayJob, replay_run
 
@@ -72,6 +74,14 @@ async def test_a_calibration_for_another_frame_size_stops_the_start(tmp_path: Pa
         await core.start()
     await asyncio.sleep(0)
     assert core.source is None or not core.source.get_properties()["running"]
+
+
+def test_a_calibration_file_that_does_not_parse_is_refused_with_the_configuration(tmp_path: Path) -> None:
+    calibration = tmp_path / "camera.yaml"
+    calibration.write_text("camera_matrix: [1, 2\n  : : garbage {{")
+    with pytest.raises(ConfigError, match=rf"camera_calibration: calibration file {re.escape(str(calibration))} is "
+                       r"not an OpenCV calibration file .*make one with: uav-tui calibrate"):
+        with_overrides(Config(), source="synthetic:", camera_calibration=str(calibration))  # nothing starts
 
 
 @pytest.mark.timeout(120)

@@ -118,6 +118,22 @@ def test_two_markers_with_the_pad_id_give_no_target() -> None:
     assert processor.getLandingTarget() is None and processor.status.startswith("2 markers with id 7")
 
 
+@pytest.mark.parametrize(("left_px", "edge"), [(3, True), (8, False)], ids=["touching", "inside"])
+def test_a_marker_touching_the_frame_edge_gives_no_target(left_px: int, edge: bool) -> None:
+    """Found, but with a corner within EDGE_MARGIN_PX of the border: it may be cut off, its pose is not trusted."""
+    vocabulary = cv2.aruco.getPredefinedDictionary(cv2.aruco.DICT_4X4_50)
+    frame = np.full((480, 640), 255, np.uint8)
+    frame[200:260, left_px:left_px + 60] = cv2.aruco.generateImageMarker(vocabulary, 7, 60)
+    processor = PrecisionLand("4x4_50", 7, 0.5, size_tolerance=None)
+    run(processor, cv2.cvtColor(frame, cv2.COLOR_GRAY2BGR), Pose(d=-10.0))
+    assert [marker_id for marker_id, _ in processor.seen] == [7]
+    if edge:
+        assert processor.getLandingTarget() is None
+        assert processor.status == "marker 7 partly out of frame: no target"
+    else:
+        assert processor.getLandingTarget() is not None, processor.status
+
+
 def test_a_pad_leaving_the_frame_is_reported_at_its_edge(renderer: SimRenderer) -> None:
     processor = PrecisionLand("4x4_50", 7, 0.5)
     inside = Pose(n=2.0, e=-1.0 + 5.4, d=-10.0)  # the pad 5.4 m west of the vehicle: 19 px from the left edge
