@@ -1,6 +1,7 @@
 """Write the manual's measured figures from the benchmarks' JSON, so that no number in it is typed by hand.
 
     .venv/bin/python scripts/bench_tracking.py > scripts/results/tracking.json
+    .venv/bin/python scripts/bench_precland.py > scripts/results/precland.json
     .venv/bin/python scripts/manual_figures.py           # rewrites the marked blocks of docs/benchmarks.md
     .venv/bin/python scripts/manual_figures.py --check   # exit 1 when docs/benchmarks.md differs from the JSON
 
@@ -45,7 +46,39 @@ def tracking(result: dict[str, Any]) -> str:
     return "\n".join([*rows, "", *notes]) + "\n"
 
 
-RENDERERS: dict[str, Callable[[dict[str, Any]], str]] = {"tracking": tracking}
+def _verdicts(result: dict[str, Any]) -> list[str]:
+    """Each goal of a benchmark's ``goals`` ({name: {goal, value, pass}}) as one line."""
+    return [f"{name}: {verdict['value']} ({verdict['goal']}: {'met' if verdict['pass'] else 'not met'})"
+            for name, verdict in result["goals"].items()]
+
+
+PRECLAND_ROWS = (("landing error", "landing_error", "m"), ("`precland` to touchdown", "precland_to_touchdown", "s"),
+                 ("capture to LANDING_TARGET at the autopilot", "capture_to_landing_target", "ms"),
+                 ("of which the `sim:` camera's rendering", "sim_camera_render", "ms"),
+                 ("of which the processor's own time", "processor_own_time", "ms"),
+                 ("of which the platform's share", "platform_share", "ms"),
+                 ("`time_usec` off the true capture", "time_usec_stamp_off_capture", "ms"))
+"""``bench_precland.py``'s figures: (row label, JSON key, unit)."""
+
+
+def precland(result: dict[str, Any]) -> str:
+    """``bench_precland.py``: p50 / p95 / max of each figure, the platform's share in its parts, the goals."""
+    rows = ["| measure | p50 | p95 | max |", "| --- | --- | --- | --- |"]
+    figures = [(label, result[key], unit) for label, key, unit in PRECLAND_ROWS]
+    figures += [(f"platform: {name.replace('_', ' ')}", value, "ms")
+                for name, value in result["platform_share_parts"].items()]
+    for label, value, unit in figures:
+        rows.append(f"| {label} | {value[f'p50_{unit}']} {unit} | {value[f'p95_{unit}']} {unit} | "
+                    f"{value[f'max_{unit}']} {unit} |")
+    notes = [f"{result['landings']} landings ({result['simulator']}) from {result['altitude_m']:g} m, the marker up to "
+             f"{result['max_offset_m']:g} m off, wind {result['wind_ne_ms'][0]:g},{result['wind_ne_ms'][1]:g} m/s "
+             f"N,E ({result['wind_speed_ms']:g} m/s); {result['landing_targets_received']} LANDING_TARGETs; load "
+             f"average {result['load_average_1min_at_end']:g} on {result['cpus']} cores at the end.", "",
+             *(f"- {line}" for line in _verdicts(result))]
+    return "\n".join([*rows, "", *notes]) + "\n"
+
+
+RENDERERS: dict[str, Callable[[dict[str, Any]], str]] = {"tracking": tracking, "precland": precland}
 """Block name -> how its JSON (``scripts/results/NAME.json``) is written into the page."""
 
 
