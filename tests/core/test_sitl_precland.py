@@ -9,7 +9,10 @@ estimate goes on wandering, by 0.7-1.2 m in 8 s once landed). The sim: camera's 
 origin, so the landing error is that position's distance from (3, 0).
 
 - ArduCopter SITL, ``PLND_ENABLED=1``, ``PLND_TYPE=1`` (set at boot): LAND with the companion's angles and distance.
-- PX4 SIH: the platform switches to PX4's Precision Land mode (see :mod:`controllers.precland`).
+- PX4 SIH: the platform switches to PX4's Precision Land mode (see :mod:`controllers.precland`). ``PLD_FAPPR_ALT``
+  1.5 m: below about 1.2 m the 0.5 m marker leaves the 62-degree camera's view once the vehicle is 0.2 m off it; with
+  the default 0.1 m PX4 takes the lost target for a lost pad once PLD_BTOUT (5 s) passes before touchdown, climbs back
+  to search and starts over (seen once: no touchdown within 180 s).
 """
 
 from __future__ import annotations
@@ -41,9 +44,9 @@ PAD_NE = (3.0, 0.0)
 """The marker's centre in the autopilot's local frame (north, east), metres."""
 GOAL_M = {"arducopter": 0.3, "px4": 1.0}
 """Touchdown within this of the marker's centre. ArduCopter: the issue's bound (measured 0.028 and 0.031 m). PX4
-SIH, on this 2-core machine at load average 12-15: 0.19, 0.21, 0.43 m (its estimate wanders: its hover by +-0.4 m,
-after touchdown by 0.4-0.8 m before the disarm), so 1.0 m; a plain LAND comes down 3 m away, which either bound
-tells apart."""
+SIH, on this 2-core machine at load average 7-15: 0.15-0.43 m in six runs with its defaults, 0.27 and 0.50 m with
+PLD_FAPPR_ALT 1.5 (its estimate wanders: its hover by +-0.4 m, after touchdown by 0.1-1.2 m before the disarm), so
+1.0 m; a plain LAND comes down 3 m away, which either bound tells apart."""
 ALTITUDE_M = 10.0
 GROUND_M = 0.15
 """Touchdown: the estimated height above where the vehicle stood before arming first falls below this after the
@@ -159,7 +162,7 @@ def uav_tui(vehicle: sitl.Sitl, tmp_path: Path) -> Iterator[subprocess.Popen[str
 @pytest.mark.timeout(420)
 @pytest.mark.parametrize("launch, params", [
     (sitl.arducopter, {"PLND_ENABLED": 1, "PLND_TYPE": 1}),
-    (sitl.px4_sih, {}),
+    (sitl.px4_sih, {"PLD_FAPPR_ALT": 1.5}),
 ], ids=["arducopter", "px4_sih"])
 def test_precland_lands_on_the_marker_by_the_autopilots_own_position(
         launch: Callable[..., AbstractContextManager[sitl.Sitl]], params: dict[str, float], tmp_path: Path) -> None:
