@@ -2,27 +2,20 @@
 
 from __future__ import annotations
 
-import importlib.util
 import json
 from pathlib import Path
-from types import ModuleType
+
+from tests.scripts import script_module
 
 ROOT = Path(__file__).resolve().parents[1]
-
-
-def _figures() -> ModuleType:
-    spec = importlib.util.spec_from_file_location("manual_figures", ROOT / "scripts" / "manual_figures.py")
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 def test_the_manual_figures_are_the_ones_the_committed_json_gives() -> None:
     text = (ROOT / "docs" / "benchmarks.md").read_text()
     assert "<!-- bench:tracking -->" in text and "<!-- bench:precland -->" in text
     stale = "docs/benchmarks.md is stale: run .venv/bin/python scripts/manual_figures.py"
-    assert _figures().render(text) == text, stale
+    with script_module("manual_figures") as figures:
+        assert figures.render(text) == text, stale
 
 
 def test_a_block_is_rewritten_from_its_json_and_nothing_else_moves(tmp_path: Path) -> None:
@@ -33,7 +26,8 @@ def test_a_block_is_rewritten_from_its_json_and_nothing_else_moves(tmp_path: Pat
                                                                       "pass": True}}}}
     (tmp_path / "tracking.json").write_text(json.dumps(result))
     text = "before\n<!-- bench:tracking -->\nfast csrt 0.528, 1 frame lost\n<!-- /bench:tracking -->\nafter\n"
-    written = _figures().render(text, tmp_path)
+    with script_module("manual_figures") as figures:
+        written = figures.render(text, tmp_path)
     assert written.startswith("before\n<!-- bench:tracking -->\n| tracker |")
     assert written.endswith("<!-- /bench:tracking -->\nafter\n") and "0.528" not in written
     assert "| `csrt mode=fast` | 0.506 | 0.700 | 4 (0.1%) | 6.3 |" in written

@@ -5,8 +5,6 @@ from __future__ import annotations
 
 import asyncio
 import dataclasses
-import importlib.util
-import sys
 from collections.abc import Iterator
 from pathlib import Path
 from types import ModuleType
@@ -16,6 +14,7 @@ import numpy as np
 import pytest
 
 from processors.detection import find_data_dir
+from tests.scripts import script_module
 from uav_tui.evaluation.sequences import find_sequences
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -25,13 +24,8 @@ SIZE = (320, 240)
 
 @pytest.fixture(scope="module")
 def bench() -> Iterator[ModuleType]:
-    spec = importlib.util.spec_from_file_location("bench_pipeline", ROOT / "scripts" / "bench_pipeline.py")
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # its dataclass looks itself up there
-    spec.loader.exec_module(module)
-    yield module
-    del sys.modules[spec.name]
+    with script_module("bench_pipeline") as module:
+        yield module
 
 
 def boat_video(bench: ModuleType, path: Path) -> tuple[int, int, int, int]:

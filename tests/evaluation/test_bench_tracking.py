@@ -5,14 +5,13 @@ Cheap: a six-frame generated sequence and processors with known answers; no timi
 
 from __future__ import annotations
 
-import importlib.util
-import sys
 from collections.abc import Iterator
 from pathlib import Path
 from types import ModuleType
 
 import pytest
 
+from tests.scripts import script_module
 from uav_tui.evaluation import TrackerSpec
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -21,13 +20,8 @@ TRACKERS = Path(__file__).with_name("trackers.py")
 
 @pytest.fixture(scope="module")
 def bench() -> Iterator[ModuleType]:
-    spec = importlib.util.spec_from_file_location("bench_tracking", ROOT / "scripts" / "bench_tracking.py")
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module
-    spec.loader.exec_module(module)
-    yield module
-    del sys.modules[spec.name]
+    with script_module("bench_tracking") as module:
+        yield module
 
 
 def test_counts_per_tracker_and_a_missing_or_failing_tracker_is_named_not_fatal(bench: ModuleType,

@@ -5,8 +5,6 @@ Cheap: rows with known values and a six-frame generated sequence; no timing is a
 
 from __future__ import annotations
 
-import importlib.util
-import sys
 from collections.abc import Iterator
 from pathlib import Path
 from types import ModuleType
@@ -14,6 +12,7 @@ from types import ModuleType
 import numpy as np
 import pytest
 
+from tests.scripts import script_module
 from uav_tui.evaluation import load_sequence
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -21,14 +20,8 @@ ROOT = Path(__file__).resolve().parents[2]
 
 @pytest.fixture(scope="module")
 def floors() -> Iterator[ModuleType]:
-    path = ROOT / "scripts" / "bench_tracking_floors.py"
-    spec = importlib.util.spec_from_file_location(path.stem, path)
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module
-    spec.loader.exec_module(module)
-    yield module
-    del sys.modules[spec.name]
+    with script_module("bench_tracking_floors") as module:
+        yield module
 
 
 def test_front_marks_the_settings_no_other_beats_and_the_ones_that_meet_the_goal(floors: ModuleType) -> None:
