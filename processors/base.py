@@ -44,8 +44,9 @@ class FrameProcessor(Protocol):
     ``snapshot()``, the telemetry at the frame's capture with its ``frame_seq`` and ``frame_t_ns``, the clock
     to pace by; ``save(frame, **extra)``). All calls come from one thread.
 
-    One optional read-only attribute, ``box``: ``(x, y, w, h)`` in frame pixels of what the processor
-    tracks now, or ``None`` (nothing selected, or lost). The platform reads it after every frame.
+    Two optional read-only attributes, read by the platform after every frame: ``box``, ``(x, y, w, h)`` in
+    frame pixels of what the processor tracks now, or ``None`` (nothing selected, or lost); ``detections``,
+    several boxes with a label and a score (:mod:`processors.detections`).
     """
 
     tmMgr: Any

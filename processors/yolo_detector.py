@@ -12,6 +12,7 @@ import numpy as np
 
 from processors.detection import Detection, DetectorConfig, load_backend
 from processors.detection.flow import shift_boxes
+from processors.detections import MAX_DETECTIONS
 from processors.frame_telemetry import frame_time_s
 from processors.steering import Box, Steering, Vector, as_box, draw_target
 
@@ -36,7 +37,8 @@ class YoloDetector:
     exported by Ultralytics (ONNX Runtime), ``.cfg``/``.weights`` Darknet (OpenCV DNN). Default:
     the Yolo-Fastest 1.1 Darknet model shipped with the package. Detections are drawn on the frame
     and, at most every ``save_interval_s``, the drawn frame is saved through ``tmMgr`` with the
-    detection count and labels.
+    detection count and labels. ``detections`` is the contract's optional attribute: the platform records each one
+    (detections.csv), geo-locates it and shows the most confident; at most ``MAX_DETECTIONS``, most confident first.
 
     Follow: ``catch_cmd(roi)`` picks the detection overlapping the ROI most (or, when none
     overlaps, the first one of a later keyframe that does); ``follow="<class name>"`` picks the most
@@ -103,7 +105,8 @@ class YoloDetector:
         self.max_lost = max_lost
         self.save_interval_s = save_interval_s
         self.detections: list[Detection] = []
-        """Detections of the newest frame (moved by optical flow between keyframes)."""
+        """Detections of the newest frame (moved by optical flow between keyframes), most confident first, at most
+        ``MAX_DETECTIONS``: the contract's ``detections`` attribute (box, label, score each)."""
         self.followed: Detection | None = None
         """The object being followed, None when nothing is."""
         self._pending_roi: tuple[float, float, float, float] | None = None
@@ -128,7 +131,7 @@ class YoloDetector:
         self._frame_no += 1
         gray = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY) if self.detect_every > 1 else None
         if keyframe:
-            self.detections = self.backend.detect(frame)
+            self.detections = self.backend.detect(frame)[:MAX_DETECTIONS]  # sorted by score
             self._associate()
         else:
             self._propagate(gray)

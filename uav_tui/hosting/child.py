@@ -282,8 +282,8 @@ class ChildRunner:
                              let_through=(MemoryError,))
         del image
         return Result(offer.gen, outcome.t_start_ns, outcome.t_end_ns, outcome.t_vector_ns, _picklable(outcome.vector),
-                      outcome.outputs, outcome.box, outcome.error, self._take_saves(), self._take_throttled(),
-                      self.slots.released())
+                      outcome.outputs, outcome.box, outcome.detections, outcome.error, self._take_saves(),
+                      self._take_throttled(), self.slots.released())
 
     def _keep_save(self, image: np.ndarray, extra: dict[str, Any]) -> None:
         # A copy: the image as it is now, not with what photo_processing draws on it afterwards.

@@ -2,7 +2,8 @@
 
 ``photo_processing(image)`` timed, then ``getPreparedVector()`` and the output methods (``getLandingTarget()``,
 ``getGimbalPointing()``: :mod:`processors.outputs`) when asked for, then its ``box``
-(:func:`processors.base.read_box`); an exception is caught and kept as text, never raised, so that no
+(:func:`processors.base.read_box`) and ``detections`` (:func:`processors.detections.read_detections`: malformed ones
+are the processor's error); an exception is caught and kept as text, never raised, so that no
 reference to the frame outlives the call (the processor's process reuses a frame's shared-memory slot only
 once no view of it is left).
 """
@@ -17,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from processors.base import Box, read_box
+from processors.detections import Detected, read_detections
 from processors.outputs import NO_OUTPUTS, FrameOutputs, read_outputs
 
 
@@ -34,6 +36,8 @@ class FrameOutcome:
     outputs: FrameOutputs = NO_OUTPUTS
     """What the output methods returned, checked (None each when not called or nothing this frame)."""
     box: Box | None = None
+    detections: tuple[Detected, ...] | None = None
+    """The processor's ``detections`` attribute, checked (None without one)."""
     error: str | None = None
     """The traceback's text when the processor raised."""
     raised: str = ""
@@ -56,6 +60,7 @@ def call_frame(instance: Any, image: Any, *, vector: bool, outputs: Collection[s
             outcome.t_vector_ns = time.monotonic_ns()
         outcome.outputs = read_outputs(instance, outputs)
         outcome.box = read_box(instance)
+        outcome.detections = read_detections(instance)
     except let_through:
         raise
     except Exception as exc:  # noqa: BLE001 - counted and reported by the caller, never fatal

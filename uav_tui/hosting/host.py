@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Protocol
 
 from processors.base import Box
+from processors.detections import Detected
 from processors.outputs import NO_OUTPUTS, FrameOutputs
 from sources.buffer import Frame
 
@@ -49,6 +50,8 @@ class ProcessedFrame:
     """True when the processor saved this frame's image."""
     box: Box | None = None
     """The processor's ``box`` attribute after this frame (what it tracks), or None."""
+    detections: tuple[Detected, ...] | None = None
+    """The processor's ``detections`` after this frame, checked; None without the attribute (or on an error)."""
 
 
 @dataclass(frozen=True, slots=True)

@@ -176,7 +176,7 @@ class SubprocessHost(DeliversResults):
         result = ProcessedFrame(frame=frame, t_start_ns=message.t_start_ns, t_end_ns=message.t_end_ns,
                                 t_vector_ns=message.t_vector_ns, vector=message.vector,
                                 outputs=message.outputs, error=message.error,
-                                box=message.box)
+                                box=message.box, detections=message.detections)
         self._store(message.saves, result)
         if result.error:
             self.stats.errors += 1

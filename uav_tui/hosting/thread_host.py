@@ -245,7 +245,7 @@ class ThreadHost(DeliversResults):
         result.t_start_ns, result.t_end_ns = outcome.t_start_ns, outcome.t_end_ns
         result.t_vector_ns, result.vector = outcome.t_vector_ns, outcome.vector
         result.outputs = outcome.outputs
-        result.box, result.error = outcome.box, outcome.error
+        result.box, result.detections, result.error = outcome.box, outcome.detections, outcome.error
         if outcome.error is None:
             self.consecutive_errors = 0
         else:

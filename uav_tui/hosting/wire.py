@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 import numpy as np
 
 from processors.base import Box, ProcessorInfo
+from processors.detections import Detected
 from processors.outputs import FrameOutputs
 
 if TYPE_CHECKING:
@@ -87,6 +88,8 @@ class Result(NamedTuple):
     outputs: FrameOutputs
     """What the output methods returned, checked (:mod:`processors.outputs`)."""
     box: Box | None
+    detections: tuple[Detected, ...] | None
+    """The processor's ``detections``, checked (None without the attribute)."""
     error: str | None
     """Traceback text if the processor raised."""
     saves: list[Save]
