@@ -46,6 +46,13 @@ class Telemetry:
     rel_alt_m: float | None = None
     rangefinder_m: float | None = None
     """A downward rangefinder's reading (along the vehicle's down axis), None without one or out of its range."""
+    terrain_height_m: float | None = None
+    """The autopilot's height above the terrain (MAVLink ALTITUDE's ``altitude_terrain`` or ``bottom_clearance``,
+    ArduPilot's TERRAIN_REPORT ``current_height``), None when it reports none."""
+    rangefinder_t_ns: int | None = None
+    """When the last ``rangefinder_m`` reading was received (monotonic ns; set by the platform)."""
+    terrain_t_ns: int | None = None
+    """When the last ``terrain_height_m`` reading was received (monotonic ns; set by the platform)."""
     roll_deg: float | None = None
     pitch_deg: float | None = None
     yaw_deg: float | None = None

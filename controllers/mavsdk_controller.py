@@ -29,6 +29,7 @@ from controllers.mavsdk_log import route_mavsdk_log
 from controllers.mavsdk_offboard import MavsdkOffboard
 from controllers.mavsdk_pose import POSE_RATE_HZ, pose_samples, request_pose_rate
 from controllers.mavsdk_telemetry import merged_updates
+from controllers.mavsdk_terrain import terrain_reports
 from controllers.precland import LANDING_MODES
 from controllers.vector_stream import DEFAULT_RATE_HZ, VectorStream
 
@@ -326,6 +327,8 @@ class MavsdkController:
             raise ControllerError("telemetry: not connected (call connect() first)")
         gimbal = self._gimbal
         more = [] if gimbal is None else [lambda put: gimbal.read_attitude(self._subscriptions, put)]
+        more.append(lambda put: self._subscriptions.read(  # ArduPilot's height above the terrain
+            terrain_reports(self._direct, self._sysid), put, "telemetry-terrain-report"))
         async for update in merged_updates(self._telemetry, self.heartbeat_age_s, self._stop, self._subscriptions,
                                            more):
             yield update

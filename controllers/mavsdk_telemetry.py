@@ -6,6 +6,7 @@ REQUEST_DATA_STREAM from the controller, because it sends nothing until asked):
 =================================================  =======
 position, attitude, NED velocity, local position    10 Hz
 downward rangefinder (DISTANCE_SENSOR), if any      10 Hz
+height above the terrain (ALTITUDE), if reported    10 Hz (ArduPilot: TERRAIN_REPORT, its streams' rate)
 in-air / landed state, home                         2 Hz
 battery, GPS info                                   1 Hz
 flight mode, armed, health (from HEARTBEAT, SYS_STATUS)  as the autopilot sends them (~1 Hz)
@@ -25,6 +26,7 @@ from typing import Any
 from mavsdk.asyncio.plugins.telemetry import TelemetryAsync
 
 from controllers.mavsdk_calls import Subscriptions
+from controllers.mavsdk_terrain import from_altitude
 
 logger = logging.getLogger(__name__)
 
@@ -34,6 +36,7 @@ RATES_HZ: dict[str, float] = {
     "velocity_ned": 10.0,
     "position_velocity_ned": 10.0,
     "distance_sensor": 10.0,
+    "altitude": 10.0,
     "in_air": 2.0,
     "landed_state": 2.0,
     "home": 1.0,
@@ -125,6 +128,7 @@ STREAMS: dict[str, Callable[[Any], Update]] = {
     "velocity_ned": from_velocity_ned,
     "position_velocity_ned": from_position_velocity_ned,
     "distance_sensor": from_distance_sensor,
+    "altitude": from_altitude,
     "battery": from_battery,
     "gps_info": from_gps_info,
     "health": from_health,

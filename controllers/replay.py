@@ -29,8 +29,9 @@ SCHEME = "replay:"
 _TYPES: dict[str, type] = {f.name: next(t for t in (bool, int, float, str) if t.__name__ in str(f.type))
                             for f in fields(Telemetry)}
 """Telemetry field -> the type its CSV text converts to."""
-_CLEARED = frozenset({"rangefinder_m"})
-"""Fields whose empty cell after a value is news (a rangefinder out of its range): replayed as None."""
+_CLEARED = frozenset({"rangefinder_m", "terrain_height_m"})
+"""Fields whose empty cell after a value is news (a rangefinder out of its range, terrain unknown): replayed as
+None."""
 
 
 def parse_address(address: str) -> tuple[Path, float | None]:

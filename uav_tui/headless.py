@@ -19,6 +19,7 @@ from uav_tui.core import UavCore
 from uav_tui.errors import KNOWN_ERRORS, CommandError, error_line
 from uav_tui.events import Event
 from uav_tui.flight.commands import Command, check_limits, parse
+from uav_tui.flight.geo_detections import describe_shown
 from uav_tui.flight.geolocate import describe as describe_target
 from uav_tui.output.line_budget import BudgetedText
 from uav_tui.output.native_stderr import native_stderr_as_events
@@ -88,6 +89,8 @@ def format_status(status: CoreStatus, elapsed_s: float) -> str:
             line += f" ({status.vehicle_problem})"
     if status.target is not None and (where := describe_target(status.target)):
         line += f" | target {where}"
+    if detected := describe_shown(status.detections, status.detections_total):
+        line += f" | {detected}"
     if status.saves_dropped:
         line += f" | {saves_dropped_text(status.saves_dropped)}"
     line += f" | auto {'ON' if status.autonomy else 'OFF'}"

@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 
 from controllers.base import Telemetry
 from uav_tui.flight.autonomy import Verdict
+from uav_tui.flight.geo_detections import LocatedDetection, describe_shown, locate_shown
 from uav_tui.flight.geolocate import GeoFix, describe, locate_row
 from uav_tui.hosting.host import ProcessorState
 from uav_tui.output.text import safe
@@ -80,6 +81,11 @@ class CoreStatus:
     """The processor's ``box`` on the newest processed frame (frame pixels), None when it tracks nothing."""
     target: GeoFix | None = None
     """Where ``box`` is on the ground, from the telemetry at that frame's capture; None: no box."""
+    detections: tuple[LocatedDetection, ...] = ()
+    """The most confident of the processor's ``detections`` on that frame, geo-located likewise (at most
+    :data:`~uav_tui.flight.geo_detections.MAX_SHOWN`)."""
+    detections_total: int = 0
+    """How many detections that frame had."""
     last_verdict: Verdict | None = None
     """What ``last_decision`` decided (None before the first vector)."""
     saves_dropped: dict[str, int] = field(default_factory=dict)
@@ -132,6 +138,9 @@ class CoreStatus:
         if self.target is not None:
             data["target"].update(distance_m=self.target.distance_m, bearing_deg=self.target.bearing_deg,
                                   range_m=self.target.range_m, description=describe(self.target))
+        data["detections_description"] = describe_shown(self.detections, self.detections_total)
+        for shown, located in zip(data["detections"], self.detections, strict=True):
+            shown["target"].update(distance_m=located.target.distance_m, bearing_deg=located.target.bearing_deg)
         return data
 
 
@@ -178,9 +187,11 @@ def core_status(core: ObservedCore) -> CoreStatus:
     assert worker is not None and source is not None
     last = worker.last
     box = last.box if last is not None else None
-    # the box where it was seen: with the telemetry at that frame's capture, not the newest (~20 us)
-    target = None if last is None or box is None else \
-        locate_row(core.camera, box, asdict(core.telemetry.at(last.frame.t_mono_ns)[0]))
+    found = (last.detections or ()) if last is not None else ()
+    # where they were seen: with the telemetry at that frame's capture, not the newest (~20 us a box)
+    seen = asdict(core.telemetry.at(last.frame.t_mono_ns)[0]) if last is not None and (box or found) else {}
+    at_ns = last.frame.t_mono_ns if last is not None else None
+    target = None if box is None else locate_row(core.camera, box, seen, at_ns=at_ns)
     return CoreStatus(
         telemetry=core.telemetry.snapshot(),
         pipeline=worker.snapshot(),
@@ -213,6 +224,8 @@ def core_status(core: ObservedCore) -> CoreStatus:
         vehicle_problem=link.vehicle_problem if link is not None else "",
         box=box,
         target=target,
+        detections=locate_shown(found, core.camera, seen, at_ns),
+        detections_total=len(found),
         saves_dropped=_saves_dropped(core),
     )
 

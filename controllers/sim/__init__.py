@@ -15,6 +15,8 @@ Requests (the simulator replies to the sender with one JSON object; an "id" in t
     {"cmd": "teleport", "n": N, "e": E, "d": D, "yaw": DEG}   -> {"ok": true, "state": TRUTH}
     {"cmd": "rc_mode", "mode": M}  -> {"ok": true, "state": TRUTH}; M in POSCTL, HOLD, RTL, LAND, LOITER, as an RC pilot
     {"cmd": "rc_throttle", "pwm": P}  -> {"ok": true, "state": TRUTH}; the RC throttle (ardupilot dialect), 800..2200
+    {"cmd": "stream", "msg_id": ID, "interval_us": US} -> {"ok": true}; a stream (a sensor) stops (-1), or comes back
+                                         (0: its default rate), as SET_MESSAGE_INTERVAL
     {"cmd": "setpoints", "since_mono_ns": T}  -> {"ok": true, "records": [REC, ...], "more": bool}
     {"cmd": "landing_targets", "since_mono_ns": T}  -> {"ok": true, "records": [LT, ...], "more": bool}
     anything else             -> {"ok": false, "error": "..."}

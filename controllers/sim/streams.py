@@ -34,6 +34,8 @@ DEFAULT_RATES_HZ: dict[int, float] = {
     M.MAVLINK_MSG_ID_DISTANCE_SENSOR: 10.0,
     M.MAVLINK_MSG_ID_GIMBAL_DEVICE_ATTITUDE_STATUS: 20.0,
     M.MAVLINK_MSG_ID_GIMBAL_MANAGER_STATUS: 5.0,
+    M.MAVLINK_MSG_ID_ALTITUDE: 10.0,
+    M.MAVLINK_MSG_ID_TERRAIN_REPORT: 10.0,
 }
 """Streamed at boot, in Hz."""
 RANGEFINDER_CM = (5, 4000)
@@ -98,6 +100,8 @@ class TelemetryStreams:
             M.MAVLINK_MSG_ID_VFR_HUD: self.vfr_hud,
             M.MAVLINK_MSG_ID_SYSTEM_TIME: self.system_time,
             M.MAVLINK_MSG_ID_DISTANCE_SENSOR: self.distance_sensor,
+            M.MAVLINK_MSG_ID_ALTITUDE: self.altitude,
+            M.MAVLINK_MSG_ID_TERRAIN_REPORT: self.terrain_report,
             M.MAVLINK_MSG_ID_AUTOPILOT_VERSION: self.autopilot_version,
         }
         g = self.gimbal
@@ -231,6 +235,20 @@ class TelemetryStreams:
         current = int(round(min(max(reading, 0), high + 1)))
         return self.enc.distance_sensor_encode(self.boot_ms(), low, high, current, M.MAV_DISTANCE_SENSOR_LASER, 0,
                                                M.MAV_SENSOR_ROTATION_PITCH_270, 0)
+
+    def altitude(self) -> mavlink.MAVLink_message:
+        """ALTITUDE as PX4 sends it; the height above the terrain is the height over the flat ground (home's)."""
+        pos, _, _ = self._nav()
+        height = -float(pos[2])
+        amsl = self.home.alt_m + height
+        return self.enc.altitude_encode(self.boot_ms() * 1000, amsl, amsl, height, height, height, -1.0)
+
+    def terrain_report(self) -> mavlink.MAVLink_message:
+        """TERRAIN_REPORT as ArduPilot streams it with terrain data loaded: the flat ground at home's altitude."""
+        pos, _, _ = self._nav()
+        lat, lon, _ = self.home.to_global(*pos)
+        return self.enc.terrain_report_encode(int(round(lat * 1e7)), int(round(lon * 1e7)), 100, self.home.alt_m,
+                                              -float(pos[2]), 0, 16)
 
     def gps_raw_int(self) -> mavlink.MAVLink_message:
         v = self.v

@@ -174,6 +174,9 @@ class TruthServer:
                     return {"ok": False, "error": f"rc_throttle: pwm {pwm} outside 800..2200"}
                 v.guidance.stick.pwm = pwm
                 return {"ok": True, "cmd": "rc_throttle", "state": self.snapshot()}
+            if cmd == "stream":  # a sensor or a stream stops (interval_us -1) or comes back (0: its default rate)
+                known = s.streams.set_interval(int(req.get("msg_id", -1)), float(req.get("interval_us", 0)))
+                return {"ok": known, "cmd": "stream"} if known else {"ok": False, "error": "stream: unknown msg_id"}
             if cmd in ("setpoints", "landing_targets"):
                 since = int(req.get("since_mono_ns", 0))
                 log = s.setpoint_log if cmd == "setpoints" else s.pad.log

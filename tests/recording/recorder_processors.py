@@ -1,5 +1,7 @@
 """Processors used by the recorder tests (loaded by spec: ``tests.recording.recorder_processors:Class``)."""
 
+import math
+
 import numpy as np
 
 
@@ -76,14 +78,40 @@ class RedCar:
         self.box = None
 
     def photo_processing(self, frame):
+        blobs = self.red_blobs(frame)
+        if not blobs:
+            self.box = None
+            return
+        self.box = max(blobs, key=lambda blob: blob[4])[:4]
+
+    @staticmethod
+    def red_blobs(frame):
+        """(x, y, w, h, area) of each red blob (the sim: camera's cars) of at least 30 pixels."""
         import cv2
 
         b, g, r = frame[..., 0].astype(np.int16), frame[..., 1].astype(np.int16), frame[..., 2].astype(np.int16)
         mask = ((r - np.maximum(b, g)) > 90).astype(np.uint8)
         mask = cv2.morphologyEx(mask, cv2.MORPH_CLOSE, np.ones((5, 5), np.uint8))  # across the roof's white lines
         count, _, stats, _ = cv2.connectedComponentsWithStats(mask)
-        if count < 2:
-            self.box = None
-            return
-        x, y, w, h, _ = stats[1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))]
-        self.box = (int(x), int(y), int(w), int(h))
+        return [tuple(int(v) for v in stats[i]) for i in range(1, count) if stats[i, cv2.CC_STAT_AREA] >= 30]
+
+
+class RedCars(RedCar):
+    """RedCar that also reports every red blob as a detection ``car``, its score the blob's share of the red pixels.
+
+    F1 makes its detections malformed (a NaN score), F2 makes them right again.
+    """
+
+    def __init__(self):
+        super().__init__()
+        self.detections = None
+        self.broken = False
+
+    def photo_processing(self, frame):
+        super().photo_processing(frame)
+        blobs = self.red_blobs(frame)
+        total = sum(blob[4] for blob in blobs) or 1
+        self.detections = [(blob[:4], "car", math.nan if self.broken else blob[4] / total) for blob in blobs]
+
+    def customize_processing(self, id):
+        self.broken = id == 1

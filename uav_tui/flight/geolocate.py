@@ -7,9 +7,11 @@ approximation around the vehicle (mean earth radius: off by < 0.5 % of the dista
 ranges a camera sees a target). Pure scalar math (no NumPy on the path): about 20 µs a box, uncertainty
 included (``scripts/bench_geolocation.py``).
 
-The height above the ground is a downward rangefinder's, tilt-corrected, when the autopilot reports one
-in range (``rangefinder_m``), else the height above home (right on flat ground around home); which one
-was used is ``GeoFix.height_from``.
+The height above the ground is, first found: a downward rangefinder's, tilt-corrected, when the autopilot reports
+one in range (``rangefinder_m``); the autopilot's height above the terrain (``terrain_height_m``: MAVLink ALTITUDE's
+``altitude_terrain``/``bottom_clearance`` or ArduPilot's TERRAIN_REPORT); else the height above home (right on flat
+ground around home). A rangefinder or terrain reading older than :data:`READING_MAX_AGE_S` at the capture is not
+used (``GeoFix.height_note`` says so); which one was used is ``GeoFix.height_from``.
 
 The uncertainty is the horizontal displacement the assumed 1-sigma errors below cause, each found by
 projecting again with that one input off by its sigma, added in quadrature. It covers the attitude and
@@ -43,11 +45,26 @@ RANGEFINDER_SIGMA_M = 0.1
 """Assumed 1-sigma error of a downward rangefinder's height: a few centimetres of the sensor's, plus ground
 that is not quite flat between the vehicle and the target."""
 
+TERRAIN_SIGMA_M = 2.0
+"""Assumed 1-sigma error of the autopilot's height above the terrain: PX4 fuses a range sensor (decimetres), but
+ArduPilot's comes from its terrain database (SRTM, metres of vertical error) and its AMSL altitude."""
+
+READING_MAX_AGE_S = 0.5
+"""A rangefinder or terrain reading older than this at the frame's capture is not used. Both are streamed at 10 Hz
+(DISTANCE_SENSOR and ALTITUDE asked for at 10 Hz; ArduPilot's streams, TERRAIN_REPORT among them, at 10 Hz): 0.5 s
+is five readings missed, a sensor or a link that stopped. And climbing or descending at 1 m/s, a reading 0.5 s old
+is off by 0.5 m, :data:`HEIGHT_SIGMA_M`: beyond that the height above home is no worse."""
+
 FROM_RANGEFINDER = "rangefinder"
+FROM_TERRAIN = "terrain"
 FROM_HOME = "home"
-HEIGHT_SIGMAS = {FROM_RANGEFINDER: RANGEFINDER_SIGMA_M, FROM_HOME: HEIGHT_SIGMA_M}
+HEIGHT_SIGMAS = {FROM_RANGEFINDER: RANGEFINDER_SIGMA_M, FROM_TERRAIN: TERRAIN_SIGMA_M, FROM_HOME: HEIGHT_SIGMA_M}
 """Where the height above the ground came from (``GeoFix.height_from``, frames.csv ``target_height_from``)
 and its assumed 1-sigma error."""
+
+_READINGS = ((FROM_RANGEFINDER, "rangefinder_m", "rangefinder_t_ns"),
+             (FROM_TERRAIN, "terrain_height_m", "terrain_t_ns"))
+"""The readings of the height above the ground, best first: (source, telemetry field, its receive time field)."""
 
 MIN_DEPRESSION_DEG = 1.0
 """A ray less than this far below the horizontal (the ground more than ~57 heights away, or sky) is not
@@ -78,8 +95,9 @@ class GeoFix:
     """A box's ground position, or why there is none (``status``; the numbers are None unless ``ok``).
 
     ``north_m``/``east_m`` are from the vehicle to the target, ``height_m`` the vehicle's height above it
-    (``height_from``: :data:`FROM_RANGEFINDER` or :data:`FROM_HOME`), ``alt_m`` is the ground's altitude AMSL
-    (None when the autopilot reports no AMSL altitude).
+    (``height_from``: a key of :data:`HEIGHT_SIGMAS`; ``height_note``: why a better height was not used, e.g.
+    ``rangefinder 0.8 s old``), ``alt_m`` is the ground's altitude AMSL (None when the autopilot reports no AMSL
+    altitude).
     """
 
     status: str
@@ -91,6 +109,7 @@ class GeoFix:
     east_m: float | None = None
     height_m: float | None = None
     height_from: str = ""
+    height_note: str = ""
 
     @property
     def distance_m(self) -> float | None:
@@ -116,13 +135,15 @@ def describe(fix: GeoFix) -> str:
     """One line for the status: ``47.397810,8.545600 12 m at 045 deg +-0.6 m``, why not, or "" (no box or camera)."""
     if fix.status != OK or fix.distance_m is None or fix.bearing_deg is None:
         return f"not located: {_WHY[fix.status]}" if fix.status in _WHY else ""
+    note = f" (height from {fix.height_from}: {fix.height_note})" if fix.height_note else ""
     return (f"{fix.lat_deg:.6f},{fix.lon_deg:.6f} {fix.distance_m:.0f} m at {fix.bearing_deg:03.0f} deg "
-            f"+-{fix.uncertainty_m:.1f} m")
+            f"+-{fix.uncertainty_m:.1f} m{note}")
 
 
 def locate(camera: CameraModel | None, box: tuple[float, float, float, float] | None, *, roll_deg: float | None,
            pitch_deg: float | None, yaw_deg: float | None, lat_deg: float | None, lon_deg: float | None,
-           height_m: float | None, abs_alt_m: float | None = None, height_from: str = FROM_HOME) -> GeoFix:
+           height_m: float | None, abs_alt_m: float | None = None, height_from: str = FROM_HOME,
+           height_note: str = "") -> GeoFix:
     """The ground position of the centre of ``box`` (x, y, w, h in frame pixels) seen from this pose.
 
     Args:
@@ -132,6 +153,7 @@ def locate(camera: CameraModel | None, box: tuple[float, float, float, float] | 
         height_m: the vehicle's height above the ground.
         abs_alt_m: the vehicle's altitude AMSL, for the target's altitude (optional).
         height_from: where ``height_m`` came from (a key of :data:`HEIGHT_SIGMAS`): its assumed error.
+        height_note: why a better height was not used (kept in the fix).
     """
     if box is None:
         return GeoFix(NO_BOX)
@@ -161,29 +183,51 @@ def locate(camera: CameraModel | None, box: tuple[float, float, float, float] | 
     lat = lat_deg + math.degrees(north / EARTH_RADIUS_M)  # type: ignore[operator]
     lon = lon_deg + math.degrees(east / (EARTH_RADIUS_M * math.cos(math.radians(lat_deg))))  # type: ignore[arg-type, operator]
     alt = abs_alt_m - height_m if _known(abs_alt_m) else None  # type: ignore[operator]
-    return GeoFix(OK, lat, lon, alt, math.sqrt(spread), north, east, height_m, height_from)
+    return GeoFix(OK, lat, lon, alt, math.sqrt(spread), north, east, height_m, height_from, height_note)
 
 
 def locate_row(camera: CameraModel | None, box: tuple[float, float, float, float] | None,
-               telemetry: Mapping[str, Any]) -> GeoFix:
+               telemetry: Mapping[str, Any], *, at_ns: int | None = None) -> GeoFix:
     """:func:`locate` with telemetry fields by name (a frame row's interpolated values, ``Telemetry`` as a dict).
 
-    The height above the ground is the rangefinder's (``rangefinder_m``, along the body's down axis, times the
-    cosines of roll and pitch) when there is one, else ``rel_alt_m``, the height above home. A camera on the gimbal
-    (``camera.mount.gimbal``) looks with the gimbal's attitude (``gimbal_roll_deg``, ``gimbal_pitch_deg``,
-    ``gimbal_yaw_deg``; status ``no_attitude`` while there is none), not the vehicle's.
+    The height above the ground is from :func:`ground_height`; ``at_ns`` is the frame's capture (monotonic ns), for
+    the age of the readings (None: not judged). A camera on the gimbal (``camera.mount.gimbal``) looks with the
+    gimbal's attitude (``gimbal_roll_deg``, ``gimbal_pitch_deg``, ``gimbal_yaw_deg``; status ``no_attitude`` while
+    there is none), not the vehicle's.
     """
-    roll, pitch, reading = telemetry.get("roll_deg"), telemetry.get("pitch_deg"), telemetry.get("rangefinder_m")
-    if reading is not None and roll is not None and pitch is not None and _known(reading, roll, pitch):
-        height, source = reading * math.cos(math.radians(roll)) * math.cos(math.radians(pitch)), FROM_RANGEFINDER
-    else:
-        height, source = telemetry.get("rel_alt_m"), FROM_HOME
+    height, source, note = ground_height(telemetry, at_ns)
     looking = ("gimbal_roll_deg", "gimbal_pitch_deg", "gimbal_yaw_deg") if camera is not None and camera.mount.gimbal \
         else ("roll_deg", "pitch_deg", "yaw_deg")
     roll, pitch, yaw = (telemetry.get(name) for name in looking)
     return locate(camera, box, roll_deg=roll, pitch_deg=pitch, yaw_deg=yaw,
                   lat_deg=telemetry.get("lat_deg"), lon_deg=telemetry.get("lon_deg"), height_m=height,
-                  abs_alt_m=telemetry.get("abs_alt_m"), height_from=source)
+                  abs_alt_m=telemetry.get("abs_alt_m"), height_from=source, height_note=note)
+
+
+def ground_height(telemetry: Mapping[str, Any], at_ns: int | None = None) -> tuple[float | None, str, str]:
+    """``(height above the ground, where from, why a better one was not used)`` at the capture ``at_ns``.
+
+    The rangefinder's (``rangefinder_m``, along the body's down axis, times the cosines of the vehicle's roll and
+    pitch), else the autopilot's height above the terrain (``terrain_height_m``), each only if received
+    (``rangefinder_t_ns``, ``terrain_t_ns``) at most :data:`READING_MAX_AGE_S` before ``at_ns``; else ``rel_alt_m``,
+    the height above home.
+    """
+    roll: Any = telemetry.get("roll_deg")
+    pitch: Any = telemetry.get("pitch_deg")
+    stale = []
+    for source, name, stamp in _READINGS:
+        reading: Any = telemetry.get(name)
+        if not _known(reading):
+            continue
+        received = telemetry.get(stamp)
+        age_s = (at_ns - received) / 1e9 if at_ns is not None and received is not None else 0.0
+        if age_s > READING_MAX_AGE_S:
+            stale.append(f"{source} {age_s:.1f} s old")
+        elif source == FROM_TERRAIN:
+            return reading, source, "; ".join(stale)
+        elif _known(roll, pitch):
+            return reading * math.cos(math.radians(roll)) * math.cos(math.radians(pitch)), source, ""
+    return telemetry.get("rel_alt_m"), FROM_HOME, "; ".join(stale)
 
 
 def _known(*values: float | None) -> bool:

@@ -28,6 +28,8 @@ _FIELDS = frozenset(TELEMETRY_FIELDS)
 _UPDATABLE = _FIELDS - {"t_mono_ns", "t_wall_ns", "heartbeat_age_s"}
 """Fields a controller update may set; receive stamps and heartbeat age are set here (a replayed
 update brings its recorded receive stamps)."""
+RECEIVED = {"rangefinder_m": "rangefinder_t_ns", "terrain_height_m": "terrain_t_ns"}
+"""Readings whose receive time is kept (their age decides whether geo-location uses them): field -> its stamp."""
 HISTORY = 1024
 """Updates kept for :meth:`TelemetryManager.at` (several seconds: MAVSDK sends a few hundred a second)."""
 
@@ -75,6 +77,8 @@ class TelemetryManager:
             The new newest Telemetry.
         """
         known = {k: v for k, v in update.items() if k in _UPDATABLE}
+        t_mono_ns = update.get("t_mono_ns") or time.monotonic_ns()
+        known |= {stamp: t_mono_ns for name, stamp in RECEIVED.items() if name in known and stamp not in known}
         unknown = set(update) - _FIELDS  # a heartbeat_age_s tick is known: it refreshes the age
         if unknown:
             self._warn_once("unknown", "TelemetryManager: ignoring unknown fields %s", sorted(unknown))
@@ -82,7 +86,7 @@ class TelemetryManager:
             self._latest = dataclasses.replace(
                 self._latest,
                 **known,
-                t_mono_ns=update.get("t_mono_ns") or time.monotonic_ns(),
+                t_mono_ns=t_mono_ns,
                 t_wall_ns=update.get("t_wall_ns") or time.time_ns(),
                 heartbeat_age_s=self._heartbeat_age(),
             )

@@ -8,6 +8,8 @@ Example::
     run.frames[["frame_id", "north_m", "east_m", "roll_deg", "brightness"]]
     run.telemetry.plot(x="east_m", y="north_m")
     saved = run.frames[run.frames.saved]          # rows whose image is in run.path / saved.image
+    people = run.detections[run.detections.label == "person"]          # one row per detection, by frame_id
+    people.merge(run.frames[["frame_id", "rel_alt_m"]], on="frame_id")  # with the frame's telemetry
 
     both = dataset.compare("runs/<flight>", "runs/<its replay>")   # the same frames, side by side
     both[["t_s_a", "vx_a", "vx_b", "decision_a", "decision_b"]]
@@ -16,8 +18,11 @@ Every table is indexed by capture / receive time (a UTC ``DatetimeIndex`` named 
 wall clock) and has ``t_s``, seconds since the run started on the monotonic clock (use it to compare
 rows: the wall clock may be stepped by NTP). Frames carry the target's ground position (``target_lat_deg``,
 ``target_lon_deg``, ``target_alt_m``, ``target_uncertainty_m``, ``target_status``: see
-:data:`uav_tui.recording.rows.GEO_COLUMNS`; empty in runs recorded before). Nanosecond columns are
-``Int64``, flags ``boolean``, text ``string``; the ``tmMgr.save`` extras of ``frames.csv`` become one column each.
+:data:`uav_tui.recording.located.GEO_COLUMNS`; empty in runs recorded before). ``detections`` has a row per
+detection the processor reported (``detections`` attribute), keyed by ``frame_id``, each geo-located the same way
+(:data:`uav_tui.recording.located.DETECTION_COLUMNS`; no rows for a processor without detections). Nanosecond
+columns are ``Int64``, flags ``boolean``, text ``string``; the ``tmMgr.save`` extras of ``frames.csv`` become one
+column each.
 
 A damaged run (power lost mid-write, a card copied half-way) loads with what can be read;
 ``run.problems`` says, one line each, which file, which line and what was wrong.
@@ -26,7 +31,7 @@ A damaged run (power lost mid-write, a card copied half-way) loads with what can
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -34,12 +39,14 @@ import pandas as pd
 
 from uav_tui.errors import UavError
 from uav_tui.recorded.run_files import Problem, read_json, read_table
+from uav_tui.recording.located import DETECTION_COLUMNS
 from uav_tui.recording.rows import EVENT_COLUMNS, FRAME_COLUMNS, TELEMETRY_COLUMNS
 
 _TEXT = ("flight_mode", "gps_fix", "decision", "landing", "gimbal", "error", "image", "extra", "telemetry", "level",
-         "kind", "origin", "message", "command", "target_status", "target_height_from")
+         "kind", "origin", "message", "command", "target_status", "target_height_from", "target_height_note", "label")
 _FLAGS = ("armed", "in_air", "health_ok", "saved", "autonomy")
-_INTEGERS = ("fc_boot_ms", "fc_clock_offset_ms", "satellites", "frame_id", "seq", "box_x", "box_y", "box_w", "box_h")
+_INTEGERS = ("fc_boot_ms", "fc_clock_offset_ms", "satellites", "frame_id", "seq", "box_x", "box_y", "box_w", "box_h",
+             "rangefinder_t_ns", "terrain_t_ns", "index")
 
 
 @dataclass(frozen=True)
@@ -57,6 +64,8 @@ class Dataset:
     """Operator commands, autonomy decisions, warnings and errors."""
     problems: tuple[str, ...] = ()
     """What could not be read, one line each (file, line, what is wrong); empty for an intact run."""
+    detections: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(columns=list(DETECTION_COLUMNS)))
+    """One row per detection the processor reported, keyed by ``frame_id`` (see the module's docstring)."""
 
     @property
     def extra_columns(self) -> list[str]:
@@ -77,11 +86,11 @@ def load(run_dir: str | Path) -> Dataset:
     info = _checked_info(info, path / "run.json", problems)
     tables = []
     for name, columns in (("telemetry", TELEMETRY_COLUMNS), ("frames", FRAME_COLUMNS),
-                          ("events", EVENT_COLUMNS)):
+                          ("events", EVENT_COLUMNS), ("detections", DETECTION_COLUMNS)):
         table, found = read_table(path / f"{name}.csv", columns, _dtype)
         tables.append(table)
         problems += found
-    telemetry, frames, events = tables
+    telemetry, frames, events, detections = tables
     frames, extra_columns = _expand_extra(frames, path / "frames.csv", problems)
     start = info.get("start_mono_ns")
     starts = [start] if isinstance(start, int) and start > 0 else [
@@ -89,7 +98,7 @@ def load(run_dir: str | Path) -> Dataset:
     start_mono = min(starts) if starts else 0
     info = {**info, "extra_columns": extra_columns}
     return Dataset(path, info, _index(telemetry, start_mono), _index(frames, start_mono), _index(events, start_mono),
-                   problems=tuple(str(problem) for problem in problems))
+                   problems=tuple(str(problem) for problem in problems), detections=_index(detections, start_mono))
 
 
 _SECTIONS = ("config", "source", "processor", "controller", "recording", "replay_of", "video", "versions")

@@ -1,7 +1,8 @@
 """A run's vehicle track and target positions as GeoJSON (QGIS) or KML (Google Earth): ``uav-tui export RUN``.
 
 The track is the telemetry's positions (latitude, longitude, altitude AMSL), the targets are the frames whose box
-was geo-located (``target_status`` ``ok``), each with its time (UTC), frame id and 1-sigma uncertainty.
+was geo-located (``target_status`` ``ok``), each with its time (UTC), frame id and 1-sigma uncertainty; the
+detections are the geo-located rows of detections.csv, likewise, with their label and score.
 """
 
 from __future__ import annotations
@@ -24,9 +25,17 @@ def _track(run: Dataset) -> pd.DataFrame:
     return table[(table["lat_deg"] != 0) | (table["lon_deg"] != 0)]  # 0,0: an autopilot without a fix yet
 
 
-def _targets(run: Dataset) -> pd.DataFrame:
-    located = run.frames[(run.frames["target_status"] == OK).fillna(False)]
+def _located(table: pd.DataFrame) -> pd.DataFrame:
+    """The rows of ``table`` (frames or detections) whose box was geo-located."""
+    located = table[(table["target_status"] == OK).fillna(False)]
     return located.dropna(subset=["target_lat_deg", "target_lon_deg"])
+
+
+def _points(run: Dataset) -> list[tuple[pd.Timestamp, pd.Series, str]]:
+    """Every located target, then every located detection: (time, row, name)."""
+    return [*((time, row, "target") for time, row in _located(run.frames).iterrows()),
+            *((time, row, f"{row['label']} {float(row['score']):.2f}")
+              for time, row in _located(run.detections).iterrows())]
 
 
 def _when(time: pd.Timestamp) -> str:
@@ -41,18 +50,22 @@ def geojson(run: Dataset) -> dict[str, Any]:
         features.append({"type": "Feature", "properties": {"kind": "vehicle", "times": [_when(t) for t in track.index]},
                          "geometry": {"type": "LineString", "coordinates": [
                              [round(lon, 8), round(lat, 8), round(alt, 3)] for lat, lon, alt in track.to_numpy()]}})
-    for time, row in _targets(run).iterrows():
+    for time, row, name in _points(run):
         point = [round(float(row["target_lon_deg"]), 8), round(float(row["target_lat_deg"]), 8)]
         if pd.notna(row["target_alt_m"]):
             point.append(round(float(row["target_alt_m"]), 3))
-        features.append({"type": "Feature", "geometry": {"type": "Point", "coordinates": point}, "properties": {
-            "kind": "target", "time": _when(time), "frame_id": int(row["frame_id"]),
-            "uncertainty_m": float(row["target_uncertainty_m"])}})
+        properties = {"kind": "target", "time": _when(time), "frame_id": int(row["frame_id"]),
+                      "uncertainty_m": float(row["target_uncertainty_m"])}
+        if name != "target":
+            properties |= {"kind": "detection", "label": str(row["label"]), "score": float(row["score"])}
+        features.append({"type": "Feature", "geometry": {"type": "Point", "coordinates": point},
+                         "properties": properties})
     return {"type": "FeatureCollection", "features": features}
 
 
 def kml(run: Dataset) -> str:
-    """A KML 2.2 document: the vehicle's track (LineString, absolute altitude), one timed Placemark per target."""
+    """A KML 2.2 document: the vehicle's track (LineString, absolute altitude), one timed Placemark per target and
+    per detection."""
     ET.register_namespace("", KML_NS)
     root = ET.Element(f"{{{KML_NS}}}kml")
     document = ET.SubElement(root, f"{{{KML_NS}}}Document")
@@ -65,9 +78,9 @@ def kml(run: Dataset) -> str:
         ET.SubElement(line, f"{{{KML_NS}}}altitudeMode").text = "absolute"
         ET.SubElement(line, f"{{{KML_NS}}}coordinates").text = " ".join(
             f"{lon:.8f},{lat:.8f},{alt:.3f}" for lat, lon, alt in track.to_numpy())
-    for time, row in _targets(run).iterrows():
+    for time, row, name in _points(run):
         placemark = ET.SubElement(document, f"{{{KML_NS}}}Placemark")
-        ET.SubElement(placemark, f"{{{KML_NS}}}name").text = f"target, frame {int(row['frame_id'])}"
+        ET.SubElement(placemark, f"{{{KML_NS}}}name").text = f"{name}, frame {int(row['frame_id'])}"
         ET.SubElement(placemark, f"{{{KML_NS}}}description").text = \
             f"+-{float(row['target_uncertainty_m']):.1f} m (1 sigma)"
         ET.SubElement(ET.SubElement(placemark, f"{{{KML_NS}}}TimeStamp"), f"{{{KML_NS}}}when").text = _when(time)

@@ -20,10 +20,11 @@ CONTINUOUS: tuple[str, ...] = (
     "fc_boot_ms", "lat_deg", "lon_deg", "abs_alt_m", "rel_alt_m", "roll_deg", "pitch_deg", "yaw_deg",
     "north_m", "east_m", "down_m", "vn_ms", "ve_ms", "vd_ms", "battery_v", "battery_pct", "rangefinder_m",
     "gimbal_roll_deg", "gimbal_pitch_deg", "gimbal_yaw_deg",
+    "terrain_height_m",
 )
 """Fields interpolated linearly."""
 
-GAPS = frozenset({"rangefinder_m"})
+GAPS = frozenset({"rangefinder_m", "terrain_height_m"})
 """Continuous fields whose None after a value is news (a rangefinder out of its range): kept as a gap, so no
 line is drawn across it and an instant next to it has no value."""
 
@@ -33,7 +34,11 @@ ANGLES = frozenset({"roll_deg", "pitch_deg", "yaw_deg", "gimbal_roll_deg", "gimb
 DISCRETE: tuple[str, ...] = ("flight_mode", "armed", "in_air", "gps_fix", "satellites", "health_ok")
 """Fields taken from the nearest snapshot."""
 
-FIELDS: tuple[str, ...] = CONTINUOUS + DISCRETE
+STAMPS: tuple[str, ...] = ("rangefinder_t_ns", "terrain_t_ns")
+"""Receive times of readings: taken from the newest snapshot at or before the instant (how old the reading
+interpolated there is, at the latest), so an instant past a sensor that stopped sees its age."""
+
+FIELDS: tuple[str, ...] = CONTINUOUS + DISCRETE + STAMPS
 """Every field a frame row carries, in column order."""
 
 STATIC_NS = 300_000_000
@@ -102,6 +107,8 @@ class TelemetryHistory:
             values["fc_boot_ms"] = round(values["fc_boot_ms"])
         nearest = self._snapshots[_nearest(self._times, t_ns)]
         values.update({name: getattr(nearest, name) for name in DISCRETE})
+        before = self._snapshots[max(bisect.bisect_right(self._times, t_ns) - 1, 0)]
+        values.update({name: getattr(before, name) for name in STAMPS})
         if t_ns < self._times[0]:
             how = "before"
         elif t_ns > self._times[-1]:

@@ -14,13 +14,15 @@ import numpy as np
 
 from controllers.base import TELEMETRY_FIELDS, Telemetry
 from uav_tui.events import Event
-from uav_tui.flight.geolocate import GeoFix, locate_row
+from uav_tui.flight.geolocate import locate_row
 from uav_tui.hosting.host import ProcessedFrame
 from uav_tui.output.text import last_line, shorten
 from uav_tui.recording.interpolate import FIELDS, TelemetryHistory
+from uav_tui.recording.located import DETECTION_COLUMNS, GEO_COLUMNS, detection_rows, geo_cells
 from uav_tui.recording.writer import Row
 
 if TYPE_CHECKING:
+    from processors.detections import Detected
     from sources.camera_model import CameraModel
 
 TELEMETRY_COLUMNS: tuple[str, ...] = TELEMETRY_FIELDS
@@ -43,15 +45,9 @@ decision, what was done with the processor's landing target and with its gimbal 
 the ``tmMgr.save`` extras as JSON, and how the telemetry columns were obtained (``interpolated``, ``held``, ``before``,
 ``none``; see :meth:`TelemetryHistory.at`)."""
 
-GEO_COLUMNS: tuple[str, ...] = ("target_lat_deg", "target_lon_deg", "target_alt_m", "target_uncertainty_m",
-                                 "target_status", "target_height_from")
-"""frames.csv, last: where the centre of ``box`` is on the ground (:mod:`uav_tui.flight.geolocate`, from the camera
-model and the telemetry at the capture): latitude, longitude, ground altitude AMSL, 1-sigma uncertainty in
-metres, the status (``ok``; empty without a box; else why there is no position), and where the height above
-the ground came from (``rangefinder`` or ``home``: the height above home)."""
-
 FRAME_COLUMNS: tuple[str, ...] = FRAME_OWN_COLUMNS + FIELDS + GEO_COLUMNS
-"""frames.csv: the frame's own columns, the telemetry interpolated to the capture time, the target's position."""
+"""frames.csv: the frame's own columns, the telemetry interpolated to the capture time, where the centre of ``box``
+is on the ground (:data:`~uav_tui.recording.located.GEO_COLUMNS`)."""
 
 MAX_ERROR_CHARS = 500
 """The ``error`` column keeps this much of an exception's last line."""
@@ -59,7 +55,8 @@ MAX_ERROR_CHARS = 500
 _SAVED = FRAME_OWN_COLUMNS.index("saved")  # followed by "image"
 _BOX = FRAME_OWN_COLUMNS.index("box_x")  # then box_y, box_w, box_h
 
-TABLES: dict[str, tuple[str, ...]] = {"telemetry": TELEMETRY_COLUMNS, "frames": FRAME_COLUMNS, "events": EVENT_COLUMNS}
+TABLES: dict[str, tuple[str, ...]] = {"telemetry": TELEMETRY_COLUMNS, "frames": FRAME_COLUMNS, "events": EVENT_COLUMNS,
+                                      "detections": DETECTION_COLUMNS}
 
 
 def image_name(frame_id: int) -> str:
@@ -75,6 +72,8 @@ class FrameRecord:
     t_mono_ns: int
     camera: CameraModel | None = None
     """The frame's camera model (geo-locates ``box`` once the telemetry is known)."""
+    detections: tuple[Detected, ...] = ()
+    """The processor's ``detections`` on this frame (detections.csv rows once the telemetry is known)."""
 
     @property
     def frame_id(self) -> int:
@@ -107,7 +106,7 @@ def frame_record(result: ProcessedFrame, frame_id: int, image: str, extra_json: 
     values = [frame_id, frame.seq, frame.t_wall_ns, frame.t_mono_ns, result.t_start_ns, result.t_end_ns,
               result.t_vector_ns or None, vx, vy, vt, *box, result.decision, result.landing, result.gimbal, error,
               bool(image), image, extra_json]
-    return FrameRecord(values, frame.t_mono_ns, camera)
+    return FrameRecord(values, frame.t_mono_ns, camera, result.detections or ())
 
 
 def event_row(event: Event) -> Row:
@@ -208,30 +207,26 @@ class FrameAligner:
             if age < self.min_hold_ns or age < self.hold_ns and (timed_out or self.telemetry_expected
                                                                  and not self.history.covers(record.t_mono_ns)):
                 break
-            rows.append(self._row(self._waiting.popleft()))
+            rows += self._rows(self._waiting.popleft())
         return rows
 
     def drain(self) -> Iterable[Row]:
-        rows = [self._row(record) for record in self._waiting]
+        rows = [row for record in self._waiting for row in self._rows(record)]
         self._waiting.clear()
         return rows
 
-    def _row(self, record: FrameRecord) -> Row:
+    def _rows(self, record: FrameRecord) -> list[Row]:
+        """The frames.csv row of ``record``, then a detections.csv row per detection."""
         image = record.values[_SAVED + 1]
         if image and self.run_dir is not None and not (self.run_dir / image).is_file():
             record.values[_SAVED:_SAVED + 2] = [False, ""]
         values, how = self.history.at(record.t_mono_ns)
         x, y, w, h = record.values[_BOX:_BOX + 4]
-        fix = locate_row(record.camera, None if x is None else (x, y, w, h), values)
-        return Row("frames", [*record.values, how, *(_finite(values[name]) for name in FIELDS), *_geo(fix)])
-
-
-def _geo(fix: GeoFix) -> tuple[Any, ...]:
-    """The :data:`GEO_COLUMNS` of a fix (coordinates to 1e-8 degrees, ~1 mm)."""
-    if fix.lat_deg is None or fix.lon_deg is None or fix.uncertainty_m is None:
-        return None, None, None, None, fix.status, None
-    alt = None if fix.alt_m is None else round(fix.alt_m, 3)
-    return round(fix.lat_deg, 8), round(fix.lon_deg, 8), alt, round(fix.uncertainty_m, 3), fix.status, fix.height_from
+        fix = locate_row(record.camera, None if x is None else (x, y, w, h), values, at_ns=record.t_mono_ns)
+        frame = Row("frames", [*record.values, how, *(_finite(values[name]) for name in FIELDS), *geo_cells(fix)])
+        t_wall_ns = record.values[FRAME_OWN_COLUMNS.index("t_wall_ns")]
+        return [frame, *(Row("detections", cells) for cells in detection_rows(
+            record.frame_id, t_wall_ns, record.t_mono_ns, record.detections, record.camera, values))]
 
 
 def _finite(value: Any) -> Any:

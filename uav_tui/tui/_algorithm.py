@@ -5,6 +5,7 @@ from __future__ import annotations
 from rich.text import Text
 
 from uav_tui.flight.autonomy import Verdict
+from uav_tui.flight.geo_detections import describe_shown
 from uav_tui.flight.geolocate import describe as describe_target
 from uav_tui.status import CoreStatus
 from uav_tui.tui._panel import StatusPanel
@@ -26,6 +27,8 @@ class AlgorithmPanel(StatusPanel):
         box = "none" if status.box is None else "{},{} {}x{}".format(*status.box)
         if status.target is not None and (where := describe_target(status.target)):
             box += f" @ {where}"
+        if detected := describe_shown(status.detections, status.detections_total):
+            box += f"; {detected}"  # one row, cut at the panel's edge
         auto = Text(f"{status.vectors_executed} flown, {status.vectors_rejected} rejected")
         if status.autonomy_stop_reason and not status.autonomy:
             auto.append(" ").append(self.styled(f"stopped: {status.autonomy_stop_reason}", "bad"))

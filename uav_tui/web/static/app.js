@@ -160,6 +160,7 @@ function showStatus(message) {
   if (s.box) line += ` | box ${s.box[0]},${s.box[1]} ${s.box[2]}x${s.box[3]}`;
   showTracked(s.box, message.frame);
   showTarget(s.target);
+  showDetections(s.detections || [], s.detections_total || 0);
   if (s.last_decision) line += ` | ${s.last_decision}`;
   if (s.gimbal) line += ` | ${s.gimbal}`;
   const host = s.processor_state;
@@ -180,6 +181,27 @@ function showTarget(target) {
   line.hidden = !text;
   line.textContent = text ? "target " + text : "";
   line.className = target && target.status !== "ok" ? "target warn" : "target";
+}
+
+// The processor's detections, over the picture's top corner: the few most confident (the status carries at most
+// five), each with where it is on the ground, and how many more there are.
+function showDetections(shown, total) {
+  const list = $("detections");
+  list.hidden = !total;
+  list.replaceChildren(...shown.map((d) => {
+    const item = document.createElement("li"), t = d.target;
+    const where = t.status === "ok" ?
+      `${t.lat_deg.toFixed(6)},${t.lon_deg.toFixed(6)} ${t.distance_m.toFixed(0)} m at ` +
+      `${String(Math.round(t.bearing_deg) % 360).padStart(3, "0")} deg +-${t.uncertainty_m.toFixed(1)} m` :
+      `not located${t.status ? ": " + t.status : ""}`;
+    item.textContent = `${d.label} ${d.score.toFixed(2)} ${where}`;
+    return item;
+  }));
+  if (total > shown.length) {
+    const more = document.createElement("li");
+    more.textContent = `+${total - shown.length} more`;
+    list.append(more);
+  }
 }
 
 function showEvent(e) {

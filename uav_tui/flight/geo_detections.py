@@ -1,0 +1,52 @@
+"""The processor's ``detections`` as the interfaces show them: the most confident few, each geo-located like ``box``."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from processors.base import Box
+from processors.detections import Detected
+from uav_tui.flight.geolocate import OK, GeoFix, locate_row
+from uav_tui.output.text import safe
+
+if TYPE_CHECKING:
+    from sources.camera_model import CameraModel
+
+MAX_SHOWN = 5
+"""Detections shown on the status (TUI, headless line, web page): the most confident; the rest are counted."""
+
+
+@dataclass(frozen=True, slots=True)
+class LocatedDetection:
+    """One detection as shown: its label (made safe to show), score, box and ground position."""
+
+    label: str
+    score: float
+    box: Box
+    target: GeoFix
+
+
+def locate_shown(detections: tuple[Detected, ...], camera: CameraModel | None, telemetry: Mapping[str, Any],
+                 at_ns: int | None) -> tuple[LocatedDetection, ...]:
+    """The :data:`MAX_SHOWN` most confident of ``detections``, located with ``telemetry`` (at the capture ``at_ns``)."""
+    best = sorted(detections, key=lambda found: -found.score)[:MAX_SHOWN]
+    return tuple(LocatedDetection(safe(found.label), found.score, found.box,
+                                  locate_row(camera, found.box, telemetry, at_ns=at_ns)) for found in best)
+
+
+def describe_shown(shown: tuple[LocatedDetection, ...], total: int) -> str:
+    """``3 detected: person 0.91 12 m at 045 deg, car 0.80 no position, +1 more``; "" when none was."""
+    if not total:
+        return ""
+    parts = [f"{found.label} {found.score:.2f} {_where(found.target)}" for found in shown]
+    if total > len(shown):
+        parts.append(f"+{total - len(shown)} more")
+    return f"{total} detected: {', '.join(parts)}"
+
+
+def _where(fix: GeoFix) -> str:
+    if fix.status != OK or fix.distance_m is None or fix.bearing_deg is None:
+        return "no position"
+    return f"{fix.distance_m:.0f} m at {fix.bearing_deg:03.0f} deg"
