@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import asyncio
+import contextlib
 import math
 import socket
 
@@ -44,4 +46,39 @@ async def test_the_ground_station_hears_where_the_car_is(tmp_path) -> None:
     assert geo.v_acc == pytest.approx(RANGEFINDER_SIGMA_M) and 0.1 < geo.h_acc < 2.0  # the simulator has one
     slant = math.hypot(car_n - vehicle["n"], car_e - vehicle["e"], vehicle["d"])
     assert geo.dist == pytest.approx(slant, abs=0.5)
-    assert all(math.isnan(v) for v in (geo.vel_n, geo.vel_e, geo.vel_d, geo.vel_acc, geo.hdg, geo.hdg_acc))
+    # parked: a velocity near zero from its positions on the frame clock, and no heading; the ground is flat: no vel_d
+    assert math.hypot(geo.vel_n, geo.vel_e) < 0.2 and 0 <= geo.vel_acc < 0.2, (geo.vel_n, geo.vel_e, geo.vel_acc)
+    assert all(math.isnan(v) for v in (geo.vel_d, geo.hdg, geo.hdg_acc))
+
+
+async def test_the_ground_station_hears_how_fast_and_which_way_the_car_drives(tmp_path) -> None:
+    port = free_port(socket.SOCK_DGRAM)
+    speed = 1.5
+    source = f"sim:?fps=15&targets=1&target_speed={speed}"  # a car driving round home on a 6 m ring
+    heard = []
+    async with flying_core(tmp_path, altitude=ALTITUDE_M, source=source, camera_mavlink=f"udpin:127.0.0.1:{port}",
+                           processor="tests.recording.recorder_processors:RedCar") as core:
+        station = GroundStation(port)
+        try:
+            await asyncio.sleep(2.5)  # a window of positions
+            for _ in range(3):
+                with contextlib.suppress(BlockingIOError):  # what was sent before: not news
+                    while station.sock.recv(4096):
+                        pass
+                await station.command(mavlink.MAV_CMD_REQUEST_MESSAGE,
+                                      mavlink.MAVLINK_MSG_ID_CAMERA_TRACKING_GEO_STATUS)
+                geo = await station.receive("CAMERA_TRACKING_GEO_STATUS")
+                car = core.source.get_properties()["targets"][0]
+                heard.append((geo, math.atan2(car["e"], car["n"]) + math.pi / 2))  # the ring's tangent, as it drives
+                await asyncio.sleep(0.5)
+        finally:
+            station.sock.close()
+    for geo, heading in heard:
+        assert geo.tracking_status == mavlink.CAMERA_TRACKING_STATUS_FLAGS_ACTIVE
+        assert math.hypot(geo.vel_n, geo.vel_e) == pytest.approx(speed, abs=0.2), (geo.vel_n, geo.vel_e)
+        assert 0 < geo.vel_acc < 0.3 and math.isnan(geo.vel_d)
+        assert geo.hdg == pytest.approx(math.atan2(geo.vel_e, geo.vel_n) % math.tau, abs=1e-5)
+        # the mean heading of the last 2 s: behind the car's by the quarter-radian it turns a second, ~14 deg
+        behind = math.degrees((heading - geo.hdg + math.pi) % math.tau - math.pi)
+        assert -8.0 <= behind <= 30.0, behind
+        assert 0 < geo.hdg_acc < math.radians(15)

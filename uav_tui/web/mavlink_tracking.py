@@ -10,9 +10,11 @@ second. Beside it, CAMERA_TRACKING_GEO_STATUS says where the box's centre is on 
 (:mod:`uav_tui.flight.geolocate`, from the telemetry at the frame's capture): active with latitude, longitude,
 altitude AMSL, ``h_acc`` (the 1-sigma uncertainty), ``v_acc`` and ``dist`` (straight-line range from the
 vehicle); idle with latitude and longitude 0 and the rest NaN whenever there is no ground position (nothing
-tracked, no camera model, no GPS, a box at the horizon), error as above. Velocity and heading are NaN: a box
-has neither. The component sends HEARTBEAT (MAV_TYPE_CAMERA) and answers CAMERA_INFORMATION requests with
-the tracking capability flags, so a ground station discovers it.
+tracked, no camera model, no GPS, a box at the horizon), error as above. Velocity (north, east), its accuracy
+and the heading are the target's from its positions on the frame clock (:mod:`uav_tui.flight.target_motion`), NaN
+without enough of them; the down velocity is NaN (the ground is taken as flat). The component sends HEARTBEAT
+(MAV_TYPE_CAMERA) and answers CAMERA_INFORMATION requests with the tracking capability flags, so a ground
+station discovers it.
 
 Endpoint (config ``camera_mavlink``): ``udpin:HOST:PORT`` listens and answers whoever spoke last;
 ``udpout:HOST:PORT`` (or ``udp:``) sends to a ground station / MAVLink router. All of it runs on the
@@ -29,7 +31,9 @@ from __future__ import annotations
 import asyncio
 import logging
 import math
+import time
 from collections.abc import Callable
+from dataclasses import asdict
 from typing import Any
 
 from pymavlink.dialects.v20 import common as mavlink
@@ -37,7 +41,8 @@ from pymavlink.dialects.v20 import common as mavlink
 from processors.base import Box
 from uav_tui.errors import KNOWN_ERRORS, CommandError, ConfigError, UavError
 from uav_tui.flight.commands import Command
-from uav_tui.flight.geolocate import HEIGHT_SIGMAS, NO_BOX, OK, GeoFix
+from uav_tui.flight.geolocate import HEIGHT_SIGMAS, NO_BOX, OK, GeoFix, locate_row
+from uav_tui.flight.target_motion import TargetMotion
 from uav_tui.output.line_budget import LineBudget
 from uav_tui.output.text import describe
 from uav_tui.status import CoreState
@@ -118,6 +123,8 @@ class CameraTracking:
         """False after MAV_CMD_CAMERA_STOP_TRACKING until the next track command: the status says idle."""
         self.tracked: tuple[Box | None, tuple[int, int], bool] = (None, (0, 0), False)
         """The newest processed frame's box, its frame size and whether the processor raised on it."""
+        self.motion = TargetMotion()
+        """The box's positions on the ground, frame by frame: its velocity and heading."""
         self._commands: asyncio.Queue[Any] = asyncio.Queue(maxsize=QUEUE_COMMANDS)
         self._tasks: list[asyncio.Task[None]] = []
         self.failures = HandlerFailures(core.events, f"CameraTracking({address})")
@@ -164,6 +171,10 @@ class CameraTracking:
         """Frame listener (on the loop): keep what the processor reported for the newest frame."""
         height, width = result.frame.image.shape[:2]
         self.tracked = (result.box, (width, height), result.error is not None)
+        if result.box is not None:  # where it was at the capture (~40 us)
+            t_ns = result.frame.t_mono_ns
+            seen = asdict(self.core.telemetry.at(t_ns)[0])
+            self.motion.add(t_ns, locate_row(self.core.camera, result.box, seen, at_ns=t_ns))
 
     def received(self, data: bytes, addr: tuple[str, int]) -> None:
         """Datagram from the ground station (on the loop): queue the commands addressed to us."""
@@ -268,6 +279,7 @@ class CameraTracking:
         except KNOWN_ERRORS:  # logged as an event by the core
             return mavlink.MAV_RESULT_FAILED
         self.mode, self.reporting = mode, True
+        self.motion.reset()  # another target
         return mavlink.MAV_RESULT_ACCEPTED
 
     # -- sending ---------------------------------------------------------------------------------
@@ -315,9 +327,11 @@ class CameraTracking:
             self.mav.camera_tracking_geo_status_send(idle if box is not None else flag, 0, 0, *([nan] * 10))
             return
         v_acc = nan if fix.alt_m is None else HEIGHT_SIGMAS[fix.height_from]
+        motion = self.motion.motion(time.monotonic_ns())
         self.mav.camera_tracking_geo_status_send(
             flag, round(fix.lat_deg * 1e7), round(fix.lon_deg * 1e7), _or_nan(fix.alt_m), _or_nan(fix.uncertainty_m),
-            v_acc, nan, nan, nan, nan, _or_nan(fix.range_m), nan, nan)
+            v_acc, motion.vel_n, motion.vel_e, nan, motion.vel_acc, _or_nan(fix.range_m), motion.heading_rad,
+            motion.heading_acc_rad)
 
     def _located(self) -> GeoFix:
         """Where the newest processed frame's box is on the ground, as every interface shows it."""

@@ -7,8 +7,10 @@ from typing import TYPE_CHECKING, Protocol
 
 if TYPE_CHECKING:
     from sources import CameraSource
+    from sources.camera_model import CameraModel
     from uav_tui.events import EventLog
     from uav_tui.flight.commands import Command
+    from uav_tui.flight.telemetry import TelemetryManager
     from uav_tui.hosting.host import ProcessedFrame
     from uav_tui.status import CoreState, CoreStatus
 
@@ -23,6 +25,14 @@ class FrameFeed(Protocol):
 
 class ServedCore(FrameFeed, Protocol):
     """A running core as the side channels see it: its state, status, events, camera and commands."""
+
+    @property
+    def camera(self) -> CameraModel | None:
+        """The camera model of the frames (geo-locates a box)."""
+        ...
+
+    @property
+    def telemetry(self) -> TelemetryManager: ...
 
     @property
     def state(self) -> CoreState: ...
