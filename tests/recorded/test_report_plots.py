@@ -16,6 +16,7 @@ from matplotlib.collections import LineCollection
 from matplotlib.patches import Rectangle
 from matplotlib.quiver import Quiver
 
+from processors.detections import Detected
 from sources.camera_model import CameraModel
 from tests.recording.recorder_fakes import FakeCore
 from uav_tui.config import RecordingConfig
@@ -104,7 +105,8 @@ def test_box_shows_the_tracked_centre_and_size_over_time_with_a_gap_once_lost(ho
 @pytest.fixture
 def located_run(tmp_path):
     """Flying north at 5 m, heading east, level, over a target 1.25 m ahead of it (a down camera, 90 deg wide,
-    its box's centre 8 px above the picture's); the box is lost after 30 of 40 frames."""
+    its box's centre 8 px above the picture's); the box is lost after 30 of 40 frames. It is detected too, with a
+    boat 1.25 m to its right, for the first 20."""
     core = FakeCore()
     core.camera = CameraModel.from_hfov(64, 48, 90.0)
     recorder = Recorder.open(RecordingConfig(runs_dir=str(tmp_path)), {}, telemetry_expected=True)
@@ -116,7 +118,9 @@ def located_run(tmp_path):
                               "lon_deg": 8.0, "abs_alt_m": 505.0, "rel_alt_m": 5.0, "roll_deg": 0.0, "pitch_deg": 0.0,
                               "yaw_deg": 90.0, "in_air": True})
         time.sleep(0.004)
-        core.process(image, i, lambda result, i=i: setattr(result, "box", (27, 11, 11, 11) if i < 30 else None))
+        found = (Detected((27, 11, 11, 11), "car", 0.9), Detected((35, 11, 11, 11), "boat", 0.4)) if i < 20 else None
+        core.process(image, i, lambda result, i=i, found=found: (
+            setattr(result, "box", (27, 11, 11, 11) if i < 30 else None), setattr(result, "detections", found)))
     recorder.close()
     return recorder.run_dir
 
@@ -135,6 +139,13 @@ def test_the_track_shows_the_target_positions_in_local_metres(located_run):
     assert np.allclose(east, recorded["east_m"] + 1.25, atol=0.002)
     low, high = ax.get_xlim()
     assert low < east.min() and east.max() < high
+    # each detection where its frame saw it: the car on the target, the boat 8 px (1.25 m) to its right: south
+    (detected,) = (c for c in ax.collections if c.get_label().startswith("detections"))
+    assert detected.get_label() == "detections (40 geo-located)"
+    east, north = detected.get_offsets().T
+    first = recorded.iloc[:20]
+    assert np.allclose(north, np.column_stack([first["north_m"], first["north_m"] - 1.25]).ravel(), atol=0.002)
+    assert np.allclose(east, np.repeat(first["east_m"].to_numpy(dtype=np.float64) + 1.25, 2), atol=0.002)
 
 
 def test_processing_rate_has_no_start_up_spike():

@@ -144,12 +144,15 @@ def _track(run: Dataset, figure: Figure) -> None:
         return
     points = ax.scatter(track["east_m"], track["north_m"], c=track["t_s"], cmap="viridis", s=6, zorder=3)
     figure.colorbar(points, ax=ax, label="time, s")
-    targets = target_positions(run)
+    targets, detected = target_positions(run), target_positions(run, detections=True)
     if len(targets):
         ax.scatter(targets["east_m"], targets["north_m"], marker="x", s=14, color="tab:red", alpha=0.7, zorder=4,
                    label=f"target ({len(targets)} frames geo-located)")
-    east = pd.concat([track["east_m"], targets["east_m"]])
-    north = pd.concat([track["north_m"], targets["north_m"]])
+    if len(detected):
+        ax.scatter(detected["east_m"], detected["north_m"], marker="+", s=14, color="tab:orange", alpha=0.6, zorder=4,
+                   label=f"detections ({len(detected)} geo-located)")
+    east = pd.concat([track["east_m"], targets["east_m"], detected["east_m"]])
+    north = pd.concat([track["north_m"], targets["north_m"], detected["north_m"]])
     # Square limits, at least MIN_TRACK_M wide: a vehicle that did not move is not drawn on centimetre axes.
     half = max((east.max() - east.min()) * 1.1, (north.max() - north.min()) * 1.1, MIN_TRACK_M) / 2
     ax.set_xlim((east.max() + east.min()) / 2 - half, (east.max() + east.min()) / 2 + half)
@@ -161,12 +164,14 @@ def _track(run: Dataset, figure: Figure) -> None:
         ax.legend(loc="upper left", fontsize="small", framealpha=0.6)
 
 
-def target_positions(run: Dataset) -> pd.DataFrame:
-    """``t_s``, ``north_m``, ``east_m`` of every geo-located target (``target_status`` ok), in the track's local
-    metres: the frame's own position plus the target's offset from it (the flat-earth step of
-    :mod:`uav_tui.flight.geolocate` undone), so no home position is needed."""
+def target_positions(run: Dataset, *, detections: bool = False) -> pd.DataFrame:
+    """``t_s``, ``north_m``, ``east_m`` of every geo-located target (``target_status`` ok; with ``detections``, of
+    every geo-located detection), in the track's local metres: the frame's own position plus the target's offset
+    from it (the flat-earth step of :mod:`uav_tui.flight.geolocate` undone), so no home position is needed."""
     columns = ["t_s", "north_m", "east_m", "lat_deg", "lon_deg", "target_lat_deg", "target_lon_deg"]
     frames = run.frames
+    if detections:  # each with its frame's position
+        frames = run.detections.merge(frames[["frame_id", *columns[1:5]]], on="frame_id")
     rows = frames.loc[(frames["target_status"] == OK).fillna(False), columns].astype("float64")
     rows = rows[np.isfinite(rows).all(axis=1)]
     north = rows["north_m"] + np.radians(rows["target_lat_deg"] - rows["lat_deg"]) * EARTH_RADIUS_M
