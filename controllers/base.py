@@ -47,8 +47,8 @@ class Telemetry:
     rangefinder_m: float | None = None
     """A downward rangefinder's reading (along the vehicle's down axis), None without one or out of its range."""
     terrain_height_m: float | None = None
-    """The autopilot's height above the terrain (MAVLink ALTITUDE's ``altitude_terrain`` or ``bottom_clearance``,
-    ArduPilot's TERRAIN_REPORT ``current_height``), None when it reports none."""
+    """The autopilot's height above the terrain (PX4's ALTITUDE ``bottom_clearance``, ArduPilot's TERRAIN_REPORT
+    ``current_height``; see :mod:`controllers.mavsdk_terrain`), None when it reports none."""
     rangefinder_t_ns: int | None = None
     """When the last ``rangefinder_m`` reading was received (monotonic ns; set by the platform)."""
     terrain_t_ns: int | None = None

@@ -1,8 +1,9 @@
 """The autopilot's height above the terrain, as a ``terrain_height_m`` telemetry update.
 
-PX4 reports it in ALTITUDE (MAVSDK's ``altitude`` stream): ``altitude_terrain`` ("altitude above terrain", from a
-terrain estimate or an altimeter; below -1000 means unknown), else ``bottom_clearance`` (the clear space below,
-negative when unmeasured). ArduPilot does not send ALTITUDE; with ``TERRAIN_ENABLE`` it streams TERRAIN_REPORT
+PX4 reports it in ALTITUDE (MAVSDK's ``altitude`` stream) as ``bottom_clearance``, its estimate of the distance to
+the ground (``dist_bottom``, NaN when it has none). Not ``altitude_terrain``: MAVLink calls it the altitude above the
+terrain, but PX4 (v1.16, ALTITUDE.hpp) sends the terrain's own altitude in its local frame there (its SIH flying at
+20 m: 0.3-1.0 m). ArduPilot does not send ALTITUDE; with ``TERRAIN_ENABLE`` it streams TERRAIN_REPORT
 (``current_height``: the vehicle's height above the terrain under it; ``spacing`` 0 when it has no terrain data
 there), which MAVSDK's telemetry does not expose: it is read as a raw message.
 """
@@ -19,25 +20,18 @@ from mavsdk.asyncio.plugins.mavlink_direct import MavlinkDirectAsync, MavlinkMes
 
 Update = dict[str, Any]
 
-UNKNOWN_TERRAIN_M = -1000.0
-"""ALTITUDE's ``altitude_terrain`` at or below this is unknown (MAVLink's definition)."""
-
-
-def _height(value: Any, low: float) -> float | None:
-    """``value`` as a height when it is a finite number above ``low``."""
+def _height(value: Any) -> float | None:
+    """``value`` as a height when it is a finite number, not negative (MAVLink's "unknown")."""
     try:
         height = float(value)
     except (TypeError, ValueError):
         return None
-    return height if math.isfinite(height) and height > low else None
+    return height if math.isfinite(height) and height >= 0 else None
 
 
 def from_altitude(a: Any) -> Update:
-    """MAVSDK's Altitude (ALTITUDE): the height above the terrain, or None when it reports none."""
-    height = _height(a.altitude_terrain_m, UNKNOWN_TERRAIN_M)
-    if height is None:
-        height = _height(a.bottom_clearance_m, -1e-9)
-    return {"terrain_height_m": height}
+    """MAVSDK's Altitude (ALTITUDE): ``bottom_clearance``, or None when it reports none."""
+    return {"terrain_height_m": _height(a.bottom_clearance_m)}
 
 
 def from_terrain_report(message: MavlinkMessage) -> Update:
@@ -47,7 +41,7 @@ def from_terrain_report(message: MavlinkMessage) -> Update:
         known = int(fields["spacing"]) > 0
     except (ValueError, KeyError, TypeError):
         return {}
-    return {"terrain_height_m": _height(fields.get("current_height"), -math.inf) if known else None}
+    return {"terrain_height_m": _height(fields.get("current_height")) if known else None}
 
 
 async def terrain_reports(direct: MavlinkDirectAsync, system_id: int) -> AsyncGenerator[Update, None]:

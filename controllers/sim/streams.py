@@ -237,11 +237,12 @@ class TelemetryStreams:
                                                M.MAV_SENSOR_ROTATION_PITCH_270, 0)
 
     def altitude(self) -> mavlink.MAVLink_message:
-        """ALTITUDE as PX4 sends it; the height above the terrain is the height over the flat ground (home's)."""
+        """ALTITUDE as PX4 sends it: ``altitude_terrain`` the terrain's local altitude (its flat ground: 0),
+        ``bottom_clearance`` the height over it."""
         pos, _, _ = self._nav()
         height = -float(pos[2])
         amsl = self.home.alt_m + height
-        return self.enc.altitude_encode(self.boot_ms() * 1000, amsl, amsl, height, height, height, -1.0)
+        return self.enc.altitude_encode(self.boot_ms() * 1000, amsl, amsl, height, height, 0.0, height)
 
     def terrain_report(self) -> mavlink.MAVLink_message:
         """TERRAIN_REPORT as ArduPilot streams it with terrain data loaded: the flat ground at home's altitude."""

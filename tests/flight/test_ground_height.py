@@ -19,14 +19,14 @@ S = 1_000_000_000
 LEVEL = {"roll_deg": 0.0, "pitch_deg": 0.0, "rel_alt_m": 23.0}
 
 
-def test_altitude_gives_the_terrain_height_else_the_clearance_else_none() -> None:
+def test_altitude_gives_the_clearance_not_px4s_terrain_altitude() -> None:
     def altitude(terrain: float, clearance: float) -> SimpleNamespace:
         return SimpleNamespace(altitude_terrain_m=terrain, bottom_clearance_m=clearance)
 
-    assert from_altitude(altitude(18.5, 18.2)) == {"terrain_height_m": 18.5}
-    assert from_altitude(altitude(-1000.0, 17.0)) == {"terrain_height_m": 17.0}  # -1000: unknown
-    assert from_altitude(altitude(math.nan, 17.0)) == {"terrain_height_m": 17.0}
-    assert from_altitude(altitude(-1e4, -1.0)) == {"terrain_height_m": None}  # negative clearance: unmeasured
+    # PX4 SIH at 20 m: altitude_terrain is the ground's local altitude (~0.7 m there), bottom_clearance the height
+    assert from_altitude(altitude(0.7, 19.3)) == {"terrain_height_m": 19.3}
+    assert from_altitude(altitude(0.7, math.nan)) == {"terrain_height_m": None}  # no distance to the ground
+    assert from_altitude(altitude(-1e4, -1.0)) == {"terrain_height_m": None}  # negative: unmeasured
 
 
 def test_terrain_report_gives_the_current_height_only_with_terrain_data() -> None:

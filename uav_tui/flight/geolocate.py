@@ -8,9 +8,9 @@ ranges a camera sees a target). Pure scalar math (no NumPy on the path): about 2
 included (``scripts/bench_geolocation.py``).
 
 The height above the ground is, first found: a downward rangefinder's, tilt-corrected, when the autopilot reports
-one in range (``rangefinder_m``); the autopilot's height above the terrain (``terrain_height_m``: MAVLink ALTITUDE's
-``altitude_terrain``/``bottom_clearance`` or ArduPilot's TERRAIN_REPORT); else the height above home (right on flat
-ground around home). A rangefinder or terrain reading older than :data:`READING_MAX_AGE_S` at the capture is not
+one in range (``rangefinder_m``); the autopilot's height above the terrain (``terrain_height_m``: PX4's ALTITUDE
+``bottom_clearance`` or ArduPilot's TERRAIN_REPORT); else the height above home (right on flat ground around
+home). A rangefinder or terrain reading older than :data:`READING_MAX_AGE_S` at the capture is not
 used (``GeoFix.height_note`` says so); which one was used is ``GeoFix.height_from``.
 
 The uncertainty is the horizontal displacement the assumed 1-sigma errors below cause, each found by
