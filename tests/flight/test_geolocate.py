@@ -158,3 +158,8 @@ def test_the_status_line_says_where_or_why_not():
     assert geolocate.describe(geolocate.GeoFix(geolocate.NO_POSITION)) == "not located: no GPS position"
     assert geolocate.describe(geolocate.GeoFix(geolocate.NO_CAMERA)) == ""  # the event log said it once
     assert geolocate.describe(geolocate.GeoFix(geolocate.NO_BOX)) == ""
+
+
+def test_a_bearing_a_hair_west_of_north_reads_000_not_360():
+    fix = geolocate.GeoFix(geolocate.OK, 47.0, 8.0, 488.0, 0.8, 6.0, -0.04, 20.0, geolocate.FROM_HOME)
+    assert fix.bearing_deg > 359.5 and " 6 m at 000 deg " in geolocate.describe(fix)

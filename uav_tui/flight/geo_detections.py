@@ -49,4 +49,4 @@ def describe_shown(shown: tuple[LocatedDetection, ...], total: int) -> str:
 def _where(fix: GeoFix) -> str:
     if fix.status != OK or fix.distance_m is None or fix.bearing_deg is None:
         return "no position"
-    return f"{fix.distance_m:.0f} m at {fix.bearing_deg:03.0f} deg"
+    return f"{fix.distance_m:.0f} m at {round(fix.bearing_deg) % 360:03d} deg"

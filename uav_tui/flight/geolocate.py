@@ -136,7 +136,7 @@ def describe(fix: GeoFix) -> str:
     if fix.status != OK or fix.distance_m is None or fix.bearing_deg is None:
         return f"not located: {_WHY[fix.status]}" if fix.status in _WHY else ""
     note = f" (height from {fix.height_from}: {fix.height_note})" if fix.height_note else ""
-    return (f"{fix.lat_deg:.6f},{fix.lon_deg:.6f} {fix.distance_m:.0f} m at {fix.bearing_deg:03.0f} deg "
+    return (f"{fix.lat_deg:.6f},{fix.lon_deg:.6f} {fix.distance_m:.0f} m at {round(fix.bearing_deg) % 360:03d} deg "
             f"+-{fix.uncertainty_m:.1f} m{note}")
 
 
