@@ -62,3 +62,37 @@ async def test_the_page_says_why_a_box_is_not_located() -> None:
     finally:
         await core.stop("test finished")
     assert text == "target not located: no GPS position" and kind == "target warn"
+
+
+DETECTED = re.compile(r"^car (\d\.\d\d) (-?\d+\.\d{6}),(-?\d+\.\d{6}) (\d+) m at (\d{3}) deg \+-(\d+\.\d) m$")
+
+
+async def test_the_page_lists_each_detection_where_it_is(tmp_path: Path) -> None:
+    from playwright.async_api import async_playwright
+
+    web = {"web": True, "web_host": "127.0.0.1", "web_port": free_port(), "web_token": TOKEN}
+    source = "sim:?fps=15&targets=2&target_speed=0"  # two parked cars, both in view from 30 m
+    async with flying_core(tmp_path, altitude=30.0, source=source,
+                           processor="tests.recording.recorder_processors:RedCars", **web) as core:
+        async with async_playwright() as pw:
+            browser = await pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+            try:
+                page = await browser.new_page(viewport={"width": 1000, "height": 640})
+                await page.goto(core.web.url)
+                items = page.locator("#detections li")
+                await items.nth(1).filter(has_text=" m at ").wait_for(state="visible", timeout=20000)
+                texts = await items.all_text_contents()
+            finally:
+                await browser.close()
+        cars = [target.position(0.0)[:2] for target in core.source.targets]
+        home = core.controller.sim.home
+    assert len(texts) == 2, texts
+    scores = []
+    for text in texts:
+        found = DETECTED.match(text)
+        assert found, text
+        score, lat, lon = (float(v) for v in found.groups()[:3])
+        north, east, _ = home.to_local(lat, lon, home.alt_m)
+        assert min(math.hypot(north - n, east - e) for n, e in cars) <= 1.5, (text, cars)
+        scores.append(score)
+    assert scores == sorted(scores, reverse=True)  # the most confident first
