@@ -6,7 +6,10 @@ perfect. Then the same views with roll and pitch off by 1 degree, and with the h
 add. Flying: a recorded flight through the real platform (UavCore, the built-in simulator, a red-blob detector),
 sideways at 2 m/s at 20 m, the height from the simulator's downward rangefinder; frames.csv's positions against
 the car's. Issue 39's goals: p95 <= 1.0 m at 20 m,
-<= 2.0 m at 50 m; <= 0.1 ms a projection.
+<= 2.0 m at 50 m; <= 0.1 ms a projection. Also timed: a frame row's projection (the height chosen from the
+telemetry by name, with the readings' ages), a frame's 32 detections (the most a processor may report) into their
+detections.csv rows, and the target's velocity: a frame's position added, and the fit (2 s of positions at
+15 fps) the geo status makes once a second.
 
 Usage: python scripts/bench_geolocation.py [--views 60] [--no-flight]
 """
@@ -15,6 +18,7 @@ from __future__ import annotations
 
 import argparse
 import asyncio
+import itertools
 import json
 import os
 import platform
@@ -29,11 +33,14 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from processors.detections import MAX_DETECTIONS, Detected  # noqa: E402
 from sources.camera_model import CameraModel, Mount  # noqa: E402
 from tests.core.flight_helpers import flying_core  # noqa: E402
 from tests.flight.geo_helpers import car_views  # noqa: E402
 from uav_tui.flight import geolocate  # noqa: E402
+from uav_tui.flight.target_motion import TargetMotion  # noqa: E402
 from uav_tui.recorded import dataset  # noqa: E402
+from uav_tui.recording.located import detection_rows  # noqa: E402
 
 CASES = {"down_level": (90.0, 0.0), "down_rolling_pitching": (90.0, 15.0), "oblique60_rolling_pitching": (60.0, 15.0)}
 """Camera tilt below the nose and the +- range of roll and pitch."""
@@ -103,6 +110,28 @@ def cost(repeat: int) -> dict[str, Any]:
             times[i] = time.perf_counter_ns() - start
         result[name] = {"p50_ms": round(float(np.percentile(times, 50)) / 1e6, 4),
                         "p95_ms": round(float(np.percentile(times, 95)) / 1e6, 4)}
+    model = CameraModel.from_hfov(640, 480, 62.0, Mount(60.0))
+    telemetry = {"roll_deg": 3.0, "pitch_deg": -5.0, "yaw_deg": 120.0, "lat_deg": 47.4, "lon_deg": 8.5,
+                 "abs_alt_m": 508.0, "rel_alt_m": 20.0, "rangefinder_m": 35.0, "rangefinder_t_ns": 0,
+                 "terrain_height_m": 20.2, "terrain_t_ns": 400_000_000}  # the rangefinder's stale: the terrain's
+    found = tuple(Detected((20 * i, 200, 40, 30), "car", 0.5) for i in range(MAX_DETECTIONS))
+    fix = geolocate.locate_row(model, (300, 200, 40, 30), telemetry, at_ns=500_000_000)
+    motion, fitted = TargetMotion(), TargetMotion()
+    for i in range(30):
+        fitted.add(i * 66_666_667, fix)
+    frames = itertools.count()
+    calls = {"frame_row": lambda: geolocate.locate_row(model, (300, 200, 40, 30), telemetry, at_ns=500_000_000),
+             f"{MAX_DETECTIONS}_detections_rows": lambda: detection_rows(1, 0, 500_000_000, found, model, telemetry),
+             "velocity_position_added": lambda: motion.add(next(frames) * 66_666_667, fix),  # every frame, 15 fps
+             "velocity_fit": lambda: fitted.motion(2_000_000_000)}  # once a second (the geo status)
+    for name, call in calls.items():
+        times = np.empty(max(repeat // 10, 100))
+        for i in range(len(times)):
+            start = time.perf_counter_ns()
+            call()
+            times[i] = time.perf_counter_ns() - start
+        result[name] = {"p50_ms": round(float(np.percentile(times, 50)) / 1e6, 4),
+                        "p95_ms": round(float(np.percentile(times, 95)) / 1e6, 4)}
     return result
 
 
@@ -117,7 +146,8 @@ def main() -> None:
         "python": platform.python_version(),
         "assumed_1sigma": {"roll_pitch_deg": geolocate.ATTITUDE_SIGMA_DEG, "yaw_deg": geolocate.YAW_SIGMA_DEG,
                            "height_above_home_m": geolocate.HEIGHT_SIGMA_M,
-                           "rangefinder_height_m": geolocate.RANGEFINDER_SIGMA_M},
+                           "rangefinder_height_m": geolocate.RANGEFINDER_SIGMA_M,
+                           "terrain_height_m": geolocate.TERRAIN_SIGMA_M},
         "cost_per_projection": cost(args.repeat),
         "hover_perfect_attitude": hover(args.views)}
     if not args.no_flight:
