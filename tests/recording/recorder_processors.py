@@ -1,6 +1,7 @@
 """Processors used by the recorder tests (loaded by spec: ``tests.recording.recorder_processors:Class``)."""
 
 import math
+import time
 
 import numpy as np
 
@@ -115,3 +116,13 @@ class RedCars(RedCar):
 
     def customize_processing(self, id):
         self.broken = id == 1
+
+
+class Slow:
+    """A processor slower than the recorder holds a frame's row (250 ms a frame: a detector on a Pi)."""
+
+    def __init__(self):
+        self.tmMgr = None
+
+    def photo_processing(self, frame):
+        time.sleep(0.25)

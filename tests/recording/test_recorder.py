@@ -118,3 +118,21 @@ async def test_the_processors_box_is_recorded_per_frame(tmp_path):
     header, first = (run.path / "frames.csv").read_text().splitlines()[:2]
     columns = dict(zip(header.split(","), first.split(","), strict=False))
     assert [columns[name] for name in ("box_x", "box_y", "box_w", "box_h")] == ["", "", "", ""]
+
+
+async def test_a_snapshot_of_a_slow_processors_frame_is_marked_saved(tmp_path):
+    """A frame's row is written 200 ms after its capture at the latest without telemetry; a processor slower than that
+    (a detector on a Pi) had its row written before any ``snapshot`` of it, and the snapshot was on disk unclaimed."""
+    core = UavCore(_config(tmp_path, processor="tests.recording.recorder_processors:Slow", fc="none"))
+    await core.start()
+    await _frames_after(core, 2)
+    snapshots = [await core.execute("snapshot") for _ in range(2)]
+    await _frames_after(core, 1)
+    await core.stop()
+
+    run = dataset.load(core.recorder.run_dir)
+    snapped = [int(line.split()[1]) for line in snapshots]
+    saved = run.frames.set_index("frame_id").loc[snapped]
+    assert saved["saved"].all() and saved["image"].tolist() == [image_name(i) for i in snapped]
+    on_disk = {p.relative_to(run.path).as_posix() for p in (run.path / "frames").glob("*.jpg")}
+    assert on_disk == set(run.frames.loc[run.frames["saved"], "image"])

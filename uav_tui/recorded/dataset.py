@@ -40,7 +40,7 @@ import pandas as pd
 from uav_tui.errors import UavError
 from uav_tui.recorded.run_files import Problem, read_json, read_table
 from uav_tui.recording.located import DETECTION_COLUMNS
-from uav_tui.recording.rows import EVENT_COLUMNS, FRAME_COLUMNS, TELEMETRY_COLUMNS
+from uav_tui.recording.rows import EVENT_COLUMNS, FRAME_COLUMNS, SNAPSHOT_COLUMNS, TELEMETRY_COLUMNS
 
 _TEXT = ("flight_mode", "gps_fix", "decision", "landing", "gimbal", "error", "image", "extra", "telemetry", "level",
          "kind", "origin", "message", "command", "target_status", "target_height_from", "target_height_note", "label")
@@ -86,12 +86,13 @@ def load(run_dir: str | Path) -> Dataset:
     info = _checked_info(info, path / "run.json", problems)
     tables = []
     for name, columns in (("telemetry", TELEMETRY_COLUMNS), ("frames", FRAME_COLUMNS),
-                          ("events", EVENT_COLUMNS), ("detections", DETECTION_COLUMNS)):
+                          ("events", EVENT_COLUMNS), ("detections", DETECTION_COLUMNS),
+                          ("snapshots", SNAPSHOT_COLUMNS)):
         table, found = read_table(path / f"{name}.csv", columns, _dtype)
         tables.append(table)
         problems += found
-    telemetry, frames, events, detections = tables
-    frames, extra_columns = _expand_extra(frames, path / "frames.csv", problems)
+    telemetry, frames, events, detections, snapshots = tables
+    frames, extra_columns = _expand_extra(_with_snapshots(frames, snapshots), path / "frames.csv", problems)
     start = info.get("start_mono_ns")
     starts = [start] if isinstance(start, int) and start > 0 else [
         int(df["t_mono_ns"].min()) for df in (telemetry, frames, events) if df["t_mono_ns"].notna().any()]
@@ -103,6 +104,18 @@ def load(run_dir: str | Path) -> Dataset:
 
 _SECTIONS = ("config", "source", "processor", "controller", "recording", "replay_of", "video", "versions")
 """The parts of run.json that are objects; anything else in their place is left out."""
+
+
+def _with_snapshots(frames: pd.DataFrame, snapshots: pd.DataFrame) -> pd.DataFrame:
+    """``frames`` with the ``snapshot`` commands' images marked (their rows may have been written before)."""
+    taken = snapshots.dropna().drop_duplicates("frame_id", keep="last").set_index("frame_id")["image"]
+    if taken.empty:
+        return frames
+    images = frames["frame_id"].map(taken)
+    found = images.notna()
+    frames.loc[found, "image"] = images[found]
+    frames.loc[found, "saved"] = True
+    return frames
 
 
 def _checked_info(info: dict[str, Any], path: Path, problems: list[Problem]) -> dict[str, Any]:

@@ -55,8 +55,11 @@ MAX_ERROR_CHARS = 500
 _SAVED = FRAME_OWN_COLUMNS.index("saved")  # followed by "image"
 _BOX = FRAME_OWN_COLUMNS.index("box_x")  # then box_y, box_w, box_h
 
+SNAPSHOT_COLUMNS = ("frame_id", "image")
+"""snapshots.csv: a row per ``snapshot`` command's image, whether or not its frame's row still showed it."""
+
 TABLES: dict[str, tuple[str, ...]] = {"telemetry": TELEMETRY_COLUMNS, "frames": FRAME_COLUMNS, "events": EVENT_COLUMNS,
-                                      "detections": DETECTION_COLUMNS}
+                                      "detections": DETECTION_COLUMNS, "snapshots": SNAPSHOT_COLUMNS}
 
 
 def image_name(frame_id: int) -> str:
@@ -146,7 +149,9 @@ class FrameAligner:
     A frame waits until every continuous telemetry field has a sample after its capture time, or
     ``hold_ns`` has passed since capture (then the newest values are held), so it is interpolated,
     not extrapolated. Every frame waits at least ``min_hold_ns``, so a ``snapshot`` of the newest
-    frame still finds its row and marks it saved.
+    frame usually still finds its row and marks it saved; every snapshot is also a snapshots.csv row, which
+    :func:`uav_tui.recorded.dataset.load` merges into ``saved`` and ``image`` (a row already written: a processor
+    slower than ``min_hold_ns`` a frame, or a snapshot taken later).
 
     While telemetry flows, rows are released when a sample arrives, as if time were its receive
     stamp (rows due just before it first, without it; then those it completes): what a row holds
@@ -187,10 +192,13 @@ class FrameAligner:
         if isinstance(item, FrameRecord):
             self._waiting.append(item)
             self._newest_ns = max(self._newest_ns, item.t_mono_ns)
-        elif isinstance(item, MarkSaved):
+        elif isinstance(item, MarkSaved):  # the frame's row may be written already (a slow processor): snapshots.csv
+            if self.run_dir is not None and not (self.run_dir / item.image).is_file():
+                return []  # not on disk (a full disk, the size cap): not claimed
             for record in self._waiting:
                 if record.frame_id == item.frame_id:
                     record.values[_SAVED:_SAVED + 2] = [True, item.image]
+            return [Row("snapshots", [item.frame_id, item.image])]
         else:
             raise TypeError(f"FrameAligner cannot handle {type(item).__name__}")
         return []
