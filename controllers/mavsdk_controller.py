@@ -294,7 +294,7 @@ class MavsdkController:
 
     @property
     def landing_modes(self) -> frozenset[str]:
-        """The flight modes (MAVSDK's names) the vehicle reports while it lands precisely."""
+        """The flight modes the vehicle reports while it lands precisely (:data:`LANDING_MODES`)."""
         return LANDING_MODES.get(self.autopilot, frozenset({"LAND"}))
 
     def _connected_landing(self, name: str) -> MavsdkLanding:
@@ -325,8 +325,12 @@ class MavsdkController:
         """Partial telemetry updates keyed by Telemetry field names; ends when the controller closes."""
         if self._system is None:
             raise ControllerError("telemetry: not connected (call connect() first)")
-        gimbal = self._gimbal
-        more = [] if gimbal is None else [lambda put: gimbal.read_attitude(self._subscriptions, put)]
+        gimbal, link = self._gimbal, self._link
+        more: list[Callable[[Callable[[dict[str, Any]], None]], asyncio.Task[None]]] = []
+        if link is not None:
+            more.append(link.follow_modes)  # MAVSDK's names, and HEARTBEAT's where MAVSDK has none
+        if gimbal is not None:
+            more.append(lambda put: gimbal.read_attitude(self._subscriptions, put))
         more.append(lambda put: self._subscriptions.read(  # ArduPilot's height above the terrain
             terrain_reports(self._direct, self._sysid), put, "telemetry-terrain-report"))
         async for update in merged_updates(self._telemetry, self.heartbeat_age_s, self._stop, self._subscriptions,

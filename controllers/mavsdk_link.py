@@ -1,4 +1,8 @@
-"""What the autopilot says about itself: heartbeat age, current flight mode, readiness to arm."""
+"""What the autopilot says about itself: heartbeat age, current flight mode, readiness to arm.
+
+The flight mode is MAVSDK's name where it has one, and the name :func:`controllers.flight_modes.decode` reads from
+the HEARTBEAT where MAVSDK says ``UNKNOWN`` (PX4's Precision Land is ``PRECISION_LAND``, not ``UNKNOWN``).
+"""
 
 from __future__ import annotations
 
@@ -7,14 +11,20 @@ import contextlib
 import json
 import math
 import time
+from collections.abc import Callable
+from typing import Any
 
 from mavsdk.asyncio.plugins.mavlink_direct import MavlinkDirectAsync, MavlinkMessage
 from mavsdk.asyncio.plugins.telemetry import FlightMode, TelemetryAsync
 
+from controllers.flight_modes import MAVSDK_NAMES, decode
 from controllers.mavsdk_calls import Subscriptions
 
 MAV_AUTOPILOT_INVALID = 8
 """HEARTBEAT.autopilot of ground stations and other non-autopilot components."""
+
+UNNAMED = "UNKNOWN"
+"""MAVSDK's name for every mode it has no name for."""
 
 
 class LinkMonitor:
@@ -35,6 +45,11 @@ class LinkMonitor:
         self._subscriptions = subscriptions
         self._last_heartbeat = time.monotonic()  # connecting means one just arrived
         self._flight_mode: tuple[str | None, float] = (None, -math.inf)
+        self._mavsdk_mode: str | None = None
+        """MAVSDK's name for the mode, as it last reported it."""
+        self._decoded_mode: str | None = None
+        """The mode decoded from the last HEARTBEAT."""
+        self._listeners: list[Callable[[dict[str, Any]], None]] = []
 
     def start(self) -> None:
         """Follow heartbeats and flight modes until ``subscriptions`` is closed."""
@@ -46,12 +61,26 @@ class LinkMonitor:
         return time.monotonic() - self._last_heartbeat
 
     def flight_mode_since(self, t_mono: float) -> str | None:
-        """The flight mode MAVSDK last reported, if it arrived after ``t_mono`` (time.monotonic()).
+        """The flight mode last reported, if it arrived after ``t_mono`` (time.monotonic()).
 
-        ArduCopter's GUIDED reads OFFBOARD and LOITER reads HOLD (MAVSDK's mapping).
+        ArduCopter's GUIDED reads OFFBOARD and LOITER reads HOLD (MAVSDK's mapping); a mode MAVSDK calls ``UNKNOWN``
+        reads as decoded from the HEARTBEAT (:mod:`controllers.flight_modes`).
         """
         mode, received = self._flight_mode
         return mode if received > t_mono else None
+
+    def follow_modes(self, put: Callable[[dict[str, Any]], None]) -> asyncio.Task[None]:
+        """Call ``put({"flight_mode": name})`` with each flight mode reported from now on (with the next HEARTBEAT, as
+        MAVSDK's other HEARTBEAT fields), until the returned task is cancelled."""
+
+        async def follow() -> None:
+            self._listeners.append(put)
+            try:
+                await asyncio.Future()  # until cancelled
+            finally:
+                self._listeners.remove(put)
+
+        return asyncio.create_task(follow(), name="telemetry-flight-mode")
 
     async def wait_ready(self, timeout_s: float) -> bool:
         """Wait until the autopilot reports it could arm (position estimate, home, pre-arm checks)."""
@@ -66,10 +95,32 @@ class LinkMonitor:
     def _on_heartbeat(self, message: MavlinkMessage) -> None:
         if message.system_id != self._system_id:
             return
-        with contextlib.suppress(ValueError):
-            if json.loads(message.fields_json).get("autopilot") == MAV_AUTOPILOT_INVALID:
-                return
+        try:
+            fields = json.loads(message.fields_json)
+        except ValueError:
+            fields = {}
+        if fields.get("autopilot") == MAV_AUTOPILOT_INVALID:
+            return
         self._last_heartbeat = time.monotonic()
+        with contextlib.suppress(KeyError, TypeError, ValueError):
+            self._decoded_mode = decode(*(int(fields[k]) for k in ("autopilot", "type", "base_mode", "custom_mode")))
+            if self._mavsdk_mode == UNNAMED:  # the decoded name is the one in use (before MAVSDK's first: none)
+                self._report(self._decoded_mode)
 
     def _on_flight_mode(self, mode: FlightMode) -> None:
-        self._flight_mode = (mode.name, time.monotonic())
+        """MAVSDK's name is reported as it is, unless it is ``UNKNOWN``.
+
+        For ``UNKNOWN``, the mode decoded from the HEARTBEAT is reported, unless it is one MAVSDK names: then it is
+        the previous mode's (MAVSDK saw the new HEARTBEAT first), and the new one is reported when its HEARTBEAT
+        arrives here.
+        """
+        name = self._mavsdk_mode = mode.name
+        if name != UNNAMED:
+            self._report(name)
+        elif self._decoded_mode is not None and self._decoded_mode not in MAVSDK_NAMES:
+            self._report(self._decoded_mode)
+
+    def _report(self, name: str) -> None:
+        self._flight_mode = (name, time.monotonic())
+        for put in list(self._listeners):
+            put({"flight_mode": name})

@@ -9,7 +9,7 @@ downward rangefinder (DISTANCE_SENSOR), if any      10 Hz
 height above the terrain (ALTITUDE), if reported    10 Hz (ArduPilot: TERRAIN_REPORT, its streams' rate)
 in-air / landed state, home                         2 Hz
 battery, GPS info                                   1 Hz
-flight mode, armed, health (from HEARTBEAT, SYS_STATUS)  as the autopilot sends them (~1 Hz)
+armed, health (from HEARTBEAT, SYS_STATUS)          as the autopilot sends them (~1 Hz)
 heartbeat age (computed here)                       1 Hz
 =================================================  =======
 """
@@ -133,7 +133,6 @@ STREAMS: dict[str, Callable[[Any], Update]] = {
     "gps_info": from_gps_info,
     "health": from_health,
     "unix_epoch_time": from_unix_epoch_time,
-    "flight_mode": lambda m: {"flight_mode": m.name},
     "armed": lambda armed: {"armed": bool(armed)},
     "in_air": lambda in_air: {"in_air": bool(in_air)},
 }

@@ -7,7 +7,8 @@
   target (``landing_target_pose``, from LANDING_TARGET) and descends onto it. ``MAV_CMD_NAV_LAND`` with param 2
   (precision "opportunistic"/"required") is read only in a mission: outside one, PX4 v1.16's Commander turns it
   into plain LAND at the current position (measured on its SITL: it came down 3 m from the target).
-  MAVSDK 4 has no name for that mode and reports it as ``UNKNOWN``.
+  MAVSDK 4 has no name for that mode (it says ``UNKNOWN``); the controller names it ``PRECISION_LAND`` from the
+  HEARTBEAT (:mod:`controllers.flight_modes`).
 """
 
 from __future__ import annotations
@@ -17,9 +18,8 @@ from typing import Any
 
 from controllers.errors import ControllerError
 
-LANDING_MODES = {"ardupilot": frozenset({"LAND"}), "px4": frozenset({"UNKNOWN"})}
-"""The flight modes (MAVSDK's names) each autopilot reports while it lands precisely: PX4's Precision Land is
-``UNKNOWN`` to MAVSDK 4."""
+LANDING_MODES = {"ardupilot": frozenset({"LAND"}), "px4": frozenset({"PRECISION_LAND"})}
+"""The flight modes (:mod:`controllers.flight_modes` names) each autopilot reports while it lands precisely."""
 
 ARDUPILOT_PARAMS = {"PLND_ENABLED": (1, "precision landing on"), "PLND_TYPE": (1, "companion computer: "
                                                                                 "LANDING_TARGET from uav-tui")}

@@ -1,12 +1,22 @@
 """Flight-mode names from HEARTBEAT: MAVSDK's where it has one, the autopilot's own where MAVSDK says UNKNOWN, and
-a distinct spelled-out name for any other number."""
+a distinct spelled-out name for any other number; and the link monitor that chooses between MAVSDK and the
+HEARTBEAT."""
 
 from __future__ import annotations
 
+import asyncio
+import json
+from collections.abc import AsyncGenerator
+from typing import Any
+
 import pytest
+from mavsdk.asyncio.plugins.mavlink_direct import MavlinkMessage
+from mavsdk.asyncio.plugins.telemetry import FlightMode
 from pymavlink import mavutil
 
 from controllers.flight_modes import MAVSDK_NAMES, decode
+from controllers.mavsdk_calls import Subscriptions
+from controllers.mavsdk_link import LinkMonitor
 
 PX4, ARDUPILOT = 12, 3
 QUADROTOR, FIXED_WING = 2, 1
@@ -65,3 +75,75 @@ def test_other_vehicles_autopilots_and_flags_are_spelled_out() -> None:
     assert decode(ARDUPILOT, 10, CUSTOM, 4) == "ARDUPILOT_TYPE10_MODE4"
     assert decode(PX4, QUADROTOR, 16, px4(4, 9)) == "BASE_MODE16"  # no custom mode: custom_mode means nothing
     assert decode(0, QUADROTOR, CUSTOM, 5) == "AUTOPILOT0_MODE5"
+
+
+# ---- LinkMonitor: MAVSDK's name, the HEARTBEAT's where MAVSDK says UNKNOWN ------------------------------------------
+
+class Feed:
+    """A subscribe_* stream the test pushes items into."""
+
+    def __init__(self) -> None:
+        self.queue: asyncio.Queue[Any] = asyncio.Queue()
+
+    async def stream(self) -> AsyncGenerator[Any, None]:
+        while True:
+            yield await self.queue.get()
+
+
+class Plugins:
+    """MavlinkDirect and Telemetry as LinkMonitor uses them: HEARTBEATs and MAVSDK's flight modes, pushed by hand."""
+
+    def __init__(self) -> None:
+        self.heartbeats, self.modes = Feed(), Feed()
+
+    def subscribe_message(self, name: str) -> AsyncGenerator[Any, None]:
+        assert name == "HEARTBEAT"
+        return self.heartbeats.stream()
+
+    def subscribe_flight_mode(self) -> AsyncGenerator[Any, None]:
+        return self.modes.stream()
+
+
+def heartbeat(custom_mode: int, autopilot: int = PX4) -> MavlinkMessage:
+    fields = {"type": QUADROTOR, "autopilot": autopilot, "base_mode": CUSTOM, "custom_mode": custom_mode,
+              "system_status": 4, "mavlink_version": 3}
+    return MavlinkMessage(message_name="HEARTBEAT", system_id=1, component_id=1, target_system_id=0,
+                          target_component_id=0, fields_json=json.dumps(fields))
+
+
+async def settle() -> None:
+    for _ in range(5):
+        await asyncio.sleep(0)
+
+
+async def test_the_mode_is_mavsdks_name_unless_it_says_unknown_then_the_heartbeats() -> None:
+    plugins, subscriptions = Plugins(), Subscriptions()
+    link = LinkMonitor(plugins, plugins, 1, subscriptions)  # type: ignore[arg-type]
+    link.start()
+    seen: list[str] = []
+    follower = link.follow_modes(lambda update: seen.append(update["flight_mode"]))
+    await settle()  # the readers and the follower are in place
+    try:
+        async def report(custom_mode: int, mavsdk: FlightMode, mavsdk_first: bool) -> str | None:
+            if mavsdk_first:
+                plugins.modes.queue.put_nowait(mavsdk)
+                await settle()
+            plugins.heartbeats.queue.put_nowait(heartbeat(custom_mode))
+            await settle()
+            plugins.modes.queue.put_nowait(mavsdk)
+            await settle()
+            return link.flight_mode_since(0.0)
+
+        assert await report(px4(4, 3), FlightMode.HOLD, mavsdk_first=False) == "HOLD"
+        assert await report(px4(4, 9), FlightMode.UNKNOWN, mavsdk_first=True) == "PRECISION_LAND"
+        assert await report(px4(4, 10), FlightMode.UNKNOWN, mavsdk_first=False) == "VTOL_TAKEOFF"  # both UNKNOWN
+        assert await report(px4(6), FlightMode.OFFBOARD, mavsdk_first=False) == "OFFBOARD"
+        assert await report(px4(4, 9), FlightMode.UNKNOWN, mavsdk_first=False) == "PRECISION_LAND"
+        assert await report(px4(3), FlightMode.POSCTL, mavsdk_first=True) == "POSCTL"
+        # None before MAVSDK's first report (a late one would look like a switch); HOLD -> PRECISION_LAND with MAVSDK's
+        # UNKNOWN first: the old HOLD HEARTBEAT is not taken for the new mode
+        assert seen == ["HOLD", "PRECISION_LAND", "PRECISION_LAND", "VTOL_TAKEOFF", "VTOL_TAKEOFF", "OFFBOARD",
+                        "OFFBOARD", "PRECISION_LAND", "POSCTL", "POSCTL"]
+    finally:
+        follower.cancel()
+        await subscriptions.close()

@@ -156,3 +156,26 @@ def test_precland_ends_when_the_vehicle_leaves_its_landing_mode_or_never_reports
     feed.engage()
     now[0] += 3_100_000_000
     assert feed.left_mode("HOLD", modes) == "the vehicle did not report LAND within 3 s of precland (it reports HOLD)"
+
+
+@pytest.mark.timeout(120)
+@pytest.mark.parametrize("sim_vehicle", [{"autopilot": "px4"}], indirect=True)
+async def test_px4_precision_land_is_reported_by_name_and_a_pilot_leaving_it_stops_the_targets(
+        tmp_path: Path, sim_vehicle: SimVehicle) -> None:
+    """PX4's Precision Land (main 4, sub 9) is UNKNOWN to MAVSDK: the platform names it from the HEARTBEAT."""
+    async with flying_core(tmp_path, vehicle=sim_vehicle, processor=pad_processor(tmp_path), camera_hfov=60.0,
+                           camera_mount="down") as core:
+        truth = core.truth  # type: ignore[attr-defined]
+        await core.execute("f 1")
+        await wait_until(lambda: core.landing.last_seen_ns is not None, 5, "the pad seen")
+        assert "Precision Land" in await core.execute("precland")
+        await wait_until(lambda: core.telemetry.snapshot().flight_mode == "PRECISION_LAND", 5,
+                         "PRECISION_LAND reported")
+        assert truth.latest()["mode"] == "PRECLAND"
+        await wait_until(lambda: core.status().landing_targets_sent >= 5, 5, "landing targets sent")
+        assert core.status().precland and core.mode_left_at_exit() == "PRECISION_LAND"
+
+        truth.request({"cmd": "rc_mode", "mode": "POSCTL"})  # the pilot's mode switch: no MAVLink client asked
+        await wait_until(lambda: not core.status().precland, 5, "precland off")
+        reason = core.status().precland_stop_reason
+        assert reason == "the vehicle left PRECISION_LAND for POSCTL: a pilot, a mission or a failsafe took it"

@@ -9,11 +9,12 @@ from uav_tui.errors import KNOWN_ERRORS
 from uav_tui.events import EventLog
 from uav_tui.flight.autonomy import own_modes
 
-LEFT_ALONE_AT_EXIT = frozenset({"LAND", "RETURN_TO_LAUNCH", "MISSION", "MANUAL", "STABILIZED", "ALTCTL", "ACRO",
-                                "RATTITUDE"})
-"""Flight modes (MAVSDK's names) a hold before exit would interrupt: the vehicle landing or returning by
-itself (the operator's ``land``/``rtl`` or a failsafe), a mission, a pilot flying by hand. Exit holds the
-vehicle in any other mode, where something uav-tui started (a vector, an orbit, a takeoff) may be flying it."""
+LEFT_ALONE_AT_EXIT = frozenset({"LAND", "PRECISION_LAND", "RETURN_TO_LAUNCH", "SMART_RTL", "MISSION", "MANUAL",
+                                "STABILIZED", "ALTCTL", "ACRO", "RATTITUDE"})
+"""Flight modes (:mod:`controllers.flight_modes` names) a hold before exit would interrupt: the vehicle landing or
+returning by itself (the operator's ``land``/``rtl``/``precland`` or a failsafe), a mission, a pilot flying by
+hand. Exit holds the vehicle in any other mode, where something uav-tui started (a vector, an orbit, a takeoff) may
+be flying it."""
 
 
 def mode_left_at_exit(mode: str | None, controller: FlightController | None, handed_over: str | None) -> str | None:
