@@ -65,6 +65,7 @@ class Telemetry:
     battery_v: float | None = None
     battery_pct: float | None = None
     flight_mode: str | None = None
+    """MAVSDK's name (HOLD, OFFBOARD...), or the HEARTBEAT's where it has none (:mod:`controllers.flight_modes`)."""
     armed: bool | None = None
     in_air: bool | None = None
     gps_fix: str | None = None
@@ -202,7 +203,8 @@ class PrecisionLanding(Protocol):
 
     @property
     def landing_modes(self) -> frozenset[str]:
-        """The flight modes (MAVSDK's names) the vehicle reports while it lands on the target."""
+        """The flight modes (:mod:`controllers.flight_modes` names) the vehicle reports while it lands on the
+        target."""
         ...
 
 

@@ -47,6 +47,9 @@ GOAL_M = {"arducopter": 0.3, "px4": 1.0}
 SIH, on this 2-core machine at load average 7-15: 0.15-0.43 m in six runs with its defaults, 0.27 and 0.50 m with
 PLD_FAPPR_ALT 1.5 (its estimate wanders: its hover by +-0.4 m, after touchdown by 0.1-1.2 m before the disarm), so
 1.0 m; a plain LAND comes down 3 m away, which either bound tells apart."""
+LANDING_MODE = {"arducopter": "LAND", "px4": "PRECISION_LAND"}
+"""The flight mode the platform records while the autopilot lands precisely (PX4's: UNKNOWN to MAVSDK, named from
+the HEARTBEAT by controllers.flight_modes)."""
 ALTITUDE_M = 10.0
 GROUND_M = 0.15
 """Touchdown: the estimated height above where the vehicle stood before arming first falls below this after the
@@ -189,3 +192,5 @@ def test_precland_lands_on_the_marker_by_the_autopilots_own_position(
     assert miss < GOAL_M[vehicle.name], f"touched down {miss:.2f} m from the marker (at {track.touchdown}){context}"
     frames = dataset.load(next((tmp_path / "runs").iterdir())).frames
     assert (frames["landing"] == "sent").sum() > 20, frames["landing"].value_counts()
+    modes = set(frames["flight_mode"].dropna())
+    assert LANDING_MODE[vehicle.name] in modes and "UNKNOWN" not in modes, modes
