@@ -123,6 +123,9 @@ async def send_when_clock_known(fc: MavsdkController, fix: LandingTargetFix) -> 
 async def test_landing_target_as_the_autopilot_receives_it(sim_vehicle: SimVehicle,
                                                            tapped: tuple[MavsdkController, MavlinkTap]) -> None:
     fc, tap = tapped
+    # The clock offset is the least (receive - boot time) seen: from the first ATTITUDE alone it carries that one
+    # message's transport delay (33.6 ms seen under load); in flight it has seconds of them, as here.
+    await asyncio.sleep(1.0)
     capture_ns = time.monotonic_ns() - 40_000_000  # a frame captured 40 ms ago
     fix = LandingTargetFix(capture_ns, unit(0.5, -0.8, 7.0), 7.1, NADIR, (0.0, 0.0, 0.0), (2.0, -3.0, 45.0),
                            (4.0, -1.0, -7.0))
