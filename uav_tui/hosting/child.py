@@ -55,7 +55,7 @@ import numpy as np
 from processors import load_processor
 from processors.errors import ProcessorLoadError
 from processors.frame_telemetry import DEFAULT_SAVE_MAX_HZ, FrameTelemetry
-from processors.outputs import output_methods
+from processors.outputs import NO_OUTPUTS, output_methods
 from uav_tui.hosting.frame_call import call_frame
 from uav_tui.hosting.frame_mailbox import FrameMailbox, Offer, Segment
 from uav_tui.hosting.pipe import send_message
@@ -281,8 +281,9 @@ class ChildRunner:
         outcome = call_frame(self.instance, image, vector=self.has_vector, outputs=self.outputs,
                              let_through=(MemoryError,))
         del image
+        outputs = outcome.outputs if outcome.outputs != NO_OUTPUTS else None
         return Result(offer.gen, outcome.t_start_ns, outcome.t_end_ns, outcome.t_vector_ns, _picklable(outcome.vector),
-                      outcome.outputs, outcome.box, outcome.detections, outcome.error, self._take_saves(),
+                      outputs, outcome.box, outcome.detections, outcome.error, self._take_saves(),
                       self._take_throttled(), self.slots.released())
 
     def _keep_save(self, image: np.ndarray, extra: dict[str, Any]) -> None:

@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 from processors import LoadedProcessor
 from processors.base import ProcessorInfo
 from processors.frame_telemetry import DEFAULT_SAVE_MAX_HZ
+from processors.outputs import NO_OUTPUTS
 from sources.buffer import FrameBuffer
 from uav_tui.errors import UavError
 from uav_tui.events import EventLog
@@ -175,7 +176,7 @@ class SubprocessHost(DeliversResults):
             return
         result = ProcessedFrame(frame=frame, t_start_ns=message.t_start_ns, t_end_ns=message.t_end_ns,
                                 t_vector_ns=message.t_vector_ns, vector=message.vector,
-                                outputs=message.outputs, error=message.error,
+                                outputs=message.outputs or NO_OUTPUTS, error=message.error,
                                 box=message.box, detections=message.detections)
         self._store(message.saves, result)
         if result.error:
