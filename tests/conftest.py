@@ -14,10 +14,11 @@ ROOT = Path(__file__).resolve().parents[1]
 SERIAL = frozenset({
     "tests/core/test_safety.py", "tests/core/test_autopilot_failsafe.py", "tests/core/test_link_loss_exit.py",
     "tests/core/test_sim_camera_mavlink.py", "tests/processors/test_closed_loop.py", "tests/tui/test_tmux.py",
-    "tests/hosting/test_opencv_pool.py",
+    "tests/hosting/test_opencv_pool.py", "tests/core/test_gimbal_flight.py", "tests/controllers/test_ardupilot_hold.py",
 })
 """Modules marked ``serial``: their tests hold real time to bounds (setpoints at 20 Hz, a failsafe within
-max_t, the camera's pose at 30 FPS, a control loop closing, idle threads' CPU time against spinning ones') or drive
+max_t, the camera's pose at 30 FPS, a control loop closing (the gimbal's too), a pilot's mode seen within 5 s, idle
+threads' CPU time against spinning ones') or drive
 a terminal; .ci/run runs them alone, after the others have run on both cores, so that a test on the other core
 cannot stretch them. Measured at load average 14 with test_isolation.py too: 51 tests, 620 s; these take about
 420 s of it."""
