@@ -115,6 +115,22 @@ def steering_config(tmp_path: Path, *, vehicle: SimVehicle | None = None, **over
     return load_config(None, settings)
 
 
+RENDERER_STALL_S = 5.0
+"""``camera_stall`` for flights that follow a ``sim:`` target: the simulator's renderer is the camera there, and on a
+loaded machine one frame took 0.8-1.7 s to draw (measured beside six busy loops); the watchdog then rightly stops
+autonomy, which is not what those tests are about (``test_safety`` tests the stall itself)."""
+
+
+def what_happened(core: UavCore) -> str:
+    """For a failure message: the last frame's box and decisions, the gimbal setpoints and the recent warnings."""
+    last, relay = core.worker.last, core.gimbal_relay
+    gimbal = "" if relay is None else f"gimbal setpoints sent {relay.sent}, failed {relay.failed}; "
+    frame = "no frame processed" if last is None else (
+        f"last frame: box {last.box}, vector {last.decision!r}, gimbal {last.gimbal!r}")
+    warnings = [e.message for e in core.events.recent if e.level != "info"][-8:]
+    return f"{gimbal}{frame}; executed {core.gate.executed}; warnings {warnings}"
+
+
 async def take_off(core: UavCore, truth: TruthClient, altitude: float = 3.0) -> None:
     """Arm and take off through the core's commands; returns once the vehicle holds at ``altitude``."""
     await core.execute("arm")

@@ -16,7 +16,7 @@ import pytest
 
 from controllers.sim.launcher import SimVehicle
 from sources.sim_geometry import Pose, project_ground_point
-from tests.core.flight_helpers import flying_core, wait_until
+from tests.core.flight_helpers import RENDERER_STALL_S, flying_core, wait_until, what_happened
 from uav_tui.recorded import dataset
 
 WIDTH, HEIGHT = 480, 360
@@ -55,11 +55,9 @@ def _car_pixel(props: dict[str, Any], camera: Any) -> tuple[float, float] | None
 @pytest.mark.parametrize("processor", ["nanotrack", "csrt"])
 async def test_a_tracker_keeps_a_driving_car_centred_with_the_gimbal_while_the_vehicle_hovers(
         tmp_path: Path, sim_vehicle: SimVehicle, processor: str) -> None:
-    # camera_stall: the simulator's renderer is the camera here; on a loaded machine one frame took 0.8-1.7 s to draw
-    # (measured beside six busy loops), and the watchdog rightly stopped autonomy: not what this test is about.
     async with flying_core(tmp_path, altitude=3, processor=processor, processor_args={"follow": "gimbal"},
                            source=SOURCE, vehicle=sim_vehicle, record=True, runs_dir=str(tmp_path),
-                           camera_stall=5.0) as core:
+                           camera_stall=RENDERER_STALL_S) as core:
         truth, source = core.truth, core.source
         await asyncio.to_thread(truth.request, HOVER)
         await wait_until(lambda: abs(truth.latest()["d"] + 20) < 0.3, 10, "the hover at 20 m")
@@ -91,11 +89,7 @@ async def test_a_tracker_keeps_a_driving_car_centred_with_the_gimbal_while_the_v
         assert math.hypot(last["n"] - first["n"], last["e"] - first["e"]) > 10  # the car drove across the view ...
         turned = truth.latest()
         off = [text for du, dv, text in offsets if du > 0.1 or dv > 0.1]
-        relay, last_frame = core.gimbal_relay, core.worker.last
-        seen = (f"gimbal setpoints sent {relay and relay.sent}, failed {relay and relay.failed}; last frame: box "
-                f"{last_frame and last_frame.box}, gimbal {last_frame and last_frame.gimbal!r}; events: "
-                f"{[e.message for e in core.events.recent if e.level != 'info'][-8:]}")
-        assert not off, f"the car was more than 10 % of the frame off centre: {off[:5]}...; {seen}"  # ... and stayed
+        assert not off, f"the car was more than 10 % of the frame off centre: {off[:5]}...; {what_happened(core)}"
         assert math.hypot(turned["n"] - hover["n"], turned["e"] - hover["e"]) < 0.5  # the vehicle hovered
         assert core.gate.executed == 0 and turned["gimbal_controlled"]
         assert core.gimbal_relay is not None and core.gimbal_relay.sent > 30

@@ -19,7 +19,7 @@ import pytest
 
 from controllers.sim.launcher import SimVehicle
 from sources.sim_geometry import PinholeCamera, Pose, project_ground_point
-from tests.core.flight_helpers import flying_core, wait_until
+from tests.core.flight_helpers import RENDERER_STALL_S, flying_core, wait_until, what_happened
 
 
 def horizontal_distance(a: dict, n: float, e: float) -> float:
@@ -90,7 +90,7 @@ async def test_tracker_follows_a_target_driving_on_the_ground(tmp_path: Path, si
     """
     async with flying_core(tmp_path, altitude=12, processor=processor, processor_args={"gain": 2.0, "max_speed": 1.5},
                            source="sim:?width=480&height=360&targets=1&target_speed=0.6", max_speed=1.5,
-                           vehicle=sim_vehicle) as core:
+                           vehicle=sim_vehicle, camera_stall=RENDERER_STALL_S) as core:
         truth = core.truth
         source = core.source
         target = source.get_properties()["targets"][0]
@@ -122,11 +122,13 @@ async def test_tracker_follows_a_target_driving_on_the_ground(tmp_path: Path, si
             await asyncio.sleep(0.2)
         moved = math.hypot(t["n"] - first["n"], t["e"] - first["e"])
         assert moved > 6  # the target drove well away from where tracking started ...
-        assert horizontal_distance(pose, start_pose["n"], start_pose["e"]) > 4  # ... the vehicle went with it ...
+        assert horizontal_distance(pose, start_pose["n"], start_pose["e"]) > 4, what_happened(core)  # ... it went too
         off_car = [text for off, _, text in samples if off is None or off > 20]
-        assert len(off_car) <= 0.1 * len(samples), f"box off the car in {len(off_car)} samples: {off_car}"
+        assert len(off_car) <= 0.1 * len(samples), \
+            f"box off the car in {len(off_car)} samples: {off_car}; {what_happened(core)}"
         grown = [text for _, size, text in samples if max_size and size is not None and size > max_size]
         assert not grown, f"the box grew beyond {max_size} x the car: {grown}"
         in_view = 12 * math.tan(math.radians(62 / 2)) * 360 / 480  # ground covered by half the frame's height, m
-        assert max(distances) < in_view, f"the car left the frame: distances {distances[-10:]}"  # ... in view
-        assert core.gate.executed > 10 and core.worker.last.box is not None  # still tracking
+        assert max(distances) < in_view, \
+            f"the car left the frame: distances {distances[-10:]}; {what_happened(core)}"  # ... in view
+        assert core.gate.executed > 10 and core.worker.last.box is not None, what_happened(core)  # still tracking
