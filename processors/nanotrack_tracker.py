@@ -13,7 +13,7 @@ import numpy as np
 
 from processors import target_search
 from processors.follow import TargetFollower
-from processors.nanotrack_net import HOLD_SHARPNESS, NanoTrackNet
+from processors.nanotrack_net import HOLD_SHARPNESS, RIVAL_LEVEL, NanoTrackNet
 from processors.steering import Box, as_box
 
 logger = logging.getLogger(__name__)
@@ -71,7 +71,7 @@ class NanoTrackProcessor(TargetFollower):
             unsure (see :data:`~processors.nanotrack_net.HOLD_SHARPNESS`).
         loss_ratio: appearance, relative to its recent median, under which the box does not show the target.
         rival: a peak this high away from the box (see :func:`~processors.nanotrack_net.rival`) says the
-            target may be elsewhere.
+            target may be elsewhere; NanoTrack does not follow such a look-alike when it overtakes the target.
         lost_after: frames of evidence in a row that make the target lost.
         wide_every: lost frames between whole-frame searches.
     """
@@ -88,7 +88,7 @@ class NanoTrackProcessor(TargetFollower):
         gimbal_max_rate: float = 60.0,
         hold: float = HOLD_SHARPNESS,
         loss_ratio: float = 0.5,
-        rival: float = 0.5,
+        rival: float = RIVAL_LEVEL,
         lost_after: int = 2,
         wide_every: int = 5,
     ) -> None:
@@ -113,7 +113,7 @@ class NanoTrackProcessor(TargetFollower):
             logger.warning("NanoTrackProcessor: ROI %s is too small to track, ignored", roi)
             return False
         self._templates = [appearance]
-        self._net = NanoTrackNet(self.hold)
+        self._net = NanoTrackNet(self.hold, self.rival)
         self._net.init(work, tuple(int(round(v)) for v in box))
         self._looks.clear()
         self._work_box, self._tracking = box, True

@@ -78,3 +78,15 @@ def test_a_look_alike_in_the_window_is_a_rival_and_move_to_searches_elsewhere() 
     tracker.move_to((1000, 500, 48, 32))
     _, box = tracker.update(_scene(1006, 504))
     assert tracker.sharpness > HOLD_SHARPNESS and abs(box[0] - 1006) <= 1 and abs(box[1] - 504) <= 1
+
+
+def test_a_look_alike_that_overtakes_the_target_on_the_map_is_not_followed() -> None:
+    tracker = NanoTrackNet()
+    tracker.init(_scene(600, 300), (600, 300, 48, 32))
+    tracker.update(_scene(600, 300, (544, 256)))  # a look-alike beside the target: the box stays on the target
+    assert tracker.rival > 0.5
+    for _ in range(2):  # the target hidden: the look-alike is the map's sharp peak, and the box does not go there
+        _, box = tracker.update(_scene(None, None, (544, 256)))
+        assert tracker.sharpness > HOLD_SHARPNESS and box == (600, 300, 48, 32)
+    _, box = tracker.update(_scene(606, 304, (544, 256)))  # the target back: followed
+    assert abs(box[0] - 606) <= 1 and abs(box[1] - 304) <= 1

@@ -58,3 +58,12 @@ def test_nanotrack_takes_the_runner_back_when_he_returns() -> None:
     overlap = iou(ours.boxes[back:], sequence.gt[back:])
     assert (overlap[:5] > 0.3).any(), f"not back within 5 frames of the return: IoU {np.round(overlap[:5], 2)}"
     assert (overlap > 0.3).mean() >= 0.9, f"IoU > 0.3 on {(overlap > 0.3).mean():.0%} of the frames after the return"
+
+
+def test_nanotrack_keeps_the_gull_when_another_flies_past() -> None:
+    """In dtb70-Gull2 a second gull crosses close to the target from frame 38; it becomes the map's best place
+    for a few frames, and the box must wait on the target rather than follow the other gull out of the frame."""
+    sequence = load_sequence(SET / "dtb70-Gull2")
+    ours = run_job(Job(sequence, TrackerSpec("nanotrack")))
+    overlap = iou(ours.boxes[:140], sequence.gt[:140])
+    assert (overlap > 0.3).mean() >= 0.9, f"IoU > 0.3 on {(overlap > 0.3).mean():.0%} of frames 0-139"
