@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from sources.base import CaptureSource
-from sources.camera_model import GIMBAL, CameraModel, Mount
+from sources.camera_model import GIMBAL, MOUNTS, CameraModel, Mount
 from sources.errors import SourceUriError
 from sources.ground import default_ground
 from sources.pacing import Pacer
@@ -27,7 +27,7 @@ from sources.uri import SourceUri
 
 logger = logging.getLogger(__name__)
 
-MOUNT_TILT_DEG = {"down": 90.0, "forward": 0.0, GIMBAL: 0.0}
+MOUNT_TILT_DEG = {**MOUNTS, GIMBAL: 0.0}
 """Camera tilt below the vehicle's nose (on the gimbal: below the gimbal's forward axis) for each named mount;
 ``tilt=`` overrides it."""
 

@@ -6,7 +6,6 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from processors.base import Box
 from processors.detections import Detected
 from uav_tui.flight.geolocate import OK, GeoFix, locate_row
 from uav_tui.output.text import safe
@@ -19,12 +18,9 @@ MAX_SHOWN = 5
 
 
 @dataclass(frozen=True, slots=True)
-class LocatedDetection:
-    """One detection as shown: its label (made safe to show), score, box and ground position."""
+class LocatedDetection(Detected):
+    """One detection as shown: its label made safe to show, and its ground position."""
 
-    label: str
-    score: float
-    box: Box
     target: GeoFix
 
 
@@ -32,7 +28,7 @@ def locate_shown(detections: tuple[Detected, ...], camera: CameraModel | None, t
                  at_ns: int | None) -> tuple[LocatedDetection, ...]:
     """The :data:`MAX_SHOWN` most confident of ``detections``, located with ``telemetry`` (at the capture ``at_ns``)."""
     best = sorted(detections, key=lambda found: -found.score)[:MAX_SHOWN]
-    return tuple(LocatedDetection(safe(found.label), found.score, found.box,
+    return tuple(LocatedDetection(found.box, safe(found.label), found.score,
                                   locate_row(camera, found.box, telemetry, at_ns=at_ns)) for found in best)
 
 

@@ -11,7 +11,7 @@ What was done is each frame's ``gimbal`` (frames.csv).
 from __future__ import annotations
 
 import asyncio
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
 from controllers.base import GimbalControl
 from controllers.errors import ControllerError
@@ -49,7 +49,6 @@ class GimbalRelay:
                  events: EventLog) -> None:
         if not isinstance(controller, GimbalControl):
             raise TypeError(f"{controller.description} has no gimbal control")
-        self.vehicle = controller
         self.controller: GimbalControl = controller
         self.gate = gate
         self.safety = safety
@@ -82,7 +81,8 @@ class GimbalRelay:
             return "autonomy off"
         if self._release is not None and not self._release.done():
             return "the gimbal is being released"
-        return not_now(self.vehicle, self.safety, (self.gate.clock() - result.frame.t_mono_ns) / 1e9, self.sender)
+        age_s = (self.gate.clock() - result.frame.t_mono_ns) / 1e9
+        return not_now(cast("FlightController", self.controller), self.safety, age_s, self.sender)
 
     def _send(self, pointing: GimbalPointing) -> None:
         epoch = self._epoch

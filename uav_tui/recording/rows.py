@@ -54,6 +54,7 @@ MAX_ERROR_CHARS = 500
 
 _SAVED = FRAME_OWN_COLUMNS.index("saved")  # followed by "image"
 _BOX = FRAME_OWN_COLUMNS.index("box_x")  # then box_y, box_w, box_h
+_T_WALL = FRAME_OWN_COLUMNS.index("t_wall_ns")
 
 SNAPSHOT_COLUMNS = ("frame_id", "image")
 """snapshots.csv: a row per ``snapshot`` command's image, whether or not its frame's row still showed it."""
@@ -232,7 +233,7 @@ class FrameAligner:
         x, y, w, h = record.values[_BOX:_BOX + 4]
         fix = locate_row(record.camera, None if x is None else (x, y, w, h), values, at_ns=record.t_mono_ns)
         frame = Row("frames", [*record.values, how, *(_finite(values[name]) for name in FIELDS), *geo_cells(fix)])
-        t_wall_ns = record.values[FRAME_OWN_COLUMNS.index("t_wall_ns")]
+        t_wall_ns = record.values[_T_WALL]
         return [frame, *(Row("detections", cells) for cells in detection_rows(
             record.frame_id, t_wall_ns, record.t_mono_ns, record.detections, record.camera, values))]
 
