@@ -159,15 +159,12 @@ class TargetFollower:
 
     # ---- internals ------------------------------------------------------------------------------
     def _gimbal_rates(self, box: Box, size: tuple[int, int]) -> GimbalPointing:
-        """Rates towards ``box`` with the frame's camera model and the gimbal's attitude at its capture, when known."""
+        """Rates towards ``box`` with the frame's camera model and the gimbal's pitch at its capture, when known."""
         tm = self.tmMgr
         camera = tm.camera() if tm is not None and hasattr(tm, "camera") else None
         t = tm.snapshot() if tm is not None and hasattr(tm, "snapshot") else None
-        pitch, yaw, heading = (getattr(t, name, None) for name in ("gimbal_pitch_deg", "gimbal_yaw_deg", "yaw_deg"))
-        gimbal = None
-        if pitch is not None and yaw is not None and heading is not None:
-            gimbal = (float(pitch), float(yaw) - float(heading))  # yaw from the nose
-        return self.gimbal_steering.rates(box, size, camera, gimbal)
+        pitch = getattr(t, "gimbal_pitch_deg", None)
+        return self.gimbal_steering.rates(box, size, camera, None if pitch is None else float(pitch))
 
     def _work_frame(self, frame: np.ndarray) -> np.ndarray:
         """``frame`` shrunk by ``_shrink``: INTER_AREA on whole k x k blocks, its fast path."""

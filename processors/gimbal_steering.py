@@ -1,8 +1,9 @@
 """Target offset in the image -> gimbal rates that bring it to the frame centre (the trackers' ``follow="gimbal"``).
 
 The target's pixel is turned into a direction (the camera model's ray, or a 62 degree field of view without one),
-seen from the gimbal's attitude at the frame's capture (pitch from the horizon, yaw from the nose) into the pitch and
-yaw the gimbal would need to look straight at it; each rate is ``gain`` times the angle still to turn. Working in the
+seen from the gimbal's pitch at the frame's capture into the pitch and yaw the gimbal would need to look straight at
+it; each rate is ``gain`` times the angle still to turn (the yaw still to turn does not depend on where the gimbal
+points in yaw, so its yaw is not needed). Working in the
 gimbal's own angles, not in the image, keeps it right when the camera looks steeply down, where turning the yaw
 spins the image about its centre instead of moving it sideways. Without the gimbal's attitude the image offsets are
 taken as the angles to turn (right at small angles from the horizon).
@@ -40,12 +41,12 @@ class GimbalSteering:
                              f"(got {self.gain}, {self.dead_band}, {self.max_rate})")
 
     def rates(self, box: tuple[float, float, float, float], size: tuple[int, int], camera: Any = None,
-              gimbal: tuple[float, float] | None = None) -> GimbalPointing:
+              gimbal_pitch: float | None = None) -> GimbalPointing:
         """The rates that turn the gimbal towards the centre of ``box`` in a ``size`` (width, height) frame.
 
         Args:
             camera: the frame's camera model (``tmMgr.camera()``), or None.
-            gimbal: the gimbal's (pitch from the horizon, yaw from the nose) at the frame's capture, degrees, or None.
+            gimbal_pitch: the gimbal's pitch from the horizon at the frame's capture, degrees, or None.
         """
         x, y, w, h = box
         u, v = x + w / 2, y + h / 2
@@ -54,16 +55,14 @@ class GimbalSteering:
         else:
             focal = size[0] / 2 / math.tan(math.radians(DEFAULT_HFOV_DEG / 2))
             right, down = math.atan2(u - size[0] / 2, focal), math.atan2(v - size[1] / 2, focal)
-        if gimbal is None:
+        if gimbal_pitch is None:
             return GimbalPointing.rates(self._rate(-math.degrees(down)), self._rate(math.degrees(right)))
-        pitch, yaw = (math.radians(a) for a in gimbal)
-        # the ray (forward 1, right tan(right), down tan(down)) in the gimbal's frame, turned by its pitch, then yaw
+        pitch = math.radians(gimbal_pitch)
+        # the ray (forward 1, right tan(right), down tan(down)) in the gimbal's frame, turned by its pitch
         f, r, d = 1.0, math.tan(right), math.tan(down)
         f, d = f * math.cos(pitch) + d * math.sin(pitch), -f * math.sin(pitch) + d * math.cos(pitch)
-        f, r = f * math.cos(yaw) - r * math.sin(yaw), f * math.sin(yaw) + r * math.cos(yaw)
-        want_pitch, want_yaw = math.atan2(-d, math.hypot(f, r)), math.atan2(r, f)
-        turn_yaw = (math.degrees(want_yaw - yaw) + 180.0) % 360.0 - 180.0
-        return GimbalPointing.rates(self._rate(math.degrees(want_pitch - pitch)), self._rate(turn_yaw))
+        want_pitch, turn_yaw = math.atan2(-d, math.hypot(f, r)), math.atan2(r, f)
+        return GimbalPointing.rates(self._rate(math.degrees(want_pitch - pitch)), self._rate(math.degrees(turn_yaw)))
 
     def _rate(self, offset_deg: float) -> float:
         if abs(offset_deg) < self.dead_band:

@@ -66,7 +66,7 @@ def _elsewhere(response: np.ndarray, cell: tuple[np.intp, ...]) -> tuple[np.intp
 
 
 class NanoTrackNet:
-    """``cv2.TrackerNano``'s ``init``/``update``/``getTrackingScore`` on the same models, run here.
+    """``cv2.TrackerNano``'s ``init`` and ``update`` on the same models, run here (its tracking score: ``score``).
 
     OpenCV 4.x's tracker (``tracker_nano.cpp``) with three changes. The first two are kept together because
     they win on the 19-sequence aerial-tracking set as a whole and on each half of it (0.622 against plain
@@ -166,9 +166,6 @@ class NanoTrackNet:
             return None
         return (self._centre[0] + float(_CELLS[col] - _INSTANCE // 2) / scale,
                 self._centre[1] + float(_CELLS[row] - _INSTANCE // 2) / scale)
-
-    def getTrackingScore(self) -> float:  # noqa: N802 - cv2.TrackerNano's name
-        return self.score
 
     def _blob(self, image: np.ndarray, side: int, out: int) -> np.ndarray:
         """The ``side``-px square around the target (padded with the frame's mean colour), resized to ``out``."""

@@ -116,8 +116,8 @@ class NanoTrackProcessor(TargetFollower):
         self._net = NanoTrackNet(self.hold, self.rival)
         self._net.init(work, tuple(int(round(v)) for v in box))
         self._looks.clear()
-        self._work_box, self._tracking = box, True
-        self._evidence = self._lost_frames = 0
+        self._on_target(box)
+        self._lost_frames = 0
         logger.info("NanoTrackProcessor: target %s selected (tracked at 1/%d)", roi, self._shrink)
         return True
 
@@ -130,7 +130,7 @@ class NanoTrackProcessor(TargetFollower):
         elif sure and there:
             logger.info("NanoTrackProcessor: back on the target (sharpness %.1f, appearance %.2f)",
                         self.sharpness, self.look)
-            self._work_box, self._tracking, self._evidence = box, True, 0
+            self._on_target(box)
         else:
             self._lost_frames += 1
             if self._lost_frames % self.wide_every == 0:
@@ -144,6 +144,10 @@ class NanoTrackProcessor(TargetFollower):
         self._tracking = False
 
     # ---- internals ------------------------------------------------------------------------------
+    def _on_target(self, box: Box) -> None:
+        """The target is tracked at ``box`` (selected, or taken back), with no evidence of loss yet."""
+        self._work_box, self._tracking, self._evidence = box, True, 0
+
     def _step(self, net: NanoTrackNet, work: np.ndarray) -> tuple[Box, bool, bool]:
         """``net`` updated on ``work``: its box, whether NanoTrack is sure of it (a sharp peak) and whether the
         target is there (its appearance holds and nothing else in the window competes). The diagnostics
@@ -206,7 +210,8 @@ class NanoTrackProcessor(TargetFollower):
         if there and probe.sharpness >= _SURE * self.hold and self.look >= self._look_median():
             logger.info("NanoTrackProcessor: re-acquired in the whole frame (sharpness %.1f, appearance %.2f)",
                         probe.sharpness, self.look)
-            self._net, self._work_box, self._tracking, self._evidence = probe, box, True, 0
+            self._net = probe
+            self._on_target(box)
 
 
 def _at_edge(box: Box, work: np.ndarray) -> bool:

@@ -13,8 +13,8 @@ odd positions in name order, the halves a setting must win on):
   defaults' at <= 0.5x their CPU;
 * ``oracle``: ``cv2.TrackerNano`` (``cv:nano``) alone, and with a perfect loss signal and re-acquisition: no
   box exactly on the absent-target frames (gt ``NaN``), and on a visible frame where its box misses the target
-  (IoU 0, scored as such) it restarts on the gt box with the template it was selected with (pasted there as
-  :class:`~processors.nanotrack_template.SelectedTemplate` does). The AUC gained is the most any loss logic on
+  (IoU 0, scored as such) it restarts on the gt box with the template it was selected with (pasted there:
+  :class:`SelectedTemplate`). The AUC gained is the most any loss logic on
   top of NanoTrack could gain (the tracker itself unchanged).
 
 Prints one JSON object.
@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 import time
 from pathlib import Path
@@ -37,7 +38,6 @@ sys.path.insert(0, str(ROOT))
 
 from processors.detection import find_data_dir  # noqa: E402
 from processors.models import create_nanotrack  # noqa: E402
-from processors.nanotrack_template import SelectedTemplate  # noqa: E402
 from uav_tui.evaluation import Scores, Sequence, find_sequences, score_sequence, summarise  # noqa: E402
 from uav_tui.evaluation.metrics import iou  # noqa: E402
 
@@ -73,6 +73,41 @@ def csrt_run(sequences: list[Sequence], setting: dict[str, Any]) -> tuple[list[S
             boxes.append(box if ok else [np.nan] * 4)
         per.append(score_sequence(np.array(boxes, float), sequence.gt, np.ones(1)))
     return per, 1e3 * float(np.mean(cpu))
+
+
+def exemplar_side(w: float, h: float) -> int:
+    """Side of the square NanoTrack cuts its template from: the box with half its perimeter as context."""
+    context = 0.5 * (w + h)
+    return max(int(math.sqrt((w + context) * (h + context))), 1)
+
+
+class SelectedTemplate:
+    """The square of the frame around the selected target that ``cv2.TrackerNano.init`` turns into its template.
+
+    ``cv2.TrackerNano`` takes its template from the image it is started on: :meth:`pasted` puts this square
+    (resized) where a NanoTrack started on another box cuts its template from, so the new tracker looks for the
+    target *as it was selected*.
+    """
+
+    def __init__(self, frame: np.ndarray, box: tuple[float, ...]) -> None:
+        x, y, w, h = box
+        side = exemplar_side(w, h)
+        self.view = cv2.getRectSubPix(frame, (side, side), (x + w / 2, y + h / 2))
+        """The selected target with its context (replicated past the frame's edges)."""
+
+    def pasted(self, frame: np.ndarray, box: tuple[float, ...]) -> np.ndarray:
+        """A copy of ``frame`` with the selected view (resized to ``box``'s) where a NanoTrack started on ``box``
+        cuts its template from."""
+        x, y, w, h = box
+        side = exemplar_side(w, h)
+        patch = cv2.resize(self.view, (side, side), interpolation=cv2.INTER_AREA)
+        image = frame.copy()
+        x0, y0 = int(x + w / 2) - (side + 1) // 2, int(y + h / 2) - (side + 1) // 2  # where init will cut it from
+        ix0, iy0 = max(x0, 0), max(y0, 0)
+        ix1, iy1 = min(x0 + side, image.shape[1]), min(y0 + side, image.shape[0])
+        if ix1 > ix0 and iy1 > iy0:
+            image[iy0:iy1, ix0:ix1] = patch[iy0 - y0 : iy1 - y0, ix0 - x0 : ix1 - x0]
+        return image
 
 
 def nano_run(sequence: Sequence, oracle: bool) -> Scores:
