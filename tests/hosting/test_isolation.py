@@ -14,6 +14,7 @@ import os
 import select
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -26,6 +27,7 @@ from uav_tui.core import UavCore
 from uav_tui.errors import ConfigError, ProcessorLoadError, UavError
 from uav_tui.events import EventLog
 from uav_tui.headless import format_status
+from uav_tui.hosting import frame_feeder
 from uav_tui.hosting.process_host import SubprocessHost
 from uav_tui.recorded import dataset
 
@@ -317,6 +319,35 @@ async def test_starting_stopping_and_reloading_leave_no_descriptor_open(tmp_path
         assert [t for t in open_descriptors(collect_garbage=False) if t.startswith("socket:")] == sockets
     finally:
         gc.enable()
+    assert open_descriptors() == before
+
+
+@pytest.mark.skipif(not Path("/proc/self/fd").is_dir(), reason="counts descriptors in Linux's /proc")
+async def test_a_frame_being_offered_at_stop_leaves_no_slot_open(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The feeder thread may be offering a frame it copied into a slot as the platform stops: stop waits for it."""
+    config = load_config(None, {"source": "synthetic:?width=160&height=120", "processor": "template", "fc": "none",
+                                "record": False})
+
+    async def run_once(*, stop_while_offering: bool) -> None:
+        core = UavCore(config)
+        await core.start()
+        await wait_until(lambda: core.worker.last is not None, 10, "a processed frame")
+        if stop_while_offering:
+            offering = threading.Event()
+            telemetry_at = frame_feeder.FrameFeeder._telemetry_at
+
+            def slowly(feeder: frame_feeder.FrameFeeder, t_mono_ns: int) -> tuple[bytes, float | None]:
+                offering.set()  # the frame is in its slot, not offered yet
+                time.sleep(0.5)
+                return telemetry_at(feeder, t_mono_ns)
+
+            monkeypatch.setattr(frame_feeder.FrameFeeder, "_telemetry_at", slowly)
+            await asyncio.get_running_loop().run_in_executor(None, offering.wait, 5)
+        await core.stop()
+
+    await run_once(stop_while_offering=False)  # starts what lives as long as the process (the resource tracker)
+    before = open_descriptors()
+    await run_once(stop_while_offering=True)
     assert open_descriptors() == before
 
 

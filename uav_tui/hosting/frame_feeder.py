@@ -77,7 +77,8 @@ class FrameFeeder:
         self._pickled_telemetry: tuple[object, bytes] = (None, b"")
         """The newest telemetry update and its pickled fields."""
         self._gens = itertools.count(1)
-        threading.Thread(target=self._feed, name=f"processor-feeder({spec})", daemon=True).start()
+        self._thread = threading.Thread(target=self._feed, name=f"processor-feeder({spec})", daemon=True)
+        self._thread.start()
 
     @property
     def captured(self) -> int:
@@ -146,6 +147,10 @@ class FrameFeeder:
             if self._buffer is not None:
                 self._detach(self._buffer)
             self._wake.notify()
+
+    def join(self, timeout: float) -> None:
+        """After :meth:`stop`: wait for the feeder thread to leave (it may be copying a frame into a slot)."""
+        self._thread.join(timeout)
 
     def close(self, children: list[ChildProcess]) -> None:
         """After :meth:`stop`: close the children's mailboxes and the ring."""

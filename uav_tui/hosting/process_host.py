@@ -120,7 +120,14 @@ class SubprocessHost(DeliversResults):
             await self._supervisor.watch()
         finally:
             self.close()
-            await asyncio.get_running_loop().run_in_executor(None, self._supervisor.reap, 2.0)
+            await asyncio.get_running_loop().run_in_executor(None, self._let_go, 2.0)
+
+    def _let_go(self, timeout: float) -> None:
+        """After :meth:`close`: wait until the feeder thread has left and every child was reaped, so that nothing of
+        theirs (a slot being copied into, a pipe, an output reader) outlives the host."""
+        deadline = time.monotonic() + timeout
+        self._feeder.join(timeout)
+        self._supervisor.reap(max(0.0, deadline - time.monotonic()))
 
     async def call(self, method: str, *args: Any) -> Answer:
         """Call ``processor.<method>(*args)`` in the child; raises ProcessorRaised if it raised there.
