@@ -35,8 +35,9 @@ TELEMETRY_HZ = 10.0
 GIMBAL_DEVICE_ATTITUDE_STATUS itself; every telemetry update is a telemetry.csv row)."""
 
 DISCOVERY_WAIT_S = 10.0
-"""How long a first setpoint waits for MAVSDK to list a gimbal: it asks each component once per heartbeat (measured:
-the built-in simulator's within 2 s of connecting, ArduCopter's and PX4's SITL in 5 s)."""
+"""How long after connecting MAVSDK may take to list a gimbal: it asks each component once per heartbeat (measured:
+the built-in simulator's within 2 s of connecting, ArduCopter's and PX4's SITL in 5 s). A setpoint waits for it
+until then; later, a vehicle that listed none has none."""
 
 
 def attitude_update(attitude: Any) -> dict[str, float]:
@@ -63,6 +64,8 @@ class MavsdkGimbal:
         self.gimbal_id: int | None = None
         """MAVSDK's id of the first gimbal it listed (None: none found yet)."""
         self._found = asyncio.Event()
+        self._listing_since = time.monotonic()
+        """When MAVSDK began looking for gimbals (:meth:`watch_list`, at connection)."""
         self.controlled = False
         """Control was asked for (and not released since)."""
 
@@ -126,6 +129,7 @@ class MavsdkGimbal:
 
     def watch_list(self, subscriptions: Subscriptions) -> None:
         """Keep :attr:`gimbal_id` as MAVSDK discovers gimbals (call once, at connection)."""
+        self._listing_since = time.monotonic()
 
         def put(found: Any) -> None:
             gimbals = list(getattr(found, "gimbals", None) or [])
@@ -138,9 +142,10 @@ class MavsdkGimbal:
         subscriptions.read(self._plugin.subscribe_gimbal_list(), put, "gimbal-list")
 
     async def _find(self) -> int:
+        """The gimbal's id; waits for MAVSDK's listing until :data:`DISCOVERY_WAIT_S` after connection, no longer."""
         if self.gimbal_id is None:
             try:
-                async with asyncio.timeout(DISCOVERY_WAIT_S):
+                async with asyncio.timeout(self._listing_left()):
                     await self._found.wait()
             except TimeoutError:
                 raise NotSupported("gimbal: the vehicle has no gimbal MAVSDK can find (gimbal protocol v2: ArduPilot "
@@ -148,3 +153,6 @@ class MavsdkGimbal:
         assert self.gimbal_id is not None
         return self.gimbal_id
 
+    def _listing_left(self) -> float:
+        """Seconds MAVSDK may still take to list a gimbal."""
+        return max(0.0, self._listing_since + DISCOVERY_WAIT_S - time.monotonic())

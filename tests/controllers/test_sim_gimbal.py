@@ -1,5 +1,6 @@
 """The simulated vehicle's gimbal (gimbal protocol v2) and the real controller driving it through MAVSDK's Gimbal
-plugin: discovered, controlled, reported, stopped and released. Movement is read on the simulator's truth channel."""
+plugin: discovered, controlled, reported, stopped and released. Movement is read on the simulator's truth channel.
+A vehicle without a gimbal is a stand-in autopilot that lists none."""
 
 from __future__ import annotations
 
@@ -10,11 +11,15 @@ from typing import Any
 import pytest
 from pymavlink.dialects.v20 import common as mavlink
 
+from controllers import mavsdk_gimbal
+from controllers.errors import NotSupported
 from controllers.mavsdk_controller import MavsdkController
 from controllers.quaternion import euler, quaternion
 from controllers.sim.gimbal import MAX_RATE_DEG_S, NEUTRAL_PITCH_DEG, PITCH_LIMITS_DEG, SimGimbal
-from controllers.sim.launcher import SimVehicle
+from controllers.sim.launcher import SimVehicle, free_udp_port
+from tests.controllers.fake_autopilot import FakeAutopilot, UdpLink
 from tests.controllers.test_sim_mavsdk import wait_truth
+from uav_tui.flight.gimbal_relay import SEND_TIMEOUT_S
 
 ME, OTHER = (245, 190), (1, 42)
 
@@ -101,3 +106,22 @@ async def test_the_controller_points_the_gimbal_reports_it_and_releases_it(sim_v
         await asyncio.gather(reader, return_exceptions=True)
         await fc.close()
     await wait_truth(truth, lambda s: not s["gimbal_controlled"], 2.0, "released by close()")
+
+
+async def test_a_vehicle_without_a_gimbal_is_said_to_have_none_once_discovery_is_over(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """MAVSDK's discovery is counted from the connection: a setpoint after it learns at once (within the relay's
+    send timeout, which is shorter than the discovery) that there is no gimbal."""
+    monkeypatch.setattr(mavsdk_gimbal, "DISCOVERY_WAIT_S", SEND_TIMEOUT_S + 1.0)
+    port = free_udp_port()
+    with FakeAutopilot(UdpLink(port), mavlink.MAV_AUTOPILOT_PX4):
+        fc = MavsdkController()
+        await fc.connect(f"udpin://127.0.0.1:{port}", heartbeat_timeout=5.0)
+        try:
+            await asyncio.sleep(mavsdk_gimbal.DISCOVERY_WAIT_S)
+            async with asyncio.timeout(SEND_TIMEOUT_S):
+                with pytest.raises(NotSupported, match="the vehicle has no gimbal MAVSDK can find"):
+                    await fc.point_gimbal("rate", 10.0, 0.0)
+            assert not fc.gimbal_controlled
+        finally:
+            await fc.close()
