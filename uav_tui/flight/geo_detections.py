@@ -7,7 +7,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from processors.detections import Detected
-from uav_tui.flight.geolocate import OK, GeoFix, locate_row
+from uav_tui.flight.geolocate import GeoFix, locate_row, range_and_bearing
 from uav_tui.output.text import safe
 
 if TYPE_CHECKING:
@@ -36,13 +36,8 @@ def describe_shown(shown: tuple[LocatedDetection, ...], total: int) -> str:
     """``3 detected: person 0.91 12 m at 045 deg, car 0.80 no position, +1 more``; "" when none was."""
     if not total:
         return ""
-    parts = [f"{found.label} {found.score:.2f} {_where(found.target)}" for found in shown]
+    parts = [f"{found.label} {found.score:.2f} {range_and_bearing(found.target) or 'no position'}" for found in shown]
     if total > len(shown):
         parts.append(f"+{total - len(shown)} more")
     return f"{total} detected: {', '.join(parts)}"
 
-
-def _where(fix: GeoFix) -> str:
-    if fix.status != OK or fix.distance_m is None or fix.bearing_deg is None:
-        return "no position"
-    return f"{fix.distance_m:.0f} m at {round(fix.bearing_deg) % 360:03d} deg"

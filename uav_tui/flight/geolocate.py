@@ -133,11 +133,17 @@ class GeoFix:
 
 def describe(fix: GeoFix) -> str:
     """One line for the status: ``47.397810,8.545600 12 m at 045 deg +-0.6 m``, why not, or "" (no box or camera)."""
-    if fix.status != OK or fix.distance_m is None or fix.bearing_deg is None:
+    if not (where := range_and_bearing(fix)):
         return f"not located: {_WHY[fix.status]}" if fix.status in _WHY else ""
     note = f" (height from {fix.height_from}: {fix.height_note})" if fix.height_note else ""
-    return (f"{fix.lat_deg:.6f},{fix.lon_deg:.6f} {fix.distance_m:.0f} m at {round(fix.bearing_deg) % 360:03d} deg "
-            f"+-{fix.uncertainty_m:.1f} m{note}")
+    return f"{fix.lat_deg:.6f},{fix.lon_deg:.6f} {where} +-{fix.uncertainty_m:.1f} m{note}"
+
+
+def range_and_bearing(fix: GeoFix) -> str:
+    """``12 m at 045 deg`` from the vehicle, or "" when ``fix`` has no position."""
+    if fix.status != OK or fix.distance_m is None or fix.bearing_deg is None:
+        return ""
+    return f"{fix.distance_m:.0f} m at {round(fix.bearing_deg) % 360:03d} deg"
 
 
 def locate(camera: CameraModel | None, box: tuple[float, float, float, float] | None, *, roll_deg: float | None,
