@@ -81,6 +81,9 @@ class Telemetry:
 
 TELEMETRY_FIELDS: tuple[str, ...] = tuple(f.name for f in fields(Telemetry))
 """Column order of ``Telemetry`` (and of telemetry.csv)."""
+RECEIVE_STAMPS = {"rangefinder_m": "rangefinder_t_ns", "terrain_height_m": "terrain_t_ns"}
+"""Readings whose receive time the platform keeps (their age decides whether geo-location uses them): field -> the
+field of its receive time."""
 
 
 @runtime_checkable

@@ -25,6 +25,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
+from controllers.base import RECEIVE_STAMPS
 from sources.camera_model import CameraModel
 
 EARTH_RADIUS_M = 6_371_000.0
@@ -62,9 +63,8 @@ HEIGHT_SIGMAS = {FROM_RANGEFINDER: RANGEFINDER_SIGMA_M, FROM_TERRAIN: TERRAIN_SI
 """Where the height above the ground came from (``GeoFix.height_from``, frames.csv ``target_height_from``)
 and its assumed 1-sigma error."""
 
-_READINGS = ((FROM_RANGEFINDER, "rangefinder_m", "rangefinder_t_ns"),
-             (FROM_TERRAIN, "terrain_height_m", "terrain_t_ns"))
-"""The readings of the height above the ground, best first: (source, telemetry field, its receive time field)."""
+_READINGS = ((FROM_RANGEFINDER, "rangefinder_m"), (FROM_TERRAIN, "terrain_height_m"))
+"""The readings of the height above the ground, best first: (source, telemetry field)."""
 
 MIN_DEPRESSION_DEG = 1.0
 """A ray less than this far below the horizontal (the ground more than ~57 heights away, or sky) is not
@@ -221,11 +221,11 @@ def ground_height(telemetry: Mapping[str, Any], at_ns: int | None = None) -> tup
     roll: Any = telemetry.get("roll_deg")
     pitch: Any = telemetry.get("pitch_deg")
     stale = []
-    for source, name, stamp in _READINGS:
+    for source, name in _READINGS:
         reading: Any = telemetry.get(name)
         if not _known(reading):
             continue
-        received = telemetry.get(stamp)
+        received = telemetry.get(RECEIVE_STAMPS[name])
         age_s = (at_ns - received) / 1e9 if at_ns is not None and received is not None else 0.0
         if age_s > READING_MAX_AGE_S:
             stale.append(f"{source} {age_s:.1f} s old")

@@ -16,7 +16,7 @@ from collections import deque
 from collections.abc import Callable
 from typing import Any
 
-from controllers.base import TELEMETRY_FIELDS, FlightController, Telemetry
+from controllers.base import RECEIVE_STAMPS, TELEMETRY_FIELDS, FlightController, Telemetry
 from uav_tui.errors import ControllerError
 
 logger = logging.getLogger(__name__)
@@ -28,8 +28,6 @@ _FIELDS = frozenset(TELEMETRY_FIELDS)
 _UPDATABLE = _FIELDS - {"t_mono_ns", "t_wall_ns", "heartbeat_age_s"}
 """Fields a controller update may set; receive stamps and heartbeat age are set here (a replayed
 update brings its recorded receive stamps)."""
-RECEIVED = {"rangefinder_m": "rangefinder_t_ns", "terrain_height_m": "terrain_t_ns"}
-"""Readings whose receive time is kept (their age decides whether geo-location uses them): field -> its stamp."""
 HISTORY = 1024
 """Updates kept for :meth:`TelemetryManager.at` (several seconds: MAVSDK sends a few hundred a second)."""
 
@@ -78,7 +76,7 @@ class TelemetryManager:
         """
         known = {k: v for k, v in update.items() if k in _UPDATABLE}
         t_mono_ns = update.get("t_mono_ns") or time.monotonic_ns()
-        known |= {stamp: t_mono_ns for name, stamp in RECEIVED.items() if name in known and stamp not in known}
+        known |= {stamp: t_mono_ns for name, stamp in RECEIVE_STAMPS.items() if name in known and stamp not in known}
         unknown = set(update) - _FIELDS  # a heartbeat_age_s tick is known: it refreshes the age
         if unknown:
             self._warn_once("unknown", "TelemetryManager: ignoring unknown fields %s", sorted(unknown))

@@ -14,7 +14,7 @@ import bisect
 import math
 from typing import Any
 
-from controllers.base import Telemetry
+from controllers.base import RECEIVE_STAMPS, Telemetry
 
 CONTINUOUS: tuple[str, ...] = (
     "fc_boot_ms", "lat_deg", "lon_deg", "abs_alt_m", "rel_alt_m", "roll_deg", "pitch_deg", "yaw_deg",
@@ -34,7 +34,7 @@ ANGLES = frozenset({"roll_deg", "pitch_deg", "yaw_deg", "gimbal_roll_deg", "gimb
 DISCRETE: tuple[str, ...] = ("flight_mode", "armed", "in_air", "gps_fix", "satellites", "health_ok")
 """Fields taken from the nearest snapshot."""
 
-STAMPS: tuple[str, ...] = ("rangefinder_t_ns", "terrain_t_ns")
+STAMPS: tuple[str, ...] = tuple(RECEIVE_STAMPS.values())
 """Receive times of readings: taken from the newest snapshot at or before the instant (how old the reading
 interpolated there is, at the latest), so an instant past a sensor that stopped sees its age."""
 
