@@ -125,6 +125,7 @@ class NanoTrackProcessor(TargetFollower):
         assert self._net is not None  # a target is selected
         work = self._work_frame(frame)
         box, sure, there = self._step(self._net, work)
+        search_due = False
         if self._tracking:
             self._update(box, sure, there, _at_edge(box, work))
         elif sure and there:
@@ -133,9 +134,8 @@ class NanoTrackProcessor(TargetFollower):
             self._on_target(box)
         else:
             self._lost_frames += 1
-            if self._lost_frames % self.wide_every == 0:
-                self._search(work)
-        if self._force_search:
+            search_due = self._lost_frames % self.wide_every == 0
+        if search_due or self._force_search:  # one search a frame, F2's or the lost target's
             self._force_search = False
             self._search(work)
 
@@ -206,12 +206,15 @@ class NanoTrackProcessor(TargetFollower):
             return
         probe = copy.copy(net)
         probe.move_to(found.box)
+        tracked = self.score, self.sharpness, self.look
         box, _, there = self._step(probe, work)
         if there and probe.sharpness >= _SURE * self.hold and self.look >= self._look_median():
             logger.info("NanoTrackProcessor: re-acquired in the whole frame (sharpness %.1f, appearance %.2f)",
                         probe.sharpness, self.look)
             self._net = probe
             self._on_target(box)
+        else:  # the frame's diagnostics stay those of the tracker kept
+            self.score, self.sharpness, self.look = tracked
 
 
 def _at_edge(box: Box, work: np.ndarray) -> bool:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from processors.nanotrack_tracker import NanoTrackProcessor
 
@@ -64,3 +65,15 @@ def test_f2_searches_the_whole_frame_on_the_next_frame() -> None:
     processor.customize_processing(2)
     (found,) = _run(processor, [(520, 60)])
     assert found is not None and abs(found[0] - 520) <= 2 and abs(found[1] - 60) <= 2
+
+
+def test_f2_on_the_frame_a_search_is_due_searches_once(monkeypatch: pytest.MonkeyPatch) -> None:
+    processor = _started()
+    _run(processor, [(200, 200)] * 5 + [None] * 2)
+    assert processor.lost
+    searches: list[np.ndarray] = []
+    monkeypatch.setattr(processor, "_search", searches.append)
+    _run(processor, [None] * (processor.wide_every - 1))
+    processor.customize_processing(2)
+    _run(processor, [None])  # the wide_every-th lost frame: its search and F2's are one
+    assert len(searches) == 1
