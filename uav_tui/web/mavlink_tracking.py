@@ -45,7 +45,6 @@ from uav_tui.flight.geolocate import HEIGHT_SIGMAS, NO_BOX, OK, GeoFix, locate_r
 from uav_tui.flight.target_motion import TargetMotion
 from uav_tui.output.line_budget import LineBudget
 from uav_tui.output.text import describe
-from uav_tui.status import CoreState
 from uav_tui.web.failures import HandlerFailures
 from uav_tui.web.roi import point_to_roi, rect_to_roi
 from uav_tui.web.view import ServedCore
@@ -123,6 +122,8 @@ class CameraTracking:
         """False after MAV_CMD_CAMERA_STOP_TRACKING until the next track command: the status says idle."""
         self.tracked: tuple[Box | None, tuple[int, int], bool] = (None, (0, 0), False)
         """The newest processed frame's box, its frame size and whether the processor raised on it."""
+        self.located = GeoFix(NO_BOX)
+        """Where that box is on the ground (seen with the telemetry at the frame's capture)."""
         self.motion = TargetMotion()
         """The box's positions on the ground, frame by frame: its velocity and heading."""
         self._commands: asyncio.Queue[Any] = asyncio.Queue(maxsize=QUEUE_COMMANDS)
@@ -171,10 +172,12 @@ class CameraTracking:
         """Frame listener (on the loop): keep what the processor reported for the newest frame."""
         height, width = result.frame.image.shape[:2]
         self.tracked = (result.box, (width, height), result.error is not None)
+        self.located = GeoFix(NO_BOX)
         if result.box is not None:  # where it was at the capture (~40 us)
             t_ns = result.frame.t_mono_ns
             seen = asdict(self.core.telemetry.at(t_ns)[0])
-            self.motion.add(t_ns, locate_row(self.core.camera, result.box, seen, at_ns=t_ns))
+            self.located = locate_row(self.core.camera, result.box, seen, at_ns=t_ns)
+            self.motion.add(t_ns, self.located)
 
     def received(self, data: bytes, addr: tuple[str, int]) -> None:
         """Datagram from the ground station (on the loop): queue the commands addressed to us."""
@@ -321,7 +324,7 @@ class CameraTracking:
             flag, self.mode, mavlink.CAMERA_TRACKING_TARGET_DATA_IN_STATUS, *point, x0, y0, x1, y1)
 
     def _send_geo_status(self) -> None:
-        (flag, box), fix, nan = self._reported(), self._located(), float("nan")
+        (flag, box), fix, nan = self._reported(), self.located, float("nan")
         if box is None or fix.status != OK or fix.lat_deg is None or fix.lon_deg is None:
             idle = mavlink.CAMERA_TRACKING_STATUS_FLAGS_IDLE  # tracking, but nowhere on the ground
             self.mav.camera_tracking_geo_status_send(idle if box is not None else flag, 0, 0, *([nan] * 10))
@@ -332,11 +335,6 @@ class CameraTracking:
             flag, round(fix.lat_deg * 1e7), round(fix.lon_deg * 1e7), _or_nan(fix.alt_m), _or_nan(fix.uncertainty_m),
             v_acc, motion.vel_n, motion.vel_e, nan, motion.vel_acc, _or_nan(fix.range_m), motion.heading_rad,
             motion.heading_acc_rad)
-
-    def _located(self) -> GeoFix:
-        """Where the newest processed frame's box is on the ground, as every interface shows it."""
-        target = self.core.status().target if self.core.state is CoreState.RUNNING else None
-        return target or GeoFix(NO_BOX)
 
     def _send_information(self) -> None:
         size = self.core.source.get_frame_size() if self.core.source is not None else (0, 0)
