@@ -57,12 +57,13 @@ def _num(value: float) -> float | None:
 
 
 def from_position(p: Any) -> Update:
-    return {
-        "lat_deg": _num(p.latitude_deg),
-        "lon_deg": _num(p.longitude_deg),
-        "abs_alt_m": _num(p.absolute_altitude_m),
-        "rel_alt_m": _num(p.relative_altitude_m),
-    }
+    """The vehicle's global position; latitude and longitude None while both are exactly 0 (ArduPilot's
+    GLOBAL_POSITION_INT before its first fix), as when MAVSDK says NaN."""
+    lat, lon = _num(p.latitude_deg), _num(p.longitude_deg)
+    if lat == 0.0 and lon == 0.0:
+        lat = lon = None
+    return {"lat_deg": lat, "lon_deg": lon, "abs_alt_m": _num(p.absolute_altitude_m),
+            "rel_alt_m": _num(p.relative_altitude_m)}
 
 
 def from_attitude_euler(a: Any) -> Update:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from types import SimpleNamespace
 
@@ -9,7 +10,7 @@ import numpy as np
 import pytest
 
 from controllers.base import Telemetry
-from controllers.mavsdk_telemetry import from_distance_sensor
+from controllers.mavsdk_telemetry import from_distance_sensor, from_position
 from sources.camera_model import CameraModel, Mount
 from tests.flight.geo_helpers import HOME, car_views
 from uav_tui.flight import geolocate
@@ -107,6 +108,15 @@ def test_a_downward_rangefinder_reading_reaches_telemetry_only_in_range():
     assert from_distance_sensor(sensor(12.5, pitch=0.0)) == {}  # a forward obstacle sensor is not a height
 
 
+def test_a_position_of_0_0_before_the_first_fix_is_no_position():
+    def position(lat: float, lon: float) -> SimpleNamespace:
+        return SimpleNamespace(latitude_deg=lat, longitude_deg=lon, absolute_altitude_m=0.0, relative_altitude_m=0.0)
+
+    assert from_position(position(0.0, 0.0))["lat_deg"] is None  # ArduPilot's GLOBAL_POSITION_INT before a fix
+    assert from_position(position(0.0, 0.0))["lon_deg"] is None
+    assert from_position(position(0.0, 8.5)) == {"lat_deg": 0.0, "lon_deg": 8.5, "abs_alt_m": 0.0, "rel_alt_m": 0.0}
+
+
 def _row(camera: CameraModel | None, telemetry: Telemetry) -> dict:
     aligner = FrameAligner(hold_ns=0, min_hold_ns=0)
     aligner.handle(TelemetrySample(telemetry, 0))
@@ -125,8 +135,10 @@ def test_a_frame_row_holds_the_target_position_or_why_there_is_none():
     assert row["target_lat_deg"] == pytest.approx(47.0, abs=1e-6) and row["target_alt_m"] == pytest.approx(500.0)
     assert 0.3 < row["target_uncertainty_m"] < 1.0
     no_gps = _row(camera, Telemetry(rel_alt_m=20.0, roll_deg=0.0, pitch_deg=0.0, yaw_deg=0.0))
+    no_fix = _row(camera, dataclasses.replace(flying, gps_fix="NO_FIX"))  # where it booted, not where it is
     no_camera = _row(None, flying)
-    for row, status in ((no_gps, "no_position"), (no_camera, "no_camera")):
+    assert _row(camera, dataclasses.replace(flying, gps_fix="FIX_3D"))["target_status"] == "ok"
+    for row, status in ((no_gps, "no_position"), (no_fix, "no_position"), (no_camera, "no_camera")):
         assert row["target_status"] == status
         assert [row[c] for c in ("target_lat_deg", "target_lon_deg", "target_alt_m", "target_uncertainty_m")] \
             == [None] * 4
