@@ -103,3 +103,19 @@ async def test_quit_while_the_vehicle_lands_says_it_goes_on_landing(make_app):
         await wait_for(pilot, lambda: app.core.state is CoreState.STOPPED, what="the core to stop")
         assert in_log(app, "vehicle left in LAND mode at exit: a hold would interrupt it")
         assert not in_log(app, "vehicle put in hold before exit")
+
+
+async def test_the_precland_key_needs_a_processor_that_reports_a_landing_target(make_app):
+    app = make_app(fc="sim")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await started(pilot)
+        assert app.screen.active_bindings["p"][2] is False  # the recording processor has no getLandingTarget
+        await pilot.press("p")
+        await pilot.pause(0.2)
+        assert "precland" not in tui_commands(app)
+    app = make_app(fc="sim", processor="precision_land")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await started(pilot)
+        assert app.screen.active_bindings["p"][2] is True
+        await pilot.press("p")  # on the ground: sent, and the platform says why it does not land
+        await wait_for(pilot, lambda: "precland" in tui_commands(app), what="precland")

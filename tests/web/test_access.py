@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import aiohttp
 import pytest
 
@@ -124,3 +126,18 @@ async def test_roi_and_commands_reach_the_processor_with_their_origin(web_core: 
     commands = [(e.message, e.origin) for e in web_core.events.recent if e.kind == "command"]
     assert ("roi 160 144 192 192", "web:127.0.0.1") in commands
     assert ("f 3", "web:127.0.0.1") in commands
+
+
+async def test_every_button_on_the_page_sends_a_command_the_page_may_send(web_core: UavCore) -> None:
+    """Each ``data-command`` of the served page is a page command (its script posts it as it is): the processor's
+    run, the vehicle's are refused only for want of a vehicle (--fc none), never as not allowed (400)."""
+    headers = {"Authorization": f"Bearer {TOKEN}"}
+    async with aiohttp.ClientSession(headers=headers) as http:
+        async with http.get(base(web_core) + f"/?token={TOKEN}") as response:
+            buttons = dict(re.findall(r'<button data-command="([^"]+)"[^>]*>([^<]+)</button>', await response.text()))
+        assert {"f 1", "f 4", "precland", "autonomy off", "hold"} <= set(buttons), buttons
+        for command, label in buttons.items():
+            async with http.post(base(web_core) + "/api/command", json={"command": command}) as response:
+                answer = await response.json()
+                assert response.status in (200, 409), (label, answer)
+                assert response.status == 200 or "no flight controller" in answer["message"], (label, answer)
