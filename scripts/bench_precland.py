@@ -204,7 +204,7 @@ async def bench(args: argparse.Namespace) -> dict[str, Any]:
                          "precland_to_touchdown_s": round(landing.precland_to_touchdown_s, 1)}
                         for landing in landings],
         "goals": {"landing error p95 (m)": goal(error["p95_m"], GOAL_ERROR_P95_M),
-                  "capture to LANDING_TARGET over the processor's own time, p95 (ms)":
+                  "capture to LANDING_TARGET over the processor's and the camera's own time, p95 (ms)":
                       goal(share["p95_ms"], GOAL_PLATFORM_P95_MS)},
     }
 
