@@ -9,6 +9,8 @@ import pytest
 from rich.text import Text
 
 from uav_tui.core import UavCore
+from uav_tui.flight.geolocate import OK, GeoFix
+from uav_tui.tui._algorithm import AlgorithmPanel
 from uav_tui.tui._pipeline import PipelinePanel
 from uav_tui.tui.app import UavApp
 
@@ -42,3 +44,19 @@ async def test_dropped_saves_are_counted_in_the_pipeline_panels_border(make_conf
         await pilot.pause(0.3)
         panel = app.query_one(PipelinePanel)
         assert Text.from_markup(panel.border_subtitle).plain == "40 saves dropped (38 throttled, 2 outside a frame)"
+
+
+async def test_the_algorithm_panel_says_where_the_box_is_and_what_the_gimbal_does(make_config):
+    target = GeoFix(OK, 47.39781, 8.5456, 488.5, 0.64, 8.485, 8.485, 9.8, "home")
+    telemetry = dataclasses.replace(STATUS.telemetry, gimbal_pitch_deg=-45.0, gimbal_yaw_deg=120.0)
+    status = dataclasses.replace(STATUS, target=target, telemetry=telemetry, gimbal_sent=210, gimbal_controlled=True,
+                                 capabilities=STATUS.capabilities | {"getGimbalPointing"})
+    app = UavApp(UavCore(make_config()), status=lambda: status, frames=lambda: (1, FRAME, None))
+    async with app.run_test(size=(80, 24)) as pilot:
+        await pilot.pause(0.3)
+        panel = app.query_one(AlgorithmPanel)
+        shown = panel.describe(status).plain  # whole rows: the panel cuts them at its edge
+        first = panel.render_line(1).text.rstrip()
+    assert "box  300,200 120x90 @ 47.397810,8.545600 12 m at 045 deg +-0.6 m\n" in shown, shown
+    assert "auto 42 flown, 1 rejected; gimbal P-45 Y120 (controlled, 210 sent)\n" in shown, shown
+    assert first.startswith("box  300,200 120x90 @ 47.3978"), first
