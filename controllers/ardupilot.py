@@ -107,6 +107,11 @@ async def request_streams(direct: MavlinkDirectAsync, target_system: int) -> Non
     await direct.send_message(request_data_streams_message(target_system))
 
 
+CIRCLE_FLIES_THE_THROTTLE = ("ArduCopter orbits in CIRCLE mode, which climbs and sinks with the RC throttle stick "
+                             "as LOITER does: with no pilot holding it at mid-stick the orbit sinks; 'hold' ends it")
+"""Said at every orbit (ArduCopter's ``mode_circle.cpp`` takes its climb rate from the pilot's throttle)."""
+
+
 def circle_rate_deg_s(radius_m: float, velocity_ms: float) -> float:
     """CIRCLE_RATE (deg/s, positive = clockwise) for a tangential speed on a radius."""
     return math.degrees(velocity_ms / radius_m)
@@ -130,3 +135,4 @@ async def start_circle(
         raise CommandAckError("FAILED", "set CIRCLE_RADIUS_M / CIRCLE_RADIUS")
     await params.set_param_float("CIRCLE_RATE", circle_rate_deg_s(radius_m, velocity_ms))
     await set_mode(direct, target_system, "CIRCLE")
+    logger.warning(CIRCLE_FLIES_THE_THROTTLE)

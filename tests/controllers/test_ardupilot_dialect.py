@@ -14,6 +14,7 @@ from collections.abc import AsyncIterator
 import pytest
 import pytest_asyncio
 
+from controllers import ardupilot
 from controllers.mavsdk_controller import MavsdkController
 from controllers.sim.launcher import free_udp_port
 from tests.controllers.fake_autopilot import FakeAutopilot, UdpLink, mavlink
@@ -77,9 +78,11 @@ async def test_vector_in_guided_then_held_in_guided(copter: tuple[MavsdkControll
     assert fc.last_vector_end == "completed"
 
 
-async def test_orbit_is_circle_mode_and_hold_is_guided(copter: tuple[MavsdkController, FakeAutopilot]) -> None:
+async def test_orbit_is_circle_mode_and_hold_is_guided(copter: tuple[MavsdkController, FakeAutopilot],
+                                                       caplog: pytest.LogCaptureFixture) -> None:
     fc, fake = copter
     await fc.do_orbit(5.0, 2.0)
+    assert ardupilot.CIRCLE_FLIES_THE_THROTTLE in [r.getMessage() for r in caplog.records if r.levelname == "WARNING"]
     params = {
         (m.param_id if isinstance(m.param_id, str) else m.param_id.decode()): m.param_value
         for m in fake.of_type("PARAM_SET")
