@@ -87,3 +87,20 @@ def test_a_dask_cluster_gives_the_same_results_as_local_workers(video_sequence: 
         assert here.scores.success_curve == there.scores.success_curve
         assert here.scores.precision_curve == there.scores.precision_curve
         assert here.scores.frames_lost == there.scores.frames_lost
+
+
+def test_names_from_outside_reach_the_terminal_without_control_characters(tmp_path: Path,
+                                                                          capsys: pytest.CaptureFixture[str]) -> None:
+    hostile = "seq\x1b]2;pwned\x07\x1b[2J"
+    data, out = tmp_path / "data", tmp_path / f"out{hostile}"
+    write_video_sequence(data / hostile)
+    # a job that fails names the sequence under the table; the written files' paths hold ESC too
+    assert main(["eval", str(data), "-p", f"{TRACKERS}:NeverFinds", "-p", f"{TRACKERS}:Failing",
+                 "--workers", "1", "--out", str(out)]) == 1
+    printed = capsys.readouterr()
+    assert "seq\\x1b]2;pwned\\x07\\x1b[2J" in printed.out and "wrote " in printed.out
+    assert not {"\x1b", "\x07"} & set(printed.out + printed.err)
+    broken = write_video_sequence(tmp_path / f"broken{hostile}", BOXES[:3])
+    assert main(["eval", str(broken), "-p", "cv:mil", "--out", str(tmp_path / "out2")]) == 2
+    err = capsys.readouterr().err
+    assert "has 3 rows" in err and not {"\x1b", "\x07"} & set(err)

@@ -18,7 +18,8 @@ from uav_tui.arguments import ArgumentParser
 from uav_tui.config import parse_processor_args
 from uav_tui.errors import KNOWN_ERRORS, ConfigError
 from uav_tui.evaluation import JobResult, TrackerSpec, evaluate, find_sequences, journal
-from uav_tui.evaluation.report import failures, summary, table, write_json, write_plots
+from uav_tui.evaluation.report import failures, outside_cell, summary, table, write_json, write_plots
+from uav_tui.output.text import safe
 
 EXAMPLE = """examples:
   uav-tui eval ../shared/data/aerial-tracking --processor csrt --processor cv:csrt
@@ -99,7 +100,7 @@ def main(argv: list[str]) -> int:
         wanted = {(s.name, t.label) for s in sequences for t in trackers}
         results.extend(r for r in done if r.key in wanted)
         if results:
-            console.print(f"resuming: {len(results)} of {total} jobs already done in {out}")
+            console.print(f"resuming: {len(results)} of {total} jobs already done in {outside_cell(out)}")
 
         def finished(result: JobResult) -> None:
             journal.append(out, result)
@@ -113,19 +114,19 @@ def main(argv: list[str]) -> int:
                                saves_dir=out / "saves", done=results, on_result=finished,
                                progress=lambda count, _: progress.update(task, completed=count))
     except KNOWN_ERRORS as exc:
-        print(f"uav-tui eval: {exc}", file=sys.stderr)
+        print(f"uav-tui eval: {safe(str(exc))}", file=sys.stderr)
         return 2
     except (KeyboardInterrupt, BrokenProcessPool) as exc:
         why = "interrupted" if isinstance(exc, KeyboardInterrupt) else f"a worker process died ({exc})"
-        print(f"uav-tui eval: {why}; the {len(results)} finished jobs are in {out / 'eval.json'}; go on with: "
-              f"{_resume_command(argv, out)}", file=sys.stderr)
+        print(safe(f"uav-tui eval: {why}; the {len(results)} finished jobs are in {out / 'eval.json'}; go on with: "
+                   f"{_resume_command(argv, out)}"), file=sys.stderr)
         return 130 if isinstance(exc, KeyboardInterrupt) else 1
     console.print(table(results))
     for line in failures(results):
-        console.print(f"[red]{escape(line)}[/red]")
+        console.print(f"[red]{escape(line)}[/red]")  # failures() made it safe
     written = [write_json(summary(results, sources, total_jobs=total), out / "eval.json"), *write_plots(results, out)]
     for path in written:
-        console.print(f"wrote {path}")
+        console.print(f"wrote {outside_cell(path)}")
     failed = sum(r.failed for r in results)
     if failed:
         console.print(f"[red]{failed} of {total} jobs failed[/red] (eval.json has their tracebacks)")

@@ -21,6 +21,7 @@ from rich.table import Table
 
 from uav_tui.evaluation.metrics import IOU_THRESHOLDS, PIXEL_THRESHOLDS, PRECISION_AT_PX, Scores, summarise
 from uav_tui.evaluation.runner import JobResult
+from uav_tui.output.text import safe
 
 OVERALL = "overall"
 """The row / key of the scores over all sequences."""
@@ -93,28 +94,37 @@ def table(results: list[JobResult]) -> Table:
     threads = {r.threads for r in results}
     grid = Table(title="one-pass evaluation", caption=f"OpenCV/ONNX threads per job: "
                  f"{', '.join(str(t) for t in sorted(threads))}", show_lines=False)
-    grid.add_column("sequence", no_wrap=True, min_width=max(len(OVERALL), *(len(r.sequence) for r in results)))
+    grid.add_column("sequence", no_wrap=True,
+                    min_width=max(len(OVERALL), *(len(safe(r.sequence)) for r in results)))
     grid.add_column("tracker", overflow="fold")
     for name in ("AUC", f"P@{PRECISION_AT_PX}", "NP", "lost visible", "absent lost", "ms mean", "p50", "p95", "FPS",
                  "saved"):
         grid.add_column(name, justify="right", no_wrap=False)
     for result in results:
         if result.scores is None:
-            grid.add_row(escape(result.sequence), escape(result.tracker), "[red]failed[/red]",
-                         f"[red]{escape(result.failed_at)}[/red]", *["-"] * 7, _saved(result))
+            grid.add_row(outside_cell(result.sequence), outside_cell(result.tracker), "[red]failed[/red]",
+                         f"[red]{outside_cell(result.failed_at)}[/red]", *["-"] * 7, _saved(result))
         else:
-            grid.add_row(escape(result.sequence), escape(result.tracker), *_cells(result.scores), _saved(result))
+            grid.add_row(outside_cell(result.sequence), outside_cell(result.tracker), *_cells(result.scores),
+                         _saved(result))
     grid.add_section()
     for label, scores in overall_scores(results).items():
         runs = [r for r in results if r.tracker == label]
         saved = f"{sum(r.saves for r in runs)}/{sum(r.save_calls for r in runs)}"
-        grid.add_row(f"[b]{OVERALL}[/b]", f"[b]{escape(label)}[/b]", *_cells(scores), saved)
+        grid.add_row(f"[b]{OVERALL}[/b]", f"[b]{outside_cell(label)}[/b]", *_cells(scores), saved)
     return grid
 
 
 def failures(results: list[JobResult]) -> list[str]:
-    """One line per failed job: ``TRACKER on SEQUENCE failed at frame 5: ValueError: text (file.py:12)``."""
-    return [f"{r.tracker} on {r.sequence} failed at {r.failed_at}: {r.error}" for r in results if r.failed]
+    """One line per failed job: ``TRACKER on SEQUENCE failed at frame 5: ValueError: text (file.py:12)``, passed
+    through :func:`safe` (names and messages come from outside)."""
+    return [safe(f"{r.tracker} on {r.sequence} failed at {r.failed_at}: {r.error}") for r in results if r.failed]
+
+
+def outside_cell(text: object) -> str:
+    """Outside text (a name, a path) as Rich markup: :func:`safe` (no control character reaches the terminal),
+    then Rich's escape (no ``[b]`` in a folder name is taken for markup)."""
+    return escape(safe(str(text)))
 
 
 def write_plots(results: list[JobResult], folder: Path) -> list[Path]:
