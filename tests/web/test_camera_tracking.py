@@ -190,3 +190,38 @@ async def test_a_failing_processor_is_reported_as_a_tracking_error() -> None:
     finally:
         station.sock.close()
         await core.stop("test finished")
+
+
+async def test_udpout_answers_and_a_failed_ack_costs_that_ack_alone(monkeypatch: pytest.MonkeyPatch,
+                                                                    caplog: pytest.LogCaptureFixture) -> None:
+    station = GroundStation(0)  # the ground station listens; the component sends to it by name
+    core = make_core(web=False, camera_mavlink=f"udpout:localhost:{station.sock.getsockname()[1]}")
+    await core.start()
+    try:
+        loop = asyncio.get_running_loop()
+        async with asyncio.timeout(5):
+            _, station.address = await loop.sock_recvfrom(station.sock, 4096)  # its heartbeat: where it sends from
+        await station.command(mavlink.MAV_CMD_CAMERA_TRACK_POINT, 0.5, 0.5, 0.05)
+        ack = await station.receive("COMMAND_ACK", command=mavlink.MAV_CMD_CAMERA_TRACK_POINT)
+        assert ack.result == mavlink.MAV_RESULT_ACCEPTED
+
+        transport = core.camera_tracking.transport
+        send = transport.sendto
+
+        def failing_ack(data: bytes, addr: Any = None) -> None:  # the next COMMAND_ACK meets a broken link
+            if int.from_bytes(data[7:10], "little") == mavlink.MAVLINK_MSG_ID_COMMAND_ACK:
+                monkeypatch.setattr(transport, "sendto", send)
+                raise OSError("the link broke")
+            send(data, addr)
+
+        monkeypatch.setattr(transport, "sendto", failing_ack)
+        await station.command(mavlink.MAV_CMD_CAMERA_STOP_TRACKING)
+        with pytest.raises(TimeoutError):
+            await station.receive("COMMAND_ACK", timeout=1.0, command=mavlink.MAV_CMD_CAMERA_STOP_TRACKING)
+        await station.command(mavlink.MAV_CMD_CAMERA_TRACK_POINT, 0.5, 0.5, 0.05)
+        ack = await station.receive("COMMAND_ACK", command=mavlink.MAV_CMD_CAMERA_TRACK_POINT)
+        assert ack.result == mavlink.MAV_RESULT_ACCEPTED
+        assert [str(r.exc_info[1]) for r in caplog.records if r.exc_info] == ["the link broke"]
+    finally:
+        station.sock.close()
+        await core.stop("test finished")

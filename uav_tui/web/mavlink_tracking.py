@@ -34,6 +34,7 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import asdict
+from functools import partial
 from typing import Any
 
 from pymavlink.dialects.v20 import common as mavlink
@@ -84,9 +85,11 @@ class _Writer:
         self.owner = owner
 
     def write(self, data: bytes) -> None:
+        """udpin: to whoever spoke last; udpout: to the address the socket is connected to (asyncio refuses any
+        other, and ``localhost`` is not the ``127.0.0.1`` it connected to)."""
         transport, peer = self.owner.transport, self.owner.peer
         if transport is not None and peer is not None:
-            transport.sendto(bytes(data), peer)
+            transport.sendto(bytes(data), peer if self.owner.scheme == "udpin" else None)
 
 
 class _Datagrams(asyncio.DatagramProtocol):
@@ -226,8 +229,9 @@ class CameraTracking:
             except Exception as exc:  # noqa: BLE001 - a bug: this command fails, the next one is handled
                 self.failures.failed(f"command {message.command} from {_origin(message)}", exc)
                 result, reply = mavlink.MAV_RESULT_FAILED, None
-            self.mav.command_ack_send(message.command, result, target_system=message.get_srcSystem(),
-                                      target_component=message.get_srcComponent())
+            self._guarded(partial(self.mav.command_ack_send, message.command, result,
+                                  target_system=message.get_srcSystem(), target_component=message.get_srcComponent()),
+                          f"the ACK of command {message.command}")
             if reply is not None:  # requested messages follow their ACK
                 self._guarded(reply, f"the reply to command {message.command}")
 
