@@ -95,21 +95,29 @@ SECRET_PARAMETERS = ("password", "passwd", "pass", "pwd", "pw", "token", "auth",
 
 _URI_START = re.compile(r"\b[a-zA-Z][a-zA-Z0-9+.-]*://")
 _URI_END = re.compile(r"[\s\"'<>]")
-"""Where a URI ends in text (a space, a quote in JSON, a bracket in HTML)."""
-_HOST_AFTER = re.compile(r"(?:\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9._~%-]+)(?::\d*)?(?:[/?#]|$)")
-"""What follows the ``@`` that ends a password: a host (name, IPv4 or [IPv6]), a port, then the path or the end."""
+"""Where a URI ends in text (a space, a quote in JSON, a bracket in HTML), unless its password holds one."""
+_HOST = r"(?:\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9._~%-]+)(?::\d*)?"
+"""A host (name, IPv4 or [IPv6]) and a port."""
+_HOST_AFTER = re.compile(_HOST + r"(?:[/?#]|$)")
+"""What follows the ``@`` that ends a password: a host, a port, then the path or the end."""
+_HOST_THEN_PATH = re.compile(_HOST + r"[/?#]")
+_AT_HOST = re.compile("@(?=" + _HOST + r"(?:[/?#\s\"'<>]|$))")
+"""An ``@`` a host follows, then the path or the end of the URI."""
+_NO_FURTHER = re.compile(r'\n|://|(?<!\\)"\s*[,:}\]]')
+"""What a password never reaches over: the line's end, another URI, the end of a JSON string (``", "key"``)."""
 _SECRET_VALUE = re.compile(
-    r"(?P<name>[?&;](?:[\w.-]*?[_.-])?(?:" + "|".join(sorted(SECRET_PARAMETERS, key=len, reverse=True)) +
+    r"(?P<name>[?&;#](?:[\w.-]*?[_.-])?(?:" + "|".join(sorted(SECRET_PARAMETERS, key=len, reverse=True)) +
     r")=)[^&;#\s\"'<>]+", re.IGNORECASE)
 
 
 def redact(text: str) -> str:
     """``text`` with the password of every URI in it and the value of every secret parameter replaced by ``***``.
 
-    A password may hold any character, ``/``, ``@``, ``#`` and ``?`` included (``rtsp://admin:P@ss/#1@host/``):
-    it runs from the first ``:`` after the user name to the last ``@`` that a host name follows, so a path
-    or query holding an ``@`` is hidden with it rather than a part of a password shown. Query parameters named in
-    :data:`SECRET_PARAMETERS` (``?pwd=``, ``&token=``, ``;password=``, ``?api_key=``) keep their name only.
+    A password may hold any character, ``/``, ``@``, ``#``, ``?``, a space, a quote or a bracket included
+    (``rtsp://admin:P@ss/#1@host/``, ``rtsp://admin:pa ss@host``): it runs from the first ``:`` after the user name
+    to the last ``@`` that a host name follows, so a path or query holding an ``@`` is hidden with it rather than a
+    part of a password shown. Parameters named in :data:`SECRET_PARAMETERS` (``?pwd=``, ``&token=``,
+    ``;password=``, ``?api_key=``, ``#access_token=``) keep their name only.
     """
     if "://" in text and "@" in text:
         text = _hide_passwords(text)
@@ -124,11 +132,32 @@ def _hide_passwords(text: str) -> str:
         start = match.end()
         if start <= done:  # a scheme inside a URI already handled
             continue
-        end_match = _URI_END.search(text, start)
-        end = end_match.start() if end_match else len(text)
+        end = _uri_end(text, start)
         parts += [text[done:start], _without_password(text[start:end])]
         done = end
     return "".join([*parts, text[done:]])
+
+
+def _uri_end(text: str, start: int) -> int:
+    """Where the URI whose ``scheme://`` ends at ``start`` ends in ``text``: at the first space, quote or bracket,
+    or, when that cuts a password (``rtsp://admin:pa ss@cam``), after the first host that an ``@`` further on the
+    same line and JSON string precedes."""
+    end_match = _URI_END.search(text, start)
+    end = end_match.start() if end_match else len(text)
+    first = text[start:end]
+    colon = first.find(":")
+    if end == len(text) or colon < 0 or any(c in first[:colon] for c in "/?#"):
+        return end  # the whole text, or no password
+    if "@" not in first and _HOST_AFTER.match(first):
+        return end  # host:port and a path
+    if any(_HOST_THEN_PATH.match(first, i + 1) for i in range(colon, len(first)) if first[i] == "@"):
+        return end  # user:password@host/path
+    further = _NO_FURTHER.search(text, end)
+    at = _AT_HOST.search(text, end, further.start() if further else len(text))
+    if at is None:
+        return end
+    end_match = _URI_END.search(text, at.end())
+    return end_match.start() if end_match else len(text)
 
 
 def _without_password(rest: str) -> str:

@@ -48,10 +48,22 @@ def test_multiline_keeps_lines_but_none_starts_at_the_margin() -> None:
     ("rtsp://host/stream and usb:0 and mail@example.org", "rtsp://host/stream and usb:0 and mail@example.org"),
     ("rtsp://192.0.2.1:554/s?user=me@mail.example", "rtsp://192.0.2.1:554/s?user=me@mail.example"),
     ("rtsp://admin:1234/x@host/s", "rtsp://admin:***@host/s"),
+    ("opening rtsp://admin:pa ss@cam/live now", "opening rtsp://admin:***@cam/live now"),
+    ('source rtsp://admin:pa"ss@cam', "source rtsp://admin:***@cam"),
+    ("rtsp://admin:sec'ret@cam:554/s", "rtsp://admin:***@cam:554/s"),
+    ("<rtsp://admin:sec<ret>@cam/s>", "<rtsp://admin:***@cam/s>"),
+    ('{"source": "rtsp://admin:pa\\"ss@cam/live", "x": 1}', '{"source": "rtsp://admin:***@cam/live", "x": 1}'),
+    ('{"uri": "rtsp://cam:x", "mail": "me@example.org"}', '{"uri": "rtsp://cam:x", "mail": "me@example.org"}'),
+    ("rtsp://192.0.2.1:554/s failed, mail me@example.org", "rtsp://192.0.2.1:554/s failed, mail me@example.org"),
+    ("rtsp://cam:554 and me@example.org", "rtsp://cam:554 and me@example.org"),
+    ("http://h/live#token=abc&x=1", "http://h/live#token=***&x=1"),
+    ("http://h/cb#access_token=abc", "http://h/cb#access_token=***"),
 ], ids=["uri", "at-in-password", "slash-in-password", "any-character", "at-in-user", "ipv6",
         "at-in-path", "token",
         "password-parameters", "prefixed-parameters", "json", "nothing-secret", "at-in-query",
-        "digits-and-slash"])
+        "digits-and-slash", "space-in-password", "quote-in-password", "apostrophe-in-password",
+        "bracket-in-password", "escaped-quote-in-json", "json-keys-kept", "port-path-then-mail",
+        "port-then-mail", "fragment-token", "fragment-access-token"])
 def test_redact(raw: str, shown: str) -> None:
     assert redact(raw) == shown
 
