@@ -10,7 +10,8 @@ interpreter exits, so the process could never exit and kept the serial port. Her
 - :func:`bounded` is the one wrapper every MAVSDK call goes through: a timeout, MAVSDK's errors
   translated to ours, and a log line for each call it abandons;
 - :class:`Command` is a controller's :func:`bounded` call, as the parts it hands it to see it;
-- :class:`Subscriptions` reads MAVSDK's subscriptions in tasks that unsubscribe when they end;
+- :class:`Subscriptions` reads MAVSDK's subscriptions in tasks that unsubscribe when they end, and that a
+  failing item does not end;
 - :func:`release` destroys MAVSDK at close, unless a call is still inside it: then it is let go.
 """
 
@@ -20,9 +21,11 @@ import asyncio
 import contextlib
 import logging
 import threading
+import traceback
 import weakref
 from collections.abc import AsyncGenerator, Awaitable, Callable
 from concurrent.futures import Future, ThreadPoolExecutor
+from pathlib import Path
 from typing import Any, Protocol, TypeVar
 
 from controllers.mavsdk_errors import map_mavsdk_errors
@@ -30,6 +33,9 @@ from controllers.mavsdk_errors import map_mavsdk_errors
 logger = logging.getLogger(__name__)
 
 T = TypeVar("T")
+
+MAX_FAILURE_KINDS = 64
+"""Kinds of failure a subscription logs; beyond, its items still fail alone, unlogged."""
 
 
 class AbandoningExecutor(ThreadPoolExecutor):
@@ -134,13 +140,25 @@ class Subscriptions:
         self._readers: set[asyncio.Task[None]] = set()
 
     def read(self, stream: AsyncGenerator[T, None], on_item: Callable[[T], None], name: str) -> asyncio.Task[None]:
-        """Call ``on_item`` with each item of ``stream`` (a ``subscribe_*()`` call) in a task of its own."""
+        """Call ``on_item`` with each item of ``stream`` (a ``subscribe_*()`` call) in a task of its own.
+
+        An item ``on_item`` raises on costs that item alone: the first failure of each kind (exception type and
+        the line that raised it) is logged with its traceback, and the subscription goes on.
+        """
 
         async def run() -> None:
+            kinds: set[str] = set()
             try:
                 async with contextlib.aclosing(stream):
                     async for item in stream:
-                        on_item(item)
+                        try:
+                            on_item(item)
+                        except Exception as exc:  # noqa: BLE001 - a bug costs one message, not the subscription
+                            kind = _kind(exc)
+                            if kind not in kinds and len(kinds) < MAX_FAILURE_KINDS:
+                                kinds.add(kind)
+                                logger.exception("MAVSDK subscription %s: an item failed (%s); the subscription "
+                                                 "goes on (this failure is not logged again)", name, kind)
             except Exception:
                 logger.exception("MAVSDK subscription %s failed", name)
 
@@ -155,6 +173,12 @@ class Subscriptions:
         for reader in readers:
             reader.cancel()
         await asyncio.gather(*readers, return_exceptions=True)
+
+
+def _kind(exc: BaseException) -> str:
+    """``ValueError at landing.py:72``: the exception's type and the innermost line that raised it."""
+    frames = traceback.extract_tb(exc.__traceback__)
+    return type(exc).__name__ + (f" at {Path(frames[-1].filename).name}:{frames[-1].lineno}" if frames else "")
 
 
 _abandoned: list[Any] = []

@@ -180,6 +180,29 @@ async def test_close_unsubscribes_everything_before_mavsdk_is_destroyed(
     assert open_at_release == [[]]
 
 
+async def test_an_item_that_fails_costs_that_item_and_is_logged_once(
+    sim_vehicle: SimVehicle, caplog: pytest.LogCaptureFixture
+) -> None:
+    flight = await start_flight(sim_vehicle)
+    seen: list[Any] = []
+
+    def on_item(message: Any) -> None:  # the first two ATTITUDE messages meet a bug in the handler
+        seen.append(message)
+        if len(seen) <= 2:
+            raise ValueError("a bug in the handler")
+
+    try:
+        reader = flight.fc._subscriptions.read(flight.fc._direct.subscribe_message("ATTITUDE"), on_item, "attitude")
+        async with asyncio.timeout(10):
+            while len(seen) < 5:
+                assert not reader.done()
+                await asyncio.sleep(0.05)
+    finally:
+        await flight.fc.close()
+    logged = [r for r in caplog.records if r.exc_info and "a bug in the handler" in str(r.exc_info[1])]
+    assert len(logged) == 1 and "attitude" in logged[0].getMessage()
+
+
 # ---- flying (shared airborne vehicle) ------------------------------------------------------------
 
 
