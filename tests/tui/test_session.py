@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import time
+from types import SimpleNamespace
 
 import pytest
 
@@ -18,6 +19,7 @@ from tests.core.flight_helpers import (
 )
 from uav_tui.core import CoreState
 from uav_tui.headless import EXIT_UNHANDLED_ERROR
+from uav_tui.tui import _session
 from uav_tui.tui._session import TuiSession
 
 from .conftest import started, wait_for
@@ -85,3 +87,21 @@ async def test_an_unhandled_error_holds_the_flying_vehicle_and_exits_with_status
     await wait_until(lambda: speed(truth.latest()) < 0.15, 5, "the vehicle to stop")
     await asyncio.sleep(0.5)
     assert await setpoints_since(truth, stopped) == []
+
+
+def test_the_saved_run_note_shows_a_hostile_runs_dir_escaped(tmp_path, capsys, monkeypatch):
+    """The note run_tui prints after the dashboard: the runs_dir comes from outside (config, command line)."""
+    run_dir = tmp_path / "runs\x1b]2;pwned\x07\x1b[2J" / "2026-11-27T14-00-00Z"
+    core = SimpleNamespace(recorder=SimpleNamespace(run_dir=run_dir))
+
+    class Ended:
+        def __init__(self, *args, **kwargs):
+            self.core = core
+
+        async def run(self):
+            return 0
+
+    monkeypatch.setattr(_session, "TuiSession", Ended)  # the dashboard itself needs a terminal
+    assert _session.run_tui(None) == 0
+    printed = capsys.readouterr().out
+    assert "runs\\x1b]2;pwned\\x07\\x1b[2J" in printed and not {"\x1b", "\x07"} & set(printed)
