@@ -83,4 +83,5 @@ def test_the_platform_stamps_each_reading_and_a_replay_keeps_the_recorded_stamp(
     history.add(later, 6 * S)
     history.add(Telemetry(rangefinder_m=13.0, rangefinder_t_ns=7 * S), 7 * S)
     values, _ = history.at(int(6.5 * S))
-    assert values["rangefinder_t_ns"] == 5 * S and values["rangefinder_m"] == pytest.approx(12.75)  # 12 at 5, 13 at 7
+    # 12 from 5 to 6 (unchanged for 1 s while telemetry came: constant until then), 13 at 7
+    assert values["rangefinder_t_ns"] == 5 * S and values["rangefinder_m"] == pytest.approx(12.5)

@@ -31,6 +31,17 @@ def test_continuous_fields_are_linear_between_their_own_samples():
     assert history.at(120 * MS)[0]["roll_deg"] == pytest.approx(8.0)
 
 
+def test_a_field_constant_for_a_while_holds_until_the_snapshot_before_it_changes():
+    # 50 Hz snapshots, the vehicle level for a second, then it rolls: before the roll it was level, not rolling slowly
+    # since it last changed (at 1 s that was 3.4 deg on the frames before a vector started, 3 m off from 50 m).
+    level = [(t, {"north_m": t / 1000, "roll_deg": 0.0}) for t in range(0, 1000, 20)]
+    history = _history(*level)
+    before = history.at(970 * MS)[0]["roll_deg"]
+    history.add(Telemetry(north_m=1.0, roll_deg=3.5), 1000 * MS)
+    assert before == history.at(970 * MS)[0]["roll_deg"] == 0.0  # the same, whenever the row was written
+    assert history.at(990 * MS)[0]["roll_deg"] == pytest.approx(1.75)
+
+
 def test_a_rangefinder_out_of_range_is_a_gap_not_a_line_across_it():
     history = _history((0, {"rangefinder_m": 10.0}), (100, {"rangefinder_m": 11.0}), (200, {"rangefinder_m": None}),
                        (300, {"rangefinder_m": None}), (400, {"rangefinder_m": 14.0}), (500, {"rangefinder_m": 15.0}))

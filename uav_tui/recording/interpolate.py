@@ -42,7 +42,8 @@ FIELDS: tuple[str, ...] = CONTINUOUS + DISCRETE + STAMPS
 """Every field a frame row carries, in column order."""
 
 STATIC_NS = 300_000_000
-"""A field unchanged for this long, while other telemetry keeps arriving, is taken as constant."""
+"""A field unchanged for this long, while other telemetry keeps arriving, is taken as constant: until the snapshot
+before its next change, not a line from its last change to the next one."""
 
 KEEP_NS = 5_000_000_000
 """History older than this (behind the newest sample) is forgotten."""
@@ -75,6 +76,9 @@ class TelemetryHistory:
             gap = given is None and name in GAPS and values and not math.isnan(values[-1])
             value = math.nan if gap else given
             if value is not None and (previous is None or getattr(previous, name) != given or not times):
+                if previous is not None and times and self._times[-2] - times[-1] >= STATIC_NS:
+                    times.append(self._times[-2])  # constant (see covers) until the snapshot before this change
+                    values.append(values[-1])
                 times.append(t_ns)
                 values.append(float(value))
         self._trim(t_ns - self.keep_ns)
