@@ -141,10 +141,13 @@ async def take_off(core: UavCore, truth: TruthClient, altitude: float = 3.0) -> 
 
 
 @asynccontextmanager
-async def flying_core(tmp_path: Path, *, altitude: float = 3.0, truth: TruthClient | None = None,
-                      vehicle: SimVehicle | None = None, **overrides: Any) -> AsyncIterator[UavCore]:
+async def flying_core(tmp_path: Path, *, altitude: float = 3.0, climb_ms: float | None = None,
+                      truth: TruthClient | None = None, vehicle: SimVehicle | None = None,
+                      **overrides: Any) -> AsyncIterator[UavCore]:
     """A core on the simulated vehicle, airborne at ``altitude``; by default with the steering test processor.
 
+    ``climb_ms``: the take-off's climb rate (PX4's MPC_TKO_SPEED, set over MAVLink before it; the simulator's
+    default is PX4's 1.5 m/s), for flights high enough that the climb would be most of the test.
     ``core.truth`` is the simulator's ground truth: the built-in simulator's, ``vehicle``'s (a simulator
     reached over MAVLink only), or ``truth`` when ``fc=`` names a simulator the test started itself
     (one that outlives the core). ``overrides``: see :func:`steering_config`.
@@ -154,6 +157,8 @@ async def flying_core(tmp_path: Path, *, altitude: float = 3.0, truth: TruthClie
     try:
         truth = truth or (vehicle.truth() if vehicle is not None else core.controller.sim.truth())
         core.truth = truth  # type: ignore[attr-defined]
+        if climb_ms is not None:
+            await core.controller._param.set_param_float("MPC_TKO_SPEED", climb_ms)  # type: ignore[union-attr]
         await take_off(core, truth, altitude)
         yield core
     finally:
