@@ -2,6 +2,7 @@
 
     .venv/bin/python scripts/bench_tracking.py > scripts/results/tracking.json
     .venv/bin/python scripts/bench_precland.py > scripts/results/precland.json
+    .venv/bin/python scripts/bench_geolocation.py > scripts/results/geolocation.json
     .venv/bin/python scripts/manual_figures.py           # rewrites the marked blocks of docs/benchmarks.md
     .venv/bin/python scripts/manual_figures.py --check   # exit 1 when docs/benchmarks.md differs from the JSON
 
@@ -78,7 +79,62 @@ def precland(result: dict[str, Any]) -> str:
     return "\n".join([*rows, "", *notes]) + "\n"
 
 
-RENDERERS: dict[str, Callable[[dict[str, Any]], str]] = {"tracking": tracking, "precland": precland}
+GEO_VIEWS = (("down_level", "views, camera down, level"),
+             ("down_rolling_pitching", "views, camera down, rolling and pitching ±15°"),
+             ("oblique60_rolling_pitching", "views, camera 60° down, rolling and pitching ±15°"))
+"""``bench_geolocation.py``'s rendered cases: (JSON key after the height, row label)."""
+GEO_FLIGHT = (("hovering", "flight, hovering"), ("flying_2ms", "flight, at 2 m/s"),
+              ("all", "flight, every frame (the climb too)"))
+"""``bench_geolocation.py``'s parts of a recorded flight: (JSON key, row label)."""
+GEO_COSTS = {"pinhole": "one projection", "distorted": "one projection, with lens distortion",
+             "frame_row": "a frame row's projection (height chosen by name, readings' ages checked)",
+             "32_detections_rows": "a frame's 32 detections into detections.csv rows (writer thread)",
+             "velocity_position_added": "the target's velocity: a position added (each frame)",
+             "velocity_fit": "the target's velocity: the fit (once a second)"}
+"""``bench_geolocation.py``'s timed calls: JSON key -> row label (an unknown key is shown as it is)."""
+
+
+def geolocation(result: dict[str, Any]) -> str:
+    """``bench_geolocation.py``: the error against the simulator's truth by height (rendered views, recorded flights),
+    what an attitude or height error adds, the cost of a projection, the goals."""
+    def error_row(height: str, label: str, count: int, part: dict[str, Any]) -> str:
+        error, stated = part["error"], part["stated_uncertainty_1sigma"]
+        return (f"| {height} | {label} | {count} | {error['p50_m']} m | {error['p95_m']} m | {error['max_m']} m | "
+                f"{part['within_stated_uncertainty']:.1%} | {stated['p50_m']} m |")
+
+    errors = ["| height | where | frames | p50 | p95 | max | within the stated 1σ | stated 1σ, p50 |",
+              "| --- | --- | --- | --- | --- | --- | --- | --- |"]
+    added = ["| height | views | 1° of roll and pitch off, p50 / p95 | 0.5 m of height off, p50 / p95 |",
+             "| --- | --- | --- | --- |"]
+    sources = []
+    heights = sorted({name.split("_", 1)[0] for name in result["hover_perfect_attitude"]}, key=lambda h: float(h[:-1]))
+    for height in heights:
+        shown = height.replace("m", " m")
+        for key, label in GEO_VIEWS:
+            view = result["hover_perfect_attitude"][f"{height}_{key}"]
+            errors.append(error_row(shown, label, view["views"], view))
+            attitude, off = view["error_with_roll_and_pitch_off_1deg"], view["error_with_height_off_0.5m"]
+            added.append(f"| {shown} | {label.removeprefix('views, ')} | {attitude['p50_m']} / {attitude['p95_m']} m | "
+                         f"{off['p50_m']} / {off['p95_m']} m |")
+        flown = result.get("flight_recorded", {}).get(height)
+        if flown is not None:
+            errors += [error_row(shown, label, flown[key]["frames"], flown[key]) for key, label in GEO_FLIGHT]
+            sources.append(f"{shown}: " + ", ".join(f"{name} {count}" for name, count in flown["height_from"].items()))
+    costs = ["| call | p50 | p95 |", "| --- | --- | --- |"]
+    costs += [f"| {GEO_COSTS.get(name, name)} | {cost['p50_ms']} ms | {cost['p95_ms']} ms |"
+              for name, cost in result["cost_per_projection"].items()]
+    sigma = result["assumed_1sigma"]
+    notes = [f"Stated uncertainty from the assumed 1σ errors: roll and pitch {sigma['roll_pitch_deg']:g}°, yaw "
+             f"{sigma['yaw_deg']:g}°, height {sigma['rangefinder_height_m']:g} m from a rangefinder, "
+             f"{sigma['terrain_height_m']:g} m above the terrain, {sigma['height_above_home_m']:g} m above home."
+             + (f" The flights' height came from (frames): {'; '.join(sources)}." if sources else ""),
+             f"Load average {result['load_average_1min_at_end']:g} on {result['cpus']} cores at the end.", "",
+             *(f"- {line}" for line in _verdicts(result))]
+    return "\n".join([*errors, "", *added, "", *costs, "", *notes]) + "\n"
+
+
+RENDERERS: dict[str, Callable[[dict[str, Any]], str]] = {"tracking": tracking, "precland": precland,
+                                                         "geolocation": geolocation}
 """Block name -> how its JSON (``scripts/results/NAME.json``) is written into the page."""
 
 
