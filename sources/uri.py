@@ -93,17 +93,20 @@ SECRET_PARAMETERS = ("password", "passwd", "pass", "pwd", "pw", "token", "auth",
                      "secret", "signature", "sig", "credential", "credentials", "session", "sessionid")
 """Query parameters whose value is hidden, also after a prefix (``access_token``, ``api_key``, ``x-auth``)."""
 
-_URI_START = re.compile(r"\b[a-zA-Z][a-zA-Z0-9+.-]*://")
+_URI_START = re.compile(r"\b[a-zA-Z][a-zA-Z0-9+.-]{0,31}://")
+"""A scheme (bounded: an unbounded one made a long run of letters and dots quadratic)."""
 _URI_END = re.compile(r"[\s\"'<>]")
 """Where a URI ends in text (a space, a quote in JSON, a bracket in HTML), unless its password holds one."""
 _HOST = r"(?:\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9._~%-]+)(?::\d*)?"
 """A host (name, IPv4 or [IPv6]) and a port."""
 _HOST_AFTER = re.compile(_HOST + r"(?:[/?#]|$)")
 """What follows the ``@`` that ends a password: a host, a port, then the path or the end."""
+_PORT_THEN_TEXT = re.compile(r"(?:\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9._~%-]*):\d*(?:[/?#].*|[^\w@]*)", re.DOTALL)
+"""A host (or none: ``udp://:14540``) and a port, then a path or punctuation: cut by a space, no password."""
 _HOST_THEN_PATH = re.compile(_HOST + r"[/?#]")
 _AT_HOST = re.compile("@(?=" + _HOST + r"(?:[/?#\s\"'<>]|$))")
 """An ``@`` a host follows, then the path or the end of the URI."""
-_NO_FURTHER = re.compile(r'\n|://|(?<!\\)"\s*[,:}\]]')
+_NO_FURTHER = re.compile(r'\n|://|(?<!\\)(?:\\\\)*"\s*[,:}\]]')
 """What a password never reaches over: the line's end, another URI, the end of a JSON string (``", "key"``)."""
 _SECRET_VALUE = re.compile(
     r"(?P<name>[?&;#](?:[\w.-]*?[_.-])?(?:" + "|".join(sorted(SECRET_PARAMETERS, key=len, reverse=True)) +
@@ -148,11 +151,11 @@ def _uri_end(text: str, start: int) -> int:
     colon = first.find(":")
     if end == len(text) or colon < 0 or any(c in first[:colon] for c in "/?#"):
         return end  # the whole text, or no password
-    if "@" not in first and _HOST_AFTER.match(first):
-        return end  # host:port and a path
+    if "@" not in first and (_HOST_AFTER.match(first) or _PORT_THEN_TEXT.fullmatch(first)):
+        return end  # host:port and a path, or punctuation
     if any(_HOST_THEN_PATH.match(first, i + 1) for i in range(colon, len(first)) if first[i] == "@"):
         return end  # user:password@host/path
-    further = _NO_FURTHER.search(text, end)
+    further = _NO_FURTHER.search(text, start)  # from the start: the cut may be a JSON string's end (``\\"``)
     at = _AT_HOST.search(text, end, further.start() if further else len(text))
     if at is None:
         return end

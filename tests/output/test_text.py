@@ -58,12 +58,17 @@ def test_multiline_keeps_lines_but_none_starts_at_the_margin() -> None:
     ("rtsp://cam:554 and me@example.org", "rtsp://cam:554 and me@example.org"),
     ("http://h/live#token=abc&x=1", "http://h/live#token=***&x=1"),
     ("http://h/cb#access_token=abc", "http://h/cb#access_token=***"),
+    ("tcp://127.0.0.1:5760, operator pilot@site.org", "tcp://127.0.0.1:5760, operator pilot@site.org"),
+    ("connect udp://:14540: timed out; ssh pi@raspberrypi.local",
+     "connect udp://:14540: timed out; ssh pi@raspberrypi.local"),
+    ('{"a": "rtsp://u:p\\\\", "b@host/": 1}', '{"a": "rtsp://u:p\\\\", "b@host/": 1}'),
 ], ids=["uri", "at-in-password", "slash-in-password", "any-character", "at-in-user", "ipv6",
         "at-in-path", "token",
         "password-parameters", "prefixed-parameters", "json", "nothing-secret", "at-in-query",
         "digits-and-slash", "space-in-password", "quote-in-password", "apostrophe-in-password",
         "bracket-in-password", "escaped-quote-in-json", "json-keys-kept", "port-path-then-mail",
-        "port-then-mail", "fragment-token", "fragment-access-token"])
+        "port-then-mail", "fragment-token", "fragment-access-token", "port-comma-then-mail",
+        "no-host-port-then-mail", "escaped-backslash-ends-json-string"])
 def test_redact(raw: str, shown: str) -> None:
     assert redact(raw) == shown
 
