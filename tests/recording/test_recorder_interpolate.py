@@ -40,6 +40,9 @@ def test_a_field_constant_for_a_while_holds_until_the_snapshot_before_it_changes
     history.add(Telemetry(north_m=1.0, roll_deg=3.5), 1000 * MS)
     assert before == history.at(970 * MS)[0]["roll_deg"] == 0.0  # the same, whenever the row was written
     assert history.at(990 * MS)[0]["roll_deg"] == pytest.approx(1.75)
+    same_stamp = _history(*level, (980, {"north_m": 0.99}))  # two snapshots at 980 ms, the second brings the roll
+    same_stamp.add(Telemetry(north_m=0.99, roll_deg=3.5), 980 * MS)
+    assert same_stamp.at(980 * MS)[0]["roll_deg"] == 3.5
 
 
 def test_a_rangefinder_out_of_range_is_a_gap_not_a_line_across_it():

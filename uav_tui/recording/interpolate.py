@@ -76,8 +76,9 @@ class TelemetryHistory:
             gap = given is None and name in GAPS and values and not math.isnan(values[-1])
             value = math.nan if gap else given
             if value is not None and (previous is None or getattr(previous, name) != given or not times):
-                if previous is not None and times and self._times[-2] - times[-1] >= STATIC_NS:
-                    times.append(self._times[-2])  # constant (see covers) until the snapshot before this change
+                before = self._times[-2] if previous is not None else t_ns  # the snapshot before this one
+                if times and before - times[-1] >= STATIC_NS and before < t_ns:
+                    times.append(before)  # constant (see covers) until the snapshot before this change
                     values.append(values[-1])
                 times.append(t_ns)
                 values.append(float(value))
