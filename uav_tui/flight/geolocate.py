@@ -77,9 +77,6 @@ NO_CAMERA = "no_camera"
 """No camera model for the frame (a source without one and no ``camera_hfov`` / calibration set)."""
 NO_POSITION = "no_position"
 """No latitude/longitude (no GPS fix yet, or no flight controller)."""
-NO_FIX = frozenset({"NO_GPS", "NO_FIX"})
-"""``gps_fix`` values (MAVSDK's ``FixType`` names) under which the reported position is not taken (an autopilot
-without a fix reports where it booted, or 0,0): ``no_position``."""
 NO_ATTITUDE = "no_attitude"
 NO_HEIGHT = "no_height"
 """No height above the ground from the autopilot (neither rangefinder nor height above home)."""
@@ -202,16 +199,14 @@ def locate_row(camera: CameraModel | None, box: tuple[float, float, float, float
     The height above the ground is from :func:`ground_height`; ``at_ns`` is the frame's capture (monotonic ns), for
     the age of the readings (None: not judged). A camera on the gimbal (``camera.mount.gimbal``) looks with the
     gimbal's attitude (``gimbal_roll_deg``, ``gimbal_pitch_deg``, ``gimbal_yaw_deg``; status ``no_attitude`` while
-    there is none), not the vehicle's. A position reported without a GPS fix (``gps_fix`` in :data:`NO_FIX`) is none.
+    there is none), not the vehicle's.
     """
     height, source, note = ground_height(telemetry, at_ns)
-    placed = telemetry.get("gps_fix") not in NO_FIX
     looking = ("gimbal_roll_deg", "gimbal_pitch_deg", "gimbal_yaw_deg") if camera is not None and camera.mount.gimbal \
         else ("roll_deg", "pitch_deg", "yaw_deg")
     roll, pitch, yaw = (telemetry.get(name) for name in looking)
     return locate(camera, box, roll_deg=roll, pitch_deg=pitch, yaw_deg=yaw,
-                  lat_deg=telemetry.get("lat_deg") if placed else None,
-                  lon_deg=telemetry.get("lon_deg") if placed else None, height_m=height,
+                  lat_deg=telemetry.get("lat_deg"), lon_deg=telemetry.get("lon_deg"), height_m=height,
                   abs_alt_m=telemetry.get("abs_alt_m"), height_from=source, height_note=note)
 
 
