@@ -20,7 +20,8 @@ _WINDOW_INFLUENCE, _SIZE_RATE, _CONTEXT, _PENALTY_K = 0.455, 0.37, 0.5, 0.055
 """NanoTrack's own post-processing constants (as OpenCV has them)."""
 _CELLS = (np.arange(_MAP, dtype=np.float32) - _MAP // 2) * _STRIDE + _INSTANCE // 2
 _GRID_X, _GRID_Y = np.meshgrid(_CELLS, _CELLS)
-_WINDOW = cv2.createHanningWindow((_MAP, _MAP), cv2.CV_32F)
+_WINDOW_TERM = cv2.createHanningWindow((_MAP, _MAP), cv2.CV_32F) * _WINDOW_INFLUENCE
+"""The cosine window's share of a cell's rank."""
 
 HOLD_SHARPNESS = 4.0
 """Peak sharpness under which the box holds still. On the development set the map's peak is far sharper on a
@@ -86,7 +87,7 @@ class NanoTrackNet:
       waited for where it was. The look-alike is followed while it stays the best place, so the box holds until
       the target is the best place again or the look-alike has left the window.
 
-    ``response`` (the raw map), its ``sharpness`` and its ``rival`` of the last update are kept for loss evidence.
+    The raw map's ``sharpness`` and ``rival`` of the last update are kept for loss evidence.
     """
 
     def __init__(self, hold: float = HOLD_SHARPNESS, rival_level: float = RIVAL_LEVEL) -> None:
@@ -99,12 +100,10 @@ class NanoTrackNet:
         self._template: np.ndarray = np.zeros(0, np.float32)
         self.score = 0.0
         """OpenCV's tracking score: the penalised, windowed map's best value."""
-        self.response = np.zeros((_MAP, _MAP), np.float32)
-        """Probability of the target at each cell of the last search."""
         self.sharpness = 0.0
-        """:func:`sharpness` of ``response``."""
+        """:func:`sharpness` of the last search's raw map (the target's probability at each cell)."""
         self.rival = 0.0
-        """:func:`rival` of ``response``."""
+        """:func:`rival` of that map."""
 
     def init(self, image: np.ndarray, box: Sequence[float]) -> None:
         """Take the template around ``box`` (x, y, w, h; whole pixels, as OpenCV's ``Rect``)."""
@@ -112,9 +111,8 @@ class NanoTrackNet:
         self._centre, self._size = (x + w / 2, y + h / 2), (float(w), float(h))
         self._frame = (image.shape[1], image.shape[0])
         self._look_alike = None
-        context = _CONTEXT * (w + h)
         backbone, _ = _nets()
-        backbone.setInput(self._blob(image, int(math.sqrt((w + context) * (h + context))), _EXEMPLAR))
+        backbone.setInput(self._blob(image, int(_extent(w, h)), _EXEMPLAR))
         self._template = backbone.forward().copy()
 
     def move_to(self, box: Box) -> None:
@@ -140,9 +138,9 @@ class NanoTrackNet:
         size_change = _reciprocal_max(_extent(widths, heights) / _extent(w * scale, h * scale))
         aspect_change = _reciprocal_max((w / h) / (widths / heights))
         penalty = np.exp(-(aspect_change * size_change - 1) * _PENALTY_K)
-        ranked = penalty * response * (1 - _WINDOW_INFLUENCE) + _WINDOW * _WINDOW_INFLUENCE
+        ranked = penalty * response * (1 - _WINDOW_INFLUENCE) + _WINDOW_TERM
         best = np.unravel_index(int(np.argmax(ranked)), ranked.shape)
-        self.response, self.sharpness, self.score = response, sharpness(response), float(ranked[best])
+        self.sharpness, self.score = sharpness(response), float(ranked[best])
         self.rival = rival(response)
         cx = self._centre[0] + (x0[best] + widths[best] / 2 - _INSTANCE // 2) / scale
         cy = self._centre[1] + (y0[best] + heights[best] / 2 - _INSTANCE // 2) / scale

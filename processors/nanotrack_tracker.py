@@ -100,8 +100,6 @@ class NanoTrackProcessor(TargetFollower):
         self._looks: deque[float] = deque(maxlen=_APPEARANCE_HISTORY)
         self.look = 0.0
         """Appearance score (normalised correlation) of the last box: diagnostics."""
-        self.sharpness = 0.0
-        """Sharpness of the last response map: diagnostics."""
 
     # ---- hooks ----------------------------------------------------------------------------------
     def _start(self, frame: np.ndarray, roi: Box) -> bool:
@@ -130,7 +128,7 @@ class NanoTrackProcessor(TargetFollower):
             self._update(box, sure, there, _at_edge(box, work))
         elif sure and there:
             logger.info("NanoTrackProcessor: back on the target (sharpness %.1f, appearance %.2f)",
-                        self.sharpness, self.look)
+                        self._net.sharpness, self.look)
             self._on_target(box)
         else:
             self._lost_frames += 1
@@ -151,10 +149,10 @@ class NanoTrackProcessor(TargetFollower):
     def _step(self, net: NanoTrackNet, work: np.ndarray) -> tuple[Box, bool, bool]:
         """``net`` updated on ``work``: its box, whether NanoTrack is sure of it (a sharp peak) and whether the
         target is there (its appearance holds and nothing else in the window competes). The diagnostics
-        ``score``, ``sharpness`` and ``look`` are this frame's."""
+        ``score`` and ``look`` are this frame's."""
         _, placed = net.update(work)
         box = as_box(placed)
-        self.score, self.sharpness = net.score, net.sharpness
+        self.score = net.score
         found = self._appearance(work, box)
         self.look = found.score if found is not None else -1.0
         there = self.look >= self.loss_ratio * self._look_median() and net.rival < self.rival
@@ -168,8 +166,9 @@ class NanoTrackProcessor(TargetFollower):
         if (not sure or at_edge) and not there:
             self._evidence += 1
             if self._evidence >= self.lost_after:
+                assert self._net is not None  # a target is selected
                 logger.info("NanoTrackProcessor: target lost (sharpness %.1f, appearance %.2f)",
-                            self.sharpness, self.look)
+                            self._net.sharpness, self.look)
                 self._tracking, self._lost_frames = False, 0
             return  # the last box is kept until the evidence is conclusive
         self._evidence = 0
@@ -206,7 +205,7 @@ class NanoTrackProcessor(TargetFollower):
             return
         probe = copy.copy(net)
         probe.move_to(found.box)
-        tracked = self.score, self.sharpness, self.look
+        tracked = self.score, self.look
         box, _, there = self._step(probe, work)
         if there and probe.sharpness >= _SURE * self.hold and self.look >= self._look_median():
             logger.info("NanoTrackProcessor: re-acquired in the whole frame (sharpness %.1f, appearance %.2f)",
@@ -214,7 +213,7 @@ class NanoTrackProcessor(TargetFollower):
             self._net = probe
             self._on_target(box)
         else:  # the frame's diagnostics stay those of the tracker kept
-            self.score, self.sharpness, self.look = tracked
+            self.score, self.look = tracked
 
 
 def _at_edge(box: Box, work: np.ndarray) -> bool:
