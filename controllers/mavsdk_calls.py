@@ -21,22 +21,17 @@ import asyncio
 import contextlib
 import logging
 import threading
-import traceback
 import weakref
 from collections.abc import AsyncGenerator, Awaitable, Callable
 from concurrent.futures import Future, ThreadPoolExecutor
-from pathlib import Path
 from typing import Any, Protocol, TypeVar
 
+from controllers.errors import FailureKinds
 from controllers.mavsdk_errors import map_mavsdk_errors
 
 logger = logging.getLogger(__name__)
 
 T = TypeVar("T")
-
-MAX_FAILURE_KINDS = 64
-"""Kinds of failure a subscription logs; beyond, its items still fail alone, unlogged."""
-
 
 class AbandoningExecutor(ThreadPoolExecutor):
     """Runs each call in its own daemon thread; :meth:`shutdown` never waits for them.
@@ -147,18 +142,11 @@ class Subscriptions:
         """
 
         async def run() -> None:
-            kinds: set[str] = set()
+            kinds = FailureKinds()
             try:
                 async with contextlib.aclosing(stream):
                     async for item in stream:
-                        try:
-                            on_item(item)
-                        except Exception as exc:  # noqa: BLE001 - a bug costs one message, not the subscription
-                            kind = _kind(exc)
-                            if kind not in kinds and len(kinds) < MAX_FAILURE_KINDS:
-                                kinds.add(kind)
-                                logger.exception("MAVSDK subscription %s: an item failed (%s); the subscription "
-                                                 "goes on (this failure is not logged again)", name, kind)
+                        _call_item(on_item, item, kinds, name)
             except Exception:
                 logger.exception("MAVSDK subscription %s failed", name)
 
@@ -175,10 +163,14 @@ class Subscriptions:
         await asyncio.gather(*readers, return_exceptions=True)
 
 
-def _kind(exc: BaseException) -> str:
-    """``ValueError at landing.py:72``: the exception's type and the innermost line that raised it."""
-    frames = traceback.extract_tb(exc.__traceback__)
-    return type(exc).__name__ + (f" at {Path(frames[-1].filename).name}:{frames[-1].lineno}" if frames else "")
+def _call_item(on_item: Callable[[T], None], item: T, kinds: FailureKinds, name: str) -> None:
+    """``on_item(item)``; a failure costs that item alone, its kind's first is logged."""
+    try:
+        on_item(item)
+    except Exception as exc:  # noqa: BLE001 - a bug costs one message, not the subscription
+        if kind := kinds.first(exc):
+            logger.exception("MAVSDK subscription %s: an item failed (%s); the subscription goes on (this failure is "
+                             "not logged again)", name, kind)
 
 
 _abandoned: list[Any] = []

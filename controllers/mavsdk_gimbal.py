@@ -65,7 +65,7 @@ class MavsdkGimbal:
         """MAVSDK's id of the first gimbal it listed (None: none found yet)."""
         self._found = asyncio.Event()
         self._listing_since = time.monotonic()
-        """When MAVSDK began looking for gimbals (:meth:`watch_list`, at connection)."""
+        """When MAVSDK began looking for gimbals (built at connection, with :meth:`watch_list` called at once)."""
         self.controlled = False
         """Control was asked for (and not released since)."""
 
@@ -129,7 +129,6 @@ class MavsdkGimbal:
 
     def watch_list(self, subscriptions: Subscriptions) -> None:
         """Keep :attr:`gimbal_id` as MAVSDK discovers gimbals (call once, at connection)."""
-        self._listing_since = time.monotonic()
 
         def put(found: Any) -> None:
             gimbals = list(getattr(found, "gimbals", None) or [])

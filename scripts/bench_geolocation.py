@@ -36,7 +36,7 @@ sys.path.insert(0, str(ROOT))
 
 from processors.detections import MAX_DETECTIONS, Detected  # noqa: E402
 from sources.camera_model import CameraModel, Mount  # noqa: E402
-from tests.flight.car_flight import fly_over_the_car  # noqa: E402
+from tests.flight.car_flight import GOALS_P95_M, fly_over_the_car  # noqa: E402
 from tests.flight.geo_helpers import car_views  # noqa: E402
 from uav_tui.flight import geolocate  # noqa: E402
 from uav_tui.flight.target_motion import TargetMotion  # noqa: E402
@@ -45,9 +45,8 @@ from uav_tui.recording.located import detection_rows  # noqa: E402
 CASES = {"down_level": (90.0, 0.0), "down_rolling_pitching": (90.0, 15.0), "oblique60_rolling_pitching": (60.0, 15.0)}
 """Camera tilt below the nose and the +- range of roll and pitch."""
 BARREL = (-0.28, 0.09, 0.0008, -0.0005, 0.0)
-HEIGHTS_M = (20.0, 50.0)
-GOALS_P95_M = {20.0: 1.0, 50.0: 2.0}
-"""Issue 39's goals for the geo error's p95 by height, with the simulator's perfect attitude."""
+HEIGHTS_M = tuple(GOALS_P95_M)
+"""The flight heights: those issue 39 sets goals for."""
 GOAL_PROJECTION_MS = 0.1
 HOVER_S = 3.0
 """How long each flight hovers at its height before flying."""

@@ -109,12 +109,12 @@ def format_status(status: CoreStatus, elapsed_s: float) -> str:
 
 
 def saved_run_note(core: UavCore) -> str:
-    """Where the core's run was recorded and how to look at it ("" when recording was off), made :func:`safe` (the
-    runs folder is the operator's choice, from outside): printed as it is after the dashboard and headless."""
+    """Where the core's run was recorded and how to look at it ("" when recording was off); the runs folder is the
+    operator's choice, from outside: pass the note through :func:`safe` before a terminal."""
     if core.recorder is None:
         return ""
     run_dir = core.recorder.run_dir
-    return safe(f"run saved in {run_dir}; plots and summary: uav-tui report {run_dir} (all runs: uav-tui runs)")
+    return f"run saved in {run_dir}; plots and summary: uav-tui report {run_dir} (all runs: uav-tui runs)"
 
 
 async def run_script(core: UavCore, script: list[tuple[int, Command]], say: Callable[[str], None]) -> str:

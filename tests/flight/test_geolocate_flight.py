@@ -10,14 +10,11 @@ import xml.etree.ElementTree as ET
 import numpy as np
 import pytest
 
-from tests.flight.car_flight import fly_over_the_car
+from tests.flight.car_flight import GOALS_P95_M, fly_over_the_car
 from uav_tui.flight.geolocate import OK, RANGEFINDER_SIGMA_M
 from uav_tui.headless import format_status
 from uav_tui.recorded import runs_cli
 from uav_tui.recording.rows import GEO_COLUMNS
-
-GOALS_P95_M = {20.0: 1.0, 50.0: 2.0}
-"""Issue 39's goals by height, with the simulator's perfect attitude (the telemetry is interpolated to each capture)."""
 
 
 @pytest.mark.parametrize(("altitude", "height_from"), [(20.0, "rangefinder"), (50.0, "terrain")])

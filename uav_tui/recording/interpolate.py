@@ -69,6 +69,7 @@ class TelemetryHistory:
     def add(self, sample: Telemetry, t_ns: int) -> None:
         """Append a snapshot received at ``t_ns`` (monotonic, not older than the previous one)."""
         previous = self._snapshots[-1] if self._snapshots else None
+        before = self._times[-1] if previous is not None else t_ns  # the snapshot before this one
         self._times.append(t_ns)
         self._snapshots.append(sample)
         for name, (times, values) in self._series.items():
@@ -76,7 +77,6 @@ class TelemetryHistory:
             gap = given is None and name in GAPS and values and not math.isnan(values[-1])
             value = math.nan if gap else given
             if value is not None and (previous is None or getattr(previous, name) != given or not times):
-                before = self._times[-2] if previous is not None else t_ns  # the snapshot before this one
                 if times and before - times[-1] >= STATIC_NS and before < t_ns:
                     times.append(before)  # constant (see covers) until the snapshot before this change
                     values.append(values[-1])

@@ -32,6 +32,7 @@ from uav_tui.headless import (
     saved_run_note,
 )
 from uav_tui.output.native_stderr import native_stderr_as_events
+from uav_tui.output.text import safe
 from uav_tui.tui._terminal import CHECK_PERIOD_S, TerminalWatch, driver_for
 from uav_tui.tui.app import LOG_ORIGIN, UavApp
 
@@ -56,7 +57,7 @@ def run_tui(config: Config, *, duration: float | None = None, script: list[tuple
     finally:
         if note := saved_run_note(session.core):
             with contextlib.suppress(OSError):  # the terminal may be gone (SIGHUP)
-                print(note, flush=True)
+                print(safe(note), flush=True)
 
 
 class TuiSession:

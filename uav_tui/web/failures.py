@@ -10,16 +10,13 @@ not a line each).
 from __future__ import annotations
 
 import logging
-import traceback
 
+from controllers.errors import FailureKinds
 from uav_tui.events import EventLog
 from uav_tui.output.line_budget import LineBudget
 from uav_tui.output.text import shorten
 
 logger = logging.getLogger(__name__)
-
-MAX_KINDS = 64
-"""Kinds of failure remembered; a traceback is logged for each new kind until there are this many."""
 
 BURST = 3
 PER_S = 0.1
@@ -39,15 +36,13 @@ class HandlerFailures:
         self.name = name
         self.count = 0
         """Failures so far."""
-        self._kinds: set[str] = set()
+        self._kinds = FailureKinds()
         self._budget = LineBudget(self._say, self._say_left_out, burst=BURST, per_s=PER_S)
 
     def failed(self, what: str, exc: BaseException) -> None:
         """Handling ``what`` (the message and who sent it) raised ``exc``; the handler goes on with the next one."""
         self.count += 1
-        kind = _kind(exc)
-        if kind not in self._kinds and len(self._kinds) < MAX_KINDS:
-            self._kinds.add(kind)
+        if kind := self._kinds.first(exc):
             logger.error("%s: %s failed (%s)", self.name, what, kind, exc_info=exc)
         self._budget.line(f"{self.name}: {what} failed: {type(exc).__name__}: {shorten(str(exc), 200)} "
                           "(a bug: the message was refused, the handler goes on)")
@@ -62,9 +57,3 @@ class HandlerFailures:
     def _say_left_out(self, count: int) -> None:
         self.events.emit("error", "web", f"{self.name}: {count} more handler failures ({self.count} in all)")
 
-
-def _kind(exc: BaseException) -> str:
-    """``ValueError at mavlink_tracking.py:172``: the exception's type and the innermost line that raised it."""
-    frames = traceback.extract_tb(exc.__traceback__)
-    where = f" at {frames[-1].filename.rsplit('/', 1)[-1]}:{frames[-1].lineno}" if frames else ""
-    return type(exc).__name__ + where

@@ -54,6 +54,8 @@ logger = logging.getLogger(__name__)
 
 STATUS_PERIOD_S = 1.0
 """HEARTBEAT, CAMERA_TRACKING_IMAGE_STATUS and CAMERA_TRACKING_GEO_STATUS are sent this often."""
+NOT_LOCATED = GeoFix(NO_BOX)
+"""The fix of a frame without a box."""
 
 QUEUE_COMMANDS = 16
 """Commands waiting to be handled; more are dropped (and counted)."""
@@ -125,7 +127,7 @@ class CameraTracking:
         """False after MAV_CMD_CAMERA_STOP_TRACKING until the next track command: the status says idle."""
         self.tracked: tuple[Box | None, tuple[int, int], bool] = (None, (0, 0), False)
         """The newest processed frame's box, its frame size and whether the processor raised on it."""
-        self.located = GeoFix(NO_BOX)
+        self.located = NOT_LOCATED
         """Where that box is on the ground (seen with the telemetry at the frame's capture)."""
         self.motion = TargetMotion()
         """The box's positions on the ground, frame by frame: its velocity and heading."""
@@ -175,8 +177,9 @@ class CameraTracking:
         """Frame listener (on the loop): keep what the processor reported for the newest frame."""
         height, width = result.frame.image.shape[:2]
         self.tracked = (result.box, (width, height), result.error is not None)
-        self.located = GeoFix(NO_BOX)
-        if result.box is not None:  # where it was at the capture (~40 us)
+        if result.box is None:
+            self.located = NOT_LOCATED
+        else:  # where it was at the capture (~40 us)
             t_ns = result.frame.t_mono_ns
             seen = asdict(self.core.telemetry.at(t_ns)[0])
             self.located = locate_row(self.core.camera, result.box, seen, at_ns=t_ns)
