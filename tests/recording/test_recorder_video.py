@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import asyncio
 import functools
 import signal
 import subprocess
@@ -13,6 +12,7 @@ from pathlib import Path
 import av
 import pandas as pd
 
+from tests.core.flight_helpers import wait_until
 from uav_tui.config import Config, with_overrides
 from uav_tui.core import UavCore
 from uav_tui.recorded import dataset
@@ -67,8 +67,8 @@ async def test_frames_the_video_cannot_take_are_dropped_counted_and_indexed(tmp_
     config = with_overrides(Config(), source="synthetic:?fps=30", runs_dir=str(tmp_path), processor=IDLE)
     core = UavCore(config)
     await core.start()
-    await asyncio.sleep(2.5)
     stats = core.worker.stats
+    await wait_until(lambda: stats.frames_processed >= 60, 20, "60 processed frames")  # 2 s at 30 FPS, unloaded
     await core.stop()
 
     assert stats.frames_processed >= 60 and stats.frames_skipped <= 0.15 * stats.frames_processed
