@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+from collections import Counter
 from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 
 from controllers.sim.launcher import SimVehicle
+from tests.videos import WANT_OF_DATA, aerial_set
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -38,6 +40,22 @@ def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
         if module in SOAK:
             item.add_marker(pytest.mark.soak)
             item.add_marker(pytest.mark.timeout(SOAK_TIMEOUT_S))
+
+
+def pytest_terminal_summary(terminalreporter: pytest.TerminalReporter) -> None:
+    """One line per reason the tests skipped for want of the real-video set, with their count: a clone without
+    the data passes, and says how much it did not run and how to run it."""
+    skipped = (report.longrepr[2].removeprefix("Skipped: ") for report in terminalreporter.stats.get("skipped", [])
+               if isinstance(report.longrepr, tuple))
+    reasons = Counter(reason for reason in skipped if reason.startswith(WANT_OF_DATA))
+    for reason, count in reasons.most_common():
+        terminalreporter.write_line(f"{count} test{'s' * (count != 1)} skipped for want of data: {reason}")
+
+
+@pytest.fixture(scope="session")
+def aerial_tracking() -> Path:
+    """The aerial-tracking set's folder; the test is skipped, saying how to get it, where it is not here."""
+    return aerial_set()
 
 
 @pytest.fixture

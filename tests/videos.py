@@ -1,14 +1,35 @@
-"""Generated video clips for tests that need a file source."""
+"""Video for tests that need a file source: generated clips, and the real-video set (skipped where it is not here)."""
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import cv2
 import numpy as np
 import pytest
 
-from processors.detection import find_data_dir
+from processors.detection import DATA_DIR_ENV, find_data_dir
+
+WANT_OF_DATA = "the real-video set"
+"""How every skip for want of the aerial-tracking set begins (tests/conftest.py counts them at the end of a run)."""
+HOW_TO_GET_IT = (f"set {DATA_DIR_ENV} to the folder holding aerial-tracking/, or build it with "
+                 "scripts/build_tracking_set.py (docs/evaluation.md#the-real-video-set)")
+
+
+def aerial_set(sequence: str = "") -> Path:
+    """The aerial-tracking set (``$UAV_TUI_DATA_DIR/aerial-tracking``, else ``shared/data/aerial-tracking`` beside
+    the repository), or its ``sequence`` folder; the test is skipped, saying how to get it, where it is not here."""
+    try:
+        folder = find_data_dir() / "aerial-tracking"
+    except FileNotFoundError as exc:  # a wrong UAV_TUI_DATA_DIR is named; the folders searched are not
+        wrong = f" ({exc})" if os.environ.get(DATA_DIR_ENV) else ""
+        pytest.skip(f"{WANT_OF_DATA} is not here{wrong}: {HOW_TO_GET_IT}")
+    if not folder.is_dir():
+        pytest.skip(f"{WANT_OF_DATA} is not in {folder.parent}: {HOW_TO_GET_IT}")
+    if sequence and not (folder / sequence).is_dir():
+        pytest.skip(f"{WANT_OF_DATA} has no {sequence} in {folder}: {HOW_TO_GET_IT}")
+    return folder / sequence
 
 
 def create_video_file(path: Path, *, frames: int = 30, width: int = 160, height: int = 120, fps: float = 15.0,
@@ -43,10 +64,4 @@ def damaged_copy(video: Path, path: Path, *, spots: int = 40) -> Path:
 def damaged_aerial_video(folder: Path) -> Path:
     """A real drone video (the aerial-tracking set's dtb70-Gull2, 1280x720 MPEG-4, 237 frames) damaged by
     :func:`damaged_copy`, in ``folder``; the test is skipped where the set is not here."""
-    try:
-        video = find_data_dir() / "aerial-tracking" / "dtb70-Gull2" / "video.mp4"
-    except FileNotFoundError as exc:
-        pytest.skip(str(exc))
-    if not video.is_file():
-        pytest.skip(f"{video} is not here")
-    return damaged_copy(video, folder / "damaged.mp4")
+    return damaged_copy(aerial_set("dtb70-Gull2") / "video.mp4", folder / "damaged.mp4")

@@ -13,12 +13,10 @@ import cv2
 import numpy as np
 import pytest
 
-from processors.detection import find_data_dir
 from tests.scripts import script_module
 from uav_tui.evaluation.sequences import find_sequences
 
 ROOT = Path(__file__).resolve().parents[2]
-BOAT = find_data_dir() / "aerial-tracking" / "uav123_10fps-boat5"
 SIZE = (320, 240)
 
 
@@ -28,14 +26,14 @@ def bench() -> Iterator[ModuleType]:
         yield module
 
 
-def boat_video(bench: ModuleType, path: Path) -> tuple[int, int, int, int]:
+def boat_video(bench: ModuleType, aerial_tracking: Path, path: Path) -> tuple[int, int, int, int]:
     """Write the real boat sequence at :data:`SIZE`, forward then backward so that its loop has no cut; return
     its ground-truth box on the first frame, scaled.
 
     The tracker keeps this boat from whichever early frame the ROI lands on (a race, as for an operator). The
     middle of the bench's own footage, cut every 25 frames, was lost for good when the ROI landed on frame 2 or
     3, which left no tracked frame to compare."""
-    sequence = find_sequences([BOAT])[0]
+    sequence = find_sequences([aerial_tracking / "uav123_10fps-boat5"])[0]
     originals = sequence.frames()
     first = next(originals)
     frames = [cv2.resize(frame, SIZE, interpolation=cv2.INTER_AREA) for frame in (first, *originals)]
@@ -45,11 +43,10 @@ def boat_video(bench: ModuleType, path: Path) -> tuple[int, int, int, int]:
     return int(x), int(y), int(w), int(h)
 
 
-@pytest.mark.skipif(not BOAT.is_dir(), reason=f"{BOAT} is not here")
-def test_the_bare_loop_replays_the_frames_the_platform_tracked(bench: ModuleType, tmp_path: Path,
+def test_the_bare_loop_replays_the_frames_the_platform_tracked(aerial_tracking: Path, bench: ModuleType, tmp_path: Path,
                                                                monkeypatch: pytest.MonkeyPatch) -> None:
     video = tmp_path / "boat.mp4"
-    roi = boat_video(bench, video)
+    roi = boat_video(bench, aerial_tracking, video)
     monkeypatch.setattr(bench, "WARM_UP_S", 1.0)
     run, replayed = asyncio.run(bench.platform_run(f"file:{video}?realtime=0", "csrt", "process", 1.0, roi))
     assert replayed.selected is not None and replayed.selected < replayed.first

@@ -11,14 +11,13 @@ takes fast's success AUC from 0.384 to 0.509 and plain CSRT's from 0.579 to 0.56
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
-from processors.detection import find_data_dir
 from uav_tui.evaluation import Job, TrackerSpec, load_sequence, run_job
 from uav_tui.evaluation.metrics import iou
-
-SET = find_data_dir() / "aerial-tracking"
 
 MIN_IOU = {"uav123_10fps-person12_1": 0.4, "uav123_10fps-boat5": 0.19}
 """Per sequence: the IoU every frame must keep; plain CSRT keeps at least 0.15 more."""
@@ -26,10 +25,9 @@ MEAN_GAP = {"uav123_10fps-person12_1": 0.15, "uav123_10fps-boat5": 0.25}
 """Per sequence: how far fast's mean IoU may fall below plain CSRT's (boat5 measured: 0.377 against 0.583)."""
 
 
-@pytest.mark.skipif(not SET.is_dir(), reason=f"{SET} is not here")
 @pytest.mark.parametrize("name", sorted(MIN_IOU))
-def test_fast_tracker_holds_the_target_on_every_frame_like_plain_csrt(name: str) -> None:
-    sequence = load_sequence(SET / name)
+def test_fast_tracker_holds_the_target_on_every_frame_like_plain_csrt(aerial_tracking: Path, name: str) -> None:
+    sequence = load_sequence(aerial_tracking / name)
     visible = ~np.isnan(sequence.gt).any(axis=1)
     plain = run_job(Job(sequence, TrackerSpec("cv:csrt")))
     fast = run_job(Job(sequence, TrackerSpec("csrt", {"mode": "fast"})))

@@ -8,24 +8,21 @@ of those frames, where plain NanoTrack reports a box on every one. A correctness
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
-from processors.detection import find_data_dir
 from uav_tui.evaluation import Job, TrackerSpec, load_sequence, run_job
 from uav_tui.evaluation.metrics import iou
-
-SET = find_data_dir() / "aerial-tracking"
 
 MIN_IOU = {"uav123_10fps-person12_1": 0.45, "uav123_10fps-boat5": 0.45, "uavdt-S1606": 0.5}
 """Per sequence: the IoU every frame must keep; plain NanoTrack keeps at least 0.1 more."""
 
-pytestmark = pytest.mark.skipif(not SET.is_dir(), reason=f"{SET} is not here")
-
 
 @pytest.mark.parametrize("name", sorted(MIN_IOU))
-def test_nanotrack_holds_the_target_on_every_frame_like_plain_nanotrack(name: str) -> None:
-    sequence = load_sequence(SET / name)
+def test_nanotrack_holds_the_target_on_every_frame_like_plain_nanotrack(aerial_tracking: Path, name: str) -> None:
+    sequence = load_sequence(aerial_tracking / name)
     plain = run_job(Job(sequence, TrackerSpec("cv:nano")))
     ours = run_job(Job(sequence, TrackerSpec("nanotrack")))
     plain_iou, our_iou = iou(plain.boxes, sequence.gt), iou(ours.boxes, sequence.gt)
@@ -36,8 +33,8 @@ def test_nanotrack_holds_the_target_on_every_frame_like_plain_nanotrack(name: st
 
 
 @pytest.mark.parametrize("name", ["uav123_10fps-person9", "uav123_10fps-car14"])
-def test_nanotrack_says_lost_while_the_target_is_out_of_view(name: str) -> None:
-    sequence = load_sequence(SET / name)
+def test_nanotrack_says_lost_while_the_target_is_out_of_view(aerial_tracking: Path, name: str) -> None:
+    sequence = load_sequence(aerial_tracking / name)
     absent = np.isnan(sequence.gt).any(axis=1)
     plain = run_job(Job(sequence, TrackerSpec("cv:nano")))
     ours = run_job(Job(sequence, TrackerSpec("nanotrack")))
@@ -48,10 +45,10 @@ def test_nanotrack_says_lost_while_the_target_is_out_of_view(name: str) -> None:
     assert np.isnan(ours.boxes[before]).any(axis=1).sum() <= 2  # and held the target until it went
 
 
-def test_nanotrack_takes_the_runner_back_when_he_returns() -> None:
+def test_nanotrack_takes_the_runner_back_when_he_returns(aerial_tracking: Path) -> None:
     """person9 runs out of the frame's corner (gt NaN 16-27) and comes back: the box is his again within a few
     frames of his return, and stays on him."""
-    sequence = load_sequence(SET / "uav123_10fps-person9")
+    sequence = load_sequence(aerial_tracking / "uav123_10fps-person9")
     absent = np.flatnonzero(np.isnan(sequence.gt).any(axis=1))
     back = int(absent[-1]) + 1
     ours = run_job(Job(sequence, TrackerSpec("nanotrack")))
@@ -60,10 +57,10 @@ def test_nanotrack_takes_the_runner_back_when_he_returns() -> None:
     assert (overlap > 0.3).mean() >= 0.9, f"IoU > 0.3 on {(overlap > 0.3).mean():.0%} of the frames after the return"
 
 
-def test_nanotrack_keeps_the_gull_when_another_flies_past() -> None:
+def test_nanotrack_keeps_the_gull_when_another_flies_past(aerial_tracking: Path) -> None:
     """In dtb70-Gull2 a second gull crosses close to the target from frame 38; it becomes the map's best place
     for a few frames, and the box must wait on the target rather than follow the other gull out of the frame."""
-    sequence = load_sequence(SET / "dtb70-Gull2")
+    sequence = load_sequence(aerial_tracking / "dtb70-Gull2")
     ours = run_job(Job(sequence, TrackerSpec("nanotrack")))
     overlap = iou(ours.boxes[:140], sequence.gt[:140])
     assert (overlap > 0.3).mean() >= 0.9, f"IoU > 0.3 on {(overlap > 0.3).mean():.0%} of frames 0-139"

@@ -15,14 +15,12 @@ import cv2
 import numpy as np
 import pytest
 
-from processors.detection import find_data_dir
 from sources import create_source, decoder_threads, open_source
 from sources.buffer import FrameBuffer
 from sources.file import NICENESS, FileSource
 from uav_tui.errors import SourceError
 from uav_tui.evaluation import find_sequences
 
-AERIAL = find_data_dir() / "aerial-tracking"
 CLIP_FRAMES = 10
 
 
@@ -124,13 +122,11 @@ def test_corrupt_file_is_reported_not_raised_from_the_thread(tmp_path) -> None:
 
 
 @pytest.fixture
-def aerial_clip(tmp_path: Path) -> Path:
+def aerial_clip(tmp_path: Path, aerial_tracking: Path) -> Path:
     """The first frames of a real drone video (the aerial-tracking set), 320x240, as an MP4 file."""
-    if not AERIAL.is_dir():
-        pytest.skip(f"{AERIAL} is not here")
     path = tmp_path / "aerial.mp4"
     writer = cv2.VideoWriter(str(path), cv2.VideoWriter.fourcc(*"mp4v"), 30, (320, 240))
-    for frame in itertools.islice(find_sequences([AERIAL])[0].frames(), CLIP_FRAMES):
+    for frame in itertools.islice(find_sequences([aerial_tracking])[0].frames(), CLIP_FRAMES):
         writer.write(cv2.resize(frame, (320, 240), interpolation=cv2.INTER_AREA))
     writer.release()
     return path
