@@ -14,6 +14,7 @@ from rich.console import Console
 from rich.markup import escape
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
+from processors.detection import DATA_DIR_ENV, find_data_dir
 from uav_tui.arguments import ArgumentParser
 from uav_tui.config import parse_processor_args
 from uav_tui.errors import KNOWN_ERRORS, ConfigError
@@ -22,7 +23,7 @@ from uav_tui.evaluation.report import failures, outside_cell, summary, table, wr
 from uav_tui.output.text import safe
 
 EXAMPLE = """examples:
-  uav-tui eval ../shared/data/aerial-tracking --processor csrt --processor cv:csrt
+  uav-tui eval --processor csrt --processor cv:csrt   # the aerial-tracking set ($UAV_TUI_DATA_DIR)
   uav-tui eval data/ --processor csrt --processor-arg mode=paper --processor ~/algos/mine.py:MyTracker
   uav-tui eval data/ --processor cv:kcf --cluster tcp://10.0.0.5:8786
   uav-tui eval data/ --processor csrt --out eval-results/csrt      # interrupted (Ctrl-C, a crash)? go on:
@@ -61,8 +62,9 @@ def build_parser() -> argparse.ArgumentParser:
                     "on every frame; the processor's box is compared with the gt (success AUC, precision@20px, "
                     "normalised precision, frames lost while visible, absent frames reported lost, ms/frame).",
         epilog=EXAMPLE.format(trackers=" ".join(f"cv:{name}" for name in sorted(available_trackers()))))
-    parser.add_argument("data", nargs="+", type=Path, help="a sequence folder (video.mp4 + gt.txt, or img/ + "
-                        "groundtruth_rect.txt, or images with <folder>.txt beside it), or a folder of them")
+    parser.add_argument("data", nargs="*", type=Path, help="a sequence folder (video.mp4 + gt.txt, or img/ + "
+                        "groundtruth_rect.txt, or images with <folder>.txt beside it), or a folder of them (default: "
+                        f"the aerial-tracking set in ${DATA_DIR_ENV}, else in shared/data beside the repository)")
     parser.add_argument("--processor", "-p", dest="processors", action=_Processor, metavar="SPEC", required=True,
                         help="what to score, as for a run (csrt, module:Class, file.py:Class) or cv:NAME; repeat")
     parser.add_argument("--processor-arg", action=_ProcessorArg, metavar="KEY=VALUE",
@@ -90,6 +92,7 @@ def main(argv: list[str]) -> int:
         _check_numbers(args)
         for tracker in trackers:
             tracker.load()  # a wrong name or argument fails here, before any job starts
+        args.data = args.data or [_aerial_tracking()]
         sequences = find_sequences(args.data)
         done = journal.read(out, sequences, args.threads) if args.resume else []
         if not args.resume and (out / journal.JOURNAL).exists():
@@ -140,6 +143,21 @@ def _check_numbers(args: argparse.Namespace) -> None:
         raise ConfigError("--threads must be at least 1", key="threads")
     if args.resume and args.out and args.out.resolve() != args.resume.resolve():
         raise ConfigError(f"--resume {args.resume} writes into that folder: leave out --out {args.out}", key="out")
+
+
+def _aerial_tracking() -> Path:
+    """The aerial-tracking set, where the tests find it; ConfigError saying how to get it when it is not here."""
+    try:
+        folder = find_data_dir() / "aerial-tracking"
+    except FileNotFoundError as exc:
+        missing = str(exc)
+    else:
+        if folder.is_dir():
+            return folder
+        missing = f"{folder} is not here"
+    raise ConfigError(f"no sequence folder given and the aerial-tracking set is not here ({missing}): give a "
+                      f"folder, set {DATA_DIR_ENV} to the one holding aerial-tracking/, or build the set with "
+                      "scripts/build_tracking_set.py (docs/evaluation.md)", key="data")
 
 
 def _resume_command(argv: list[str], out: Path) -> str:
