@@ -1,7 +1,7 @@
 """The Python cost of handing one frame to the processor's process and its result back, step by step.
 
 Both sides run in this one process and thread, in the order they run in flight, so what is measured is
-the code itself (locks, syscalls, pickling), without wake-ups or scheduling: the floor of what process
+the code itself (locks, syscalls, encoding), without wake-ups or scheduling: the floor of what process
 isolation adds to every frame. ``bench_pipeline.py`` measures the whole pipeline. Prints one JSON object,
 microseconds per frame for each step.
 """
@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import pickle
 import sys
 import time
 from multiprocessing import Pipe, resource_tracker
@@ -18,13 +17,15 @@ from multiprocessing.shared_memory import SharedMemory
 from pathlib import Path
 from types import SimpleNamespace
 
+import msgspec
+
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from processors.base import ProcessorInfo  # noqa: E402
 from uav_tui.hosting.child import ChildRunner  # noqa: E402
+from uav_tui.hosting.codec import decode_from_child  # noqa: E402
 from uav_tui.hosting.frame_mailbox import FrameMailbox, Offer  # noqa: E402
 from uav_tui.hosting.pipe import Inbox, send_message  # noqa: E402
-from uav_tui.hosting.wire import pack, unpack  # noqa: E402
 
 SHAPE = (480, 640, 3)
 
@@ -47,7 +48,7 @@ def measure(frames: int) -> dict[str, float]:
     inbox = Inbox(platform_end)
     info = ProcessorInfo("bench", None, frozenset({"getPreparedVector"}))
     runner = ChildRunner(child_end, child_box, SimpleNamespace(instance=DoesNothing(), info=info))
-    telemetry = pickle.dumps({"armed": True, "relative_alt_m": 10.0, "lat_deg": 47.39, "lon_deg": 8.54})
+    telemetry = msgspec.msgpack.encode({"armed": True, "relative_alt_m": 10.0, "lat_deg": 47.39, "lon_deg": 8.54})
     steps = dict.fromkeys(("platform_offer", "child_poll_messages", "child_claim", "child_process_wrapper",
                            "child_send_result", "platform_read_result"), 0)
     try:
@@ -61,10 +62,10 @@ def measure(frames: int) -> dict[str, float]:
             t3 = time.perf_counter_ns()
             result = runner.process(offer)
             t4 = time.perf_counter_ns()
-            send_message(child_end, pack(result))
+            send_message(child_end, result)
             t5 = time.perf_counter_ns()
             for data, buffers in inbox.read():
-                unpack(pickle.loads(data, buffers=buffers))
+                decode_from_child(data, buffers)
             t6 = time.perf_counter_ns()
             for name, ns in zip(steps, (t1 - t0, t2 - t1, t3 - t2, t4 - t3, t5 - t4, t6 - t5), strict=True):
                 steps[name] += ns

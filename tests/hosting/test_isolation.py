@@ -75,8 +75,8 @@ class Faulty:
         return (self.speed, 0.0, 2.0) if self.mode == "fly" else None
 '''
 
-CHILD_MODULES = ["uav_tui", "uav_tui.hosting", "uav_tui.hosting.frame_call", "uav_tui.hosting.frame_mailbox",
-                 "uav_tui.hosting.pipe", "uav_tui.hosting.wire"]
+CHILD_MODULES = ["uav_tui", "uav_tui.hosting", "uav_tui.hosting.codec", "uav_tui.hosting.frame_call",
+                 "uav_tui.hosting.frame_mailbox", "uav_tui.hosting.pipe", "uav_tui.hosting.wire"]
 """The platform's modules the processor's process imports beside its main loop (``__main__``, from
 ``uav_tui.hosting.child``): what it shares with the platform."""
 MODULES = '''

@@ -9,11 +9,11 @@ a segfault or a leak here cannot freeze or kill the flight path.
 
 The messages both ways are :mod:`uav_tui.hosting.wire`'s. Frames are not messages: whenever it is free (no
 call waiting), this process claims the frame on offer in the mailbox (the image in a shared-memory slot, read
-and drawn in place, and the pickled telemetry attached to it) and answers with a ``Result`` for that offer's
+and drawn in place, and the telemetry attached to it, MessagePack) and answers with a ``Result`` for that offer's
 ``gen``.
 
 ``saves`` are the ``tmMgr.save(frame, **extra)`` calls made meanwhile: ``(image, extra)``, the image
-copied at the call (what is drawn afterwards must not reach the dataset), so it is pickled. When the
+copied at the call (what is drawn afterwards must not reach the dataset), so it is sent. When the
 platform does not record (``save_images`` false) the image is None: nothing is copied or sent for it.
 ``tmMgr`` is a :class:`~processors.frame_telemetry.FrameTelemetry`: its snapshot is the offer's seq and capture
 times with the telemetry attached to it; saves beyond ``save_max_hz`` are dropped here, before any copy.
@@ -21,7 +21,9 @@ The processor's log records go to stderr one per line, as ``LOG_TAG level name "
 platform logs them as its own (escaped and redacted like every record); anything else the process
 prints is forwarded line by line, escaped.
 
-``released`` names the slots this process no longer references (see ``Result.released``).
+``released`` names the slots this process no longer references (see ``Result.released``). What crosses is data only
+(:mod:`uav_tui.hosting.codec`): a returned value that is not data is sent as its ``repr`` (a vector, a save's
+``extra``, a call's answer) or makes the frame's outputs its error.
 
 Calls and frames run one at a time in this process's main thread (calls first), so a researcher never
 needs a lock.
@@ -37,7 +39,6 @@ import faulthandler
 import json
 import logging
 import os
-import pickle
 import resource
 import select
 import signal
@@ -50,29 +51,18 @@ from multiprocessing import resource_tracker
 from multiprocessing.connection import Connection
 from typing import Any
 
+import msgspec
 import numpy as np
 
 from processors import load_processor
 from processors.errors import ProcessorLoadError
 from processors.frame_telemetry import DEFAULT_SAVE_MAX_HZ, FrameTelemetry
 from processors.outputs import NO_OUTPUTS, output_methods
+from uav_tui.hosting.codec import TO_CHILD, as_data, camera_model
 from uav_tui.hosting.frame_call import call_frame
 from uav_tui.hosting.frame_mailbox import FrameMailbox, Offer, Segment
 from uav_tui.hosting.pipe import send_message
-from uav_tui.hosting.wire import (
-    Call,
-    Camera,
-    Forget,
-    Load,
-    LoadError,
-    Message,
-    Ready,
-    Reply,
-    Result,
-    Save,
-    pack,
-    unpack,
-)
+from uav_tui.hosting.wire import Call, Camera, Forget, Load, LoadError, Ready, Reply, Result, Save, ToChild
 
 JOB_SIGNALS = frozenset({signal.SIGINT, signal.SIGQUIT, signal.SIGHUP, signal.SIGTSTP, signal.SIGTTIN, signal.SIGTTOU})
 """What a terminal sends to every process of its job. The platform starts this process with them blocked (a
@@ -134,7 +124,7 @@ class Slots:
             del self._alive[name]
         return gone
 
-    def forget(self, names: list[str]) -> None:
+    def forget(self, names: tuple[str, ...]) -> None:
         for name in names:
             shm = self._mapped.pop(name, None)
             if shm is not None and name not in self._alive:
@@ -148,14 +138,6 @@ class Slots:
                 raise MemoryError(f"cannot map the frame ({exc.strerror})") from exc
             raise
         return shm
-
-
-def _picklable(value: Any) -> Any:
-    try:
-        pickle.dumps(value)
-    except Exception:  # noqa: BLE001 - anything a researcher returns is reported, never fatal
-        return repr(value)[:200]
-    return value
 
 
 def _limit_memory(memory_mb: float | None) -> str:
@@ -237,7 +219,7 @@ class ChildRunner:
         self.has_vector = "getPreparedVector" in loaded.info.capabilities
         self.outputs = output_methods(loaded.info.capabilities)
         self._telemetry: tuple[bytes, dict[str, Any]] = (b"", {})
-        """The last frame's pickled telemetry and its fields (telemetry changes slower than frames)."""
+        """The last frame's encoded telemetry and its fields (telemetry changes slower than frames)."""
         self._messages = select.poll()
         self._messages.register(conn.fileno(), select.POLLIN)
         """The pipe alone, asked with no wait before every frame (``Connection.poll`` builds a selector each time)."""
@@ -253,7 +235,7 @@ class ChildRunner:
         while True:
             try:
                 while self._messages.poll(0):  # a message, or the end of the pipe (recv raises EOFError)
-                    self.handle(unpack(self.conn.recv()))
+                    self.handle(TO_CHILD.decode(self.conn.recv_bytes()))
             except (EOFError, OSError):
                 return
             offer = self.mailbox.claim()
@@ -263,37 +245,50 @@ class ChildRunner:
             if offer is None:
                 self._idle.poll()  # a call, a notice, EOF or an offer
                 continue
-            send_message(self.conn, pack(self.process(offer)))
+            self.send(self.process(offer))
 
-    def handle(self, message: Message) -> None:
+    def send(self, message: Result | Reply) -> None:
+        """Send a result or reply; one with a value the wire does not take goes without its outputs, saying why."""
+        try:
+            send_message(self.conn, message)
+        except (TypeError, ValueError, OverflowError) as exc:
+            reason = f"the processor's outputs are not data: {exc}"
+            if isinstance(message, Result):
+                send_message(self.conn, msgspec.structs.replace(
+                    message, vector=None, outputs=None, box=None, detections=None, saves=(),
+                    error=f"{message.error}\n{reason}" if message.error else reason))
+            else:
+                send_message(self.conn, msgspec.structs.replace(message, ok=False, value=reason, saves=()))
+
+    def handle(self, message: ToChild) -> None:
         if isinstance(message, Call):
-            send_message(self.conn, pack(self.call(message)))
+            self.send(self.call(message))
         elif isinstance(message, Forget):
             self.slots.forget(message.slots)
         elif isinstance(message, Camera):
-            self.telemetry.camera_model = message.model
+            self.telemetry.camera_model = camera_model(message)
 
     def process(self, offer: Offer) -> Result:
         if offer.telemetry != self._telemetry[0]:
-            self._telemetry = (offer.telemetry, pickle.loads(offer.telemetry) if offer.telemetry else {})
+            self._telemetry = (offer.telemetry, msgspec.msgpack.decode(offer.telemetry) if offer.telemetry else {})
         self.telemetry.begin(offer.seq, offer.t_mono_ns, offer.t_wall_ns, self._telemetry[1], offer.heartbeat_age_s)
         image = self.slots.view(offer.slot, offer.shape)
         outcome = call_frame(self.instance, image, vector=self.has_vector, outputs=self.outputs,
                              let_through=(MemoryError,))
         del image
         outputs = outcome.outputs if outcome.outputs != NO_OUTPUTS else None
-        return Result(offer.gen, outcome.t_start_ns, outcome.t_end_ns, outcome.t_vector_ns, _picklable(outcome.vector),
-                      outputs, outcome.box, outcome.detections, outcome.error, self._take_saves(),
-                      self._take_throttled(), self.slots.released())
+        return Result(offer.gen, outcome.t_start_ns, outcome.t_end_ns, outcome.t_vector_ns,
+                      tuple(self.slots.released()), self._take_throttled(), as_data(outcome.vector, arrays=False),
+                      outputs, outcome.box, outcome.detections, outcome.error, self._take_saves())
 
     def _keep_save(self, image: np.ndarray, extra: dict[str, Any]) -> None:
         # A copy: the image as it is now, not with what photo_processing draws on it afterwards.
         kept = np.array(image) if self.save_images else None
-        self.saves.append((kept, {key: _picklable(value) for key, value in extra.items()}))
+        self.saves.append(Save(kept, {str(key): as_data(value) for key, value in extra.items()}))
 
-    def _take_saves(self) -> list[Save]:
+    def _take_saves(self) -> tuple[Save, ...]:
         saves, self.saves = self.saves, []
-        return saves
+        return tuple(saves)
 
     def _take_throttled(self) -> int:
         """``tmMgr.save`` calls throttled since the last result."""
@@ -304,12 +299,12 @@ class ChildRunner:
     def call(self, call: Call) -> Reply:
         taken = time.monotonic_ns()
         try:
-            value, ok = _picklable(getattr(self.instance, call.method)(*call.args)), True
+            value, ok = as_data(getattr(self.instance, call.method)(*call.args), arrays=False), True
         except MemoryError:
             raise
         except Exception as exc:  # noqa: BLE001 - handed to the operator as the command's error
             value, ok = f"{type(exc).__name__}: {exc}", False
-        return Reply(call.call_id, ok, value, taken, self._take_saves(), self.slots.released())
+        return Reply(call.call_id, ok, taken, tuple(self.slots.released()), value, self._take_saves())
 
 
 def main(fd: int, mailbox_address: str) -> int:
@@ -319,18 +314,18 @@ def main(fd: int, mailbox_address: str) -> int:
     _start_resource_tracker()
     conn = Connection(fd)
     mailbox = FrameMailbox.attach(mailbox_address)
-    load = unpack(conn.recv())
+    load = TO_CHILD.decode(conn.recv_bytes())
     assert isinstance(load, Load), load
     try:
         if too_small := _limit_memory(load.memory_mb):
-            send_message(conn, pack(LoadError(too_small, None, load.spec.rpartition(":")[2], None)))
+            send_message(conn, LoadError(too_small, None, load.spec.rpartition(":")[2], None))
             return 0
         try:
             loaded = load_processor(load.spec, load.kwargs)
         except ProcessorLoadError as exc:
-            send_message(conn, pack(LoadError(str(exc), exc.path, exc.class_name, exc.missing)))
+            send_message(conn, LoadError(str(exc), exc.path, exc.class_name, exc.missing))
             return 0
-        send_message(conn, pack(Ready(loaded.info)))
+        send_message(conn, Ready(loaded.info))
         ChildRunner(conn, mailbox, loaded, save_images=load.save_images, save_max_hz=load.save_max_hz).serve()
     except MemoryError:
         traceback.print_exc()

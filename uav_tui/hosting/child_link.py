@@ -2,7 +2,8 @@
 
 A child's messages (:mod:`uav_tui.hosting.wire`) are read by the event loop itself whenever its pipe is readable
 (:class:`~uav_tui.hosting.pipe.Inbox`), never blocking it; when they come faster than :data:`RESULTS_POLL_S` they
-are polled in batches instead.
+are polled in batches instead. Each is decoded and checked (:mod:`uav_tui.hosting.codec`): a result or reply that
+does not fit the schema is that frame's (or call's) error; any other message that does not is logged and dropped.
 """
 
 from __future__ import annotations
@@ -10,7 +11,6 @@ from __future__ import annotations
 import asyncio
 import itertools
 import logging
-import pickle
 import threading
 import time
 from collections.abc import Callable
@@ -18,8 +18,10 @@ from typing import Any
 
 from processors.errors import ProcessorLoadError
 from uav_tui.hosting.child_process import ChildProcess, PendingCall
+from uav_tui.hosting.codec import UnreadableResult, WireError, decode_from_child
 from uav_tui.hosting.host import Answer
-from uav_tui.hosting.wire import Call, LoadError, Message, Ready, Reply, Result, Save, ToChild, pack, unpack
+from uav_tui.hosting.pipe import send_to_child
+from uav_tui.hosting.wire import Call, FromChild, LoadError, Ready, Reply, ReplyHead, Result, Save, ToChild
 
 logger = logging.getLogger(__name__)
 
@@ -41,13 +43,16 @@ class ChildLink:
         spec: the processor, for log lines.
         on_result: given each :class:`~uav_tui.hosting.wire.Result` (on the loop).
         on_spent: given a reply's ``tmMgr.save`` calls and the slots it released (on the loop).
+        on_unreadable: given a result that did not decode: what could be read of it, and why (on the loop).
     """
 
     def __init__(self, spec: str, on_result: Callable[[ChildProcess, Result], None],
-                 on_spent: Callable[[ChildProcess, list[Save], list[str]], None]) -> None:
+                 on_spent: Callable[[ChildProcess, tuple[Save, ...], tuple[str, ...]], None],
+                 on_unreadable: Callable[[ChildProcess, UnreadableResult], None]) -> None:
         self.spec = spec
         self._on_result = on_result
         self._on_spent = on_spent
+        self._on_unreadable = on_unreadable
         self._send_lock = threading.Lock()
         self._call_ids = itertools.count(1)
         self._loop: asyncio.AbstractEventLoop | None = None
@@ -61,7 +66,7 @@ class ChildLink:
         """Send one message to ``child``; False when it is gone (the end of its pipe reports that)."""
         try:
             with self._send_lock:
-                child.conn.send(pack(message))
+                send_to_child(child.conn, message)
         except OSError:
             return False
         return True
@@ -96,9 +101,13 @@ class ChildLink:
             return None
         for data, buffers in messages:
             try:
-                message = unpack(pickle.loads(data, buffers=buffers))
-            except Exception:  # noqa: BLE001 - a value that cannot be unpickled here: say so, go on
-                logger.exception("SubprocessHost(%s): unreadable message from pid %s", self.spec, child.pid)
+                message = decode_from_child(data, buffers)
+            except UnreadableResult as exc:
+                self._unreadable(child, exc)
+                continue
+            except WireError as exc:
+                logger.warning("SubprocessHost(%s): a message from pid %s that is not one: %s", self.spec,
+                               child.pid, exc)
                 continue
             if isinstance(message, Result):
                 self._on_result(child, message)
@@ -128,7 +137,17 @@ class ChildLink:
         else:
             loop.add_reader(child.inbox.fileno(), self._on_readable, child)
 
-    def _on_message(self, child: ChildProcess, message: Message) -> None:
+    def _unreadable(self, child: ChildProcess, exc: UnreadableResult) -> None:
+        """A result or reply whose rest did not decode: the frame's error, or the call's."""
+        if not isinstance(exc.head, ReplyHead):
+            self._on_unreadable(child, exc)
+            return
+        self._on_spent(child, (), exc.head.released)
+        call = child.calls.pop(exc.head.call_id, None)
+        if call is not None and not call.future.done():
+            call.future.set_exception(ProcessorRaised(f"WireError: the answer is not data: {exc.reason}"))
+
+    def _on_message(self, child: ChildProcess, message: FromChild) -> None:
         if isinstance(message, Ready):
             if not child.ready.done():
                 child.ready.set_result(message.info)

@@ -12,12 +12,12 @@ import contextlib
 import functools
 import itertools
 import logging
-import pickle
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from typing import TYPE_CHECKING
 
+import msgspec
 import numpy as np
 
 from controllers.base import TELEMETRY_FIELDS
@@ -25,9 +25,10 @@ from sources.buffer import Frame, FrameBuffer
 from uav_tui.events import EventLog
 from uav_tui.flight.telemetry import TelemetryManager
 from uav_tui.hosting.child_process import ChildProcess, Offered
+from uav_tui.hosting.codec import camera_message
 from uav_tui.hosting.frame_mailbox import TELEMETRY_BYTES, MailboxGone, Offer
 from uav_tui.hosting.frame_ring import FrameRing
-from uav_tui.hosting.wire import Camera, Forget, Result, ToChild
+from uav_tui.hosting.wire import Forget, Result, ToChild
 
 if TYPE_CHECKING:
     from sources.camera_model import CameraModel
@@ -74,8 +75,8 @@ class FrameFeeder:
         """The newest frame taken for an offer (each frame is offered once)."""
         self._offered: tuple[FrameBuffer | None, int, int] = (None, 0, 0)
         """The newest frame put in the mailbox, and its gen (an older frame is never put after it)."""
-        self._pickled_telemetry: tuple[object, bytes] = (None, b"")
-        """The newest telemetry update and its pickled fields."""
+        self._encoded_telemetry: tuple[object, bytes] = (None, b"")
+        """The newest telemetry update and its fields, encoded (MessagePack)."""
         self._gens = itertools.count(1)
         self._thread = threading.Thread(target=self._feed, name=f"processor-feeder({spec})", daemon=True)
         self._thread.start()
@@ -92,7 +93,7 @@ class FrameFeeder:
                 self._detach(self._buffer)
             self._buffer, self._camera, child = buffer, camera, self.child
         if child is not None:
-            self._send(child, Camera(camera))  # before the first frame of the new source is offered
+            self._send(child, camera_message(camera))  # before the first frame of the new source is offered
         with self._lock:
             buffer.set_allocator(self._ring.capture_view)  # cameras that can decode into shared memory do
             buffer.set_read_waiter(functools.partial(self._wait_claimed, buffer))
@@ -102,7 +103,7 @@ class FrameFeeder:
     def feed(self, child: ChildProcess | None) -> None:
         """Offer frames to ``child`` from now on (None: to nobody); a new child is told the camera model first."""
         if child is not None and self._camera is not None:  # before it can be offered a frame
-            self._send(child, Camera(self._camera))
+            self._send(child, camera_message(self._camera))
         with self._lock:
             self.child = child
             self._picked, self._offered = (None, 0), (None, 0, 0)
@@ -126,7 +127,7 @@ class FrameFeeder:
             frame = Frame(slot_view, frame.seq, frame.t_mono_ns, frame.t_wall_ns)
         return frame
 
-    def release(self, child: ChildProcess, names: list[str]) -> None:
+    def release(self, child: ChildProcess, names: Iterable[str]) -> None:
         """``child`` no longer references these slots."""
         with self._lock:
             slots = [child.held.pop(name) for name in names if name in child.held]
@@ -225,7 +226,7 @@ class FrameFeeder:
         if copied:
             np.copyto(slot.array(), frame.image)  # the slot is ours alone until it is offered
         if forget:
-            self._send(child, Forget(forget))
+            self._send(child, Forget(tuple(forget)))
         offer = Offer(next(self._gens), slot.name, slot.shape, frame.seq, frame.t_mono_ns, frame.t_wall_ns,
                       *self._telemetry_at(frame.t_mono_ns))
         with self._lock:
@@ -270,23 +271,23 @@ class FrameFeeder:
         return self._offered[0] is buffer and self._offered[1] >= seq
 
     def _telemetry_at(self, t_mono_ns: int) -> tuple[bytes, float | None]:
-        """The telemetry attached to a frame: the newest update received by its capture pickled, the heartbeat age now.
+        """The telemetry attached to a frame: the newest update received by its capture encoded, the heartbeat age now.
 
-        The update is pickled once, when it arrives; frames come faster than telemetry. Empty without a
+        The update is encoded once, when it arrives; frames come faster than telemetry. Empty without a
         telemetry manager.
         """
         if self.telemetry is None:
             return b"", None
         latest, heartbeat_age = self.telemetry.at(t_mono_ns)
-        if latest is not self._pickled_telemetry[0]:
-            data = pickle.dumps({name: getattr(latest, name) for name in TELEMETRY_FIELDS
-                                 if name != "heartbeat_age_s"})
+        if latest is not self._encoded_telemetry[0]:
+            data = msgspec.msgpack.encode({name: getattr(latest, name) for name in TELEMETRY_FIELDS
+                                           if name != "heartbeat_age_s"})
             if len(data) > TELEMETRY_BYTES:  # never seen: the fields are numbers and short names
                 logger.warning("SubprocessHost: telemetry of %d bytes does not fit the frame mailbox; not attached",
                                len(data))
                 data = b""
-            self._pickled_telemetry = (latest, data)
-        return self._pickled_telemetry[1], heartbeat_age
+            self._encoded_telemetry = (latest, data)
+        return self._encoded_telemetry[1], heartbeat_age
 
     def _forget(self, names: list[str]) -> None:
         self._to_forget.extend(names)

@@ -27,7 +27,7 @@ from multiprocessing.shared_memory import SharedMemory
 from typing import NamedTuple
 
 TELEMETRY_BYTES = 16 * 1024
-"""Room for the pickled telemetry of one frame (a few hundred bytes in practice)."""
+"""Room for the encoded telemetry of one frame (a few hundred bytes in practice)."""
 
 _CLAIM = struct.Struct("=qq")
 """Written by the processor: the gen it claimed last, and when (``time.monotonic_ns``, the same clock in both
@@ -59,7 +59,7 @@ class Offer(NamedTuple):
     t_mono_ns: int
     t_wall_ns: int
     telemetry: bytes
-    """The telemetry attached to the frame, pickled (the same bytes until the telemetry changes)."""
+    """The telemetry attached to the frame, MessagePack (the same bytes until the telemetry changes)."""
     heartbeat_age_s: float | None = None
     """The autopilot heartbeat's age at the offer (kept out of ``telemetry``: it changes every frame)."""
 

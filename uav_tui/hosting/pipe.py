@@ -1,34 +1,45 @@
 """The pipe between the platform and the processor's process: how a message is framed and read.
 
-The child sends each :mod:`~uav_tui.hosting.wire` message (packed) with :func:`send_message`; the platform
-reads them with :class:`Inbox` on the event loop, never blocking. The platform's own messages to the child go
-through :meth:`multiprocessing.connection.Connection.send` and the child reads them with ``recv``.
+The child sends each :mod:`~uav_tui.hosting.wire` message with :func:`send_message`; the platform reads them with
+:class:`Inbox` on the event loop, never blocking, and decodes them (:func:`uav_tui.hosting.codec.decode_from_child`).
+The platform's own messages to the child are one frame each (:func:`send_to_child`), read with ``recv_bytes``.
 """
 
 from __future__ import annotations
 
 import os
-import pickle
 import socket
 import struct
 from multiprocessing.connection import Connection
-from typing import Any
+
+from uav_tui.hosting.codec import Encoder
+from uav_tui.hosting.wire import FromChild, ToChild
 
 BUFFER_COUNT = struct.Struct("!I")
-"""Leads every frame that carries a pickle (:func:`send_message`): how many out-of-band frames follow it."""
+"""Leads every frame that carries a message (:func:`send_message`): how many out-of-band frames follow it."""
+
+_CHILD = Encoder(out_of_band=True)
+_PLATFORM = Encoder(out_of_band=False)
 
 
-def send_message(conn: Connection, message: tuple[Any, ...]) -> None:
-    """Send ``message`` as one frame ``count + pickle`` then ``count`` frames with its arrays' bytes.
+def send_message(conn: Connection, message: FromChild) -> None:
+    """Send ``message`` as one frame ``count + document`` then ``count`` frames with its arrays' bytes.
 
-    Arrays (``tmMgr.save`` images) go out of band: written to the pipe straight from their memory, and
-    the platform unpickles them into the buffers it read, without copying them again.
+    Arrays (``tmMgr.save`` images) go out of band: written to the pipe straight from their memory, and the
+    platform decodes them from the buffers it read, without copying them again.
+
+    Raises:
+        TypeError: a value in it is not data.
     """
-    buffers: list[pickle.PickleBuffer] = []
-    data = pickle.dumps(message, protocol=5, buffer_callback=buffers.append)
-    conn.send_bytes(BUFFER_COUNT.pack(len(buffers)) + data)
-    for buffer in buffers:
-        conn.send_bytes(buffer.raw())
+    data, arrays = _CHILD.encode(message)
+    conn.send_bytes(BUFFER_COUNT.pack(len(arrays)) + data)
+    for array in arrays:
+        conn.send_bytes(array.data.cast("B"))
+
+
+def send_to_child(conn: Connection, message: ToChild) -> None:
+    """Send one of the platform's messages (arrays inline: a camera model's, a few hundred bytes)."""
+    conn.send_bytes(_PLATFORM.encode(message)[0])
 
 
 class Inbox:
@@ -37,7 +48,7 @@ class Inbox:
     The pipe is a socket (``multiprocessing.Pipe``); this reads a duplicate of it with ``MSG_DONTWAIT``
     (the platform's own sends stay blocking) and splits the bytes the way
     :class:`~multiprocessing.connection.Connection` framed them: a 4-byte big-endian length, or -1 and
-    an 8-byte one for 2 GiB and more, then the bytes. A message is a frame with a pickle and the frames
+    an 8-byte one for 2 GiB and more, then the bytes. A message is a frame with a document and the frames
     of its out-of-band buffers (:func:`send_message`); a frame longer than one read (an image from
     ``tmMgr.save``) is read straight into a buffer of its own size.
 
@@ -62,14 +73,14 @@ class Inbox:
         """The long message being read, and how much of it has arrived (``_long_at``)."""
         self._long_at = 0
         self._message: tuple[memoryview, list[bytearray], int] | None = None
-        """A pickle waiting for its out-of-band buffers: (pickle, buffers so far, how many)."""
+        """A document waiting for its out-of-band buffers: (document, buffers so far, how many)."""
 
     def fileno(self) -> int:
         return self._sock.fileno()
 
     def read(self) -> list[tuple[memoryview, list[bytearray]]] | None:
-        """The messages completed by what has arrived, maybe none, as ``pickle.loads(data, buffers=buffers)``
-        takes them; None at the end of the pipe."""
+        """The messages completed by what has arrived, maybe none, as ``(document, buffers)`` for
+        :func:`~uav_tui.hosting.codec.decode_from_child`; None at the end of the pipe."""
         frames = self._frames()
         if frames is None:
             return None

@@ -25,10 +25,11 @@ from uav_tui.events import EventLog
 from uav_tui.flight.telemetry import TelemetryManager
 from uav_tui.hosting.child_link import ChildLink
 from uav_tui.hosting.child_process import ChildProcess, rss_mb
+from uav_tui.hosting.codec import UnreadableResult
 from uav_tui.hosting.frame_feeder import FrameFeeder
 from uav_tui.hosting.host import Answer, DeliversResults, ProcessedFrame, ProcessorState
 from uav_tui.hosting.supervisor import ChildSupervisor
-from uav_tui.hosting.wire import Result, Save
+from uav_tui.hosting.wire import Result, ResultHead, Save
 from uav_tui.stats import PipelineStats, RollingStats
 
 if TYPE_CHECKING:
@@ -74,7 +75,7 @@ class SubprocessHost(DeliversResults):
         self.timeout_s = timeout_s
         self._on_result = on_result
         self._running = False
-        self._link = ChildLink(spec, on_result=self._take_result, on_spent=self._spent)
+        self._link = ChildLink(spec, on_result=self._take_result, on_spent=self._spent, on_unreadable=self._unreadable)
         self._feeder = FrameFeeder(spec, events, send=self._link.send)
         self._supervisor = ChildSupervisor(
             spec, self.kwargs, link=self._link, feeder=self._feeder, events=events, on_fault=on_fault,
@@ -193,18 +194,26 @@ class SubprocessHost(DeliversResults):
             self.consecutive_errors = 0
         self._deliver(result)
 
-    def _spent(self, child: ChildProcess, saves: list[Save], released: list[str]) -> None:
+    def _unreadable(self, child: ChildProcess, unreadable: UnreadableResult) -> None:
+        """A result whose outputs did not decode: that frame's error, its slots freed, nothing of it used."""
+        head = unreadable.head
+        assert isinstance(head, ResultHead)
+        self._take_result(child, Result(head.gen, head.t_start_ns, head.t_end_ns, head.t_vector_ns, head.released,
+                                        head.saves_throttled, None, None, None, None,
+                                        f"the processor's outputs could not be read: {unreadable.reason}", ()))
+
+    def _spent(self, child: ChildProcess, saves: tuple[Save, ...], released: tuple[str, ...]) -> None:
         """A reply's slots let go and its ``tmMgr.save`` calls."""
         self._feeder.release(child, released)
         self._store(saves, None)
 
-    def _store(self, saves: list[Save], result: ProcessedFrame | None) -> None:
+    def _store(self, saves: tuple[Save, ...], result: ProcessedFrame | None) -> None:
         """Replay the child's ``tmMgr.save`` calls here, where the recorder is."""
         if not saves or self.telemetry is None:
             return
         self.current = result
         try:
-            for image, extra in saves:
-                self.telemetry.save(image, **extra)
+            for save in saves:
+                self.telemetry.save(save.image, **save.extra)
         finally:
             self.current = None

@@ -1,38 +1,49 @@
-"""Every message between the platform and the processor's process: typed values, the same at both ends.
+"""Every message between the platform and the processor's process: typed records of plain data, the schema both
+ends share.
 
-Platform -> child, pickled by :meth:`multiprocessing.connection.Connection.send`: :class:`Load` first, then
-:class:`Call`, :class:`Forget` and :class:`Camera` in any order. Child -> platform, through
-:func:`uav_tui.hosting.pipe.send_message` (pickle protocol 5, arrays out of band): :class:`Ready` or
-:class:`LoadError` once, then a :class:`Result` per frame claimed and a :class:`Reply` per call.
+Platform -> child: :class:`Load` first, then :class:`Call`, :class:`Forget` and :class:`Camera` in any order.
+Child -> platform: :class:`Ready` or :class:`LoadError` once, then a :class:`Result` per frame claimed and a
+:class:`Reply` per call. :mod:`uav_tui.hosting.codec` turns them into MessagePack and back.
+
+Data only, because the child is not trusted: a processor can return any object, and what arrives is checked
+against this schema when it is decoded (each value type's own ``__post_init__`` runs again in the platform), so a
+value that is not data is that frame's error and nothing a processor does runs code in the platform (pickle
+would call whatever ``__reduce__`` a returned object names). Each record is a MessagePack array, its kind's
+number (``tag``) first, fields in the order written here.
 
 Frames are not messages: the child claims the newest one in its
 :class:`~uav_tui.hosting.frame_mailbox.FrameMailbox` and answers with a :class:`Result` for that offer's ``gen``.
-
-On the pipe a message is a plain tuple, its kind's number first (:func:`pack`, :func:`unpack`, at both ends):
-pickle takes a NamedTuple apart through Python-level calls, and a result crosses every frame. A ``Result``
-pickled as the NamedTuple took 10.5 us to dump and 4.5 us to load, packed 3.6 and 2.6 us (the untyped tuple it
-replaces: 1.0 and 2.0 us; least of 7 runs of 20,000 on a loaded x86 machine).
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, NamedTuple
+from typing import Any
 
+import msgspec
 import numpy as np
 
 from processors.base import Box, ProcessorInfo
 from processors.detections import Detected
 from processors.outputs import FrameOutputs
 
-if TYPE_CHECKING:
-    from sources.camera_model import CameraModel
-
-Save = tuple[np.ndarray | None, dict[str, Any]]
-"""One ``tmMgr.save(frame, **extra)`` call: the image copied at the call (None when the platform does not record:
-nothing is copied or sent), and ``extra``."""
+Value = tuple[Any, ...] | dict[Any, Any] | str | bool | int | float | None
+"""A value a processor returned (a vector, a call's answer), as plain data: a sequence arrives as a tuple (inside it,
+lists), as from the thread host; an array or bytes as its ``repr`` (:func:`~uav_tui.hosting.codec.as_data`)."""
 
 
-class Load(NamedTuple):
+class _Record(msgspec.Struct, frozen=True, array_like=True):
+    """A message: an array on the wire, its kind's number first."""
+
+
+class Save(_Record, frozen=True):
+    """One ``tmMgr.save(frame, **extra)`` call: the image copied at the call (None when the platform does not
+    record: nothing is copied or sent), and ``extra`` (plain data; arrays allowed)."""
+
+    image: np.ndarray | None
+    extra: dict[str, Any]
+
+
+class Load(_Record, frozen=True, tag=0):
     """The first message: cap the child's memory, then construct the processor."""
 
     spec: str
@@ -42,7 +53,7 @@ class Load(NamedTuple):
     save_max_hz: float
 
 
-class Call(NamedTuple):
+class Call(_Record, frozen=True, tag=1):
     """An operator's call (``catch_cmd``, ``customize_processing``), answered with a :class:`Reply`."""
 
     call_id: int
@@ -50,25 +61,27 @@ class Call(NamedTuple):
     args: tuple[Any, ...]
 
 
-class Forget(NamedTuple):
+class Forget(_Record, frozen=True, tag=2):
     """The platform freed these shared-memory slots: unmap them."""
 
-    slots: list[str]
+    slots: tuple[str, ...]
 
 
-class Camera(NamedTuple):
-    """The source's camera model (``tmMgr.camera()``), sent at each change of source."""
+class Camera(_Record, frozen=True, tag=3):
+    """The source's camera model (``tmMgr.camera()``), sent at each change of source: a
+    :class:`~sources.camera_model.CameraModel`, encoded (:func:`uav_tui.hosting.codec.camera_message`) and decoded
+    only when it arrives (:func:`~uav_tui.hosting.codec.camera_model`), so a child imports ``sources`` only then."""
 
-    model: CameraModel | None
+    model: msgspec.Raw
 
 
-class Ready(NamedTuple):
+class Ready(_Record, frozen=True, tag=4):
     """The processor is constructed."""
 
     info: ProcessorInfo
 
 
-class LoadError(NamedTuple):
+class LoadError(_Record, frozen=True, tag=5):
     """The processor could not be loaded (the fields of a :class:`~processors.errors.ProcessorLoadError`)."""
 
     message: str
@@ -77,56 +90,67 @@ class LoadError(NamedTuple):
     missing: str | None
 
 
-class Result(NamedTuple):
-    """One claimed frame's outcome (monotonic ns times; ``t_vector_ns`` 0 without ``getPreparedVector``)."""
+class Result(_Record, frozen=True, tag=6):
+    """One claimed frame's outcome (monotonic ns times; ``t_vector_ns`` 0 without ``getPreparedVector``).
+
+    The fields up to ``saves_throttled`` are :class:`ResultHead`'s: what the platform still reads when the rest
+    does not decode, to free the frame's slots and count its error.
+    """
 
     gen: int
     t_start_ns: int
     t_end_ns: int
     t_vector_ns: int
-    vector: Any
+    released: tuple[str, ...]
+    """Slots the child no longer references: a processor may keep a frame (the previous one, for optical flow) and
+    the platform must not reuse its slot until it lets go."""
+    saves_throttled: int
+    """``tmMgr.save`` calls dropped above ``save_max_hz`` since the last result (in the child, before any copy)."""
+    vector: Value
+    """What ``getPreparedVector`` returned, as plain data (the gate checks it)."""
     outputs: FrameOutputs | None
-    """What the output methods returned, checked (:mod:`processors.outputs`); None when none gave anything, the
-    usual frame: a dataclass costs about 6 us a frame to pickle and load, None nothing."""
+    """What the output methods returned, checked (:mod:`processors.outputs`); None when none gave anything."""
     box: Box | None
     detections: tuple[Detected, ...] | None
     """The processor's ``detections``, checked (None without the attribute)."""
     error: str | None
     """Traceback text if the processor raised."""
-    saves: list[Save]
+    saves: tuple[Save, ...]
     """The ``tmMgr.save`` calls made since the last message."""
+
+
+class ResultHead(_Record, frozen=True, tag=6):
+    """The leading fields of a :class:`Result`: read alone when the whole does not decode."""
+
+    gen: int
+    t_start_ns: int
+    t_end_ns: int
+    t_vector_ns: int
+    released: tuple[str, ...]
     saves_throttled: int
-    """``tmMgr.save`` calls dropped above ``save_max_hz`` since the last result (in the child, before any copy)."""
-    released: list[str]
-    """Slots the child no longer references: a processor may keep a frame (the previous one, for optical flow) and
-    the platform must not reuse its slot until it lets go."""
 
 
-class Reply(NamedTuple):
+class Reply(_Record, frozen=True, tag=7):
     """A :class:`Call`'s answer: its value, or (``ok`` False) ``Type: message`` of what it raised."""
 
     call_id: int
     ok: bool
-    value: Any
     t_taken_ns: int
     """When the processor began the call (monotonic ns)."""
-    saves: list[Save]
-    released: list[str]
+    released: tuple[str, ...]
+    value: Value
+    saves: tuple[Save, ...]
+
+
+class ReplyHead(_Record, frozen=True, tag=7):
+    """The leading fields of a :class:`Reply`: read alone when the whole does not decode."""
+
+    call_id: int
+    ok: bool
+    t_taken_ns: int
+    released: tuple[str, ...]
 
 
 ToChild = Load | Call | Forget | Camera
 FromChild = Ready | LoadError | Result | Reply
 Message = ToChild | FromChild
-
-_KINDS: tuple[type[Message], ...] = (Load, Call, Forget, Camera, Ready, LoadError, Result, Reply)
-_NUMBERS = {kind: number for number, kind in enumerate(_KINDS)}
-
-
-def pack(message: Message) -> tuple[Any, ...]:
-    """``message`` as it travels: its kind's number, then its fields."""
-    return (_NUMBERS[type(message)], *message)
-
-
-def unpack(packed: tuple[Any, ...]) -> Message:
-    """The message :func:`pack` made ``packed`` from."""
-    return _KINDS[packed[0]]._make(packed[1:])

@@ -1,0 +1,78 @@
+"""The wire's encoding: what round-trips, and what a child's bytes may not smuggle in."""
+
+from __future__ import annotations
+
+import msgspec
+import numpy as np
+import pytest
+
+from sources.camera_model import CameraModel
+from uav_tui.hosting.codec import (
+    INLINE,
+    OUT_OF_BAND,
+    TO_CHILD,
+    Encoder,
+    UnreadableResult,
+    WireError,
+    as_data,
+    camera_message,
+    camera_model,
+    decode_from_child,
+)
+from uav_tui.hosting.wire import Reply, Result, ResultHead
+
+
+def result(vector: object = None, **fields: object) -> Result:
+    return Result(gen=3, t_start_ns=1, t_end_ns=2, t_vector_ns=0, released=("slot-a",), saves_throttled=0,
+                  vector=vector, outputs=None, box=None, detections=None, error=None, saves=(), **fields)
+
+
+def encoded(message: Result | Reply) -> bytes:
+    return Encoder(out_of_band=True).encode(message)[0]
+
+
+@pytest.mark.parametrize("model", [CameraModel.from_hfov(640, 480, 60), None], ids=["model", "none"])
+def test_a_camera_model_reaches_the_child_as_it_was(model: CameraModel | None) -> None:
+    message = TO_CHILD.decode(Encoder(out_of_band=False).encode(camera_message(model))[0])
+    assert camera_model(message) == model
+
+
+def test_values_arrive_as_plain_data() -> None:
+    vector = as_data((np.float32(0.5), 10**400, True), arrays=False)
+    back = decode_from_child(encoded(result(vector)), [])
+    assert isinstance(back, Result) and back.vector == (0.5, 10**400, True)  # a sequence arrives as a tuple
+    assert as_data(np.zeros(3), arrays=False).startswith("array(")  # an array is no vector: its repr
+    assert as_data(object()).startswith("<object object")
+
+
+def ext(code: int, payload: object) -> msgspec.msgpack.Ext:
+    return msgspec.msgpack.Ext(code, msgspec.msgpack.encode(payload))
+
+
+@pytest.mark.parametrize("value, reason", [
+    (ext(OUT_OF_BAND, (0, "|O", (1,))), "not a number type"),
+    (ext(OUT_OF_BAND, (5, "|u1", (1,))), "was not sent"),
+    (ext(OUT_OF_BAND, (0, "|u1", (2, 3))), "does not match"),
+    (ext(INLINE, ("<f8", (1,), b"abc")), "does not match"),
+    (ext(9, ()), "unknown extension type 9"),
+], ids=["object dtype", "missing buffer", "wrong size", "short inline", "unknown kind"])
+def test_an_array_that_is_not_one_is_the_frame_error(value: object, reason: str) -> None:
+    data = msgspec.msgpack.encode([6, 3, 1, 2, 0, ["slot-a"], 0, None, None, None, None, None, [[value, {}]]])
+    with pytest.raises(UnreadableResult, match=reason) as caught:
+        decode_from_child(data, [bytearray(4)])
+    assert caught.value.head == ResultHead(3, 1, 2, 0, ("slot-a",), 0)  # what frees the frame and counts it
+
+
+def test_a_message_that_is_none_at_all_is_refused() -> None:
+    for data in (b"\xc1", msgspec.msgpack.encode([99, 1]), msgspec.msgpack.encode({"gen": 1})):
+        with pytest.raises(WireError):
+            decode_from_child(data, [])
+
+
+def test_a_reply_that_does_not_fit_keeps_its_call_id() -> None:
+    data = msgspec.msgpack.encode([7, 12, True, 5, ["s"], {"a": ext(9, ())}, []])
+    with pytest.raises(UnreadableResult) as caught:
+        decode_from_child(data, [])
+    assert caught.value.head.call_id == 12
+    assert decode_from_child(encoded(Reply(12, True, 5, ("s",), {"a": [1]}, ())), []) == Reply(
+        12, True, 5, ("s",), {"a": [1]}, ())
