@@ -56,11 +56,12 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from processors import load_processor  # noqa: E402
 from processors.base import Box, read_box  # noqa: E402
-from processors.detection import find_data_dir  # noqa: E402
 from sources.synthetic import SyntheticScene  # noqa: E402
 from uav_tui.config import load_config  # noqa: E402
 from uav_tui.core import UavCore  # noqa: E402
+from uav_tui.errors import ConfigError  # noqa: E402
 from uav_tui.evaluation import find_sequences  # noqa: E402
+from uav_tui.evaluation.sequences import aerial_tracking_set  # noqa: E402
 from uav_tui.hosting.host import ProcessedFrame  # noqa: E402
 
 PROCESSORS = ("template", "csrt", "position_hold", "yolo")
@@ -85,7 +86,7 @@ def synthetic_frames(width: int, height: int) -> Iterator[np.ndarray]:
 
 def aerial_frames(width: int, height: int) -> Iterator[np.ndarray]:
     """The first frames of every aerial-tracking sequence, resized (SequenceError when the set is not there)."""
-    for sequence in find_sequences([find_data_dir() / "aerial-tracking"]):
+    for sequence in find_sequences([aerial_tracking_set()]):
         for frame in itertools.islice(sequence.frames(), AERIAL_FRAMES_PER_SEQUENCE):
             yield cv2.resize(frame, (width, height), interpolation=cv2.INTER_AREA)
 
@@ -307,6 +308,11 @@ def main() -> None:
     parser.add_argument("--footage", choices=sorted(FOOTAGE), default="synthetic",
                         help="the video replayed: the generated scene, or real drone video (the aerial-tracking set)")
     args = parser.parse_args()
+    if args.footage == "aerial":
+        try:
+            aerial_tracking_set()
+        except ConfigError as exc:
+            parser.error(str(exc))
     measure = camera_rate if args.camera else compare
     runs = []
     with tempfile.TemporaryDirectory() as tmp:

@@ -26,9 +26,10 @@ from typing import Any
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from processors.detection import find_data_dir  # noqa: E402
+from uav_tui.errors import ConfigError  # noqa: E402
 from uav_tui.evaluation import TrackerSpec, evaluate, find_sequences  # noqa: E402
 from uav_tui.evaluation.report import headline, summary, write_json  # noqa: E402
+from uav_tui.evaluation.sequences import aerial_tracking_set  # noqa: E402
 
 NANOTRACK, CSRT_FAST = "nanotrack", "csrt mode=fast"
 PLAIN_NANO, PLAIN_CSRT = "cv:nano", "cv:csrt"
@@ -106,14 +107,19 @@ def run(data: Path, trackers: list[TrackerSpec], workers: int, threads: int, out
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--data", type=Path, default=find_data_dir() / "aerial-tracking")
+    parser.add_argument("--data", type=Path, help="the sequences (default: the aerial-tracking set where the "
+                        "tests find it)")
     parser.add_argument("--workers", type=int, default=1,
                         help="jobs at once (default 1: a tracker's ms/frame is not measured beside another's)")
     parser.add_argument("--threads", type=int, default=1, help="OpenCV/ONNX threads of each job (default 1)")
     parser.add_argument("--out", type=Path, help="also keep eval.json here (default: a temporary folder)")
     args = parser.parse_args()
     out = args.out or Path(tempfile.mkdtemp(prefix="bench_tracking-"))
-    print(json.dumps(run(args.data, TRACKERS, args.workers, args.threads, out), indent=1))
+    try:
+        data = args.data or aerial_tracking_set()
+    except ConfigError as exc:
+        parser.error(str(exc))
+    print(json.dumps(run(data, TRACKERS, args.workers, args.threads, out), indent=1))
 
 
 def _row(scores: dict[str, Any]) -> dict[str, Any]:

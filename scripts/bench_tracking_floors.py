@@ -36,10 +36,11 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from processors.detection import find_data_dir  # noqa: E402
 from processors.models import create_nanotrack  # noqa: E402
+from uav_tui.errors import ConfigError  # noqa: E402
 from uav_tui.evaluation import Scores, Sequence, find_sequences, score_sequence, summarise  # noqa: E402
 from uav_tui.evaluation.metrics import iou  # noqa: E402
+from uav_tui.evaluation.sequences import aerial_tracking_set  # noqa: E402
 
 FAST = {"template_size": 128, "use_segmentation": False, "psr_threshold": 0.0}
 """The OpenCV part of ``csrt`` mode fast."""
@@ -181,10 +182,15 @@ def _csrt(knobs: dict[str, Any]) -> cv2.TrackerCSRT:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--data", type=Path, default=find_data_dir() / "aerial-tracking")
+    parser.add_argument("--data", type=Path, help="the sequences (default: the aerial-tracking set where the "
+                        "tests find it)")
     parser.add_argument("--part", choices=("csrt", "oracle", "both"), default="both")
     args = parser.parse_args()
     cv2.setNumThreads(1)
+    try:
+        args.data = args.data or aerial_tracking_set()
+    except ConfigError as exc:
+        parser.error(str(exc))
     sequences = find_sequences([args.data])
     document: dict[str, Any] = {"data": str(args.data), "sequences": len(sequences), "threads": 1}
     if args.part in ("csrt", "both"):

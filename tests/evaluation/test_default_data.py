@@ -4,6 +4,9 @@ get it when it is not there."""
 from __future__ import annotations
 
 import json
+import os
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -34,3 +37,13 @@ def test_no_folder_given_and_no_set_says_how_to_get_it(tmp_path: Path, monkeypat
     err = capsys.readouterr().err
     assert said in err and "scripts/build_tracking_set.py" in err and "docs/evaluation.md" in err
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("command", [["bench_tracking.py"], ["bench_tracking_floors.py"],
+                                     ["bench_pipeline.py", "--footage", "aerial"]], ids=lambda c: c[0])
+def test_a_benchmark_without_the_set_says_how_to_get_it(tmp_path: Path, command: list[str]) -> None:
+    script = Path(__file__).resolve().parents[2] / "scripts" / command[0]
+    done = subprocess.run([sys.executable, str(script), *command[1:]], capture_output=True, text=True, timeout=60,
+                          env={**os.environ, DATA_DIR_ENV: str(tmp_path / "nowhere")})
+    assert done.returncode == 2 and "Traceback" not in done.stderr
+    assert "scripts/build_tracking_set.py" in done.stderr

@@ -14,12 +14,13 @@ from rich.console import Console
 from rich.markup import escape
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-from processors.detection import DATA_DIR_ENV, find_data_dir
+from processors.detection import DATA_DIR_ENV
 from uav_tui.arguments import ArgumentParser
 from uav_tui.config import parse_processor_args
 from uav_tui.errors import KNOWN_ERRORS, ConfigError
 from uav_tui.evaluation import JobResult, TrackerSpec, evaluate, find_sequences, journal
 from uav_tui.evaluation.report import failures, outside_cell, summary, table, write_json, write_plots
+from uav_tui.evaluation.sequences import aerial_tracking_set
 from uav_tui.output.text import safe
 
 EXAMPLE = """examples:
@@ -92,7 +93,7 @@ def main(argv: list[str]) -> int:
         _check_numbers(args)
         for tracker in trackers:
             tracker.load()  # a wrong name or argument fails here, before any job starts
-        args.data = args.data or [_aerial_tracking()]
+        args.data = args.data or [aerial_tracking_set()]
         sequences = find_sequences(args.data)
         done = journal.read(out, sequences, args.threads) if args.resume else []
         if not args.resume and (out / journal.JOURNAL).exists():
@@ -143,21 +144,6 @@ def _check_numbers(args: argparse.Namespace) -> None:
         raise ConfigError("--threads must be at least 1", key="threads")
     if args.resume and args.out and args.out.resolve() != args.resume.resolve():
         raise ConfigError(f"--resume {args.resume} writes into that folder: leave out --out {args.out}", key="out")
-
-
-def _aerial_tracking() -> Path:
-    """The aerial-tracking set, where the tests find it; ConfigError saying how to get it when it is not here."""
-    try:
-        folder = find_data_dir() / "aerial-tracking"
-    except FileNotFoundError as exc:
-        missing = str(exc)
-    else:
-        if folder.is_dir():
-            return folder
-        missing = f"{folder} is not here"
-    raise ConfigError(f"no sequence folder given and the aerial-tracking set is not here ({missing}): give a "
-                      f"folder, set {DATA_DIR_ENV} to the one holding aerial-tracking/, or build the set with "
-                      "scripts/build_tracking_set.py (docs/evaluation.md)", key="data")
 
 
 def _resume_command(argv: list[str], out: Path) -> str:

@@ -25,7 +25,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from uav_tui.errors import UavError
+from processors.detection import DATA_DIR_ENV, find_data_dir
+from uav_tui.errors import ConfigError, UavError
 
 VIDEO_NAME, VIDEO_GT = "video.mp4", "gt.txt"
 OTB_IMAGES, OTB_GT = "img", "groundtruth_rect.txt"
@@ -192,3 +193,18 @@ def _is_sequence(folder: Path) -> bool:
     image_dir = folder / OTB_IMAGES if (folder / OTB_IMAGES).is_dir() else folder
     sibling_gt = folder.parent / f"{folder.name}.txt"
     return sibling_gt.is_file() and any(p.suffix.lower() in IMAGE_SUFFIXES for p in image_dir.iterdir())
+
+
+def aerial_tracking_set() -> Path:
+    """The aerial-tracking set, where the tests find it; ConfigError saying how to get it when it is not here."""
+    try:
+        folder = find_data_dir() / "aerial-tracking"
+    except FileNotFoundError as exc:
+        missing = str(exc)
+    else:
+        if folder.is_dir():
+            return folder
+        missing = f"{folder} is not here"
+    raise ConfigError(f"no sequence folder given and the aerial-tracking set is not here ({missing}): give a "
+                      f"folder, set {DATA_DIR_ENV} to the one holding aerial-tracking/, or build the set with "
+                      "scripts/build_tracking_set.py (docs/evaluation.md)", key="data")
