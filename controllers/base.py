@@ -1,89 +1,20 @@
-"""The flight-controller contract and the telemetry value type it produces."""
+"""The flight-controller contract; the telemetry value types it produces live in :mod:`uav_values.telemetry`."""
 
 from __future__ import annotations
 
 from collections.abc import AsyncIterator
-from dataclasses import dataclass, fields
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Literal, Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
+
+from uav_values.telemetry import RECEIVE_STAMPS as RECEIVE_STAMPS
+from uav_values.telemetry import TELEMETRY_FIELDS as TELEMETRY_FIELDS
+from uav_values.telemetry import PoseSample as PoseSample
+from uav_values.telemetry import Telemetry as Telemetry
 
 if TYPE_CHECKING:
     from controllers.failsafe import FailsafeReport
     from controllers.landing_target import LandingTargetFix
     from controllers.replay_timeline import ReplayTimeline
-
-
-@dataclass(frozen=True, slots=True)
-class PoseSample:
-    """One position (``north_m, east_m, down_m``), attitude (``roll, pitch, yaw`` degrees) or gimbal attitude sample
-    (``roll, pitch, yaw`` degrees: roll and pitch from the horizon, yaw from the vehicle's nose for ``gimbal``, from
-    north for ``gimbal_earth``)."""
-
-    kind: Literal["position", "attitude", "gimbal", "gimbal_earth"]
-    t_mono_ns: int
-    """When the autopilot measured it, on this computer's ``time.monotonic_ns()`` clock."""
-    values: tuple[float, float, float]
-
-
-@dataclass(frozen=True, slots=True)
-class Telemetry:
-    """The newest known value of every telemetry field; None where nothing has arrived yet.
-
-    Angles are degrees, positions metres (NED relative to the autopilot's local origin, i.e. home),
-    velocities m/s, times nanoseconds. ``t_mono_ns``/``t_wall_ns`` are when the last field changed on
-    this computer; ``fc_boot_ms`` is the autopilot's own clock where MAVLink carries it;
-    ``fc_clock_offset_ms`` is the autopilot's UTC time (from GPS, in SYSTEM_TIME) minus this
-    computer's wall clock, once the autopilot knows the time (a Pi without a network has none right).
-    """
-
-    t_mono_ns: int = 0
-    t_wall_ns: int = 0
-    fc_boot_ms: int | None = None
-    fc_clock_offset_ms: int | None = None
-    lat_deg: float | None = None
-    lon_deg: float | None = None
-    abs_alt_m: float | None = None
-    rel_alt_m: float | None = None
-    rangefinder_m: float | None = None
-    """A downward rangefinder's reading (along the vehicle's down axis), None without one or out of its range."""
-    terrain_height_m: float | None = None
-    """The autopilot's height above the terrain (PX4's ALTITUDE ``bottom_clearance``, ArduPilot's TERRAIN_REPORT
-    ``current_height``; see :mod:`controllers.mavsdk_terrain`), None when it reports none."""
-    rangefinder_t_ns: int | None = None
-    """When the last ``rangefinder_m`` reading was received (monotonic ns; set by the platform)."""
-    terrain_t_ns: int | None = None
-    """When the last ``terrain_height_m`` reading was received (monotonic ns; set by the platform)."""
-    roll_deg: float | None = None
-    pitch_deg: float | None = None
-    yaw_deg: float | None = None
-    north_m: float | None = None
-    east_m: float | None = None
-    down_m: float | None = None
-    vn_ms: float | None = None
-    ve_ms: float | None = None
-    vd_ms: float | None = None
-    battery_v: float | None = None
-    battery_pct: float | None = None
-    flight_mode: str | None = None
-    """MAVSDK's name (HOLD, OFFBOARD...), or the HEARTBEAT's where it has none (:mod:`controllers.flight_modes`)."""
-    armed: bool | None = None
-    in_air: bool | None = None
-    gps_fix: str | None = None
-    satellites: int | None = None
-    health_ok: bool | None = None
-    heartbeat_age_s: float | None = None
-    gimbal_roll_deg: float | None = None
-    gimbal_pitch_deg: float | None = None
-    """The gimbal's attitude where there is one (gimbal protocol v2): roll and pitch from the horizon (pitch
-    positive up), yaw from north; the camera on it looks along its forward axis."""
-    gimbal_yaw_deg: float | None = None
-
-
-TELEMETRY_FIELDS: tuple[str, ...] = tuple(f.name for f in fields(Telemetry))
-"""Column order of ``Telemetry`` (and of telemetry.csv)."""
-RECEIVE_STAMPS = {"rangefinder_m": "rangefinder_t_ns", "terrain_height_m": "terrain_t_ns"}
-"""Readings whose receive time the platform keeps (their age decides whether geo-location uses them): field -> the
-field of its receive time."""
 
 
 @runtime_checkable

@@ -5,11 +5,14 @@ from __future__ import annotations
 import inspect
 import math
 from dataclasses import dataclass
-from typing import Any, Protocol, TypeVar, runtime_checkable
+from typing import TYPE_CHECKING, Any, Protocol, TypeVar, runtime_checkable
 
 import numpy as np
 
 from processors.errors import ProcessorLoadError
+
+if TYPE_CHECKING:
+    from processors.frame_telemetry import FrameTelemetry
 
 OPTIONAL_METHODS = ("catch_cmd", "customize_processing", "getPreparedVector", "getLandingTarget",
                     "getGimbalPointing")
@@ -49,7 +52,7 @@ class FrameProcessor(Protocol):
     several boxes with a label and a score (:mod:`processors.detections`).
     """
 
-    tmMgr: Any
+    tmMgr: FrameTelemetry | None
 
     def photo_processing(self, frame: np.ndarray) -> Any: ...
 

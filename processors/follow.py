@@ -9,11 +9,11 @@ supplies the tracking through four hooks and the ``box``/``selected`` properties
 from __future__ import annotations
 
 import logging
-from typing import Any
 
 import cv2
 import numpy as np
 
+from processors.frame_telemetry import FrameTelemetry
 from processors.gimbal import GimbalPointing
 from processors.gimbal_steering import GimbalSteering
 from processors.steering import Box, Steering, Vector, as_box, draw_target
@@ -55,7 +55,7 @@ class TargetFollower:
                  follow: str = "vehicle", gimbal_gain: float = 2.0, gimbal_max_rate: float = 60.0) -> None:
         if follow not in FOLLOW_MODES:
             raise ValueError(f"follow must be one of {', '.join(FOLLOW_MODES)}, got {follow!r}")
-        self.tmMgr: Any = None
+        self.tmMgr: FrameTelemetry | None = None
         self.steering = Steering(camera, gain, dead_band, max_speed, vector_t)
         self.follow = follow
         self.gimbal_steering = GimbalSteering(gimbal_gain, max_rate=gimbal_max_rate)
@@ -161,9 +161,8 @@ class TargetFollower:
     def _gimbal_rates(self, box: Box, size: tuple[int, int]) -> GimbalPointing:
         """Rates towards ``box`` with the frame's camera model and the gimbal's pitch at its capture, when known."""
         tm = self.tmMgr
-        camera = tm.camera() if tm is not None and hasattr(tm, "camera") else None
-        t = tm.snapshot() if tm is not None and hasattr(tm, "snapshot") else None
-        pitch = getattr(t, "gimbal_pitch_deg", None)
+        camera = tm.camera() if tm is not None else None
+        pitch = tm.snapshot().gimbal_pitch_deg if tm is not None else None
         return self.gimbal_steering.rates(box, size, camera, None if pitch is None else float(pitch))
 
     def _work_frame(self, frame: np.ndarray) -> np.ndarray:

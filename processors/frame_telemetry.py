@@ -21,10 +21,11 @@ from __future__ import annotations
 import logging
 import time
 from collections.abc import Callable, Mapping
-from types import SimpleNamespace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+from uav_values.telemetry import TELEMETRY_FIELDS, Snapshot
 
 if TYPE_CHECKING:
     from sources.camera_model import CameraModel
@@ -37,30 +38,11 @@ about 60 kB, so 5 a second fill about 1 GB an hour (position hold's fast mode es
 JPEG_BYTES_PER_PIXEL = 0.19
 """About 1.5 bits a pixel: a quality-90 JPEG of aerial video (the estimate of the throttle's warning)."""
 
+_FIELDS = frozenset(TELEMETRY_FIELDS) - {"heartbeat_age_s"}
+
 Store = Callable[[np.ndarray, dict[str, Any]], None]
 """``store(image, extra)``: what the host does with one save; it copies the pixels it keeps (the processor may
 draw on the array after the call)."""
-
-
-class Snapshot(SimpleNamespace):
-    """The telemetry at the capture of the frame being processed, and that frame's number and capture time.
-
-    Telemetry fields as in ``controllers.base.Telemetry`` (None where unknown: no vehicle, or nothing received
-    before the capture), and:
-
-    * ``frame_seq``: the frame's capture number, 1 for the first frame of the camera (eval: of the sequence);
-    * ``frame_t_ns``: its capture time, monotonic nanoseconds: the clock to pace by. Live it is
-      ``time.monotonic_ns()`` at capture, in a replay the recorded capture time, in eval the frame's time in the
-      sequence (``(frame_seq - 1) / fps``);
-    * ``frame_t_wall_ns``: the capture's wall-clock time (eval: 0).
-
-    Outside ``photo_processing`` (``catch_cmd``, ``customize_processing``) it is the last frame's.
-    """
-
-    @property
-    def frame_t_s(self) -> float:
-        """``frame_t_ns`` in seconds."""
-        return self.frame_t_ns / 1e9
 
 
 class FrameTelemetry:
@@ -80,7 +62,7 @@ class FrameTelemetry:
         """Saves handed to the store."""
         self.saves_throttled = 0
         """Saves dropped for coming faster than ``save_max_hz``."""
-        self.current = Snapshot(frame_seq=0, frame_t_ns=0, frame_t_wall_ns=0)
+        self.current = Snapshot()
         self.camera_model: CameraModel | None = None
         """Set by the host: the model of the source the frames come from."""
         self._tokens = 0.0
@@ -91,8 +73,10 @@ class FrameTelemetry:
 
     def begin(self, seq: int, t_ns: int, t_wall_ns: int, telemetry: Mapping[str, Any],
               heartbeat_age_s: float | None) -> None:
-        """The host, before ``photo_processing``: the frame's number, capture times and the telemetry at capture."""
-        self.current = Snapshot(**telemetry, heartbeat_age_s=heartbeat_age_s, frame_seq=seq, frame_t_ns=t_ns,
+        """The host, before ``photo_processing``: the frame's number, capture times and the telemetry at capture
+        (fields of :class:`~uav_values.telemetry.Telemetry`; any other key is not telemetry and is left out)."""
+        known = {name: value for name, value in telemetry.items() if name in _FIELDS}
+        self.current = Snapshot(**known, heartbeat_age_s=heartbeat_age_s, frame_seq=seq, frame_t_ns=t_ns,
                                 frame_t_wall_ns=t_wall_ns)
 
     def snapshot(self) -> Snapshot:
@@ -105,7 +89,7 @@ class FrameTelemetry:
 
     def link_alive(self, max_age_s: float = 1.5) -> bool:
         """True when the autopilot's heartbeat was younger than ``max_age_s`` when the frame was handed over."""
-        age = getattr(self.current, "heartbeat_age_s", None)
+        age = self.current.heartbeat_age_s
         return age is not None and age < max_age_s
 
     def save(self, frame: Any, **extra: Any) -> None:
@@ -150,5 +134,5 @@ def frame_time_s(tm_mgr: Any) -> float:
     Outside a host (a processor called directly, a ``tmMgr`` of None or without a frame clock) there is no
     frame clock, and this is ``time.monotonic()``.
     """
-    t_ns = getattr(tm_mgr.snapshot(), "frame_t_ns", None) if tm_mgr is not None else None
-    return t_ns / 1e9 if isinstance(t_ns, int) else time.monotonic()
+    snapshot = tm_mgr.snapshot() if tm_mgr is not None else None
+    return snapshot.frame_t_s if isinstance(snapshot, Snapshot) else time.monotonic()

@@ -10,7 +10,7 @@ import cv2
 import numpy as np
 
 from processors import sift_match
-from processors.frame_telemetry import frame_time_s
+from processors.frame_telemetry import FrameTelemetry, frame_time_s
 from processors.steering import Vector, draw_vector, velocity_toward
 
 logger = logging.getLogger(__name__)
@@ -81,7 +81,7 @@ class SIFTPositionHold:
         cfg = dict(_MODES[mode])
         overrides = {"work_width": work_width, "sift_features": sift_features, "interval_s": interval_s}
         cfg.update({k: v for k, v in overrides.items() if v is not None})
-        self.tmMgr = None
+        self.tmMgr: FrameTelemetry | None = None
         self.mode = mode
         self.hfov_deg = hfov_deg
         self.altitude_m = altitude_m
@@ -162,10 +162,10 @@ class SIFTPositionHold:
 
     def _telemetry(self) -> tuple[float, float, float]:
         """(altitude m, roll deg, pitch deg); fallbacks where telemetry is missing."""
-        snap = self.tmMgr.snapshot() if self.tmMgr is not None else None
-        alt = getattr(snap, "rel_alt_m", None)
-        roll = getattr(snap, "roll_deg", None) or 0.0
-        pitch = getattr(snap, "pitch_deg", None) or 0.0
+        if self.tmMgr is None:
+            return self.altitude_m, 0.0, 0.0
+        snap = self.tmMgr.snapshot()
+        alt, roll, pitch = snap.rel_alt_m, snap.roll_deg or 0.0, snap.pitch_deg or 0.0
         return (alt if alt is not None and alt > 0.3 else self.altitude_m), roll, pitch
 
     def _store_reference(self, work: np.ndarray, spot: tuple[float, float], at_centre: bool) -> None:

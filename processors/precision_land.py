@@ -5,7 +5,7 @@ from __future__ import annotations
 import logging
 import math
 import re
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import cv2
 import numpy as np
@@ -14,6 +14,7 @@ from processors import markers
 from processors.landing_target import LandingTarget
 
 if TYPE_CHECKING:
+    from processors.frame_telemetry import FrameTelemetry
     from sources.camera_model import CameraModel
 
 logger = logging.getLogger(__name__)
@@ -67,7 +68,7 @@ class PrecisionLand:
             raise ValueError(f"marker_size_m {marker_size_m:g} must be 0.01..100 metres (the black square's side)")
         if marker_id < 0:
             raise ValueError(f"marker_id {marker_id} must be >= 0")
-        self.tmMgr: Any = None
+        self.tmMgr: FrameTelemetry | None = None
         self.dictionary = markers.dictionary_name(dictionary)
         self.marker_id = marker_id
         self.marker_size_m = marker_size_m
@@ -138,17 +139,19 @@ class PrecisionLand:
         mismatch = self._size_check(pose, camera)
         if mismatch:
             return mismatch
-        snapshot = self.tmMgr.snapshot()
-        self._target = LandingTarget(tuple(pose.tvec), pose.distance_m, getattr(snapshot, "frame_seq", None))
+        seq = self.tmMgr.snapshot().frame_seq if self.tmMgr is not None else None
+        self._target = LandingTarget(tuple(pose.tvec), pose.distance_m, seq)
         return f"marker {self.marker_id} at {pose.distance_m:.2f} m"
 
     def _size_check(self, pose: markers.MarkerPose, camera: CameraModel) -> str | None:
         """Why the distance does not fit the telemetry's height above home, or None when it fits (or can't say)."""
+        if self.tmMgr is None:
+            return None
         snapshot = self.tmMgr.snapshot()
-        height = getattr(snapshot, "rel_alt_m", None)
+        height = snapshot.rel_alt_m
         if self.size_tolerance is None or height is None or height < MIN_CHECK_HEIGHT_M:
             return None
-        roll, pitch = (math.radians(getattr(snapshot, name, None) or 0.0) for name in ("roll_deg", "pitch_deg"))
+        roll, pitch = (math.radians(angle or 0.0) for angle in (snapshot.roll_deg, snapshot.pitch_deg))
         forward, right, down = camera.ray_in_body(pose.tvec)
         # NED down of a body-frame vector: the third row of Rz(yaw) Ry(pitch) Rx(roll).
         drop = -math.sin(pitch) * forward + math.cos(pitch) * (math.sin(roll) * right + math.cos(roll) * down)

@@ -114,3 +114,16 @@ def test_modules_and_classes_stay_readable_in_one_sitting() -> None:
             if isinstance(node, ast.ClassDef) and (lines := (node.end_lineno or 0) - node.lineno + 1) > 300:
                 too_long.append(f"{path.relative_to(ROOT)}: class {node.name}, {lines} lines")
     assert too_long == []
+
+
+def test_the_value_types_are_a_leaf() -> None:
+    """``uav_values`` imports only the standard library and NumPy: every level may import it, it imports none."""
+    allowed = set(sys.stdlib_module_names) | {"numpy", "uav_values", "__future__"}
+    found = set()
+    for path in (ROOT / "uav_values").rglob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Import):
+                found |= {alias.name.split(".")[0] for alias in node.names}
+            elif isinstance(node, ast.ImportFrom) and not node.level:
+                found.add((node.module or "").split(".")[0])
+    assert found and found <= allowed, found - allowed

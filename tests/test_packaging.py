@@ -36,7 +36,7 @@ def test_the_build_asks_for_a_setuptools_that_reads_the_spdx_license() -> None:
     assert not setuptools.specifier.contains("76.1.0") and setuptools.specifier.contains("77.0.0")  # PEP 639: 77
 
 
-PACKAGES = ("uav_tui", "processors", "sources", "controllers")
+PACKAGES = ("uav_tui", "uav_values", "processors", "sources", "controllers")
 
 INSTALLED_CHECK = """
 import sys

@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import dataclasses
 import logging
+import typing
 
 import numpy as np
 import pytest
 
 from processors.frame_telemetry import FrameTelemetry, frame_time_s
+from uav_values import Snapshot, Telemetry
 
 IMAGE = np.zeros((480, 640, 3), np.uint8)
 
@@ -21,6 +24,19 @@ def test_the_snapshot_is_the_frames_telemetry_number_and_capture_time() -> None:
     assert (seen.rel_alt_m, seen.armed, seen.heartbeat_age_s) == (12.5, True, 0.2)
     assert tm.link_alive() and not tm.link_alive(0.1)
     assert frame_time_s(tm) == 2.5
+
+
+def test_the_snapshot_is_a_frozen_record_with_every_field_typed() -> None:
+    tm = FrameTelemetry(lambda image, extra: None)
+    assert tm.snapshot() == Snapshot()  # before the first frame: nothing known, frame 0
+    tm.begin(3, 100, 0, {"rel_alt_m": 4.0, "not_telemetry": 1}, None)  # a key that is no field is left out
+    seen = tm.snapshot()
+    assert type(seen) is Snapshot and seen.rel_alt_m == 4.0 and seen.pitch_deg is None
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        seen.rel_alt_m = 5.0  # type: ignore[misc]
+    hints = typing.get_type_hints(Snapshot)
+    assert {f.name for f in dataclasses.fields(Snapshot)} == set(hints)  # every field has a type
+    assert {f.name for f in dataclasses.fields(Telemetry)} < set(hints) and hints["rel_alt_m"] == float | None
 
 
 def test_saves_faster_than_the_rate_are_dropped_by_frame_time_and_said_once(caplog: pytest.LogCaptureFixture) -> None:
