@@ -39,13 +39,11 @@ import asyncio
 import itertools
 import json
 import multiprocessing
-import os
 import sys
 import tempfile
 import time
 from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import ProcessPoolExecutor
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -57,12 +55,10 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from processors import load_processor  # noqa: E402
 from processors.base import Box, read_box  # noqa: E402
 from sources.synthetic import SyntheticScene  # noqa: E402
-from uav_tui.config import load_config  # noqa: E402
-from uav_tui.core import UavCore  # noqa: E402
 from uav_tui.errors import ConfigError  # noqa: E402
 from uav_tui.evaluation import find_sequences  # noqa: E402
 from uav_tui.evaluation.sequences import aerial_tracking_set  # noqa: E402
-from uav_tui.hosting.host import ProcessedFrame  # noqa: E402
+from uav_tui.evaluation.throughput import Replayed, latency_percentiles, platform_run  # noqa: E402
 
 PROCESSORS = ("template", "csrt", "position_hold", "yolo")
 RESOLUTIONS = ((640, 480), (1280, 720))
@@ -71,9 +67,6 @@ GOALS = {"fps_ratio_min": 0.95, "cpu_ratio_max": 1.1, "handoff_p95_ms_max_at_128
 
 
 FRAMES = 150
-WARM_UP_S = 3.5
-"""Before measuring: decoder and caches warm, and the file source has chosen its decoder thread count (a window
-on each, see ``sources.decoder_threads``)."""
 AERIAL_FRAMES_PER_SEQUENCE = 25
 BARE_WARM_UP_FRAMES = 30
 """Processed untimed before the bare loop's measured frames, when no target was selected."""
@@ -115,22 +108,6 @@ def target_roi(width: int, height: int) -> tuple[int, int, int, int]:
     return width // 2 - width // 16, height // 2 - height // 16, width // 8, height // 8
 
 
-@dataclass(frozen=True)
-class Replayed:
-    """The frames a platform run processed, by capture sequence number (1: the video's first frame)."""
-
-    selected: int | None
-    """The frame the target was selected on (csrt), None without one."""
-    first: int
-    last: int
-    """The measured frames, both included."""
-    seqs: list[int]
-    """The measured frames it processed: all from ``first`` to ``last`` unless it skipped some (a late reader
-    skips frames, as the camera's newest frame wins)."""
-    boxes: list[Box | None]
-    """What the processor tracked after each frame of ``seqs`` (its ``box``)."""
-
-
 def bare_loop(path: Path, processor: str, replayed: Replayed, roi: Box | None, fps: float | None) -> dict[str, Any]:
     """The frames ``replayed`` says: untimed from the selection (or :data:`BARE_WARM_UP_FRAMES` frames before the
     measured ones), then the measured ones as fast as it goes, or paced at ``fps`` like a camera (then with
@@ -170,62 +147,6 @@ def _read_looping(cap: cv2.VideoCapture) -> np.ndarray:
         cap.set(cv2.CAP_PROP_POS_FRAMES, 0)
         ok, frame = cap.read()
     return frame
-
-
-def latency_percentiles(ms: np.ndarray) -> dict[str, float]:
-    return {"latency_ms_p50": float(np.percentile(ms, 50)), "latency_ms_p95": float(np.percentile(ms, 95))}
-
-
-def cpu_s(pid: int | None) -> float:
-    """CPU seconds (user + system) of another process, from /proc; 0 when there is none."""
-    if pid is None or pid == os.getpid():
-        return 0.0
-    with open(f"/proc/{pid}/stat") as stat:
-        fields = stat.read().rpartition(")")[2].split()
-    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
-
-
-async def platform_run(source: str, processor: str, isolation: str, seconds: float,
-                       roi: Box | None) -> tuple[dict[str, float], Replayed]:
-    """The measures of one run, and which frames it processed."""
-    core = UavCore(load_config(None, {"source": source, "processor": processor, "fc": "none", "record": False,
-                                      "isolation": isolation, "processor_call_timeout": 30.0}))
-    results: list[tuple[int, int, int, int]] = []  # (seq, captured, started, ready): never keep the images
-    boxes: list[Box | None] = []
-    selected: list[int] = []
-
-    def record(r: ProcessedFrame) -> None:
-        results.append((r.frame.seq, r.frame.t_mono_ns, r.t_start_ns, r.t_vector_ns or r.t_end_ns))
-        boxes.append(r.box)
-        if r.box is not None and not selected:
-            selected.append(r.frame.seq)  # the first frame tracked: the one the target was selected on
-
-    await core.start()
-    core.add_frame_listener(record)
-    if roi is not None:
-        await core.execute("roi {} {} {} {}".format(*roi))
-    await asyncio.sleep(WARM_UP_S)
-    child = core.worker.state().pid
-    results.clear()
-    boxes.clear()
-    wall0, cpu0, child0 = time.perf_counter(), time.process_time(), cpu_s(child)
-    await asyncio.sleep(seconds)
-    wall, cpu = time.perf_counter() - wall0, time.process_time() - cpu0 + cpu_s(child) - child0
-    snapshot, measured_boxes = list(results), boxes[:len(results)]
-    await core.stop()
-    stamps = np.array(snapshot, dtype=np.int64).reshape(-1, 4)
-    ready = np.maximum(stamps[1:, 1], stamps[:-1, 3])  # the frame is there and the processor is free
-    handoff = np.clip(stamps[1:, 2] - ready, 0, None) / 1e6
-    measures = {
-        "fps": len(snapshot) / wall,
-        "cpu_s_per_frame": cpu / max(1, len(snapshot)),
-        "frames": len(snapshot),
-        "handoff_ms_p50": float(np.percentile(handoff, 50)),
-        "handoff_ms_p95": float(np.percentile(handoff, 95)),
-        **latency_percentiles((stamps[:, 3] - stamps[:, 1]) / 1e6),  # capture to result
-    }
-    seqs = [int(seq) for seq in stamps[:, 0]]
-    return measures, Replayed(selected[0] if selected else None, seqs[0], seqs[-1], seqs, measured_boxes)
 
 
 def rounds(processor: str, size: tuple[int, int], video: Path, seconds: float, count: int,

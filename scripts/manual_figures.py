@@ -3,6 +3,7 @@
     .venv/bin/python scripts/bench_tracking.py > scripts/results/tracking.json
     .venv/bin/python scripts/bench_precland.py > scripts/results/precland.json
     .venv/bin/python scripts/bench_geolocation.py > scripts/results/geolocation.json
+    .venv/bin/uav-tui bench --out scripts/results/bench.json
     .venv/bin/python scripts/manual_figures.py           # rewrites the marked blocks of docs/benchmarks.md
     .venv/bin/python scripts/manual_figures.py --check   # exit 1 when docs/benchmarks.md differs from the JSON
 
@@ -133,8 +134,31 @@ def geolocation(result: dict[str, Any]) -> str:
     return "\n".join([*errors, "", *added, "", *costs, "", *notes]) + "\n"
 
 
+PAPER_TABLE_1 = {"template": "30", "csrt": "18 (CSRT + SIFT)", "position_hold": "2 (SIFT hold)", "yolo": "3"}
+"""The seed paper's Table 1: FPS of its processors on a Raspberry Pi 4B at 640x480."""
+
+
+def bench(result: dict[str, Any]) -> str:
+    """``uav-tui bench``: each processor's FPS and CPU a frame at each resolution, beside the paper's Table 1."""
+    resolutions = list(dict.fromkeys(row["resolution"] for row in result["rows"]))
+    rows = ["| processor | paper, Pi 4B 640x480 FPS | " + " | ".join(f"{r} FPS | {r} CPU ms a frame"
+                                                                     for r in resolutions) + " |",
+            "| --- | --- | " + " | ".join("--- | ---" for _ in resolutions) + " |"]
+    for processor in dict.fromkeys(row["processor"] for row in result["rows"]):
+        cells = [f"`{processor}`", PAPER_TABLE_1.get(processor, "-")]
+        for resolution in resolutions:
+            row = next(r for r in result["rows"] if (r["processor"], r["resolution"]) == (processor, resolution))
+            cells += ["-", "-"] if "error" in row else [f"{row['fps']:g}", f"{row['cpu_ms_per_frame']:g}"]
+        rows.append("| " + " | ".join(cells) + " |")
+    machine = result["machine"]
+    notes = [f"{machine['cpus']} cores ({machine['machine']}{', ' + machine['model'] if machine['model'] else ''}), "
+             f"{result['seconds']:g} s measured each, {result['video']}; load average "
+             f"{machine['load_average_1min_at_end']:g} at the end."]
+    return "\n".join([*rows, "", *notes]) + "\n"
+
+
 RENDERERS: dict[str, Callable[[dict[str, Any]], str]] = {"tracking": tracking, "precland": precland,
-                                                         "geolocation": geolocation}
+                                                         "geolocation": geolocation, "bench": bench}
 """Block name -> how its JSON (``scripts/results/NAME.json``) is written into the page."""
 
 

@@ -3,6 +3,7 @@
 ``uav-tui [options]`` runs; ``uav-tui sim`` starts the simulated vehicle on its own;
 ``uav-tui runs`` lists recorded runs; ``uav-tui report [RUN]`` draws a run's plots; ``uav-tui replay RUN...``
 replays recorded runs through a processor; ``uav-tui eval DATA`` scores processors on annotated video;
+``uav-tui bench`` measures each reference processor's FPS and CPU on this computer;
 ``uav-tui calibrate`` writes a camera's calibration file from views of a chessboard.
 """
 
@@ -20,7 +21,7 @@ from uav_tui.errors import CONFIG_ERRORS, error_line
 from uav_tui.flight.commands import help_text
 from uav_tui.output.text import SafeFormatter, safe
 
-TOOLS = ("sim", "runs", "report", "export", "replay", "eval", "calibrate")
+TOOLS = ("sim", "runs", "report", "export", "replay", "eval", "bench", "calibrate")
 """Sub-commands; anything else on the command line configures a run."""
 
 
@@ -28,8 +29,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser = ArgumentParser(
         prog="uav-tui", suggest=TOOLS,
         description="Camera -> your algorithm -> flight controller, with an operator dashboard.",
-        epilog=f"tools: uav-tui sim | runs | report [RUN] | export [RUN] | replay RUN... | eval DATA | calibrate "
-               f"(each has --help)\n\n"
+        epilog=f"tools: uav-tui sim | runs | report [RUN] | export [RUN] | replay RUN... | eval DATA | bench | "
+               f"calibrate (each has --help)\n\n"
                f"commands (keys, --script, web):\n{help_text()}",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
@@ -96,6 +97,10 @@ def _run_tool(name: str, argv: list[str]) -> int:
         from uav_tui.evaluation import cli as eval_cli
 
         return eval_cli.main(argv)
+    if name == "bench":
+        from uav_tui.evaluation import bench_cli
+
+        return bench_cli.main(argv)
     if name == "calibrate":
         from uav_tui import calibrate_cli
 

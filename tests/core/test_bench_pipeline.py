@@ -43,12 +43,12 @@ def boat_video(bench: ModuleType, aerial_tracking: Path, path: Path) -> tuple[in
     return int(x), int(y), int(w), int(h)
 
 
-def test_the_bare_loop_replays_the_frames_the_platform_tracked(aerial_tracking: Path, bench: ModuleType, tmp_path: Path,
-                                                               monkeypatch: pytest.MonkeyPatch) -> None:
+def test_the_bare_loop_replays_the_frames_the_platform_tracked(aerial_tracking: Path, bench: ModuleType,
+                                                               tmp_path: Path) -> None:
     video = tmp_path / "boat.mp4"
     roi = boat_video(bench, aerial_tracking, video)
-    monkeypatch.setattr(bench, "WARM_UP_S", 1.0)
-    run, replayed = asyncio.run(bench.platform_run(f"file:{video}?realtime=0", "csrt", "process", 1.0, roi))
+    run, replayed = asyncio.run(bench.platform_run(f"file:{video}?realtime=0", "csrt", "process", 1.0, roi,
+                                                   warm_up_s=1.0))
     assert replayed.selected is not None and replayed.selected < replayed.first
     assert run["frames"] == replayed.last - replayed.first + 1 == len(replayed.boxes)  # lockstep: none skipped
     assert any(replayed.boxes)  # it tracked something
