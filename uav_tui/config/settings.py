@@ -77,6 +77,13 @@ class RecordingConfig:
                               maximum=1e7, default=200)
 
 
+def _video_out(uri: str) -> None:
+    if uri.strip():
+        from uav_tui.web.rtp import Destination
+
+        Destination.parse(uri)
+
+
 @dataclass(frozen=True)
 class WebConfig:
     """The optional WebRTC side page."""
@@ -92,6 +99,13 @@ class WebConfig:
     web_fps: float = _key("frame rate of the streamed video", minimum=1, maximum=60, default=15)
     camera_mavlink: str = _key("MAVLink camera endpoint for ground-station click-to-track, e.g. "
                                "udpin:0.0.0.0:14580 (empty = off)", default="")
+    video_out: str = _key("the processed video for a ground station, H.264 over RTP/UDP: rtp://HOST:PORT of the "
+                          "ground station (QGroundControl listens on 5600; empty = off)", default="",
+                          parse=_video_out, metavar="rtp://HOST:PORT")
+    video_out_width: int = _key("width of the ground-station video, px", minimum=64, maximum=1920, default=640)
+    video_out_fps: float = _key("frame rate of the ground-station video", minimum=1, maximum=60, default=15)
+    video_out_kbps: int = _key("bit rate of the ground-station video, kbit/s (a telemetry-grade radio carries "
+                               "about 1000)", minimum=50, maximum=20000, default=1000)
 
 
 def _home(text: str) -> Home | None:

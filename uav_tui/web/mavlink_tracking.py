@@ -35,7 +35,7 @@ import time
 from collections.abc import Callable
 from dataclasses import asdict
 from functools import partial
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from pymavlink.dialects.v20 import common as mavlink
 
@@ -49,6 +49,9 @@ from uav_tui.output.text import describe
 from uav_tui.web.failures import HandlerFailures
 from uav_tui.web.roi import point_to_roi, rect_to_roi
 from uav_tui.web.view import ServedCore
+
+if TYPE_CHECKING:
+    from uav_tui.web.ground_video import GroundVideo
 
 logger = logging.getLogger(__name__)
 
@@ -113,8 +116,10 @@ class CameraTracking:
     """
 
     def __init__(self, core: ServedCore, address: str, *, system_id: int = 1,
-                 component_id: int = mavlink.MAV_COMP_ID_CAMERA) -> None:
+                 component_id: int = mavlink.MAV_COMP_ID_CAMERA, video: GroundVideo | None = None) -> None:
         self.core = core
+        self.video = video
+        """The ground-station video this component announces (VIDEO_STREAM_INFORMATION), None without one."""
         self.address = address
         self.scheme, self.host, self.port = parse_endpoint(address)
         self.mav = mavlink.MAVLink(_Writer(self), srcSystem=system_id, srcComponent=component_id)
@@ -267,6 +272,12 @@ class CameraTracking:
         if command == mavlink.MAV_CMD_REQUEST_CAMERA_INFORMATION or \
                 requested == mavlink.MAVLINK_MSG_ID_CAMERA_INFORMATION:
             return mavlink.MAV_RESULT_ACCEPTED, self._send_information
+        if self.video is not None and (command == mavlink.MAV_CMD_REQUEST_VIDEO_STREAM_INFORMATION
+                                       or requested == mavlink.MAVLINK_MSG_ID_VIDEO_STREAM_INFORMATION):
+            return mavlink.MAV_RESULT_ACCEPTED, self._send_video_information
+        if self.video is not None and (command == mavlink.MAV_CMD_REQUEST_VIDEO_STREAM_STATUS
+                                       or requested == mavlink.MAVLINK_MSG_ID_VIDEO_STREAM_STATUS):
+            return mavlink.MAV_RESULT_ACCEPTED, self._send_video_status
         if requested == mavlink.MAVLINK_MSG_ID_CAMERA_TRACKING_IMAGE_STATUS:
             return mavlink.MAV_RESULT_ACCEPTED, self._send_image_status
         if requested == mavlink.MAVLINK_MSG_ID_CAMERA_TRACKING_GEO_STATUS:
@@ -349,7 +360,25 @@ class CameraTracking:
             0, list(b"uav-tui".ljust(32, b"\0")), list(b"processed camera".ljust(32, b"\0")), 0, 0.0, 0.0, 0.0,
             size[0], size[1], 0,
             mavlink.CAMERA_CAP_FLAGS_HAS_TRACKING_POINT | mavlink.CAMERA_CAP_FLAGS_HAS_TRACKING_RECTANGLE
-            | mavlink.CAMERA_CAP_FLAGS_HAS_TRACKING_GEO_STATUS, 0, b"")
+            | mavlink.CAMERA_CAP_FLAGS_HAS_TRACKING_GEO_STATUS
+            | (mavlink.CAMERA_CAP_FLAGS_HAS_VIDEO_STREAM if self.video is not None else 0), 0, b"")
+
+    def _video_fields(self) -> tuple[float, int, int, int, int, int]:
+        """(framerate, width, height, bit rate, rotation, horizontal field of view) of the announced stream."""
+        assert self.video is not None
+        width, height = self.video.size
+        camera = self.core.camera
+        hfov = round(math.degrees(2 * math.atan(camera.width / (2 * camera.fx)))) if camera is not None else 0
+        return self.video.fps, width, height, self.video.kbps * 1000, 0, hfov
+
+    def _send_video_information(self) -> None:
+        assert self.video is not None
+        self.mav.video_stream_information_send(
+            1, 1, mavlink.VIDEO_STREAM_TYPE_RTPUDP, mavlink.VIDEO_STREAM_STATUS_FLAGS_RUNNING, *self._video_fields(),
+            b"uav-tui processed", self.video.receiver_uri.encode(), mavlink.VIDEO_STREAM_ENCODING_H264)
+
+    def _send_video_status(self) -> None:
+        self.mav.video_stream_status_send(1, mavlink.VIDEO_STREAM_STATUS_FLAGS_RUNNING, *self._video_fields())
 
 
 def _or_nan(value: float | None) -> float:

@@ -1,19 +1,23 @@
-"""The side channels a run starts when configured: the web page and MAVLink click-to-track."""
+"""The side channels a run starts when configured: the web page, MAVLink click-to-track and the ground-station
+video."""
 
 from __future__ import annotations
 
+import asyncio
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:  # aiortc and pymavlink are imported only when the side channels are switched on
     from uav_tui.config import WebConfig
     from uav_tui.events import EventLog
+    from uav_tui.web.ground_video import GroundVideo
     from uav_tui.web.mavlink_tracking import CameraTracking
     from uav_tui.web.server import WebServer
     from uav_tui.web.view import ServedCore
 
 
 class SideChannels:
-    """The web page and MAVLink click-to-track, each started when ``[web]`` switches it on.
+    """The web page, MAVLink click-to-track and the ground-station video, each started when ``[web]`` switches it
+    on.
 
     Args:
         config: the ``[web]`` settings.
@@ -27,9 +31,22 @@ class SideChannels:
         """The web page's WebServer (``web.url`` has the token) when ``web`` is on, else None."""
         self.camera_tracking: CameraTracking | None = None
         """The MAVLink camera component when ``camera_mavlink`` is set, else None."""
+        self.video: GroundVideo | None = None
+        """The ground-station video when ``video_out`` is set, else None (the camera component announces it)."""
 
     async def start(self, core: ServedCore) -> None:
-        """Start the channels switched on, serving ``core`` (aiortc and pymavlink are imported only then)."""
+        """Start the channels switched on, serving ``core`` (aiortc, PyAV and pymavlink are imported only then)."""
+        if self.config.video_out:
+            from uav_tui.web.ground_video import GroundVideo
+            from uav_tui.web.rtp import Destination
+
+            destination = Destination.parse(self.config.video_out)
+            self.video = GroundVideo(core, destination, width=self.config.video_out_width,
+                                     fps=self.config.video_out_fps, kbps=self.config.video_out_kbps)
+            self.video.start()
+            self.events.emit("info", "web", f"ground-station video: H.264 over RTP to {destination.uri} "
+                             f"({self.video.encoder}); in QGroundControl: Video Source UDP h.264, port "
+                             f"{destination.port}")
         if self.config.web:
             from uav_tui.web.server import WebServer
 
@@ -39,7 +56,7 @@ class SideChannels:
         if self.config.camera_mavlink:
             from uav_tui.web.mavlink_tracking import CameraTracking
 
-            self.camera_tracking = CameraTracking(core, self.config.camera_mavlink)
+            self.camera_tracking = CameraTracking(core, self.config.camera_mavlink, video=self.video)
             await self.camera_tracking.start()
             self.events.emit("info", "web", f"camera tracking on {self.config.camera_mavlink}")
 
@@ -48,3 +65,7 @@ class SideChannels:
         for side in (self.web, self.camera_tracking):
             if side is not None:
                 await side.stop()
+        if self.video is not None:
+            video, self.video = self.video, None
+            video.stop()
+            await asyncio.get_running_loop().run_in_executor(None, video.join)
