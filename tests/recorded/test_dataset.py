@@ -35,7 +35,7 @@ def _record_run(tmp_path):
     first = core.process(image, 1, saves)
     time.sleep(0.005)
     second = core.process(image, 2, fails)
-    time.sleep(0.01)
+    time.sleep(0.31)  # the fields the next sample does not change count as constant (not held past their value)
     core.telemetry.apply({"north_m": 2.0, "yaw_deg": -179.0, "armed": True, "flight_mode": "OFFBOARD"})
     core.events.emit("warning", "autonomy", "vector rejected: vx is nan,\nsecond line", "tui")
     recorder.close()
@@ -86,3 +86,23 @@ def test_load_round_trips_values_and_dtypes(tmp_path):
 def test_load_refuses_a_folder_that_is_not_a_run(tmp_path):
     with pytest.raises(UavError, match="not a recorded run"):
         dataset.load(tmp_path)
+
+
+def test_load_lists_the_frames_whose_telemetry_is_extrapolated_and_by_how_much(tmp_path):
+    core = FakeCore()
+    recorder = Recorder.open(RecordingConfig(runs_dir=str(tmp_path)), {}, telemetry_expected=True)
+    recorder.attach(core)
+    core.telemetry.apply({"north_m": 0.0, "roll_deg": 1.0})
+    core.telemetry.apply({"north_m": 1.0, "roll_deg": 1.0})
+    image = np.zeros((8, 8, 3), np.uint8)
+    core.process(image, 1, lambda result: None)
+    time.sleep(0.02)
+    core.telemetry.apply({"north_m": 2.0, "roll_deg": 2.0})  # brackets frame 1
+    time.sleep(0.02)
+    core.process(image, 2, lambda result: None)  # the vehicle's link stops after this: nothing brackets frame 2
+    recorder.close()
+    run = dataset.load(recorder.run_dir)
+    assert run.frames["telemetry"].tolist() == ["interpolated", "held"]
+    assert run.extrapolated["frame_id"].tolist() == [2]
+    gap_ms = (run.frames["t_mono_ns"].iloc[1] - run.telemetry["t_mono_ns"].iloc[-1]) / 1e6
+    assert run.extrapolated["extrapolated_ms"].iloc[0] == pytest.approx(gap_ms, abs=0.1)

@@ -126,3 +126,16 @@ class Slow:
 
     def photo_processing(self, frame):
         time.sleep(0.25)
+
+
+class FixedBox:
+    """Reports the same box and one detection on every frame (geo-located by the recorder from the telemetry)."""
+
+    box = (60, 40, 40, 40)
+
+    def __init__(self):
+        self.tmMgr = None
+        self.detections = [((10, 10, 30, 20), "thing", 0.9)]
+
+    def photo_processing(self, frame):
+        pass

@@ -115,7 +115,7 @@ def test_history_forgets_old_samples_but_keeps_one_before_the_window():
 
 
 def _record(frame_id: int, t_ms: int) -> FrameRecord:
-    own = len(FRAME_OWN_COLUMNS) - 1
+    own = FRAME_OWN_COLUMNS.index("telemetry")  # up to extra: the aligner adds the rest
     return FrameRecord([frame_id, *[None] * (own - 1)], t_ms * MS)
 
 
@@ -138,7 +138,7 @@ def test_aligner_gives_up_waiting_after_hold_and_holds_the_newest_values():
     assert aligner.due(599 * MS) == []
     assert [r.values[0] for r in aligner.due(600 * MS)] == [1]
     row = dict(zip(FRAME_COLUMNS, aligner.drain()[0].values, strict=True))
-    assert (row["frame_id"], row["north_m"], row["telemetry"]) == (2, 2.0, "held")
+    assert (row["frame_id"], row["north_m"], row["telemetry"], row["extrapolated_ms"]) == (2, 2.0, "held", 300.0)
 
 
 def test_without_a_flight_controller_frames_wait_only_the_minimum():
@@ -172,3 +172,24 @@ def test_rows_depend_on_the_stamps_not_on_when_the_writer_ran():
     replayed = frame_rows(FrameAligner(recorded_clock=True), 0)
     assert live_fast == live_slow == replayed
     assert [row["frame_id"] for row in replayed] == [1] and replayed[0]["battery_v"] == 16.5
+
+
+def test_a_row_waits_for_telemetry_held_up_longer_than_half_a_second():
+    """A busy computer hands the writer the sample after a frame 1.3 s late: the row still interpolates across it."""
+    aligner = FrameAligner()
+    aligner.handle(TelemetrySample(Telemetry(north_m=0.0), 0))
+    aligner.handle(_record(1, 100))
+    assert aligner.due(1500 * MS) == []
+    rows = [r for r in aligner.handle(TelemetrySample(Telemetry(north_m=1.0), 1000 * MS)) if r.table == "frames"]
+    row = dict(zip(FRAME_COLUMNS, rows[0].values, strict=True))
+    assert (row["north_m"], row["telemetry"], row["extrapolated_ms"]) == (pytest.approx(0.1), "interpolated", None)
+
+
+def test_a_row_written_before_every_field_was_bracketed_is_held_and_says_how_far():
+    aligner = FrameAligner()
+    aligner.handle(TelemetrySample(Telemetry(north_m=0.0, roll_deg=1.0), 0))
+    aligner.handle(_record(1, 100))
+    aligner.handle(TelemetrySample(Telemetry(north_m=1.0, roll_deg=1.0), 150 * MS))  # the roll: nothing new yet
+    assert aligner.due(5099 * MS) == []
+    row = dict(zip(FRAME_COLUMNS, aligner.due(5100 * MS)[0].values, strict=True))
+    assert (row["telemetry"], row["extrapolated_ms"], row["roll_deg"]) == ("held", 100.0, 1.0)

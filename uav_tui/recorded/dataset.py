@@ -22,7 +22,8 @@ rows: the wall clock may be stepped by NTP). Frames carry the target's ground po
 detection the processor reported (``detections`` attribute), keyed by ``frame_id``, each geo-located the same way
 (:data:`uav_tui.recording.located.DETECTION_COLUMNS`; no rows for a processor without detections). Nanosecond
 columns are ``Int64``, flags ``boolean``, text ``string``; the ``tmMgr.save`` extras of ``frames.csv`` become one
-column each.
+column each. ``run.extrapolated`` lists the frames whose telemetry is not interpolated (held past the newest
+sample or before the first) and by how much time.
 
 A damaged run (power lost mid-write, a card copied half-way) loads with what can be read;
 ``run.problems`` says, one line each, which file, which line and what was wrong.
@@ -66,6 +67,17 @@ class Dataset:
     """What could not be read, one line each (file, line, what is wrong); empty for an intact run."""
     detections: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(columns=list(DETECTION_COLUMNS)))
     """One row per detection the processor reported, keyed by ``frame_id`` (see the module's docstring)."""
+
+    @property
+    def extrapolated(self) -> pd.DataFrame:
+        """The frames whose telemetry is not interpolated between samples around their capture: ``frame_id``,
+        ``t_s``, ``telemetry`` (``held``: written without the sample after it, a link that stopped for longer
+        than the recorder waits; ``before``: captured before the first sample) and ``extrapolated_ms``, how far
+        the values reach past the telemetry (empty in runs recorded before it was written). Empty when every
+        frame is bracketed, or the run had no vehicle."""
+        frames = self.frames
+        return frames.loc[frames["telemetry"].isin(["held", "before"]).fillna(False).to_numpy(dtype=bool),
+                          ["frame_id", "t_s", "telemetry", "extrapolated_ms"]]
 
     @property
     def extra_columns(self) -> list[str]:

@@ -101,8 +101,9 @@ class TelemetryHistory:
 
         Returns:
             ``(values, how)``: values are None where nothing is known; ``how`` is ``interpolated``
-            (samples on both sides), ``held`` (only older samples: the newest values),
-            ``before`` (only newer samples: the oldest values) or ``none`` (no telemetry).
+            (samples on both sides of every field: :meth:`covers`), ``held`` (some field has only older
+            samples: its newest value), ``before`` (only newer samples: the oldest values) or ``none``
+            (no telemetry). :meth:`extrapolated_ns` says how far ``held`` and ``before`` reach.
         """
         if not self._times:
             return dict.fromkeys(FIELDS), "none"
@@ -116,11 +117,26 @@ class TelemetryHistory:
         values.update({name: getattr(before, name) for name in STAMPS})
         if t_ns < self._times[0]:
             how = "before"
-        elif t_ns > self._times[-1]:
-            how = "held"
-        else:
+        elif self.covers(t_ns):
             how = "interpolated"
+        else:
+            how = "held"
         return values, how
+
+    def extrapolated_ns(self, t_ns: int) -> int | None:
+        """How far :meth:`at` reaches past the samples at ``t_ns``: 0 where they bracket it (:meth:`covers`).
+
+        Before the first sample, how long before it; else the longest a changing field is held past its newest
+        value (a field constant for :data:`STATIC_NS` past the newest sample). None without telemetry.
+        """
+        if not self._times:
+            return None
+        if t_ns < self._times[0]:
+            return self._times[0] - t_ns
+        newest = self._times[-1]
+        held = [t_ns - times[-1] for times, _ in self._series.values()
+                if times and times[-1] < t_ns and newest - times[-1] < STATIC_NS]
+        return max(0, t_ns - newest, *held)
 
     def _trim(self, oldest_ns: int) -> None:
         cut = bisect.bisect_left(self._times, oldest_ns)

@@ -17,7 +17,7 @@ from uav_tui.events import Event
 from uav_tui.flight.geolocate import locate_row
 from uav_tui.hosting.host import ProcessedFrame
 from uav_tui.output.text import last_line, shorten
-from uav_tui.recording.interpolate import FIELDS, TelemetryHistory
+from uav_tui.recording.interpolate import FIELDS, KEEP_NS, TelemetryHistory
 from uav_tui.recording.located import DETECTION_COLUMNS, GEO_COLUMNS, detection_rows, geo_cells
 from uav_tui.recording.writer import Row
 
@@ -36,14 +36,15 @@ or error row reports on; ``autonomy`` is True or False where autonomy was switch
 FRAME_OWN_COLUMNS: tuple[str, ...] = (
     "frame_id", "seq", "t_wall_ns", "t_mono_ns", "t_start_ns", "t_end_ns", "t_vector_ns", "vx", "vy", "vt",
     "box_x", "box_y", "box_w", "box_h", "decision", "landing", "gimbal", "error", "saved", "image", "extra",
-    "telemetry",
+    "telemetry", "extrapolated_ms",
 )
 """frames.csv, the frame's own part: ids, capture times (wall + monotonic ns), processing stage times
 (monotonic ns), the vector, the processor's ``box`` (frame pixels, empty when None), the autonomy
 decision, what was done with the processor's landing target and with its gimbal pointing (each ``sent`` or
 ``not sent: why``; empty without one), the last line of an exception, whether and where the image was saved,
-the ``tmMgr.save`` extras as JSON, and how the telemetry columns were obtained (``interpolated``, ``held``, ``before``,
-``none``; see :meth:`TelemetryHistory.at`)."""
+the ``tmMgr.save`` extras as JSON, how the telemetry columns were obtained (``interpolated``, ``held``, ``before``,
+``none``; see :meth:`TelemetryHistory.at`) and, when ``held`` or ``before``, how far past the telemetry the row
+reaches (:meth:`TelemetryHistory.extrapolated_ns`, in ms: the row was written without the sample after it)."""
 
 FRAME_COLUMNS: tuple[str, ...] = FRAME_OWN_COLUMNS + FIELDS + GEO_COLUMNS
 """frames.csv: the frame's own columns, the telemetry interpolated to the capture time, where the centre of ``box``
@@ -102,7 +103,7 @@ class MarkSaved:
 
 def frame_record(result: ProcessedFrame, frame_id: int, image: str, extra_json: str,
                  camera: CameraModel | None = None) -> FrameRecord:
-    """The own columns of a processed frame (:data:`FRAME_OWN_COLUMNS` minus ``telemetry``) and its camera model."""
+    """The own columns of a processed frame (:data:`FRAME_OWN_COLUMNS` up to ``extra``) and its camera model."""
     frame = result.frame
     vx, vy, vt = _vector(result.vector)
     error = shorten(last_line(result.error), MAX_ERROR_CHARS) if result.error else ""
@@ -144,26 +145,34 @@ def _vector(vector: Any) -> tuple[float | None, float | None, float | None]:
     return vx, vy, vt
 
 
+HOLD_NS = KEEP_NS
+"""Longest a frame row waits for the telemetry after its capture (5 s: as long as the writer keeps the history
+the row is interpolated from): telemetry held up this long by a busy computer (a starved
+``mavsdk_server``, a loop running late) still brackets the frames captured meanwhile; only a link that stops
+for longer leaves rows ``held``."""
+
+
 class FrameAligner:
     """Writer-thread stage: telemetry rows go out at once, frame rows once telemetry brackets them.
 
-    A frame waits until every continuous telemetry field has a sample after its capture time, or
-    ``hold_ns`` has passed since capture (then the newest values are held), so it is interpolated,
-    not extrapolated. Every frame waits at least ``min_hold_ns``, so a ``snapshot`` of the newest
+    A frame waits until every continuous telemetry field has a sample after its capture time (or has
+    been constant a while: :meth:`TelemetryHistory.covers`), so it is interpolated, not extrapolated,
+    however late the telemetry reaches the writer. Only when ``hold_ns`` passed since capture without
+    it is the row written with the newest values held, marked ``held`` with how far it reaches
+    (``extrapolated_ms``). Every frame waits at least ``min_hold_ns``, so a ``snapshot`` of the newest
     frame usually still finds its row and marks it saved; every snapshot is also a snapshots.csv row, which
     :func:`uav_tui.recorded.dataset.load` merges into ``saved`` and ``image`` (a row already written: a processor
     slower than ``min_hold_ns`` a frame, or a snapshot taken later).
 
-    While telemetry flows, rows are released when a sample arrives, as if time were its receive
-    stamp (rows due just before it first, without it; then those it completes): what a row holds
-    depends on the recorded stamps alone, not on when the writer thread ran, so a replay computes
-    the same row. Ticks (``due``) only release rows that waited ``hold_ns``.
+    A row written once the telemetry brackets it holds the same values whenever that was (later samples
+    do not change an interpolation between earlier ones), so it equals the interpolation from the whole
+    ``telemetry.csv``, and a replay computes the same row.
 
     A row's ``saved`` says whether its image file is on disk when the row is written (images are
     queued before their rows, so a frame dropped by a full disk or the size cap is not claimed).
 
     Args:
-        hold_ns: longest wait for telemetry after a capture.
+        hold_ns: longest wait for telemetry after a capture (:data:`HOLD_NS`).
         min_hold_ns: shortest wait.
         telemetry_expected: False with ``--fc none``: frames wait only ``min_hold_ns``.
         run_dir: where image names point (None: do not check the files).
@@ -173,7 +182,7 @@ class FrameAligner:
 
     accepts: tuple[type, ...] = (TelemetrySample, FrameRecord, MarkSaved)
 
-    def __init__(self, hold_ns: int = 500_000_000, min_hold_ns: int = 200_000_000,
+    def __init__(self, hold_ns: int = HOLD_NS, min_hold_ns: int = 200_000_000,
                  telemetry_expected: bool = True, run_dir: Path | None = None, recorded_clock: bool = False) -> None:
         self.hold_ns = hold_ns
         self.min_hold_ns = min_hold_ns
@@ -186,10 +195,9 @@ class FrameAligner:
 
     def handle(self, item: Any) -> Iterable[Row]:
         if isinstance(item, TelemetrySample):
-            rows = self._release(item.t_mono_ns - 1)  # rows due before this sample arrived go out without it
             self.history.add(item.telemetry, item.t_mono_ns)
             self._newest_ns = max(self._newest_ns, item.t_mono_ns)
-            return [*rows, *self._release(item.t_mono_ns), telemetry_row(item)]
+            return [*self._release(item.t_mono_ns), telemetry_row(item)]
         if isinstance(item, FrameRecord):
             self._waiting.append(item)
             self._newest_ns = max(self._newest_ns, item.t_mono_ns)
@@ -208,13 +216,14 @@ class FrameAligner:
         return self._release(self._newest_ns if self.recorded_clock else now_ns, timed_out=self.telemetry_expected)
 
     def _release(self, now_ns: int, *, timed_out: bool = False) -> list[Row]:
-        """Rows ready at ``now_ns``: those that waited ``hold_ns`` if ``timed_out``, else also covered ones."""
+        """Rows ready at ``now_ns``: covered ones that waited ``min_hold_ns``; if ``timed_out``, also those that
+        waited ``hold_ns``."""
         rows = []
         while self._waiting:
             record = self._waiting[0]
             age = now_ns - record.t_mono_ns
-            if age < self.min_hold_ns or age < self.hold_ns and (timed_out or self.telemetry_expected
-                                                                 and not self.history.covers(record.t_mono_ns)):
+            if age < self.min_hold_ns or self.telemetry_expected and not self.history.covers(record.t_mono_ns) and (
+                    not timed_out or age < self.hold_ns):
                 break
             rows += self._rows(self._waiting.popleft())
         return rows
@@ -230,9 +239,11 @@ class FrameAligner:
         if image and self.run_dir is not None and not (self.run_dir / image).is_file():
             record.values[_SAVED:_SAVED + 2] = [False, ""]
         values, how = self.history.at(record.t_mono_ns)
+        reach = self.history.extrapolated_ns(record.t_mono_ns) if how in ("held", "before") else None
         x, y, w, h = record.values[_BOX:_BOX + 4]
         fix = locate_row(record.camera, None if x is None else (x, y, w, h), values, at_ns=record.t_mono_ns)
-        frame = Row("frames", [*record.values, how, *(_finite(values[name]) for name in FIELDS), *geo_cells(fix)])
+        frame = Row("frames", [*record.values, how, None if reach is None else round(reach / 1e6, 1),
+                               *(_finite(values[name]) for name in FIELDS), *geo_cells(fix)])
         t_wall_ns = record.values[_T_WALL]
         return [frame, *(Row("detections", cells) for cells in detection_rows(
             record.frame_id, t_wall_ns, record.t_mono_ns, record.detections, record.camera, values))]
