@@ -70,13 +70,25 @@ def read_telemetry(path: Path) -> list[dict[str, Any]]:
 
 
 def first_frame_ns(run_dir: Path) -> int | None:
-    """Capture time of the run's first processed frame (``frames.csv``), None when it has none."""
+    """Capture time of the run's first processed frame (``frames.csv``), None when it has none.
+
+    Raises:
+        ConnectError: that time is not a whole number (names the file and the line).
+    """
+    path = run_dir / "frames.csv"
     try:
-        with open(run_dir / "frames.csv", newline="") as handle:
+        with open(path, newline="") as handle:
             row = next(csv.DictReader(handle), None)
     except OSError:
         return None
-    return int(row["t_mono_ns"]) if row and row.get("t_mono_ns") else None
+    text = row.get("t_mono_ns") if row else None
+    if not text:
+        return None
+    try:
+        return int(text)
+    except ValueError:
+        raise ConnectError(f"{path} line 2: t_mono_ns {text[:40]!r} is not a whole number (the file is damaged): "
+                           "mend or delete that row, then replay again") from None
 
 
 def _typed(name: str, text: str) -> Any:

@@ -135,3 +135,36 @@ def test_a_damaged_run_gives_one_line_naming_file_and_line_and_draws_the_rest(ca
     assert len(run.frames) >= 30 or "frames" in where
     lines = _report(run_dir, capsys)
     assert lines == [f"damaged run: {run.problems[0]}"]
+
+
+def _locate(text: str, *lines: int) -> str:
+    """frames.csv with the rows on ``lines`` geo-located (as a frame with a box, a camera and GPS is)."""
+    for number in lines:
+        for column, value in (("target_lat_deg", "47.3977"), ("target_lon_deg", "8.5456"), ("target_alt_m", "488.0"),
+                              ("target_uncertainty_m", "0.5"), ("target_status", "ok")):
+            text = _set_field(text, number, column, value)
+    return text
+
+
+def test_export_leaves_out_a_located_row_without_frame_id_and_says_which(odd_run, tmp_path, capsys):
+    run_dir = tmp_path / odd_run.name
+    shutil.copytree(odd_run, run_dir)
+    _edit("frames.csv", lambda text: _set_field(_locate(text, 3, 4), 4, "frame_id", "nan"))(run_dir)
+    assert tools_main("export", [str(run_dir), "--geojson"]) == 0  # before: a traceback (int() of NA)
+    out = capsys.readouterr().out
+    assert f"damaged run: {run_dir}/frames.csv line 4: column frame_id: 'nan' is not a whole number" in out
+    assert "1 geo-located rows without a frame_id were left out" in out
+    points = json.loads((run_dir / "track.geojson").read_text())["features"]
+    assert [p["properties"]["frame_id"] for p in points if p["properties"]["kind"] == "target"] == [2]
+
+
+def test_replay_names_frames_csv_for_a_frame_time_that_is_not_a_number(odd_run, tmp_path, capsys):
+    from uav_tui.cli import main
+
+    run_dir = tmp_path / odd_run.name
+    shutil.copytree(odd_run, run_dir)
+    _edit("frames.csv", lambda text: _set_field(text, 2, "t_mono_ns", "nan"))(run_dir)
+    assert main(["replay", str(run_dir), "--processor", "template", "--runs-dir", str(tmp_path / "out")]) == 2
+    error = capsys.readouterr().err
+    assert f"{run_dir}/frames.csv line 2: t_mono_ns 'nan' is not a whole number" in error  # before: telemetry.csv
+    assert "telemetry.csv" not in error

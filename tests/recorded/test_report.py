@@ -4,9 +4,16 @@ from __future__ import annotations
 
 import functools
 import math
+import os
+import resource
+import signal
+import subprocess
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from tests.recording.recorder_fakes import FakeCore
@@ -14,6 +21,8 @@ from uav_tui.config import RecordingConfig
 from uav_tui.recorded.report import PLOTS, write_report
 from uav_tui.recorded.runs_cli import main
 from uav_tui.recording import Recorder
+
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def _circle_processor(core, i, result):
@@ -74,3 +83,30 @@ def test_report_on_a_run_without_telemetry(tmp_path):
     paths, text = write_report(recorder.run_dir)
     assert all(p.is_file() for p in paths)
     assert "frames: 0 processed" in text and "telemetry: none" in text
+
+
+def _limit_files_to(size: int):
+    """A ``preexec_fn``: files of the process cannot grow past ``size`` bytes; writes past it fail (EFBIG) as they
+    would on a full disk (see tests/recording/test_recorder_full_disk.py)."""
+    def limit() -> None:
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+        resource.setrlimit(resource.RLIMIT_FSIZE, (size, size))
+    return limit
+
+
+def test_report_on_a_full_disk_says_so_once_and_leaves_no_half_written_file(circle_run):
+    paths, _ = write_report(circle_run)  # an earlier report: kept whole
+    before = (circle_run / "report.html").read_bytes()
+    largest_plot = max(path.stat().st_size for path in paths[:len(PLOTS)])
+    assert len(before) > largest_plot + 4096
+    (circle_run / "summary.txt").unlink()
+    result = subprocess.run([sys.executable, "-m", "uav_tui", "report", str(circle_run)], capture_output=True,
+                            text=True, timeout=120, env={**os.environ, "PYTHONPATH": str(ROOT)},
+                            preexec_fn=_limit_files_to(largest_plot + 4096))  # the plots fit, report.html does not
+    # Before: a traceback, and report.html cut at the limit.
+    assert result.returncode == 5, result.stdout + result.stderr
+    assert "Traceback" not in result.stderr and result.stderr.count("\n") == 1, result.stderr
+    assert f"{circle_run / 'report.html'}: File too large" in result.stderr and "run it again" in result.stderr
+    assert (circle_run / "report.html").read_bytes() == before
+    assert (circle_run / "summary.txt").is_file()  # written whole before it
+    assert not list(circle_run.glob("*.tmp"))

@@ -16,6 +16,7 @@ import pandas as pd
 
 from uav_tui.flight.geolocate import OK
 from uav_tui.recorded.dataset import Dataset
+from uav_tui.recording.run_info import replace_file
 
 KML_NS = "http://www.opengis.net/kml/2.2"
 
@@ -26,9 +27,16 @@ def _track(run: Dataset) -> pd.DataFrame:
 
 
 def _located(table: pd.DataFrame) -> pd.DataFrame:
-    """The rows of ``table`` (frames or detections) whose box was geo-located."""
+    """The rows of ``table`` (frames or detections) whose box was geo-located, and that name their frame."""
     located = table[(table["target_status"] == OK).fillna(False)]
-    return located.dropna(subset=["target_lat_deg", "target_lon_deg"])
+    return located.dropna(subset=["target_lat_deg", "target_lon_deg", "frame_id"])
+
+
+def without_frame_id(run: Dataset) -> int:
+    """Geo-located rows left out of the export because their ``frame_id`` is empty (a damaged file: the cell did
+    not read as a whole number, which ``run.problems`` names)."""
+    return sum(int(((table["target_status"] == OK).fillna(False) & table["frame_id"].isna()).sum())
+               for table in (run.frames, run.detections))
 
 
 def _points(run: Dataset) -> list[tuple[pd.Timestamp, pd.Series, str]]:
@@ -93,11 +101,15 @@ def kml(run: Dataset) -> str:
 
 
 def write(run: Dataset, formats: list[str]) -> list[Path]:
-    """Write ``track.geojson`` / ``track.kml`` into the run's folder; returns the paths written."""
+    """Write ``track.geojson`` / ``track.kml`` into the run's folder (each whole or not at all); returns the paths
+    written.
+
+    Raises:
+        OSError: a file could not be written (a full disk).
+    """
     written = []
     for name in formats:
         path = run.path / f"track.{name}"
-        text = json.dumps(geojson(run)) if name == "geojson" else kml(run)
-        path.write_text(text, encoding="utf-8")
+        replace_file(path, (json.dumps(geojson(run)) if name == "geojson" else kml(run)).encode())
         written.append(path)
     return written

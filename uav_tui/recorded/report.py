@@ -29,6 +29,7 @@ from uav_tui.output.text import safe
 from uav_tui.recorded.dataset import Dataset, load
 from uav_tui.recorded.report_replay import REPLAY_PLOT, replay_figure
 from uav_tui.recording.crash import CRASH_FILE, crash_summary
+from uav_tui.recording.run_info import replace_file
 
 logger = logging.getLogger(__name__)
 
@@ -50,6 +51,9 @@ def write_report(run_dir: str | Path) -> tuple[list[Path], str]:
 
     Returns:
         ``(paths written, summary text)``.
+
+    Raises:
+        OSError: a file could not be written (a full disk); each file is written whole or not at all.
     """
     run = load(run_dir)
     paths, images = [], {}
@@ -62,11 +66,11 @@ def write_report(run_dir: str | Path) -> tuple[list[Path], str]:
         figure.savefig(buffer, format="png", dpi=100)
         images[name] = buffer.getvalue()
         path = run.path / name
-        path.write_bytes(images[name])
+        replace_file(path, images[name])
         paths.append(path)
     text = summary(run)
-    (run.path / "summary.txt").write_text(text + "\n")
-    (run.path / "report.html").write_text(_html(run.path.name, text, images))
+    replace_file(run.path / "summary.txt", text + "\n")
+    replace_file(run.path / "report.html", _html(run.path.name, text, images))
     paths += [run.path / "summary.txt", run.path / "report.html"]
     return paths, text
 

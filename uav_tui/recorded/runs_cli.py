@@ -98,10 +98,17 @@ def find_run(runs_dir: Path, name: str | None) -> Path:
     raise UavError(f"{name} is neither a run folder nor a run in {runs_dir}; `uav-tui runs` lists them")
 
 
+WRITE_FAILED = 5
+"""Exit status of ``report`` and ``export`` when their files cannot be written (a full disk), as a run's."""
+
+
 def _report(run_dir: Path) -> int:
     from uav_tui.recorded.report import write_report  # matplotlib is only imported when a report is drawn
 
-    paths, text = write_report(run_dir)
+    try:
+        paths, text = write_report(run_dir)
+    except OSError as exc:
+        return _not_written(exc, "the report")
     print(text)  # safe already
     for path in paths:
         print(safe(f"wrote {path}"))
@@ -112,12 +119,27 @@ def _export(run_dir: Path, formats: list[str]) -> int:
     from uav_tui.recorded import dataset, export
 
     run = dataset.load(run_dir)
-    for path in export.write(run, formats):
+    try:
+        written = export.write(run, formats)
+    except OSError as exc:
+        return _not_written(exc, "the export")
+    for path in written:
         print(safe(f"wrote {path}"))
+    for problem in run.problems:
+        print(safe(f"damaged run: {problem}"))
+    if unnamed := export.without_frame_id(run):
+        print(f"{unnamed} geo-located rows without a frame_id were left out")
     targets = int((run.frames["target_status"] == "ok").sum())
     print(f"{targets} target positions" if targets else "no target positions: the run has no frame whose box was "
           "geo-located (it needs a box, a camera model and GPS; see target_status in frames.csv)")
     return 0
+
+
+def _not_written(exc: OSError, what: str) -> int:
+    """Say once that ``what`` could not be written, and why; the files written whole before it stay."""
+    print(safe(f"{what} could not be written: {exc.filename or 'a file'}: {exc.strerror or exc}; nothing half-written "
+               "was left: free some space (or copy the run elsewhere) and run it again"), file=sys.stderr)
+    return WRITE_FAILED
 
 
 def _spec(part: Any, key: str = "spec") -> str:

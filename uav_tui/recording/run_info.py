@@ -116,13 +116,26 @@ def _platform() -> str:
 
 def write_json(path: Path, data: dict[str, Any]) -> None:
     """Replace ``path`` atomically (a reader never sees half a file); passwords in URIs are redacted."""
+    replace_file(path, redact(json.dumps(data, indent=2, default=str)) + "\n")
+
+
+def replace_file(path: Path, data: str | bytes) -> None:
+    """Write ``path`` whole or not at all: into ``<name>.tmp`` beside it, then renamed over it.
+
+    Raises:
+        OSError: it could not be written (a full disk): ``path`` is as it was, no temporary file is left, and the
+            error's ``filename`` is ``path``.
+    """
     temporary = path.with_name(path.name + ".tmp")
     try:
-        temporary.write_text(redact(json.dumps(data, indent=2, default=str)) + "\n")
+        if isinstance(data, str):
+            temporary.write_text(data)
+        else:
+            temporary.write_bytes(data)
         os.replace(temporary, path)
-    except OSError:
+    except OSError as exc:
         temporary.unlink(missing_ok=True)  # a full disk left it empty, or cut
-        raise
+        raise OSError(exc.errno, exc.strerror, str(path)) from exc
 
 
 def _plain(value: Any) -> Any:
