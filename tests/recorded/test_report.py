@@ -110,3 +110,14 @@ def test_report_on_a_full_disk_says_so_once_and_leaves_no_half_written_file(circ
     assert (circle_run / "report.html").read_bytes() == before
     assert (circle_run / "summary.txt").is_file()  # written whole before it
     assert not list(circle_run.glob("*.tmp"))
+
+
+def test_report_says_where_the_telemetry_has_gaps(circle_run):
+    path = circle_run / "telemetry.csv"
+    table = pd.read_csv(path, dtype={"t_mono_ns": "Int64", "t_wall_ns": "Int64"})
+    later = table.index >= 40
+    table.loc[later, ["t_mono_ns", "t_wall_ns"]] += 10_000_000_000  # 10 s without telemetry half-way round
+    table.to_csv(path, index=False)
+    _, text = write_report(circle_run)
+    assert "telemetry gaps: 1 of 2 s or more (10.0 s at " in text
+    assert "telemetry gaps" in (circle_run / "report.html").read_text()

@@ -28,6 +28,7 @@ from uav_tui.flight.geolocate import EARTH_RADIUS_M, OK
 from uav_tui.output.text import safe
 from uav_tui.recorded.dataset import Dataset, load
 from uav_tui.recorded.report_replay import REPLAY_PLOT, replay_figure
+from uav_tui.recorded.telemetry_notes import telemetry_notes
 from uav_tui.recording.crash import CRASH_FILE, crash_summary
 from uav_tui.recording.run_info import replace_file
 
@@ -132,6 +133,7 @@ def summary(run: Dataset) -> str:
                      "last flush")
     elif run.info.get("end_wall_ns") is None:
         lines.append("the run did not end cleanly (no end time in run.json): data up to the last flush")
+    lines += telemetry_notes(run)
     lines += [f"damaged run: {problem}" for problem in run.problems]  # read around, drawn without
     return "\n".join(safe(line) for line in lines)  # names, paths and URIs from the run: escaped, redacted
 
