@@ -119,7 +119,7 @@ def test_a_position_of_0_0_before_the_first_fix_is_no_position():
 def _row(camera: CameraModel | None, telemetry: Telemetry) -> dict:
     aligner = FrameAligner(hold_ns=0, min_hold_ns=0)
     aligner.handle(TelemetrySample(telemetry, 0))
-    values = [1, *[None] * (len(FRAME_OWN_COLUMNS) - 2)]
+    values = [1, *[None] * (FRAME_OWN_COLUMNS.index("telemetry") - 1)]  # up to extra: the aligner adds the rest
     values[FRAME_OWN_COLUMNS.index("box_x"):FRAME_OWN_COLUMNS.index("box_x") + 4] = [310, 230, 20, 20]
     aligner.handle(FrameRecord(values, 0, camera))
     return dict(zip(FRAME_COLUMNS, aligner.drain()[0].values, strict=True))
