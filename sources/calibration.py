@@ -18,11 +18,17 @@ import cv2
 import numpy as np
 
 from sources.calibration_boards import Board, View
+from sources.calibration_views import coverage_problem
 from sources.camera_model import CameraModel, CameraModelError, Mount
 
 MAX_FILE_BYTES = 1_000_000
 """A calibration file is a few hundred bytes; anything far larger is not one."""
 MAKE_ONE = "make one with: uav-tui calibrate --source URI --out FILE"
+MAX_UNCERTAINTY = 0.02
+"""The largest 1-sigma uncertainty OpenCV may report for fx and fy (share of the value) and for cx and cy (share
+of the image's size); good views of a flat board give about 0.2 %."""
+AGAIN = ("show the board in more places and tilts (near and far, all over the image, tilted up to about 45 degrees "
+         "each way), then calibrate again")
 
 
 @dataclass(frozen=True)
@@ -113,17 +119,32 @@ def write_calibration(path: str | Path, calibration: Calibration, board: Board) 
 
 
 def calibrate(views: list[View], size: tuple[int, int]) -> Calibration:
-    """``cv2.calibrateCamera`` over ``views`` (each from a board's ``find``) of frames of ``size`` = (width, height).
+    """``cv2.calibrateCameraExtended`` over ``views`` (each from a board's ``find``) of frames of ``size`` = (width,
+    height); CameraModelError (saying what to do) when the views cannot constrain it.
 
     Fits k1, k2, p1, p2 (k3 fixed at 0, as the samples advise for ordinary lenses: it overfits with few views).
+    Refused: views that are not tilted or not spread (:func:`~sources.calibration_views.coverage_problem`), a
+    result whose intrinsics OpenCV itself reports uncertain by more than :data:`MAX_UNCERTAINTY`, and one that
+    is not a camera (:mod:`sources.camera_plausibility`).
     """
     if len(views) < 3:
         raise CameraModelError(f"calibration needs at least 3 views of the board, got {len(views)}")
+    if problem := coverage_problem(views, size):
+        raise CameraModelError(f"nothing written: {problem}")
     objects, points = [objects for objects, _ in views], [points for _, points in views]
     try:
-        rms, matrix, distortion, _, _ = cv2.calibrateCamera(objects, points, size, None, None, flags=cv2.CALIB_FIX_K3)
+        rms, matrix, distortion, _, _, deviations, _, _ = cv2.calibrateCameraExtended(
+            objects, points, size, np.eye(3), np.zeros(5), flags=cv2.CALIB_FIX_K3)  # no guess: both ignored
     except cv2.error:
-        raise CameraModelError(f"cv2.calibrateCamera found no solution in {len(views)} views: show the board in "
-                               "different places and tilts (not all square to the camera), then calibrate "
-                               "again") from None
-    return Calibration(size[0], size[1], matrix, distortion.ravel(), float(rms), len(views))
+        raise CameraModelError(f"cv2.calibrateCamera found no solution in {len(views)} views: {AGAIN}") from None
+    fx, fy, cx, cy = (float(v) for v in deviations.ravel()[:4])
+    shares = {"fx": fx / matrix[0, 0], "fy": fy / matrix[1, 1], "cx": cx / size[0], "cy": cy / size[1]}
+    if uncertain := [f"{name} +-{share:.1%}" for name, share in shares.items() if not share <= MAX_UNCERTAINTY]:
+        raise CameraModelError(f"nothing written: the views leave the intrinsics uncertain ({', '.join(uncertain)}; "
+                               f"at most {MAX_UNCERTAINTY:.0%} is taken): {AGAIN}")
+    calibration = Calibration(size[0], size[1], matrix, distortion.ravel(), float(rms), len(views))
+    try:
+        calibration.model()
+    except CameraModelError as exc:
+        raise CameraModelError(f"nothing written: the views give no camera ({exc}): {AGAIN}") from None
+    return calibration

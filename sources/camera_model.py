@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from sources.camera_plausibility import implausibility
 from sources.errors import SourceError
 from sources.sim_geometry import rotation_body_camera
 
@@ -118,6 +119,8 @@ class CameraModel:
         if len(self.distortion) not in (0, 4, 5, 8, 12, 14):
             raise CameraModelError(f"camera model: {len(self.distortion)} distortion coefficients; OpenCV takes "
                                    "4, 5, 8, 12 or 14")
+        if reason := implausibility(self.width, self.height, self.fx, self.fy, self.cx, self.cy, self.distortion):
+            raise CameraModelError(f"camera model: {reason}")
         k = np.array([[self.fx, 0.0, self.cx], [0.0, self.fy, self.cy], [0.0, 0.0, 1.0]])
         d = np.array(self.distortion, float) if any(self.distortion) else None
         r = rotation_body_camera(self.mount.tilt_deg)

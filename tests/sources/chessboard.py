@@ -36,17 +36,22 @@ def _charuco_texture() -> tuple[np.ndarray, np.ndarray]:
     return texture, np.array([[square / _PX, 0, -square], [0, square / _PX, -square], [0, 0, 1]])
 
 
-def render_views(model: CameraModel, count: int, seed: int = 0, *, charuco: bool = False) -> list[np.ndarray]:
-    """``count`` BGR views of the board in random poses 0.45-0.7 m away, tilted up to ~30 degrees."""
+def render_views(model: CameraModel, count: int, seed: int = 0, *, charuco: bool = False, tilted: bool = True,
+                 distance_m: tuple[float, float] = (0.45, 0.7)) -> list[np.ndarray]:
+    """``count`` BGR views of the board in random poses ``distance_m`` away, tilted up to ~30 degrees (``tilted``)
+    or square to the camera and moved over the whole image (not ``tilted``)."""
     texture, board_from_texture = _charuco_texture() if charuco else _chessboard_texture()
     height, width = texture.shape
     centre = board_from_texture @ np.array([width / 2, height / 2, 1.0])
     centre = np.array([centre[0], centre[1], 0.0])
     rng = np.random.default_rng(seed)
+    spread = 1.0 if tilted else 1.6
     views = []
     for _ in range(count):
-        rotation, _ = cv2.Rodrigues(np.array([rng.uniform(-0.5, 0.5), rng.uniform(-0.5, 0.5), rng.uniform(-0.3, 0.3)]))
-        shift = np.array([rng.uniform(-0.08, 0.08), rng.uniform(-0.06, 0.06), rng.uniform(0.45, 0.7)])
+        angles = [rng.uniform(-0.5, 0.5), rng.uniform(-0.5, 0.5), rng.uniform(-0.3, 0.3)]
+        rotation, _ = cv2.Rodrigues(np.array(angles if tilted else [0.0, 0.0, angles[2]]))
+        shift = np.array([rng.uniform(-0.08, 0.08) * spread, rng.uniform(-0.06, 0.06) * spread,
+                          rng.uniform(*distance_m)])
         t = shift - rotation @ centre
         image_from_board = model.matrix @ np.column_stack([rotation[:, 0], rotation[:, 1], t])
         gray = cv2.warpPerspective(texture, image_from_board @ board_from_texture, (model.width, model.height),

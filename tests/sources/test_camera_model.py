@@ -142,6 +142,24 @@ def test_a_calibration_file_that_does_not_parse_says_what_to_do(tmp_path: Path, 
     assert str(path) in str(raised.value) and "uav-tui calibrate --source URI" in str(raised.value)
 
 
+@pytest.mark.parametrize(("edit", "problem"), [
+    (("5.0512e+02, 0., 3.1875e+02, 0., 5.0488e+02", "1e-06, 0., 3.1875e+02, 0., 1e-06"), "field of view of 180 x 180"),
+    (("5.0512e+02, 0., 3.1875e+02, 0., 5.0488e+02", "1e12, 0., 3.1875e+02, 0., 1e12"), "field of view of 3.67e-08"),
+    (("3.1875e+02", "-1e6"), r"principal point \(-1e\+06, 242.1\) is outside the 640x480 image"),
+    (("-1.0e-02 ]", "1e9 ]"), "scales the radius at the image's corner by"),
+    (("-2.8e-01, 9.0e-02", "-6.0e-01, 0."), "not one-to-one over the image: its radial function turns back"),
+    (("0., 5.0488e+02", "0., 1.5e+03"), "fy / fx = 2.97 is not a camera's"),
+], ids=["fx-1e-6", "fx-1e12", "cx-outside", "k3-1e9", "folding-barrel", "aspect"])
+def test_a_calibration_file_that_is_no_camera_is_refused(tmp_path: Path, edit: tuple[str, str], problem: str) -> None:
+    """An edited file with finite, positive numbers that describe no lens says what is wrong and how to fix it."""
+    path = tmp_path / "camera.yaml"
+    assert edit[0] in SAMPLE_YAML
+    path.write_text(SAMPLE_YAML.replace(*edit))
+    with pytest.raises(CameraModelError, match=problem) as raised:
+        load_model(path)
+    assert str(path) in str(raised.value) and "uav-tui calibrate --source URI" in str(raised.value)
+
+
 def test_a_missing_calibration_file_says_how_to_make_one(tmp_path: Path) -> None:
     with pytest.raises(CameraModelError, match="does not exist; make one with: uav-tui calibrate"):
         read_calibration(tmp_path / "nope.yaml")
@@ -219,6 +237,29 @@ def test_uav_tui_calibrate_writes_the_file_with_its_rms(tmp_path: Path, capsys: 
         assert getattr(model, name) == pytest.approx(getattr(truth, name), rel=0.01), name
 
 
+def test_uav_tui_calibrate_refuses_a_board_that_was_never_tilted(tmp_path: Path,
+                                                                   capsys: pytest.CaptureFixture[str]) -> None:
+    """Moved over the whole image but always square to the camera: OpenCV would fit a focal length of thousands of
+    pixels with an RMS under 0.2 px; nothing is written and the operator is told to tilt the board."""
+    video = _board_video(tmp_path / "board.avi", render_views(sim_model(), 12, seed=1, tilted=False))
+    out = tmp_path / "camera.yaml"
+    assert main(["calibrate", "--source", f"file:{video}?realtime=0", "--views", "10", "--interval", "0",
+                 "--out", str(out)]) == 1
+    captured = capsys.readouterr()
+    assert "view 10/10: board found" in captured.out and not out.exists()
+    assert "nothing written: the board was not tilted in enough views (0 of 10 tilted, 3 needed)" in captured.err
+    assert "tilt it towards and away from the camera" in captured.err
+
+
+def test_calibration_refuses_views_that_leave_the_image_edges_unseen() -> None:
+    """Tilted views, but all far away in the middle of the image: the distortion there is unknown."""
+    views = [CHESSBOARD.find(image) for image in render_views(sim_model(), 10, distance_m=(0.8, 0.9))]
+    assert all(view is not None for view in views)
+    with pytest.raises(CameraModelError, match=r"covered only 4 of the image's 16 cells \(4x4\), 8 needed: .* near "
+                       "the corners and edges"):
+        calibrate(views, (640, 480))
+
+
 def test_uav_tui_calibrate_says_what_to_do_when_it_sees_no_board(tmp_path: Path,
                                                                   capsys: pytest.CaptureFixture[str]) -> None:
     out = tmp_path / "camera.yaml"
@@ -259,7 +300,7 @@ def test_uav_tui_calibrate_with_a_charuco_board(tmp_path: Path, capsys: pytest.C
     assert main(["calibrate", "--charuco", "--write-board", str(printed_board)]) == 0
     assert cv2.imread(str(printed_board), cv2.IMREAD_GRAYSCALE).shape == (500, 700)
     truth = sim_model()
-    video = _board_video(tmp_path / "board.avi", render_views(truth, 12, seed=2, charuco=True))
+    video = _board_video(tmp_path / "board.avi", render_views(truth, 12, seed=3, charuco=True))
     out = tmp_path / "camera.json"
     assert main(["calibrate", "--charuco", "--source", f"file:{video}?realtime=0", "--views", "10", "--interval", "0",
                  "--out", str(out)]) == 0
