@@ -4,6 +4,8 @@ processor from the frame after the one the dead one had."""
 from __future__ import annotations
 
 import asyncio
+import os
+import resource
 from pathlib import Path
 
 import numpy as np
@@ -93,3 +95,36 @@ async def test_a_replay_goes_on_with_the_restarted_processor_after_the_frame_the
         source.close()
     seqs = [r.frame.seq for r in results]
     assert seqs == [1, 2, *range(4, len(seqs) + 2)]
+
+
+async def test_a_restart_the_system_refuses_for_lack_of_descriptors_is_tried_again(tmp_path: Path) -> None:
+    """Issue 47, 4: with no descriptor left when the processor died, the restart failed with an OSError that ended
+    the restart task silently ("restarting 1" for good). Now it is said once, not counted, and tried again."""
+    (tmp_path / "dies_once.py").write_text(DIES_ONCE)
+    events = EventLog()
+    limit = resource.getrlimit(resource.RLIMIT_NOFILE)
+
+    def no_descriptors_left(reason: str) -> None:  # at the death: every new descriptor fails (EMFILE) for 1 s
+        resource.setrlimit(resource.RLIMIT_NOFILE, (len(os.listdir("/proc/self/fd")) - 1, limit[1]))
+        asyncio.get_running_loop().call_later(1.0, resource.setrlimit, resource.RLIMIT_NOFILE, limit)
+
+    worker = await SubprocessHost.start(f"{tmp_path}/dies_once.py:DiesOnce", {"marker": str(tmp_path / "died")},
+                                       lambda result: None, events=events, on_fault=no_descriptors_left,
+                                       first_backoff_s=0.05)
+    buffer = FrameBuffer()
+    worker.attach(buffer)
+    task = asyncio.create_task(worker.run())
+    try:
+        for _ in range(3):
+            buffer.put(np.zeros((4, 4, 3), np.uint8))
+            await asyncio.sleep(0.1)
+        await wait_until(lambda: worker.state().state == "running" and (tmp_path / "died").exists(), 30,
+                         "the processor to be restarted once descriptors are free again")
+    finally:
+        task.cancel()
+        await asyncio.gather(task, return_exceptions=True)
+        resource.setrlimit(resource.RLIMIT_NOFILE, limit)
+    messages = [e.message for e in events.recent]
+    refused = [m for m in messages if "could not start a process" in m]
+    assert len(refused) == 1 and "Too many open files" in refused[0], messages
+    assert any(m.startswith("processor restarted (pid") for m in messages)

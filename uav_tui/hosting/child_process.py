@@ -168,8 +168,13 @@ def spawn(ready: asyncio.Future[ProcessorInfo], output: Callable[[list[bytes]], 
     the hand-off cost more CPU (measured, position hold at 640x480).
     """
     ours, theirs = multiprocessing.Pipe()
-    ensure_resource_tracker()
-    mailbox = FrameMailbox.create()
+    try:
+        ensure_resource_tracker()
+        mailbox = FrameMailbox.create()
+    except BaseException:  # out of descriptors or shared memory: nothing left open
+        ours.close()
+        theirs.close()
+        raise
     env = {**opencv_pool.child_environment(malloc_tuning.child_environment(os.environ)),
            "PYTHONPATH": os.pathsep.join(p for p in sys.path if p),  # its imports
            LOG_LEVEL_ENV: logging.getLevelName(logging.getLogger().getEffectiveLevel())}
@@ -182,6 +187,7 @@ def spawn(ready: asyncio.Future[ProcessorInfo], output: Callable[[list[bytes]], 
                                     process_group=0)
     except BaseException:
         mailbox.close()
+        ours.close()
         raise
     finally:
         theirs.close()

@@ -218,7 +218,12 @@ class ChildSupervisor:
         self._restart_task = asyncio.create_task(self._restart(reason), name="processor restart")
 
     async def _restart(self, reason: str) -> None:
-        """Start a fresh child after 1, 2, 4 ... s; give up after MAX_RESTARTS within a minute."""
+        """Start a fresh child after 1, 2, 4 ... s; give up after MAX_RESTARTS within a minute.
+
+        A start the system refuses (``OSError``: no descriptors or processes left) is said once and tried again
+        after the same wait, without counting as a restart: the processor did nothing wrong.
+        """
+        short_of = False
         while not self._closing:
             now = time.monotonic()
             while self._restarts and self._restarts[0] < now - RESTART_WINDOW_S:
@@ -237,6 +242,13 @@ class ChildSupervisor:
             except ProcessorLoadError as exc:
                 reason = f"restart failed: {exc}"
                 self.events.emit("error", "processor", f"restart {attempt} failed: {exc}")
+                continue
+            except OSError as exc:  # the system's limit (descriptors, processes, memory), not the processor's fault
+                self._restarts.pop()  # not counted: the same attempt again after its wait, until the system has room
+                if not short_of:
+                    self.events.emit("error", "processor", f"restart {attempt} could not start a process "
+                                     f"({exc.strerror or exc}); trying again until the system has room")
+                short_of = True
                 continue
             self.adopt(child)
             self.events.emit("warning", "processor", f"processor restarted (pid {child.pid}, attempt {attempt}); "
