@@ -27,8 +27,17 @@ def token_bits(token: str) -> float:
     return float(zxcvbn(token[:_ESTIMATED_CHARS])["guesses_log10"]) * math.log2(10)
 
 
+TOKEN_CHARACTERS = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789-._~")
+"""What a token may hold: the characters a URL carries as they are (it travels in the page's address, a header and
+a cookie), so it reaches the server whole."""
+
+
 def token_problem(token: str) -> str | None:
-    """Why ``token`` is too easy to guess, or None when it is not."""
+    """Why ``token`` is not one (a character a URL cannot carry as it is) or too easy to guess; None when it is."""
+    if bad := sorted(set(token) - TOKEN_CHARACTERS):
+        shown = ", ".join(repr(c) for c in bad[:5])
+        return (f"may hold only letters, digits and - . _ ~ (it travels in the page's address), not {shown}; "
+                f"generate one with {GENERATE_TOKEN}")
     bits = token_bits(token)
     if bits >= MIN_TOKEN_BITS:
         return None

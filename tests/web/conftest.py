@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import signal
 import socket
+import subprocess
 import threading
 from collections.abc import AsyncIterator
 from typing import Any
@@ -47,6 +49,16 @@ class RecordingProcessor:
     def customize_processing(self, id: int) -> None:  # noqa: A002 - the published name
         with self._lock:
             self.buttons.append(id)
+
+
+def interrupt(process: subprocess.Popen[bytes], timeout_s: float = 20.0) -> None:
+    """Stop a platform started by a test as Ctrl-C does; kill it if it has not ended within ``timeout_s``."""
+    process.send_signal(signal.SIGINT)
+    try:
+        process.wait(timeout_s)
+    except subprocess.TimeoutExpired:
+        process.kill()
+        process.wait()
 
 
 def free_port(kind: socket.SocketKind = socket.SOCK_STREAM) -> int:

@@ -7,7 +7,6 @@ from __future__ import annotations
 import asyncio
 import os
 import re
-import signal
 import socket
 import subprocess
 import sys
@@ -18,7 +17,7 @@ from pathlib import Path
 import pytest
 from pymavlink.dialects.v20 import common as mavlink
 
-from tests.web.conftest import free_port
+from tests.web.conftest import free_port, interrupt
 from tests.web.test_camera_tracking import GroundStation
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -38,12 +37,7 @@ def platform(tmp_path: Path) -> Iterator[tuple[int, Path]]:
     try:
         yield port, output
     finally:
-        process.send_signal(signal.SIGINT)
-        try:
-            process.wait(20)
-        except subprocess.TimeoutExpired:
-            process.kill()
-            process.wait()
+        interrupt(process)
 
 
 async def answered(station: GroundStation, param1: float, timeout: float = 3.0) -> int | None:

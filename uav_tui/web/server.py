@@ -11,10 +11,10 @@ Routes (every one needs the token, else 401 and nothing else):
 Every field of a request is checked before use; a handler that still raises (a bug) answers that request
 with a 500 and is reported once (:class:`HandlerFailures`), and the server goes on.
 
-The token travels as ``?token=`` or ``Authorization: Bearer``. Failed attempts are slowed per client
-address (:class:`AuthThrottle`: 429 with ``Retry-After``). POST routes and the websocket also refuse a
-browser ``Origin`` other than the page's own or one listed in ``web_origins`` (403). Commands go
-through ``core.execute(..., origin="web:<ip>")``, the one command module.
+Access (the token, the page's session, the throttle, the origins) is :class:`~uav_tui.web.access.AccessGuard`'s;
+how many connections are taken and for how long, :mod:`uav_tui.web.connections`'s. A viewer whose connection has
+not completed :data:`VIEWER_CONNECT_TIMEOUT_S` after its offer is dropped, so offers that never connect cannot
+hold the viewer slots. Commands go through ``core.execute(..., origin="web:<ip>")``, the one command module.
 """
 
 from __future__ import annotations
@@ -39,10 +39,19 @@ from uav_tui.flight.commands import Command, parse
 from uav_tui.output.line_budget import LineBudget
 from uav_tui.output.text import describe, shorten
 from uav_tui.status import CoreState
+from uav_tui.web.access import AccessGuard
+from uav_tui.web.connections import (
+    BACKLOG,
+    BODY_TIMEOUT_S,
+    IDLE_TIMEOUT_S,
+    AcceptFailures,
+    ConnectionLimits,
+    LimitedServer,
+    connection_budget,
+)
 from uav_tui.web.failures import HandlerFailures
 from uav_tui.web.mdns import adopt_mdns_resolver
 from uav_tui.web.roi import roi_from_message
-from uav_tui.web.throttle import AuthThrottle
 from uav_tui.web.tracks import VideoHub
 from uav_tui.web.view import ServedCore
 
@@ -55,8 +64,9 @@ STATUS_PERIOD_S = 0.5
 WEB_COMMANDS = frozenset({"f", "roi", "hold", "land", "precland", "rtl", "autonomy off"})
 """What the page may send: the buttons, target selection, the ways to stop and to land. Arming, takeoff and
 switching autonomy on stay with the operator's terminal."""
-COOKIE = "uav_token"
-_REJECT_LOG_PERIOD_S = 60.0
+VIEWER_CONNECT_TIMEOUT_S = 6.0
+"""A viewer's connection (ICE, DTLS) must complete this long after its offer, else its slot is freed (on a LAN it
+takes well under a second)."""
 
 
 class WebServer:
@@ -76,10 +86,13 @@ class WebServer:
         self._peers: set[RTCPeerConnection] = set()
         self._sockets: set[web.WebSocketResponse] = set()
         self._queues: set[asyncio.Queue[dict[str, Any]]] = set()
-        self._rejected: dict[str, float] = {}
-        self._throttle = AuthThrottle()
-        self._origins = frozenset(o.strip().rstrip("/").lower() for o in config.web_origins.split(",") if o.strip())
-        self._runner: web.AppRunner | None = None
+        self._pending: dict[RTCPeerConnection, asyncio.Task[None]] = {}
+        """Viewers whose connection has not completed yet, each with the task that drops it when it does not."""
+        self.limits = ConnectionLimits(connection_budget(), core.events)
+        self.access = AccessGuard(self.token, config.web_origins, core.events, self.limits)
+        self._accept_failures = AcceptFailures(core.events)
+        self._app_runner: web.AppRunner | None = None
+        self._runner: web.ServerRunner | None = None
         self.failures = HandlerFailures(core.events, "web page")
         self._refusals: LineBudget[tuple[str, str]] | None = None
         """Events for bad requests (made on the loop, at the first one)."""
@@ -94,23 +107,31 @@ class WebServer:
 
     async def start(self) -> None:
         adopt_mdns_resolver()
-        app = web.Application(middlewares=[self._guard, self._auth], client_max_size=256 * 1024)
+        app = web.Application(middlewares=[self._guard, self.access.middleware], client_max_size=256 * 1024)
         app.router.add_get("/", self._page)
         app.router.add_static("/static/", STATIC)
         app.router.add_post("/offer", self._offer)
         app.router.add_get("/ws", self._websocket)
         app.router.add_post("/api/roi", self._roi)
         app.router.add_post("/api/command", self._command)
-        app.on_shutdown.append(self._on_shutdown)
-        self._runner = web.AppRunner(app, access_log=None)
+        self._app_runner = web.AppRunner(app)  # the application's startup and cleanup
+        await self._app_runner.setup()
+        assert self._app_runner.server is not None
+        # The connections are this server's: it takes only those the limits allow, and aiohttp closes them when
+        # idle (also before a first request: a client that sends nothing or a byte at a time).
+        server = LimitedServer(self._app_runner.server.request_handler, limits=self.limits,
+                               request_factory=self._app_runner.server.request_factory,
+                               keepalive_timeout=IDLE_TIMEOUT_S, access_log=None)
+        self._runner = web.ServerRunner(server)
         await self._runner.setup()
-        site = web.TCPSite(self._runner, self.config.web_host, self.config.web_port)
+        site = web.TCPSite(self._runner, self.config.web_host, self.config.web_port, backlog=BACKLOG)
         try:
             await site.start()
         except OSError as exc:
-            await self._runner.cleanup()
+            await self.stop()
             raise UavError(f"web page: cannot listen on {self.config.web_host}:{self.config.web_port} "
                            f"({exc.strerror}); pick another --web-port") from exc
+        self._accept_failures.install(asyncio.get_running_loop())
         self.core.events.add_listener(self._on_event)
 
     async def stop(self) -> None:
@@ -118,7 +139,12 @@ class WebServer:
         self.core.events.remove_listener(self._on_event)
         if self._runner is not None:
             runner, self._runner = self._runner, None
+            await self._close_viewers()
             await runner.cleanup()
+        if self._app_runner is not None:
+            app_runner, self._app_runner = self._app_runner, None
+            await app_runner.cleanup()
+        self._accept_failures.uninstall()
         self.failures.close()
         if self._refusals is not None:
             self._refusals.close()
@@ -137,54 +163,9 @@ class WebServer:
             raise web.HTTPInternalServerError(text="500: this request could not be handled (a bug, logged); "
                                                    "the page goes on") from None
 
-    @web.middleware
-    async def _auth(self, request: web.Request, handler: Any) -> web.StreamResponse:
-        address = request.remote or "?"
-        wait = self._throttle.retry_after(address)
-        if wait > 0:
-            self._note_rejected(request, "too many failed attempts")
-            seconds = math.ceil(wait)
-            raise web.HTTPTooManyRequests(text=f"429: too many failed attempts; retry in {seconds} s",
-                                          headers={"Retry-After": str(seconds)})
-        given = request.query.get("token", "")
-        header = request.headers.get("Authorization", "")
-        if header.startswith("Bearer "):
-            given = header[len("Bearer "):]
-        if not given and request.path.startswith("/static/"):
-            given = request.cookies.get(COOKIE, "")
-        if not secrets.compare_digest(given.encode(), self.token.encode()):
-            self._throttle.failed(address)
-            self._note_rejected(request, "no valid token")
-            raise web.HTTPUnauthorized(text="401: a valid token is required")
-        self._throttle.succeeded(address)
-        if (request.method == "POST" or request.path == "/ws") and not self._origin_allowed(request):
-            self._note_rejected(request, f"origin {describe(request.headers['Origin'])} not allowed")
-            raise web.HTTPForbidden(text="403: requests from another site's page are refused; add its origin to "
-                                         "web_origins to allow it")
-        return await handler(request)
-
-    def _origin_allowed(self, request: web.Request) -> bool:
-        """No ``Origin`` (not a browser), the page's own, or one in ``web_origins``."""
-        origin = request.headers.get("Origin")
-        if origin is None:
-            return True
-        origin = origin.rstrip("/").lower()
-        return origin == f"{request.scheme}://{request.host}".lower() or origin in self._origins
-
-    def _note_rejected(self, request: web.Request, why: str) -> None:
-        """An event for a refused request, at most one per client address a minute."""
-        ip = request.remote or "?"
-        now = time.monotonic()
-        if now - self._rejected.get(ip, -math.inf) > _REJECT_LOG_PERIOD_S:
-            if len(self._rejected) > 4096:
-                self._rejected.clear()
-            self._rejected[ip] = now
-            self.core.events.emit("warning", "web", f"refused {request.method} {describe(request.path)}: {why}",
-                                  f"web:{ip}")
-
     async def _page(self, request: web.Request) -> web.StreamResponse:
         response = web.FileResponse(STATIC / "index.html")
-        response.set_cookie(COOKIE, self.token, httponly=True, samesite="Strict")
+        self.access.admit(response)
         return response
 
     # -- video -----------------------------------------------------------------------------------
@@ -212,16 +193,33 @@ class WebServer:
 
         @pc.on("connectionstatechange")
         async def on_state() -> None:
+            if pc.connectionState == "connected" and (pending := self._pending.pop(pc, None)) is not None:
+                pending.cancel()
             if pc.connectionState in ("failed", "closed") and pc in self._peers:  # once, not again on close
                 await self._close_peer(pc, track)
                 self.core.events.emit("info", "web", f"viewer left ({self.video.viewers} watching)", origin)
+
+        self._pending[pc] = asyncio.create_task(self._drop_unconnected(pc, track, origin),
+                                                name=f"viewer from {origin} connecting")
 
         self.core.events.emit("info", "web", f"viewer connected ({self.video.viewers} watching)", origin)
         answer = pc.localDescription
         return web.json_response({"sdp": answer.sdp, "type": answer.type})
 
+    async def _drop_unconnected(self, pc: RTCPeerConnection, track: Any, origin: str) -> None:
+        """Free the slot of a viewer whose connection has not completed in VIEWER_CONNECT_TIMEOUT_S."""
+        await asyncio.sleep(VIEWER_CONNECT_TIMEOUT_S)
+        self._pending.pop(pc, None)
+        if pc in self._peers and pc.connectionState != "connected":
+            await self._close_peer(pc, track)
+            self.core.events.emit("warning", "web", f"viewer dropped: its connection did not complete within "
+                                  f"{VIEWER_CONNECT_TIMEOUT_S:g} s (a firewall, or another network); "
+                                  f"{self.video.viewers} watching", origin)
+
     async def _close_peer(self, pc: RTCPeerConnection, track: Any) -> None:
         self._peers.discard(pc)
+        if (pending := self._pending.pop(pc, None)) is not None and pending is not asyncio.current_task():
+            pending.cancel()
         if track is not None:
             self.video.unsubscribe(track)
         await pc.close()
@@ -304,7 +302,10 @@ class WebServer:
 
     async def _json(self, request: web.Request, origin: str, what: str) -> dict[str, Any]:
         try:
-            body = await request.json()
+            async with asyncio.timeout(BODY_TIMEOUT_S):
+                body = await request.json()
+        except TimeoutError:
+            raise web.HTTPRequestTimeout(text=f"408: the body did not arrive within {BODY_TIMEOUT_S:g} s") from None
         except (ValueError, RecursionError):  # not JSON, not UTF-8, or nested too deep to parse
             body = None
         if not isinstance(body, dict):
@@ -321,9 +322,13 @@ class WebServer:
         self._refusals.line((message, origin))
         return web.HTTPBadRequest(text=message)
 
-    async def _on_shutdown(self, app: web.Application) -> None:
+    async def _close_viewers(self) -> None:
+        """Close the websockets and every peer connection (before the server closes the connections)."""
         for ws in tuple(self._sockets):
             await ws.close(code=WSCloseCode.GOING_AWAY, message=b"uav-tui is stopping")
+        for pending in self._pending.values():
+            pending.cancel()
+        self._pending.clear()
         peers = tuple(self._peers)
         self._peers.clear()
         await asyncio.gather(*(pc.close() for pc in peers), return_exceptions=True)

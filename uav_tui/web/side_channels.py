@@ -52,7 +52,8 @@ class SideChannels:
 
             self.web = WebServer(core, self.config)
             await self.web.start()
-            self.events.emit("info", "web", f"web page: {self.web.url}")
+            self.events.emit("info", "web", f"web page on {self.web.url.partition('?')[0]} (its token is on the "
+                             "terminal; never recorded)")
         if self.config.camera_mavlink:
             from uav_tui.web.mavlink_tracking import CameraTracking
 
