@@ -88,7 +88,7 @@ async def test_malformed_offer_is_400_logged_and_changes_nothing(web_core: UavCo
         assert response.status == 400
     assert warnings(web_core), "the refusal is logged as an event"
     assert web_core.web.video.viewers == 0 and web_core.web.video.source is None
-    assert not web_core.web._peers
+    assert not web_core.web.viewers.peers
 
 
 @pytest.mark.parametrize("body", [

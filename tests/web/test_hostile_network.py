@@ -15,7 +15,7 @@ from tests.web.conftest import TOKEN
 from uav_tui.config import load_config
 from uav_tui.core import UavCore
 from uav_tui.errors import ConfigError
-from uav_tui.web import server
+from uav_tui.web import viewers
 
 
 def base(core: UavCore, host: str = "127.0.0.1") -> str:
@@ -88,7 +88,7 @@ async def _offer_that_cannot_connect(http: aiohttp.ClientSession, url: str, deaf
 
 async def test_offers_that_never_connect_free_their_viewer_slots(web_core: UavCore,
                                                                  monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(server, "VIEWER_CONNECT_TIMEOUT_S", 1.0, raising=False)  # (absent before #47)
+    monkeypatch.setattr(viewers, "VIEWER_CONNECT_TIMEOUT_S", 1.0)
     with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as deaf:
         deaf.bind(("127.0.0.1", 0))
         port = deaf.getsockname()[1]

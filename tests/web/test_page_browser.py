@@ -129,6 +129,6 @@ async def test_page_streams_video_and_selects_targets(web_core: UavCore, tmp_pat
             await third.goto(web_core.web.url)
             await third.wait_for_function(f"{frames} > 5", timeout=20000)
             await web_core.stop("test finished")
-            assert not web_core.web._peers and web_core.web.video.source is None
+            assert not web_core.web.viewers.peers and web_core.web.video.source is None
         finally:
             await browser.close()

@@ -1,8 +1,8 @@
 """The side page: aiohttp routes, token check, WebRTC signalling, status push and page commands.
 
-Routes (every one needs the token, else 401 and nothing else):
+Routes (every one needs the token or the page's session, else 401 and nothing else):
 
-- ``GET /?token=T``: the page (it also sets an HttpOnly cookie so ``/static/*`` loads);
+- ``GET /?token=T``: the page (it also sets an HttpOnly session cookie, so ``/static/*`` loads);
 - ``POST /offer``: the browser's SDP offer -> the answer with the processed video track;
 - ``GET /ws?token=T``: a websocket the server pushes status (twice a second) and events into;
 - ``POST /api/roi``: ``{"rect": [x0, y0, x1, y1]}`` or ``{"point": [x, y]}``, normalized -> ``roi``;
@@ -12,9 +12,9 @@ Every field of a request is checked before use; a handler that still raises (a b
 with a 500 and is reported once (:class:`HandlerFailures`), and the server goes on.
 
 Access (the token, the page's session, the throttle, the origins) is :class:`~uav_tui.web.access.AccessGuard`'s;
-how many connections are taken and for how long, :mod:`uav_tui.web.connections`'s. A viewer whose connection has
-not completed :data:`VIEWER_CONNECT_TIMEOUT_S` after its offer is dropped, so offers that never connect cannot
-hold the viewer slots. Commands go through ``core.execute(..., origin="web:<ip>")``, the one command module.
+how many connections are taken and for how long, :mod:`uav_tui.web.connections`'s; the video's peer connections,
+:class:`~uav_tui.web.viewers.Viewers`'. Commands go through ``core.execute(..., origin="web:<ip>")``, the one
+command module.
 """
 
 from __future__ import annotations
@@ -30,14 +30,13 @@ from pathlib import Path
 from typing import Any
 
 from aiohttp import WSCloseCode, web
-from aiortc import RTCConfiguration, RTCPeerConnection, RTCSessionDescription
 
 from uav_tui.config import WebConfig
 from uav_tui.errors import KNOWN_ERRORS, CommandError, UavError
 from uav_tui.events import Event
 from uav_tui.flight.commands import Command, parse
 from uav_tui.output.line_budget import LineBudget
-from uav_tui.output.text import describe, shorten
+from uav_tui.output.text import describe
 from uav_tui.status import CoreState
 from uav_tui.web.access import AccessGuard
 from uav_tui.web.connections import (
@@ -54,19 +53,15 @@ from uav_tui.web.mdns import adopt_mdns_resolver
 from uav_tui.web.roi import roi_from_message
 from uav_tui.web.tracks import VideoHub
 from uav_tui.web.view import ServedCore
+from uav_tui.web.viewers import Viewers, ViewersFull
 
 logger = logging.getLogger(__name__)
 
 STATIC = Path(__file__).with_name("static")
-MAX_VIEWERS = 4
-"""Peer connections served at once; each one encodes its own stream."""
 STATUS_PERIOD_S = 0.5
 WEB_COMMANDS = frozenset({"f", "roi", "hold", "land", "precland", "rtl", "autonomy off"})
 """What the page may send: the buttons, target selection, the ways to stop and to land. Arming, takeoff and
 switching autonomy on stay with the operator's terminal."""
-VIEWER_CONNECT_TIMEOUT_S = 6.0
-"""A viewer's connection (ICE, DTLS) must complete this long after its offer, else its slot is freed (on a LAN it
-takes well under a second)."""
 
 
 class WebServer:
@@ -83,11 +78,9 @@ class WebServer:
         self.token = config.web_token or secrets.token_urlsafe(24)  # 192 bits (config refuses under 96)
         self.video = VideoHub(core, config.web_width, config.web_fps)
         self.port = config.web_port
-        self._peers: set[RTCPeerConnection] = set()
+        self.viewers = Viewers(self.video, core.events)
         self._sockets: set[web.WebSocketResponse] = set()
         self._queues: set[asyncio.Queue[dict[str, Any]]] = set()
-        self._pending: dict[RTCPeerConnection, asyncio.Task[None]] = {}
-        """Viewers whose connection has not completed yet, each with the task that drops it when it does not."""
         self.limits = ConnectionLimits(connection_budget(), core.events)
         self.access = AccessGuard(self.token, config.web_origins, core.events, self.limits)
         self._accept_failures = AcceptFailures(core.events)
@@ -175,54 +168,13 @@ class WebServer:
         body = await self._json(request, origin, "offer")
         if not (isinstance(body.get("sdp"), str) and body.get("type") == "offer"):
             raise self._bad_request(origin, "offer must be JSON {\"sdp\": ..., \"type\": \"offer\"}")
-        if len(self._peers) >= MAX_VIEWERS:
-            raise web.HTTPServiceUnavailable(text=f"{MAX_VIEWERS} viewers are watching already")
-        pc = RTCPeerConnection(RTCConfiguration(iceServers=[]))  # loopback / LAN only: no STUN lookups
-        self._peers.add(pc)
-        track = None
         try:
-            await pc.setRemoteDescription(RTCSessionDescription(sdp=body["sdp"], type="offer"))
-            if not any(t.kind == "video" for t in pc.getTransceivers()):
-                raise ValueError("the offer has no video section")
-            track = self.video.subscribe()
-            pc.addTrack(track)
-            await pc.setLocalDescription(await pc.createAnswer())
-        except Exception as exc:  # noqa: BLE001 - aiortc raises many types for a bad SDP
-            await self._close_peer(pc, track)
-            raise self._bad_request(origin, f"offer rejected: {type(exc).__name__}: {shorten(str(exc), 200)}") from None
-
-        @pc.on("connectionstatechange")
-        async def on_state() -> None:
-            if pc.connectionState == "connected" and (pending := self._pending.pop(pc, None)) is not None:
-                pending.cancel()
-            if pc.connectionState in ("failed", "closed") and pc in self._peers:  # once, not again on close
-                await self._close_peer(pc, track)
-                self.core.events.emit("info", "web", f"viewer left ({self.video.viewers} watching)", origin)
-
-        self._pending[pc] = asyncio.create_task(self._drop_unconnected(pc, track, origin),
-                                                name=f"viewer from {origin} connecting")
-
-        self.core.events.emit("info", "web", f"viewer connected ({self.video.viewers} watching)", origin)
-        answer = pc.localDescription
+            answer = await self.viewers.answer(body["sdp"], origin)
+        except ViewersFull as exc:
+            raise web.HTTPServiceUnavailable(text=str(exc)) from None
+        except ValueError as exc:
+            raise self._bad_request(origin, str(exc)) from None
         return web.json_response({"sdp": answer.sdp, "type": answer.type})
-
-    async def _drop_unconnected(self, pc: RTCPeerConnection, track: Any, origin: str) -> None:
-        """Free the slot of a viewer whose connection has not completed in VIEWER_CONNECT_TIMEOUT_S."""
-        await asyncio.sleep(VIEWER_CONNECT_TIMEOUT_S)
-        self._pending.pop(pc, None)
-        if pc in self._peers and pc.connectionState != "connected":
-            await self._close_peer(pc, track)
-            self.core.events.emit("warning", "web", f"viewer dropped: its connection did not complete within "
-                                  f"{VIEWER_CONNECT_TIMEOUT_S:g} s (a firewall, or another network); "
-                                  f"{self.video.viewers} watching", origin)
-
-    async def _close_peer(self, pc: RTCPeerConnection, track: Any) -> None:
-        self._peers.discard(pc)
-        if (pending := self._pending.pop(pc, None)) is not None and pending is not asyncio.current_task():
-            pending.cancel()
-        if track is not None:
-            self.video.unsubscribe(track)
-        await pc.close()
 
     # -- status push -----------------------------------------------------------------------------
 
@@ -326,13 +278,7 @@ class WebServer:
         """Close the websockets and every peer connection (before the server closes the connections)."""
         for ws in tuple(self._sockets):
             await ws.close(code=WSCloseCode.GOING_AWAY, message=b"uav-tui is stopping")
-        for pending in self._pending.values():
-            pending.cancel()
-        self._pending.clear()
-        peers = tuple(self._peers)
-        self._peers.clear()
-        await asyncio.gather(*(pc.close() for pc in peers), return_exceptions=True)
-        self.video.close()
+        await self.viewers.close()
 
 
 def _origin(request: web.Request) -> str:
