@@ -91,8 +91,8 @@ class WebConfig:
     web: bool = _key("serve the WebRTC page", default=False)
     web_host: str = _key("address the page binds to", default="0.0.0.0")
     web_port: int = _key("port of the page", minimum=1, maximum=65535, default=8080)
-    web_token: str = _key(f"access token with at least {MIN_TOKEN_BITS} bits of entropy (make one: {GENERATE_TOKEN}); "
-                          "empty = a random one per start", default="")
+    web_token: str = _key(f"access token of letters, digits and - . _ ~ with at least {MIN_TOKEN_BITS} bits of "
+                          f"entropy (make one: {GENERATE_TOKEN}); empty = a random one per start", default="")
     web_origins: str = _key("other page origins allowed to send commands, comma-separated, e.g. "
                             "https://gcs.local:8443 (the page's own origin is always allowed)", default="")
     web_width: int = _key("width of the streamed video, px", minimum=64, maximum=4096, default=640)
