@@ -4,6 +4,7 @@ Origin, an open page while someone guesses from its address, offers that never c
 from __future__ import annotations
 
 import asyncio
+import itertools
 import re
 import socket
 
@@ -16,6 +17,7 @@ from uav_tui.config import load_config
 from uav_tui.core import UavCore
 from uav_tui.errors import ConfigError
 from uav_tui.web import viewers
+from uav_tui.web.throttle import AuthThrottle
 
 
 def base(core: UavCore, host: str = "127.0.0.1") -> str:
@@ -68,6 +70,32 @@ async def test_an_open_page_is_never_locked_out_by_guesses_from_its_address(web_
             stop.set()
             await guessing
     assert 429 in guesses and answers == [200] * 20
+
+
+def test_guessing_without_pause_never_blocks_the_address_over_30_s_in_a_row() -> None:
+    """The probe's case on the throttle's own clock: a guess whenever the address is not blocked, for 10 minutes.
+    Before, each block was renewed the moment it ended (74 s in a row measured: open for an instant in between);
+    now the address is open for 2 s after at most 30 s blocked, so an operator there who retries after
+    Retry-After is checked."""
+    now, tick = [0.0], 0.01
+    throttle = AuthThrottle(clock=lambda: now[0])
+    blocked = []
+    while now[0] < 600:
+        blocked.append(throttle.retry_after("shared") > 0)
+        if not blocked[-1]:
+            throttle.failed("shared")
+        now[0] += tick
+    longest = locked = 0.0
+    windows = 0
+    for is_blocked, run in itertools.groupby(blocked):
+        seconds = len(list(run)) * tick
+        if is_blocked or seconds < 1.0:  # open for an instant is no way in for the operator
+            locked += seconds
+        else:
+            longest, locked, windows = max(longest, locked), 0.0, windows + 1
+    longest = max(longest, locked)
+    assert 29.0 < longest <= 30.1 and windows >= 18
+    assert throttle.retry_after("operator") == 0  # another address is not touched
 
 
 async def _offer_that_cannot_connect(http: aiohttp.ClientSession, url: str, deaf_port: int) -> int:

@@ -169,7 +169,9 @@ def test_the_throttle_grows_is_bounded_and_forgets() -> None:
         delays.append(throttle.failed("a"))
         assert throttle.retry_after("a") == delays[-1] and throttle.retry_after("b") == 0
         now[0] += delays[-1]
-    assert delays == [1.0, 2.0, 4.0, 8.0, 8.0, 8.0]
+    assert delays == [1.0, 2.0, 4.0, 1.0, 0.0, 0.0]  # never more than 8 s in a row, then open for 2 s
+    now[0] += 2.1
+    assert throttle.failed("a") == 8.0  # the blocks start again
     now[0] += 61  # a quiet minute: forgotten
     assert throttle.failed("a") == 0.0
     throttle.succeeded("a")
