@@ -141,7 +141,7 @@ def calibrate(views: list[View], size: tuple[int, int]) -> Calibration:
     shares = {"fx": fx / matrix[0, 0], "fy": fy / matrix[1, 1], "cx": cx / size[0], "cy": cy / size[1]}
     if uncertain := [f"{name} +-{share:.1%}" for name, share in shares.items() if not share <= MAX_UNCERTAINTY]:
         raise CameraModelError(f"nothing written: the views leave the intrinsics uncertain ({', '.join(uncertain)}; "
-                               f"at most {MAX_UNCERTAINTY:.0%} is taken): {AGAIN}")
+                               f"at most {MAX_UNCERTAINTY:.0%} is taken: blurred corners, or too few views): {AGAIN}")
     calibration = Calibration(size[0], size[1], matrix, distortion.ravel(), float(rms), len(views))
     try:
         calibration.model()

@@ -260,6 +260,16 @@ def test_calibration_refuses_views_that_leave_the_image_edges_unseen() -> None:
         calibrate(views, (640, 480))
 
 
+def test_calibration_refuses_views_that_leave_the_intrinsics_uncertain() -> None:
+    """Tilted, spread views, but few and with corners found to 1 px only: OpenCV reports fx to +-3 %."""
+    rng = np.random.default_rng(0)
+    views = [(objects, (points + rng.normal(0.0, 1.0, points.shape)).astype(np.float32))
+             for objects, points in (CHESSBOARD.find(image) for image in render_views(sim_model(), 5))]
+    with pytest.raises(CameraModelError, match=r"nothing written: the views leave the intrinsics uncertain \(fx "
+                       r"\+-3\.\d%, fy \+-3\.\d%.* at most 2% is taken: blurred corners, or too few views\)"):
+        calibrate(views, (640, 480))
+
+
 def test_uav_tui_calibrate_says_what_to_do_when_it_sees_no_board(tmp_path: Path,
                                                                   capsys: pytest.CaptureFixture[str]) -> None:
     out = tmp_path / "camera.yaml"
