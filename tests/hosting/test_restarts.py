@@ -104,9 +104,22 @@ async def test_a_restart_the_system_refuses_for_lack_of_descriptors_is_tried_aga
     events = EventLog()
     limit = resource.getrlimit(resource.RLIMIT_NOFILE)
 
+    filler: list[int] = []
+
+    def free_again() -> None:
+        for fd in filler:
+            os.close(fd)
+        filler.clear()
+        resource.setrlimit(resource.RLIMIT_NOFILE, limit)
+
     def no_descriptors_left(reason: str) -> None:  # at the death: every new descriptor fails (EMFILE) for 1 s
-        resource.setrlimit(resource.RLIMIT_NOFILE, (len(os.listdir("/proc/self/fd")) - 1, limit[1]))
-        asyncio.get_running_loop().call_later(1.0, resource.setrlimit, resource.RLIMIT_NOFILE, limit)
+        resource.setrlimit(resource.RLIMIT_NOFILE, (max(int(fd) for fd in os.listdir("/proc/self/fd")), limit[1]))
+        while True:  # the free numbers below the limit (closed earlier) taken too
+            try:
+                filler.append(os.open(os.devnull, os.O_RDONLY))
+            except OSError:
+                break
+        asyncio.get_running_loop().call_later(1.0, free_again)
 
     worker = await SubprocessHost.start(f"{tmp_path}/dies_once.py:DiesOnce", {"marker": str(tmp_path / "died")},
                                        lambda result: None, events=events, on_fault=no_descriptors_left,
@@ -123,7 +136,7 @@ async def test_a_restart_the_system_refuses_for_lack_of_descriptors_is_tried_aga
     finally:
         task.cancel()
         await asyncio.gather(task, return_exceptions=True)
-        resource.setrlimit(resource.RLIMIT_NOFILE, limit)
+        free_again()
     messages = [e.message for e in events.recent]
     refused = [m for m in messages if "could not start a process" in m]
     assert len(refused) == 1 and "Too many open files" in refused[0], messages
