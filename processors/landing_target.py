@@ -61,7 +61,16 @@ class LandingTarget:
     @classmethod
     def from_angles(cls, angle_x: float, angle_y: float, distance_m: float | None = None,
                     frame_seq: int | None = None) -> LandingTarget:
-        """From angles (radians) off the optical axis, right (``angle_x``) and down (``angle_y``) in the image."""
+        """From angles (radians) off the optical axis, right (``angle_x``) and down (``angle_y``) in the image.
+
+        Raises:
+            ValueError: an angle that is not finite or not within +-pi/2 (beyond it the pad would be behind the
+                camera, and ``tan`` would fold it back in front: pi would read as straight ahead).
+        """
+        for name, angle in (("angle_x", angle_x), ("angle_y", angle_y)):
+            if not (math.isfinite(angle) and abs(angle) < math.pi / 2):
+                raise ValueError(f"landing target {name}={angle!r} rad must be within (-pi/2, pi/2): an angle off "
+                                 "the optical axis, in radians (not degrees)")
         return cls((math.tan(angle_x), math.tan(angle_y), 1.0), distance_m, frame_seq)
 
     @property

@@ -18,6 +18,9 @@ class FrameOutputs:
 
     landing_target: LandingTarget | None = None
     gimbal: GimbalPointing | None = None
+    landing_status: str = ""
+    """A processor with ``getLandingTarget`` that gave no target: its ``status`` attribute, the reason it gives
+    (``2 markers with id 7: which is the pad? no target``), one line of at most :data:`STATUS_CHARS` characters."""
 
 
 READERS: dict[str, tuple[str, Callable[[object], Any]]] = {
@@ -28,14 +31,20 @@ READERS: dict[str, tuple[str, Callable[[object], Any]]] = {
 
 NO_OUTPUTS = FrameOutputs()
 
+STATUS_CHARS = 160
+"""The longest ``landing_status`` kept (it is shown in an 80-column status line)."""
+
 
 def output_methods(capabilities: Collection[str]) -> tuple[str, ...]:
     """The output methods among a processor's ``capabilities`` (detected at load time), in :data:`READERS` order."""
     return tuple(name for name in READERS if name in capabilities)
 
 
-def read_outputs(instance: Any, methods: Collection[str]) -> FrameOutputs:
+def read_outputs(instance: Any, methods: Collection[str], frame_seq: int | None = None) -> FrameOutputs:
     """Call each of ``methods`` (output methods) on ``instance`` and check what it returned.
+
+    A landing target without a ``frame_seq`` is stamped, in place, with ``frame_seq`` (the frame just processed):
+    the same object returned after a later frame then says it was seen in this one, and is not sent for that one.
 
     Raises:
         TypeError: a method returned a value of the wrong type; whatever a method raised propagates.
@@ -46,4 +55,17 @@ def read_outputs(instance: Any, methods: Collection[str]) -> FrameOutputs:
     for name in methods:
         field, read = READERS[name]
         values[field] = read(getattr(instance, name)())
+    target = values.get("landing_target")
+    if target is not None and target.frame_seq is None and frame_seq is not None:
+        object.__setattr__(target, "frame_seq", frame_seq)
+    if "getLandingTarget" in methods and target is None:
+        values["landing_status"] = _one_line(getattr(instance, "status", None))
     return FrameOutputs(**values)
+
+
+def _one_line(status: object) -> str:
+    """``status`` if it is text: its printable characters on one line, at most :data:`STATUS_CHARS`; else ""."""
+    if not isinstance(status, str):
+        return ""
+    text = " ".join("".join(c if c.isprintable() else " " for c in status[:4 * STATUS_CHARS]).split())
+    return text if len(text) <= STATUS_CHARS else text[:STATUS_CHARS - 3] + "..."

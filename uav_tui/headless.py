@@ -103,6 +103,8 @@ def format_status(status: CoreStatus, elapsed_s: float) -> str:
         line += f" | precland {'ON' if status.precland else 'OFF'} {status.landing_targets_sent} sent"
         if status.landing_targets_failed:
             line += f" {status.landing_targets_failed} failed"
+        if status.landing_none_reason:
+            line += f" ({status.landing_none_reason})"
     if gimbal := status.gimbal_summary():
         line += f" | {gimbal}"
     return line

@@ -4,7 +4,9 @@ sending of each target to the autopilot (LANDING_TARGET, converted by the contro
 ``precland`` is refused unless the processor reports a landing target (``getLandingTarget``) and saw the pad
 within :data:`FRESH_TARGET_S`: an autopilot told to land precisely without a target lands where it is
 (ArduPilot) or searches for one (PX4). Once it is on, any other vehicle command, a processor fault, a lost
-link, or the vehicle leaving its precision-landing mode (a pilot's switch, a failsafe) turns it off again.
+link, the vehicle leaving its precision-landing mode (a pilot's switch, a failsafe), or a run of
+:data:`~uav_tui.flight.plausibility.REFUSALS_TO_STOP` landing targets that cannot be true
+(:mod:`uav_tui.flight.plausibility`) turns it off again; the autopilot's own landing then goes on without them.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ from controllers.base import PrecisionLanding
 from controllers.landing_target import LandingTargetFix
 from uav_tui.errors import UavError
 from uav_tui.flight.autonomy import WATCHDOG_PERIOD_S
+from uav_tui.flight.plausibility import LandingCheck, RefusalRun
 from uav_tui.flight.relay import SEND_TIMEOUT_S, OneAtATime, not_now
 
 if TYPE_CHECKING:
@@ -57,6 +60,12 @@ class LandingTargetFeed:
         """When ``precland`` was last turned on (monotonic ns)."""
         self.mode_reported = False
         """The vehicle has reported its precision-landing mode since ``precland`` was turned on."""
+        self.check = LandingCheck()
+        """Judges each target before it counts as seen or is sent."""
+        self.refusals = RefusalRun()
+        """The targets that could not be true: how many, the last reason, how many in a row."""
+        self.processor_says = ""
+        """The processor's own reason for giving no target (its ``status``, :mod:`processors.outputs`), newest."""
 
     def seen(self, capture_ns: int) -> None:
         """The processor saw the pad in the frame captured at ``capture_ns``."""
@@ -66,12 +75,19 @@ class LandingTargetFeed:
     def check_fresh(self) -> None:
         """Raise UavError saying so unless the pad was seen within :data:`FRESH_TARGET_S`."""
         if self.last_seen_ns is None:
-            raise UavError("precland: the processor has not seen a landing target yet: bring the pad into view "
-                           "(or use land)")
+            why = f" ({self.why_none()})" if self.why_none() else ""
+            raise UavError(f"precland: the processor has not seen a landing target yet{why}: bring the pad into "
+                           "view (or use land)")
         age_s = (self.clock() - self.last_seen_ns) / 1e9
         if age_s > FRESH_TARGET_S:
             raise UavError(f"precland: no landing target in the last {FRESH_TARGET_S:g} s (the last one "
                            f"{age_s:.1f} s ago): bring the pad into view (or use land)")
+
+    def why_none(self) -> str:
+        """``the processor says: 2 markers with id 7...`` or ``refused: ...``: why there is no target now, or ""."""
+        if self.refusals.in_a_row:
+            return f"refused: {self.refusals.last}"
+        return f"the processor says: {self.processor_says}" if self.processor_says else ""
 
     def engage(self) -> None:
         self.engaged, self.stop_reason = True, ""
@@ -155,22 +171,35 @@ class LandingCore(Protocol):
 
 
 def consider_landing_target(core: LandingCore, result: ProcessedFrame) -> None:
-    """Send the frame's landing target while ``precland`` or autonomy is on, the frame fresh and the link alive;
-    ``result.landing`` says what was done (frames.csv)."""
+    """Judge the frame's landing target (:class:`~uav_tui.flight.plausibility.LandingCheck`), then send it while
+    ``precland`` or autonomy is on, the frame fresh and the link alive; ``result.landing`` says what was done
+    (frames.csv). A run of refusals turns ``precland`` off."""
     target = result.outputs.landing_target
+    landing = core.landing
     if target is None:
+        landing.processor_says = result.outputs.landing_status
         return
-    if target.frame_seq is not None and target.frame_seq != result.frame.seq:
-        result.landing = f"not sent: seen in frame {target.frame_seq}, not this one (its capture time is gone)"
+    if core.camera is None:
+        result.landing = "not sent: no camera model to check it against"
         return
     capture_ns = result.frame.t_mono_ns
-    core.landing.seen(capture_ns)
+    at_capture = core.telemetry.at(capture_ns)[0]
+    judged = landing.check.judge(target, result.frame.seq, capture_ns, core.camera, at_capture)
+    if judged.target is None:
+        result.landing = f"refused: {judged.reason}"
+        if landing.refusals.refuse(judged.reason) and landing.engaged:
+            core.stop_precland(f"{landing.refusals.in_a_row} landing targets in a row refused, the last: "
+                               f"{judged.reason}; the autopilot's own landing goes on without them")
+        return
+    landing.refusals.accept()
+    landing.processor_says = ""
+    landing.seen(capture_ns)
     why = _blocked(core, capture_ns)
     result.landing = f"not sent: {why}" if why else "sent"
     if why:
         return
-    assert core.landing_sender is not None and core.camera is not None
-    core.landing_sender.send(landing_fix(target, capture_ns, core.camera, core.telemetry.at(capture_ns)[0]))
+    assert core.landing_sender is not None
+    core.landing_sender.send(landing_fix(judged.target, capture_ns, core.camera, at_capture))
 
 def _blocked(core: LandingCore, capture_ns: int) -> str:
     """Why a landing target seen in the frame captured at ``capture_ns`` is not sent now, or ""."""
@@ -178,8 +207,6 @@ def _blocked(core: LandingCore, capture_ns: int) -> str:
         return "precland and autonomy off"
     if core.landing_sender is None or core.controller is None:
         return "the flight controller takes no landing targets"
-    if core.camera is None:
-        return "no camera model"
     return not_now(core.controller, core.config.safety, (core.gate.clock() - capture_ns) / 1e9, core.landing_sender)
 
 async def watch_precland(core: LandingCore) -> None:

@@ -99,6 +99,10 @@ class CoreStatus:
     """LANDING_TARGET messages sent to the autopilot."""
     landing_targets_failed: int = 0
     """Landing targets the controller could not send (the reason is in the event log)."""
+    landing_targets_refused: int = 0
+    """Landing targets that could not be true (:mod:`uav_tui.flight.plausibility`), never sent."""
+    landing_none_reason: str = ""
+    """Why there is no landing target now: ``refused: ...`` or ``the processor says: ...`` ("" while there is)."""
     gimbal_sent: int = 0
     """Gimbal setpoints sent (the processor's ``getGimbalPointing``)."""
     gimbal_failed: int = 0
@@ -210,6 +214,8 @@ def core_status(core: ObservedCore) -> CoreStatus:
         precland_stop_reason=core.landing.stop_reason,
         landing_targets_sent=core.landing_sender.sent if core.landing_sender is not None else 0,
         landing_targets_failed=core.landing_sender.failed if core.landing_sender is not None else 0,
+        landing_targets_refused=core.landing.refusals.refused,
+        landing_none_reason=core.landing.why_none(),
         gimbal_sent=core.gimbal_relay.sent if core.gimbal_relay is not None else 0,
         gimbal_failed=core.gimbal_relay.failed if core.gimbal_relay is not None else 0,
         gimbal_controlled=core.gimbal_relay is not None and core.gimbal_relay.controller.gimbal_controlled,

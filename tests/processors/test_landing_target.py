@@ -7,6 +7,7 @@ import math
 import pytest
 
 from processors.landing_target import CAMERA_FRAME, LandingTarget
+from processors.outputs import STATUS_CHARS
 from uav_tui.hosting.frame_call import call_frame
 
 
@@ -64,3 +65,29 @@ def test_the_per_frame_call_reads_the_landing_target_and_refuses_anything_else()
     assert wrong.outputs.landing_target is None
     assert wrong.raised.startswith("TypeError: getLandingTarget() returned tuple (0.1, 0.2): return a "
                                    "processors.LandingTarget or None")
+
+
+@pytest.mark.parametrize("angle", [math.pi, -math.pi / 2, 2.0, math.inf], ids=["pi", "minus-half-pi", "2-rad", "inf"])
+def test_from_angles_refuses_an_angle_a_tangent_would_fold_back_in_front(angle: float) -> None:
+    with pytest.raises(ValueError, match=r"angle_x=.* must be within \(-pi/2, pi/2\)"):
+        LandingTarget.from_angles(angle, 0.0, 5.0)  # tan(pi) is 0: it was taken as straight down
+
+
+def test_a_target_returned_again_keeps_the_frame_it_was_first_returned_after() -> None:
+    processor = _Returns(LandingTarget((0.0, 0.0, 2.0), 4.0))  # built once, returned after every frame
+    first = call_frame(processor, None, vector=False, outputs=["getLandingTarget"], frame_seq=7)
+    again = call_frame(processor, None, vector=False, outputs=["getLandingTarget"], frame_seq=8)
+    assert first.outputs.landing_target.frame_seq == again.outputs.landing_target.frame_seq == 7
+    own = LandingTarget((0.0, 0.0, 2.0), 4.0, frame_seq=3)  # the processor's own frame number is kept
+    assert call_frame(_Returns(own), None, vector=False, outputs=["getLandingTarget"],
+                      frame_seq=9).outputs.landing_target.frame_seq == 3
+
+
+def test_without_a_target_the_processors_own_reason_is_read_as_one_bounded_line() -> None:
+    processor = _Returns(None)
+    processor.status = "2 markers with id 7:\x1b[2J which is the pad?\nno target" + " x" * 200  # type: ignore[attr-defined]
+    outputs = call_frame(processor, None, vector=False, outputs=["getLandingTarget"]).outputs
+    assert outputs.landing_status.startswith("2 markers with id 7: [2J which is the pad? no target x x")
+    assert len(outputs.landing_status) == STATUS_CHARS and outputs.landing_status.endswith("...")
+    processor.value = LandingTarget((0.0, 0.0, 2.0), 4.0)
+    assert call_frame(processor, None, vector=False, outputs=["getLandingTarget"]).outputs.landing_status == ""

@@ -274,7 +274,7 @@ class ChildRunner:
         self.telemetry.begin(offer.seq, offer.t_mono_ns, offer.t_wall_ns, self._telemetry[1], offer.heartbeat_age_s)
         image = self.slots.view(offer.slot, offer.shape)
         outcome = call_frame(self.instance, image, vector=self.has_vector, outputs=self.outputs,
-                             let_through=(MemoryError,))
+                             let_through=(MemoryError,), frame_seq=offer.seq)
         del image
         outputs = outcome.outputs if outcome.outputs != NO_OUTPUTS else None
         return Result(offer.gen, outcome.t_start_ns, outcome.t_end_ns, outcome.t_vector_ns,

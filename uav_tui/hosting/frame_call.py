@@ -45,9 +45,10 @@ class FrameOutcome:
 
 
 def call_frame(instance: Any, image: Any, *, vector: bool, outputs: Collection[str] = (),
-               let_through: tuple[type[BaseException], ...] = ()) -> FrameOutcome:
-    """Process ``image`` with ``instance``; ``vector``: call ``getPreparedVector`` too; ``outputs``: these output
-    methods (:func:`processors.outputs.read_outputs`: a value of the wrong type is the processor's error). Exceptions
+               let_through: tuple[type[BaseException], ...] = (), frame_seq: int | None = None) -> FrameOutcome:
+    """Process ``image`` (the frame ``frame_seq``) with ``instance``; ``vector``: call ``getPreparedVector`` too;
+    ``outputs``: these output methods (:func:`processors.outputs.read_outputs`: a value of the wrong type is the
+    processor's error; a landing target is stamped with ``frame_seq``). Exceptions
     of the types in ``let_through`` propagate (the processor's process ends on a MemoryError); any other is kept in
     the outcome."""
     start = time.monotonic_ns()
@@ -58,7 +59,7 @@ def call_frame(instance: Any, image: Any, *, vector: bool, outputs: Collection[s
         if vector:
             outcome.vector = instance.getPreparedVector()
             outcome.t_vector_ns = time.monotonic_ns()
-        outcome.outputs = read_outputs(instance, outputs)
+        outcome.outputs = read_outputs(instance, outputs, frame_seq)
         outcome.box = read_box(instance)
         outcome.detections = read_detections(instance)
     except let_through:

@@ -238,7 +238,7 @@ class ThreadHost(DeliversResults):
         try:
             capabilities = self.processor.info.capabilities
             outcome = call_frame(instance, frame.image, vector="getPreparedVector" in capabilities,
-                                 outputs=output_methods(capabilities))
+                                 outputs=output_methods(capabilities), frame_seq=frame.seq)
         finally:
             self._busy_since_ns = None
             self.current = None
