@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pytest
 
+from controllers.errors import NotSupported
 from processors import GimbalPointing
 from processors.outputs import FrameOutputs
 from sources.buffer import Frame
@@ -17,6 +18,7 @@ from uav_tui.config import SafetyConfig
 from uav_tui.events import EventLog
 from uav_tui.flight.autonomy import AutonomyGate
 from uav_tui.flight.gimbal_relay import GimbalRelay, consider_gimbal
+from uav_tui.flight.plausibility import REFUSALS_TO_STOP
 from uav_tui.flight.telemetry import TelemetryManager
 from uav_tui.hosting.host import ProcessedFrame
 
@@ -129,3 +131,68 @@ async def test_without_gimbal_control_the_frame_says_so() -> None:
     nothing = _result(None)
     consider_gimbal(None, nothing)
     assert nothing.gimbal == ""
+
+
+@dataclass
+class _Refusing(_Gimbal):
+    """A gimbal controller whose sends raise ``error`` (a refusal below the controller's errors, or no gimbal)."""
+
+    error: Exception = field(default_factory=lambda: ValueError("gimbal setpoint angle (1e30, 0): finite values"))
+
+    async def point_gimbal(self, mode: str, pitch: float, yaw: float) -> None:
+        raise self.error
+
+
+async def test_a_pointing_changed_after_it_was_built_is_refused_and_a_run_stops_the_gimbal() -> None:
+    vehicle = _Gimbal()
+    relay, gate = _relay(vehicle)
+    gate.enable("test")
+    relay.consider(result := _result(TURN))
+    await relay.sender.settle()
+    judged = []
+    for _ in range(REFUSALS_TO_STOP + 1):
+        pointing = GimbalPointing.angles(-10.0, 0.0)
+        object.__setattr__(pointing, "pitch", 1e30)
+        relay.consider(result := _result(pointing))
+        judged.append(result.gimbal)
+    await asyncio.sleep(0)
+    assert relay._release is not None
+    await relay._release
+    assert set(judged) == {"refused: gimbal angle pitch=1e+30 deg is out of range [-90, 90]"}
+    assert vehicle.calls == [("rate", "-5", "10"), ("release",)] and relay.refusals.refused == REFUSALS_TO_STOP + 1
+    messages = [e.message for e in relay.events.recent]
+    assert any(m.startswith(f"gimbal output stopped: {REFUSALS_TO_STOP} gimbal pointings in a row refused") for m in
+               messages)
+    relay.consider(result := _result(TURN))  # a true one again: still stopped until autonomy is next turned on
+    assert result.gimbal.startswith("not sent: stopped until autonomy is next turned on")
+    await gate.disable("test", "operator")
+    await relay.close()
+    gate.enable("test")
+    relay.consider(result := _result(TURN))
+    assert result.gimbal == "sent"
+
+
+async def test_a_send_that_raises_is_an_event_never_a_lost_task_exception(caplog: pytest.LogCaptureFixture) -> None:
+    vehicle = _Refusing()
+    relay, gate = _relay(vehicle)
+    gate.enable("test")
+    for _ in range(3):
+        relay.consider(_result(TURN))
+        await relay.sender.settle()
+    assert relay.failed == 3 and relay.sent == 0
+    said = [e.message for e in relay.events.recent if e.level == "warning"]
+    assert said == ["gimbal setpoint not sent: ValueError: gimbal setpoint angle (1e30, 0): finite values"]  # once
+    assert "Task exception was never retrieved" not in caplog.text
+
+
+async def test_a_vehicle_without_a_gimbal_is_said_in_every_later_frame() -> None:
+    vehicle = _Refusing(error=NotSupported("gimbal: the vehicle has no gimbal MAVSDK can find"))
+    relay, gate = _relay(vehicle)
+    gate.enable("test")
+    judged = []
+    for _ in range(3):
+        relay.consider(result := _result(TURN))
+        await relay.sender.settle()
+        judged.append(result.gimbal)
+    assert judged == ["sent"] + ["not sent: gimbal: the vehicle has no gimbal MAVSDK can find"] * 2
+    assert relay.failed == 1

@@ -5,7 +5,11 @@ first, then streams setpoints) only while the operator has autonomy on, the link
 the vehicle does not have to fly (a gimbal follows a target while the vehicle holds). Whenever autonomy stops (an
 operator command such as ``land`` or ``hold``, a processor fault, the watchdog, the platform's exit) the gimbal is
 stopped and control released. A processor that stops returning a pointing stops a gimbal it had turning at a rate.
-What was done is each frame's ``gimbal`` (frames.csv).
+Each pointing is checked again against the contract's ranges before it is sent (:func:`.judge_gimbal`: the processor
+may have changed it after building it); a run of :data:`~uav_tui.flight.plausibility.REFUSALS_TO_STOP` refusals
+stops and releases the gimbal until autonomy is next turned on. What was done is each frame's ``gimbal``
+(frames.csv): ``sent``, ``refused: why`` or ``not sent: why`` (a vehicle without a gimbal: every frame once it
+said so).
 """
 
 from __future__ import annotations
@@ -16,6 +20,7 @@ from typing import TYPE_CHECKING, cast
 from controllers.base import GimbalControl
 from controllers.errors import ControllerError
 from processors.gimbal import RATE, GimbalPointing
+from uav_tui.flight.plausibility import RefusalRun, judge_gimbal
 from uav_tui.flight.relay import OneAtATime, not_now
 
 if TYPE_CHECKING:
@@ -58,6 +63,10 @@ class GimbalRelay:
         """The last setpoint sent was a non-zero rate: the gimbal turns until told otherwise."""
         self.releases = 0
         """Times the gimbal was stopped and released."""
+        self.refusals = RefusalRun()
+        """Pointings that broke the contract's ranges: how many, the last reason, how many in a row."""
+        self.halted = ""
+        """Why a run of refusals stopped the gimbal ("" while it is not stopped; cleared when autonomy stops)."""
         self._release: asyncio.Task[None] | None = None
         self._epoch = 0
         """Counts stops: a send begun before a stop is dropped after it."""
@@ -65,12 +74,21 @@ class GimbalRelay:
 
     def consider(self, result: ProcessedFrame) -> None:
         """Send ``result``'s pointing if the gate allows it now; ``result.gimbal`` says what was done."""
-        pointing = result.outputs.gimbal
-        if pointing is None:
+        given = result.outputs.gimbal
+        if given is None:
             if self.turning and not self._blocked(result):
                 self._send(STOP)
                 result.gimbal = "stopped (no pointing)"
             return
+        pointing = judge_gimbal(given)
+        if isinstance(pointing, str):
+            result.gimbal = f"refused: {pointing}"
+            if self.refusals.refuse(pointing) and not self.halted and self.gate.enabled:
+                self.halted = f"{self.refusals.in_a_row} gimbal pointings in a row refused, the last: {pointing}"
+                self.events.emit("warning", "autonomy", f"gimbal output stopped: {self.halted}")
+                self._halt(self.halted)
+            return
+        self.refusals.accept()
         why = self._blocked(result)
         result.gimbal = f"not sent: {why}" if why else "sent"
         if not why:
@@ -79,6 +97,8 @@ class GimbalRelay:
     def _blocked(self, result: ProcessedFrame) -> str:
         if not self.gate.enabled:
             return "autonomy off"
+        if self.halted:
+            return f"stopped until autonomy is next turned on ({self.halted})"
         if self._release is not None and not self._release.done():
             return "the gimbal is being released"
         age_s = (self.gate.clock() - result.frame.t_mono_ns) / 1e9
@@ -96,6 +116,11 @@ class GimbalRelay:
 
     def stop(self, reason: str) -> None:
         """Autonomy stopped for ``reason``: stop the gimbal and release control (in a task; :meth:`close` waits)."""
+        self.halted = ""
+        self._halt(reason)
+
+    def _halt(self, reason: str) -> None:
+        """Stop the gimbal and release control for ``reason`` (in a task)."""
         self._epoch += 1
         self.turning = False
         if self._release is None or self._release.done():

@@ -8,7 +8,7 @@ import asyncio
 from collections.abc import Awaitable, Callable
 from typing import TYPE_CHECKING, Any
 
-from controllers.errors import ControllerError
+from controllers.errors import ControllerError, NotSupported
 
 if TYPE_CHECKING:
     from controllers.base import FlightController
@@ -23,7 +23,9 @@ class OneAtATime:
     """Sends one item at a time to the controller, counting what was sent and what failed.
 
     An item that comes while the previous one is still being sent is skipped by the caller (:attr:`busy`: the newest
-    frame wins, as for frames). A failure is said once in the event log until a different one comes.
+    frame wins, as for frames). A failure is said once in the event log until a different one comes; whatever a send
+    raises is such a failure (a refusal below the controller's errors too), never an unretrieved task exception. A
+    :class:`~controllers.errors.NotSupported` stays true (:attr:`unsupported`): nothing more is sent.
 
     Args:
         events: the core's event log.
@@ -38,6 +40,8 @@ class OneAtATime:
         self.sent = 0
         self.failed = 0
         self.last_error = ""
+        self.unsupported = ""
+        """Why the controller cannot take these at all (its NotSupported), "" until it said so."""
         self._task: asyncio.Task[None] | None = None
 
     @property
@@ -52,9 +56,13 @@ class OneAtATime:
         try:
             async with asyncio.timeout(self.timeout_s):
                 await send()
-        except (ControllerError, TimeoutError) as exc:
+        except Exception as exc:  # noqa: BLE001 - each failure counted and said; the loop never sees it
             self.failed += 1
             error = str(exc) or f"no answer within {self.timeout_s:g} s"
+            if not isinstance(exc, ControllerError | TimeoutError):
+                error = f"{type(exc).__name__}: {error}"
+            if isinstance(exc, NotSupported):
+                self.unsupported = error
             if error != self.last_error:
                 self.events.emit("warning", "autonomy", f"{self.what} not sent: {error}")
             self.last_error = error
@@ -81,6 +89,8 @@ def not_now(controller: FlightController, safety: SafetyConfig, frame_age_s: flo
         return f"link lost (heartbeat {age:.1f} s old)"
     if frame_age_s >= safety.max_frame_age:
         return f"frame {frame_age_s:.2f} s old"
+    if sender.unsupported:
+        return sender.unsupported
     if sender.busy:
         return "the previous one is still being sent"
     return ""
