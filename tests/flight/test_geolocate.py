@@ -172,3 +172,16 @@ def test_the_status_line_says_where_or_why_not():
 def test_a_bearing_a_hair_west_of_north_reads_000_not_360():
     fix = geolocate.GeoFix(geolocate.OK, 47.0, 8.0, 488.0, 0.8, 6.0, -0.04, 20.0, geolocate.FROM_HOME)
     assert fix.bearing_deg > 359.5 and " 6 m at 000 deg " in geolocate.describe(fix)
+
+
+@pytest.mark.parametrize("impossible, status", [
+    ({"lat_deg": 91.0}, geolocate.NO_POSITION), ({"lon_deg": 200.0}, geolocate.NO_POSITION),
+    ({"height_m": -10.0}, geolocate.NO_HEIGHT), ({"height_m": 1e7}, geolocate.NO_HEIGHT),
+    ({"height_m": math.inf}, geolocate.NO_HEIGHT), ({"roll_deg": 1e6}, geolocate.NO_ATTITUDE)],
+    ids=["lat-91", "lon-200", "height-minus-10", "height-10000-km", "height-inf", "roll-1e6"])
+def test_telemetry_that_cannot_be_true_gives_no_position(impossible, status):
+    """A recording's telemetry is checked here too (an edited telemetry.csv never met the vehicle's boundary)."""
+    inputs = dict(camera=CameraModel.from_hfov(640, 480, 62.0), box=(300, 200, 20, 20), roll_deg=0.0, pitch_deg=0.0,
+                  yaw_deg=0.0, lat_deg=47.0, lon_deg=8.0, height_m=20.0, abs_alt_m=500.0)
+    assert geolocate.locate(**{**inputs, **impossible}).status == status
+    assert geolocate.locate(**{**inputs, "abs_alt_m": math.inf}).alt_m is None

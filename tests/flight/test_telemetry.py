@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import logging
+import math
 import threading
 import time
 from typing import Any
@@ -115,3 +116,20 @@ async def test_manager_follows_the_simulated_vehicle_and_notices_link_loss(
     finally:
         await fc.close()
     await asyncio.wait_for(task, 2.0)  # the stream ends when the controller closes
+
+
+def test_values_that_cannot_be_true_are_none_with_a_reason_said_once(caplog: pytest.LogCaptureFixture) -> None:
+    tm = TelemetryManager(None)
+    tm.apply({"lat_deg": 47.0, "lon_deg": 8.0, "rel_alt_m": 10.0, "north_m": 1.0, "pitch_deg": 2.0})
+    impossible = {"lat_deg": 91.0, "lon_deg": 200.0, "rel_alt_m": 1e7, "abs_alt_m": math.inf, "north_m": math.inf,
+                  "pitch_deg": 400.0, "rangefinder_m": -10.0}
+    with caplog.at_level(logging.WARNING, logger="uav_tui.flight.telemetry"):
+        for _ in range(2):
+            latest = tm.apply(impossible)
+    assert all(getattr(latest, name) is None for name in impossible)  # not the last true value either
+    assert tm.refused["lat_deg"] == "lat_deg 91 is outside [-90, 90]"
+    assert tm.refused["north_m"] == "north_m inf is not finite"
+    assert tm.refused["rel_alt_m"] == "rel_alt_m 1e+07 is outside [-20000, 20000]"
+    assert tm.values_refused == 2 * len(impossible)
+    assert len(caplog.records) == len(impossible)  # each field said once
+    assert tm.apply({"lat_deg": -33.9, "lon_deg": 151.2}).lat_deg == -33.9

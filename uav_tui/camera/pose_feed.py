@@ -3,20 +3,30 @@
 from __future__ import annotations
 
 import asyncio
+import logging
 import time
 from collections.abc import AsyncIterator
 
 from controllers.base import PoseSample
 from sources.pose import PoseTrack
+from uav_tui.flight.telemetry_sanity import pose_problem
+
+logger = logging.getLogger(__name__)
 
 FIRST_POSE_TIMEOUT_S = 5.0
 """How long opening a ``sim:`` camera waits for the vehicle's first pose before drawing the default hover."""
 
 
 async def feed(samples: AsyncIterator[PoseSample], track: PoseTrack) -> None:
-    """Copy ``controller.pose_samples()`` into ``track`` until the controller closes."""
+    """Copy ``controller.pose_samples()`` into ``track`` until the controller closes; a sample that cannot be true
+    (:func:`~uav_tui.flight.telemetry_sanity.pose_problem`) is dropped, each kind said once."""
+    said: set[str] = set()
     async for sample in samples:
-        if sample.kind == "position":
+        if why := pose_problem(sample.kind, sample.values):
+            if sample.kind not in said:
+                said.add(sample.kind)
+                logger.warning("sim: camera pose: %s sample dropped: %s", sample.kind, why)
+        elif sample.kind == "position":
             track.add_position(sample.t_mono_ns, *sample.values)
         elif sample.kind == "attitude":
             track.add_attitude(sample.t_mono_ns, *sample.values)

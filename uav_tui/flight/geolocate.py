@@ -27,6 +27,7 @@ from typing import Any
 
 from controllers.base import RECEIVE_STAMPS
 from sources.camera_model import CameraModel
+from uav_tui.flight.telemetry_sanity import implausible
 
 EARTH_RADIUS_M = 6_371_000.0
 """Mean earth radius of the flat-earth conversion (the built-in simulator uses the same)."""
@@ -76,10 +77,11 @@ NO_BOX = ""
 NO_CAMERA = "no_camera"
 """No camera model for the frame (a source without one and no ``camera_hfov`` / calibration set)."""
 NO_POSITION = "no_position"
-"""No latitude/longitude (no GPS fix yet, or no flight controller)."""
+"""No latitude/longitude (no GPS fix yet, or no flight controller), or one that cannot be true (latitude 91)."""
 NO_ATTITUDE = "no_attitude"
 NO_HEIGHT = "no_height"
-"""No height above the ground from the autopilot (neither rangefinder nor height above home)."""
+"""No height above the ground from the autopilot (neither rangefinder nor height above home), or one that cannot
+be true (at or below the ground, above :data:`~uav_tui.flight.telemetry_sanity.MAX_ALTITUDE_M`)."""
 HORIZON = "horizon"
 """The box's centre is at or above the horizon (see :data:`MIN_DEPRESSION_DEG`): no ground point."""
 
@@ -156,8 +158,11 @@ def locate(camera: CameraModel | None, box: tuple[float, float, float, float] | 
         camera: the frame's camera model (None: status ``no_camera``).
         roll_deg, pitch_deg, yaw_deg: the vehicle's attitude at the capture.
         lat_deg, lon_deg: the vehicle's position at the capture.
-        height_m: the vehicle's height above the ground.
+        height_m: the vehicle's height above the ground (above it: > 0).
         abs_alt_m: the vehicle's altitude AMSL, for the target's altitude (optional).
+
+    Values that cannot be true (:mod:`~uav_tui.flight.telemetry_sanity`: a recording's telemetry is checked here, not
+    at the vehicle's boundary) count as not known.
         height_from: where ``height_m`` came from (a key of :data:`HEIGHT_SIGMAS`): its assumed error.
         height_note: why a better height was not used (kept in the fix).
     """
@@ -165,11 +170,11 @@ def locate(camera: CameraModel | None, box: tuple[float, float, float, float] | 
         return GeoFix(NO_BOX)
     if camera is None:
         return GeoFix(NO_CAMERA)
-    if not _known(lat_deg, lon_deg):
+    if not _possible(lat_deg=lat_deg, lon_deg=lon_deg):
         return GeoFix(NO_POSITION)
-    if not _known(roll_deg, pitch_deg, yaw_deg):
+    if not _possible(roll_deg=roll_deg, pitch_deg=pitch_deg, yaw_deg=yaw_deg):
         return GeoFix(NO_ATTITUDE)
-    if not _known(height_m):
+    if not _possible(rel_alt_m=height_m) or height_m <= 0:  # type: ignore[operator]
         return GeoFix(NO_HEIGHT)
     x, y, w, h = box
     ray = _body_ray(camera, x + w / 2 - 0.5, y + h / 2 - 0.5)  # the box's centre in OpenCV's pixel convention
@@ -188,7 +193,7 @@ def locate(camera: CameraModel | None, box: tuple[float, float, float, float] | 
     north, east = found
     lat = lat_deg + math.degrees(north / EARTH_RADIUS_M)  # type: ignore[operator]
     lon = lon_deg + math.degrees(east / (EARTH_RADIUS_M * math.cos(math.radians(lat_deg))))  # type: ignore[arg-type, operator]
-    alt = abs_alt_m - height_m if _known(abs_alt_m) else None  # type: ignore[operator]
+    alt = abs_alt_m - height_m if _possible(abs_alt_m=abs_alt_m) else None  # type: ignore[operator]
     return GeoFix(OK, lat, lon, alt, math.sqrt(spread), north, east, height_m, height_from, height_note)
 
 
@@ -234,6 +239,11 @@ def ground_height(telemetry: Mapping[str, Any], at_ns: int | None = None) -> tup
         elif _known(roll, pitch):
             return reading * math.cos(math.radians(roll)) * math.cos(math.radians(pitch)), source, ""
     return telemetry.get("rel_alt_m"), FROM_HOME, "; ".join(stale)
+
+
+def _possible(**values: float | None) -> bool:
+    """Every one of ``values`` (telemetry fields by name) known and possible."""
+    return all(value is not None and not implausible(name, value) for name, value in values.items())
 
 
 def _known(*values: float | None) -> bool:

@@ -18,6 +18,7 @@ from typing import Any
 
 from controllers.base import RECEIVE_STAMPS, TELEMETRY_FIELDS, FlightController, Telemetry
 from uav_tui.errors import ControllerError
+from uav_tui.flight.telemetry_sanity import problems
 
 logger = logging.getLogger(__name__)
 
@@ -52,6 +53,9 @@ class TelemetryManager:
         """``save()`` calls made while no saver was set (recording off)."""
         self.listener_errors = 0
         """Exceptions raised by listeners (each listener's first one is logged)."""
+        self.refused: dict[str, str] = {}
+        """Field -> why its last impossible value was made None (:mod:`.telemetry_sanity`; each field logged once)."""
+        self.values_refused = 0
         self._lock = threading.Lock()
         self._latest = Telemetry()
         self._history: deque[Telemetry] = deque(maxlen=HISTORY)
@@ -71,10 +75,19 @@ class TelemetryManager:
     def apply(self, update: dict[str, Any]) -> Telemetry:
         """Merge one partial update, stamp it with receive times, and tell the listeners.
 
+        A value that cannot be true (:func:`~uav_tui.flight.telemetry_sanity.problems`) is merged as None: the last
+        one it had is not kept either, and :attr:`refused` says why.
+
         Returns:
             The new newest Telemetry.
         """
         known = {k: v for k, v in update.items() if k in _UPDATABLE}
+        for name, why in problems(known):
+            known[name] = None
+            self.values_refused += 1
+            if self.refused.get(name) is None:
+                logger.warning("TelemetryManager: %s: taken as not known", why)
+            self.refused[name] = why
         t_mono_ns = update.get("t_mono_ns") or time.monotonic_ns()
         known |= {stamp: t_mono_ns for name, stamp in RECEIVE_STAMPS.items() if name in known and stamp not in known}
         unknown = set(update) - _FIELDS  # a heartbeat_age_s tick is known: it refreshes the age

@@ -2,12 +2,15 @@
 
 The track is the telemetry's positions (latitude, longitude, altitude AMSL), the targets are the frames whose box
 was geo-located (``target_status`` ``ok``), each with its time (UTC), frame id and 1-sigma uncertainty; the
-detections are the geo-located rows of detections.csv, likewise, with their label and score.
+detections are the geo-located rows of detections.csv, likewise, with their label and score. Coordinates that
+cannot be true (latitude 91, an infinite altitude: an edited or corrupted recording) are left out, never written:
+no map takes them, and JSON has no ``Infinity``.
 """
 
 from __future__ import annotations
 
 import json
+import math
 import xml.etree.ElementTree as ET
 from pathlib import Path
 from typing import Any
@@ -15,21 +18,36 @@ from typing import Any
 import pandas as pd
 
 from uav_tui.flight.geolocate import OK
+from uav_tui.flight.telemetry_sanity import LIMITS
 from uav_tui.recorded.dataset import Dataset
 from uav_tui.recording.run_info import replace_file
 
 KML_NS = "http://www.opengis.net/kml/2.2"
 
 
+def _possible(values: pd.Series, field: str) -> pd.Series:
+    """Which of ``values`` (numbers or text) telemetry field ``field`` can be (NaN and infinities cannot)."""
+    return pd.to_numeric(values, errors="coerce").between(*LIMITS[field])
+
+
 def _track(run: Dataset) -> pd.DataFrame:
-    table = run.telemetry[["lat_deg", "lon_deg", "abs_alt_m"]].dropna()
+    table = run.telemetry[["lat_deg", "lon_deg", "abs_alt_m"]].apply(pd.to_numeric, errors="coerce")
+    table = table[_possible(table["lat_deg"], "lat_deg") & _possible(table["lon_deg"], "lon_deg")
+                  & _possible(table["abs_alt_m"], "abs_alt_m")]
     return table[(table["lat_deg"] != 0) | (table["lon_deg"] != 0)]  # 0,0: an autopilot without a fix yet
 
 
 def _located(table: pd.DataFrame) -> pd.DataFrame:
-    """The rows of ``table`` (frames or detections) whose box was geo-located, and that name their frame."""
+    """The rows of ``table`` (frames or detections) whose box was geo-located at a possible place, and that name
+    their frame; an impossible target altitude is left out (NaN)."""
     located = table[(table["target_status"] == OK).fillna(False)]
-    return located.dropna(subset=["target_lat_deg", "target_lon_deg", "frame_id"])
+    located = located.dropna(subset=["target_lat_deg", "target_lon_deg", "frame_id"])
+    keep = _possible(located["target_lat_deg"], "lat_deg") & _possible(located["target_lon_deg"], "lon_deg")
+    for name in ("target_uncertainty_m", "score"):  # numbers JSON must write as numbers
+        if name in located:
+            keep &= pd.to_numeric(located[name], errors="coerce").abs().lt(math.inf)
+    located = located[keep]
+    return located.assign(target_alt_m=located["target_alt_m"].where(_possible(located["target_alt_m"], "abs_alt_m")))
 
 
 def without_frame_id(run: Dataset) -> int:
@@ -110,6 +128,7 @@ def write(run: Dataset, formats: list[str]) -> list[Path]:
     written = []
     for name in formats:
         path = run.path / f"track.{name}"
-        replace_file(path, (json.dumps(geojson(run)) if name == "geojson" else kml(run)).encode())
+        text = json.dumps(geojson(run), allow_nan=False) if name == "geojson" else kml(run)
+        replace_file(path, text.encode())
         written.append(path)
     return written
