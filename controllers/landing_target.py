@@ -120,11 +120,15 @@ def landing_target_fields(autopilot: str, fix: LandingTargetFix, time_usec: int)
     """The LANDING_TARGET fields ``autopilot`` (``"px4"`` or ``"ardupilot"``) takes for ``fix``.
 
     Raises:
-        LandingTargetError: an unknown autopilot, or a fix it cannot be given.
+        LandingTargetError: an unknown autopilot, a fix it cannot be given, or fields that would not be finite.
     """
-    if autopilot == "ardupilot":
-        return ardupilot_fields(fix, time_usec)
-    if autopilot == "px4":
-        return px4_fields(fix, time_usec)
-    raise LandingTargetError(f"landing target: unknown autopilot {autopilot!r} (PX4 and ArduPilot take "
-                             "LANDING_TARGET differently): not sent")
+    if autopilot not in ("ardupilot", "px4"):
+        raise LandingTargetError(f"landing target: unknown autopilot {autopilot!r} (PX4 and ArduPilot take "
+                                 "LANDING_TARGET differently): not sent")
+    fields = ardupilot_fields(fix, time_usec) if autopilot == "ardupilot" else px4_fields(fix, time_usec)
+    broken = sorted(name for name, value in fields.items() if isinstance(value, float) and not math.isfinite(value))
+    if broken:  # MAVLink would carry it; MAVSDK's JSON parser is no place to find out
+        raise LandingTargetError(f"landing target: {', '.join(broken)} not finite (direction {fix.direction_camera}, "
+                                 f"{fix.distance_m} m, attitude {fix.attitude_deg}, position {fix.position_ned}): "
+                                 "not sent")
+    return fields

@@ -187,3 +187,12 @@ def test_the_processors_target_points_each_autopilot_at_the_sim_marker(autopilot
     pad = estimate.pad(0)
     assert pad is not None
     assert math.dist(pad, (4.0, 2.0)) < 0.02 * target.distance_m, f"{pad} from {target.distance_m:.1f} m"
+
+
+@pytest.mark.parametrize("autopilot", ["px4", "ardupilot"])
+def test_a_fix_that_gives_fields_that_are_not_finite_is_refused_before_mavlink(autopilot: str) -> None:
+    fix = LandingTargetFix(0, (0.0, 0.0, 1.0), 8.0, NADIR, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (math.inf, 0.0, -8.0))
+    if autopilot == "ardupilot":
+        fix = LandingTargetFix(0, (0.0, 0.0, 1.0), math.nan, NADIR)
+    with pytest.raises(LandingTargetError, match="not finite"):
+        landing_target_fields(autopilot, fix, 0)
