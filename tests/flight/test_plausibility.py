@@ -8,9 +8,10 @@ import math
 import pytest
 
 from controllers.base import Telemetry
+from controllers.landing_target import rotation_ned_body
 from processors import GimbalPointing, LandingTarget
 from sources.camera_model import CameraModel
-from uav_tui.flight.plausibility import REFUSALS_TO_STOP, LandingCheck, RefusalRun, judge_gimbal
+from uav_tui.flight.plausibility import REFUSALS_TO_STOP, LandingCheck, RefusalRun, _ned, judge_gimbal
 
 CAMERA = CameraModel.from_hfov(640, 480, 62.0)
 """Looking straight down, the top of the image to the nose: camera x = body right, y = body back, z = body down."""
@@ -88,3 +89,9 @@ def test_a_gimbal_pointing_is_checked_again_against_the_contracts_ranges() -> No
     assert "must be a finite number" in str(judge_gimbal(pointing))
     object.__setattr__(pointing, "mode", "spin")
     assert "must be 'rate' or 'angle'" in str(judge_gimbal(pointing))
+
+
+def test_the_scalar_rotation_is_the_autopilots() -> None:
+    body = [0.3, -0.5, 0.8]
+    for attitude in ((0.0, 0.0, 0.0), (12.0, -7.0, 135.0), (-40.0, 25.0, -170.0)):
+        assert _ned(body, *attitude) == pytest.approx(tuple(rotation_ned_body(*attitude) @ body))

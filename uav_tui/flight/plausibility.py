@@ -22,7 +22,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from controllers.landing_target import rotation_ned_body
 from processors.gimbal import GimbalPointing
 from processors.landing_target import LandingTarget
 
@@ -96,7 +95,8 @@ class LandingCheck:
     def __init__(self) -> None:
         self._last: tuple[int, Vector3] | None = None
         """(capture ns, pad relative to the vehicle in NED metres) of the last accepted target."""
-        self._view: tuple[CameraModel, tuple[float, float, float, float]] | None = None
+        self._view: tuple[CameraModel, tuple[float, float, float, float], tuple[Vector3, ...]] | None = None
+        """The camera last judged against: its view's limits (:func:`_view_limits`) and its rotation's rows."""
 
     def judge(self, target: LandingTarget, frame_seq: int, capture_ns: int, camera: CameraModel,
               at_capture: Telemetry) -> Judged:
@@ -107,12 +107,14 @@ class LandingCheck:
             return Judged(None, str(exc))
         if copy.frame_seq is not None and copy.frame_seq != frame_seq:
             return Judged(None, f"seen in frame {copy.frame_seq}, not this one (its capture time is gone)")
-        reason = self._outside_view(copy.direction, camera)
+        if self._view is None or self._view[0] is not camera:
+            self._view = camera, _view_limits(camera), tuple(map(tuple, camera.rotation_body_camera.tolist()))
+        reason = _outside_view(copy.direction, self._view[1])
         if reason:
             return Judged(None, reason)
         t = at_capture
-        attitude = (t.roll_deg or 0.0, t.pitch_deg or 0.0, t.yaw_deg or 0.0)
-        ned = (rotation_ned_body(*attitude) @ camera.rotation_body_camera @ copy.direction).tolist()
+        body = [sum(r * c for r, c in zip(row, copy.direction, strict=True)) for row in self._view[2]]
+        ned = _ned(body, t.roll_deg or 0.0, t.pitch_deg or 0.0, t.yaw_deg or 0.0)
         if ned[2] < MIN_DEPRESSION:
             return Judged(None, f"the line of sight is {math.degrees(math.asin(max(-1.0, ned[2]))):.0f} deg below "
                                 "the horizon: a landing pad is below the vehicle")
@@ -133,18 +135,6 @@ class LandingCheck:
         reason = self._jump(capture_ns, (distance * ned[0], distance * ned[1], distance * ned[2]), t)
         return Judged(None, reason) if reason else Judged(copy)
 
-    def _outside_view(self, direction: Vector3, camera: CameraModel) -> str:
-        """Why ``direction`` cannot have been seen in ``camera``'s image, or ""."""
-        if self._view is None or self._view[0] is not camera:
-            self._view = camera, _view_limits(camera)
-        left, right, up, down = self._view[1]
-        x, y, z = direction
-        tx, ty = x / z, y / z
-        if -left <= tx <= right and -up <= ty <= down:
-            return ""
-        return (f"direction {math.degrees(math.atan(tx)):+.0f} deg right, {math.degrees(math.atan(ty)):+.0f} deg "
-                "down is outside the camera's view")
-
     def _jump(self, capture_ns: int, pad: Vector3, t: Telemetry) -> str:
         """Why the pad at ``pad`` (relative to the vehicle, NED) cannot follow the last accepted one, or ""."""
         last, self._last = self._last, (capture_ns, pad)
@@ -162,6 +152,28 @@ class LandingCheck:
         self._last = last  # the refused one is no reference
         return (f"the pad moved {jump:.1f} m relative to the vehicle in {dt:.2f} s; the vehicle's speed "
                 f"({speed:.1f} m/s) explains {allowed:.1f} m")
+
+
+def _outside_view(direction: Vector3, limits: tuple[float, float, float, float]) -> str:
+    """Why ``direction`` cannot have been seen in an image reaching ``limits`` (:func:`_view_limits`), or ""."""
+    left, right, up, down = limits
+    x, y, z = direction
+    tx, ty = x / z, y / z
+    if -left <= tx <= right and -up <= ty <= down:
+        return ""
+    return (f"direction {math.degrees(math.atan(tx)):+.0f} deg right, {math.degrees(math.atan(ty)):+.0f} deg "
+            "down is outside the camera's view")
+
+
+def _ned(body: list[float], roll_deg: float, pitch_deg: float, yaw_deg: float) -> Vector3:
+    """A body-frame (FRD) vector in NED: :func:`~controllers.landing_target.rotation_ned_body` applied to one
+    vector, in scalar math (NumPy's calls alone would be most of a frame's budget for the checks)."""
+    r, p, y = math.radians(roll_deg), math.radians(pitch_deg), math.radians(yaw_deg)
+    cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
+    forward, right, down = body
+    right, down = cr * right - sr * down, sr * right + cr * down  # roll about the forward axis
+    forward, down = cp * forward + sp * down, -sp * forward + cp * down  # pitch about the right axis
+    return cy * forward - sy * right, sy * forward + cy * right, down  # yaw about the down axis
 
 
 def _view_limits(camera: CameraModel) -> tuple[float, float, float, float]:
