@@ -10,6 +10,7 @@ from rich.text import Text
 
 from uav_tui.core import UavCore
 from uav_tui.flight.geolocate import OK, GeoFix
+from uav_tui.headless import format_status
 from uav_tui.tui._algorithm import AlgorithmPanel
 from uav_tui.tui._pipeline import PipelinePanel
 from uav_tui.tui.app import UavApp
@@ -60,3 +61,16 @@ async def test_the_algorithm_panel_says_where_the_box_is_and_what_the_gimbal_doe
     assert "box  300,200 120x90 @ 47.397810,8.545600 12 m at 045 deg +-0.6 m\n" in shown, shown
     assert "auto 42 flown, 1 rejected; gimbal P-45 Y120 (controlled, 210 sent)\n" in shown, shown
     assert first.startswith("box  300,200 120x90 @ 47.3978"), first
+
+
+async def test_the_algorithm_panel_says_why_there_is_no_landing_target(make_config):
+    """Issue 47: the processor's own reason (or the relay's refusal), not only "no landing target yet"."""
+    status = dataclasses.replace(STATUS, capabilities=STATUS.capabilities | {"getLandingTarget"},
+                                 landing_none_reason="the processor says: 2 markers with id 7: which is the pad?")
+    app = UavApp(UavCore(make_config()), status=lambda: status, frames=lambda: (1, FRAME, None))
+    async with app.run_test(size=(80, 24)) as pilot:
+        await pilot.pause(0.3)
+        shown = app.query_one(AlgorithmPanel).describe(status).plain
+    assert ("auto 42 flown, 1 rejected; precland off, 0 targets sent, the processor says: 2 markers with id 7: which "
+            "is the pad?\n") in shown, shown
+    assert "(the processor says: 2 markers with id 7: which is the pad?)" in format_status(status, 1.0)

@@ -38,7 +38,7 @@ class AlgorithmPanel(StatusPanel):
             if status.landing_targets_failed:
                 auto.append(" ").append(self.styled(f"{status.landing_targets_failed} failed", "bad"))
             if status.landing_none_reason:
-                auto.append(" ").append(self.styled(status.landing_none_reason, "warn"))
+                auto.append(", ").append(self.styled(status.landing_none_reason, "warn"))
         if gimbal := status.gimbal_summary():
             auto.append(f"; {gimbal}")
         if "getPreparedVector" not in status.capabilities:
