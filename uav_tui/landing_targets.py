@@ -64,8 +64,9 @@ class LandingTargetFeed:
         """Judges each target before it counts as seen or is sent."""
         self.refusals = RefusalRun()
         """The targets that could not be true: how many, the last reason, how many in a row."""
-        self.processor_says = ""
-        """The processor's own reason for giving no target (its ``status``, :mod:`processors.outputs`), newest."""
+        self.why_none = ""
+        """Why the newest frame gave no target to send: ``refused: ...`` (:attr:`check`) or ``the processor says:
+        ...`` (its ``status``, :mod:`processors.outputs`); "" after a target passed the checks."""
 
     def seen(self, capture_ns: int) -> None:
         """The processor saw the pad in the frame captured at ``capture_ns``."""
@@ -75,19 +76,13 @@ class LandingTargetFeed:
     def check_fresh(self) -> None:
         """Raise UavError saying so unless the pad was seen within :data:`FRESH_TARGET_S`."""
         if self.last_seen_ns is None:
-            why = f" ({self.why_none()})" if self.why_none() else ""
+            why = f" ({self.why_none})" if self.why_none else ""
             raise UavError(f"precland: the processor has not seen a landing target yet{why}: bring the pad into "
                            "view (or use land)")
         age_s = (self.clock() - self.last_seen_ns) / 1e9
         if age_s > FRESH_TARGET_S:
             raise UavError(f"precland: no landing target in the last {FRESH_TARGET_S:g} s (the last one "
                            f"{age_s:.1f} s ago): bring the pad into view (or use land)")
-
-    def why_none(self) -> str:
-        """``the processor says: 2 markers with id 7...`` or ``refused: ...``: why there is no target now, or ""."""
-        if self.refusals.in_a_row:
-            return f"refused: {self.refusals.last}"
-        return f"the processor says: {self.processor_says}" if self.processor_says else ""
 
     def engage(self) -> None:
         self.engaged, self.stop_reason = True, ""
@@ -177,7 +172,8 @@ def consider_landing_target(core: LandingCore, result: ProcessedFrame) -> None:
     target = result.outputs.landing_target
     landing = core.landing
     if target is None:
-        landing.processor_says = result.outputs.landing_status
+        status = result.outputs.landing_status
+        landing.why_none = f"the processor says: {status}" if status else landing.why_none
         return
     if core.camera is None:
         result.landing = "not sent: no camera model to check it against"
@@ -186,13 +182,13 @@ def consider_landing_target(core: LandingCore, result: ProcessedFrame) -> None:
     at_capture = core.telemetry.at(capture_ns)[0]
     judged = landing.check.judge(target, result.frame.seq, capture_ns, core.camera, at_capture)
     if judged.target is None:
-        result.landing = f"refused: {judged.reason}"
+        result.landing = landing.why_none = f"refused: {judged.reason}"
         if landing.refusals.refuse(judged.reason) and landing.engaged:
             core.stop_precland(f"{landing.refusals.in_a_row} landing targets in a row refused, the last: "
                                f"{judged.reason}; the autopilot's own landing goes on without them")
         return
     landing.refusals.accept()
-    landing.processor_says = ""
+    landing.why_none = ""
     landing.seen(capture_ns)
     why = _blocked(core, capture_ns)
     result.landing = f"not sent: {why}" if why else "sent"

@@ -215,7 +215,7 @@ def core_status(core: ObservedCore) -> CoreStatus:
         landing_targets_sent=core.landing_sender.sent if core.landing_sender is not None else 0,
         landing_targets_failed=core.landing_sender.failed if core.landing_sender is not None else 0,
         landing_targets_refused=core.landing.refusals.refused,
-        landing_none_reason=core.landing.why_none(),
+        landing_none_reason=core.landing.why_none,
         gimbal_sent=core.gimbal_relay.sent if core.gimbal_relay is not None else 0,
         gimbal_failed=core.gimbal_relay.failed if core.gimbal_relay is not None else 0,
         gimbal_controlled=core.gimbal_relay is not None and core.gimbal_relay.controller.gimbal_controlled,

@@ -53,12 +53,14 @@ def test_a_refused_target_is_not_seen_and_precland_says_why() -> None:
     assert core.landing.last_seen_ns is None and core.landing.refusals.refused == 1
     with pytest.raises(UavError, match=r"has not seen a landing target yet \(refused: distance 5000.0 m"):
         core.landing.check_fresh()
+    consider_landing_target(core, _frame(2, None, "marker 7 not in view"))  # type: ignore[arg-type]
+    assert core.landing.why_none == "the processor says: marker 7 not in view"  # the newest reason
 
 
 def test_the_processors_own_reason_for_no_target_is_what_precland_says() -> None:
     core = _Core()
     consider_landing_target(core, _frame(1, None, "2 markers with id 7: which is the pad? no target"))  # type: ignore[arg-type]
-    assert core.landing.why_none() == "the processor says: 2 markers with id 7: which is the pad? no target"
+    assert core.landing.why_none == "the processor says: 2 markers with id 7: which is the pad? no target"
     with pytest.raises(UavError, match=r"yet \(the processor says: 2 markers with id 7: which is the pad\? no"):
         core.landing.check_fresh()
 

@@ -92,6 +92,6 @@ def test_a_gimbal_pointing_is_checked_again_against_the_contracts_ranges() -> No
 
 
 def test_the_scalar_rotation_is_the_autopilots() -> None:
-    body = [0.3, -0.5, 0.8]
+    body = (0.3, -0.5, 0.8)
     for attitude in ((0.0, 0.0, 0.0), (12.0, -7.0, 135.0), (-40.0, 25.0, -170.0)):
         assert _ned(body, *attitude) == pytest.approx(tuple(rotation_ned_body(*attitude) @ body))

@@ -113,7 +113,9 @@ class LandingCheck:
         if reason:
             return Judged(None, reason)
         t = at_capture
-        body = [sum(r * c for r, c in zip(row, copy.direction, strict=True)) for row in self._view[2]]
+        (a, b, c), (d, e, f), (g, h, i) = self._view[2]
+        x, y, z = copy.direction
+        body = (a * x + b * y + c * z, d * x + e * y + f * z, g * x + h * y + i * z)
         ned = _ned(body, t.roll_deg or 0.0, t.pitch_deg or 0.0, t.yaw_deg or 0.0)
         if ned[2] < MIN_DEPRESSION:
             return Judged(None, f"the line of sight is {math.degrees(math.asin(max(-1.0, ned[2]))):.0f} deg below "
@@ -165,7 +167,7 @@ def _outside_view(direction: Vector3, limits: tuple[float, float, float, float])
             "down is outside the camera's view")
 
 
-def _ned(body: list[float], roll_deg: float, pitch_deg: float, yaw_deg: float) -> Vector3:
+def _ned(body: Vector3, roll_deg: float, pitch_deg: float, yaw_deg: float) -> Vector3:
     """A body-frame (FRD) vector in NED: :func:`~controllers.landing_target.rotation_ned_body` applied to one
     vector, in scalar math (NumPy's calls alone would be most of a frame's budget for the checks)."""
     r, p, y = math.radians(roll_deg), math.radians(pitch_deg), math.radians(yaw_deg)
