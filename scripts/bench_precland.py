@@ -12,8 +12,12 @@ the shared monotonic clock): capture -> arrival; the ``sim:`` camera's own delay
 it renders, then renders: a real camera's readout); the processor's own time for that frame (``t_end - t_start``);
 the platform's share, what is left, in three parts: the frame in the buffer to the processor's start, its end to
 the send started on the event loop, that to the simulator's arrival (conversion, MAVSDK, UDP); and the
-``time_usec`` stamp against the true capture time (its error, absolute).
-Issue 38's goals: landing error p95 <= 0.25 m, the platform's share p95 <= 5 ms.
+``time_usec`` stamp against the true capture time (its error, absolute). Also the relay's plausibility checks
+(:mod:`uav_tui.flight.plausibility`) on every frame's landing target, in the loop thread's CPU time: where they run
+(on the event loop, in flight: from cold caches on a loaded machine, shown beside an empty call timed the same way),
+and on the flight's own inputs one after another (the code's cost: the goal); the gimbal pointing's check too.
+Issue 38's goals: landing error p95 <= 0.25 m, the platform's share p95 <= 5 ms; issue 47's: the relay's checks
+p95 <= 0.05 ms per frame.
 
 Usage: python scripts/bench_precland.py [--landings 10] [--wind 3,2] [--altitude 10] [--max-offset 4] [--seed 0]
 """
@@ -41,13 +45,16 @@ sys.path.insert(0, str(ROOT))
 from controllers.sim.geo import parse_wind  # noqa: E402
 from controllers.sim.launcher import SimVehicle  # noqa: E402
 from controllers.sim.truth import TruthClient  # noqa: E402
+from processors.gimbal import GimbalPointing  # noqa: E402
 from tests.core.flight_helpers import flying_core, wait_until  # noqa: E402
+from uav_tui.flight.plausibility import LandingCheck, judge_gimbal  # noqa: E402
 from uav_tui.hosting.host import ProcessedFrame  # noqa: E402
 
 MARKER_ID = 7
 MARKER_SIZE_M = 0.5
 GOAL_ERROR_P95_M = 0.25
 GOAL_PLATFORM_P95_MS = 5.0
+GOAL_CHECKS_P95_MS = 0.05
 
 
 @dataclass
@@ -65,6 +72,12 @@ class Landing:
     result_ms: list[float] = field(default_factory=list)
     send_ms: list[float] = field(default_factory=list)
     stamp_error_ms: list[float] = field(default_factory=list)
+    check_ms: list[float] = field(default_factory=list)
+    """The relay's plausibility check of each frame's landing target, in flight."""
+    check_baseline_ms: list[float] = field(default_factory=list)
+    check_inputs: list[tuple[Any, ...]] = field(default_factory=list)
+    refusals: list[str] = field(default_factory=list)
+    """What the relay refused (an honest processor's targets: each is a false refusal)."""
     targets_received: int = 0
     targets_unmatched: int = 0
 
@@ -87,6 +100,8 @@ async def land_once(pad_ne: tuple[float, float], wind: tuple[float, float], alti
     published: dict[int, int] = {}  # capture ns -> when the frame reached the frame buffer (the sim: camera renders)
 
     def on_frame(result: ProcessedFrame) -> None:  # on the loop, right after the send was started
+        if result.landing.startswith("refused: "):
+            landing.refusals.append(result.landing)
         if result.landing == "sent":
             sent[result.frame.t_mono_ns] = (result.t_start_ns, result.t_end_ns, time.monotonic_ns())
 
@@ -96,6 +111,7 @@ async def land_once(pad_ne: tuple[float, float], wind: tuple[float, float], alti
                                processor_args={"marker_id": MARKER_ID, "marker_size_m": MARKER_SIZE_M}) as core:
             truth: TruthClient = core.truth  # type: ignore[attr-defined]
             core.add_frame_listener(on_frame)
+            time_checks(core.landing.check, landing)
             assert core.source is not None
             core.source.buffer.add_listener(lambda frame: published.__setitem__(frame.t_mono_ns, time.monotonic_ns()))
             await wait_until(lambda: core.landing.last_seen_ns is not None, 20, "the marker in view")
@@ -120,6 +136,48 @@ async def land_once(pad_ne: tuple[float, float], wind: tuple[float, float], alti
     # time_boot_ms is floored to the millisecond: the smallest difference is the boot
     split_latencies(landing, records, min(boot_ns), sent, published)
     return landing
+
+
+def time_checks(check: Any, landing: Landing) -> None:
+    """Time each call of ``check.judge`` (the relay's plausibility check, as the relay calls it, on the loop) in ms of
+    the loop thread's own CPU time, and an empty call timed the same way beside it (on a loaded machine every call
+    after the loop waited runs from cold caches); keep the inputs for :func:`replayed_check_ms`."""
+    judge = check.judge
+
+    def timed(*args: Any) -> Any:
+        start = time.thread_time_ns()
+        landing.check_baseline_ms.append((time.thread_time_ns() - start) / 1e6)
+        start = time.thread_time_ns()
+        try:
+            return judge(*args)
+        finally:
+            landing.check_ms.append((time.thread_time_ns() - start) / 1e6)
+            landing.check_inputs.append(args)
+
+    check.judge = timed
+
+
+def replayed_check_ms(inputs: list[tuple[Any, ...]], rounds: int = 20) -> list[float]:
+    """The same checks on the flight's own inputs, one after another (``rounds`` times each, a fresh check each
+    round): the code's cost without the machine's other work in between."""
+    times = []
+    for _ in range(rounds):
+        check = LandingCheck()
+        for args in inputs:
+            start = time.thread_time_ns()
+            check.judge(*args)
+            times.append((time.thread_time_ns() - start) / 1e6)
+    return times
+
+
+def gimbal_check_ms(count: int = 20_000) -> list[float]:
+    """The gimbal pointing's check, ``count`` times (it has no geometry: the copy and the contract's ranges)."""
+    pointing, times = GimbalPointing.angles(-45.0, 10.0), []
+    for _ in range(count):
+        start = time.thread_time_ns()
+        judge_gimbal(pointing)
+        times.append((time.thread_time_ns() - start) / 1e6)
+    return times
 
 
 def split_latencies(landing: Landing, records: list[dict[str, Any]], boot_ns: int,
@@ -180,6 +238,7 @@ async def bench(args: argparse.Namespace) -> dict[str, Any]:
     errors = [landing.error_m for landing in landings]
     error = stats(errors, "m")
     share = stats(pooled(landings, "platform_ms"), "ms", 2)
+    checks = stats(replayed_check_ms(pooled(landings, "check_inputs")), "ms", 4)
     return {
         "benchmark": "precland", "machine": platform.machine(), "cpus": os.cpu_count(),
         "load_average_1min_at_end": round(os.getloadavg()[0], 1), "python": platform.python_version(),
@@ -200,12 +259,20 @@ async def bench(args: argparse.Namespace) -> dict[str, Any]:
             "processor_end_to_send_started": stats(pooled(landings, "result_ms"), "ms", 2),
             "send_started_to_autopilot": stats(pooled(landings, "send_ms"), "ms", 2)},
         "time_usec_stamp_off_capture": stats(pooled(landings, "stamp_error_ms"), "ms", 2),
+        "relay_checks": {
+            "landing_target": checks | {"frames": len(pooled(landings, "check_ms")),
+                                        "refused": pooled(landings, "refusals")},
+            "landing_target_in_flight_cold": stats(pooled(landings, "check_ms"), "ms", 4),
+            "empty_call_in_flight_cold": stats(pooled(landings, "check_baseline_ms"), "ms", 4),
+            "gimbal_pointing": stats(gimbal_check_ms(), "ms", 4)},
         "per_landing": [{"pad_ne_m": [round(c, 2) for c in landing.pad_ne], "error_m": round(landing.error_m, 3),
                          "precland_to_touchdown_s": round(landing.precland_to_touchdown_s, 1)}
                         for landing in landings],
         "goals": {"landing error p95 (m)": goal(error["p95_m"], GOAL_ERROR_P95_M),
                   "capture to LANDING_TARGET over the processor's and the camera's own time, p95 (ms)":
-                      goal(share["p95_ms"], GOAL_PLATFORM_P95_MS)},
+                      goal(share["p95_ms"], GOAL_PLATFORM_P95_MS),
+                  "the relay's plausibility checks of a frame's landing target, p95 (ms)":
+                      goal(checks["p95_ms"], GOAL_CHECKS_P95_MS)},
     }
 
 
