@@ -37,15 +37,14 @@ def _track(run: Dataset) -> pd.DataFrame:
     return table[(table["lat_deg"] != 0) | (table["lon_deg"] != 0)]  # 0,0: an autopilot without a fix yet
 
 
-def _located(table: pd.DataFrame) -> pd.DataFrame:
-    """The rows of ``table`` (frames or detections) whose box was geo-located at a possible place, and that name
-    their frame; an impossible target altitude is left out (NaN)."""
+def _located(table: pd.DataFrame, *numbers: str) -> pd.DataFrame:
+    """The rows of ``table`` (frames or detections) whose box was geo-located at a possible place, that name their
+    frame and have finite ``numbers`` (written as JSON numbers); an impossible target altitude is left out (NaN)."""
     located = table[(table["target_status"] == OK).fillna(False)]
     located = located.dropna(subset=["target_lat_deg", "target_lon_deg", "frame_id"])
     keep = _possible(located["target_lat_deg"], "lat_deg") & _possible(located["target_lon_deg"], "lon_deg")
-    for name in ("target_uncertainty_m", "score"):  # numbers JSON must write as numbers
-        if name in located:
-            keep &= pd.to_numeric(located[name], errors="coerce").abs().lt(math.inf)
+    for name in ("target_uncertainty_m", *numbers):
+        keep &= pd.to_numeric(located[name], errors="coerce").abs().lt(math.inf)
     located = located[keep]
     return located.assign(target_alt_m=located["target_alt_m"].where(_possible(located["target_alt_m"], "abs_alt_m")))
 
@@ -61,7 +60,7 @@ def _points(run: Dataset) -> list[tuple[pd.Timestamp, pd.Series, str]]:
     """Every located target, then every located detection: (time, row, name)."""
     return [*((time, row, "target") for time, row in _located(run.frames).iterrows()),
             *((time, row, f"{row['label']} {float(row['score']):.2f}")
-              for time, row in _located(run.detections).iterrows())]
+              for time, row in _located(run.detections, "score").iterrows())]
 
 
 def _when(time: pd.Timestamp) -> str:
