@@ -4,7 +4,8 @@
 ``uav-tui runs`` lists recorded runs; ``uav-tui report [RUN]`` draws a run's plots; ``uav-tui replay RUN...``
 replays recorded runs through a processor; ``uav-tui eval DATA`` scores processors on annotated video;
 ``uav-tui bench`` measures each reference processor's FPS and CPU on this computer;
-``uav-tui calibrate`` writes a camera's calibration file from views of a chessboard.
+``uav-tui calibrate`` writes a camera's calibration file from views of a chessboard; ``uav-tui service`` installs
+the platform as a boot service.
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ from uav_tui.errors import CONFIG_ERRORS, error_line
 from uav_tui.flight.commands import help_text
 from uav_tui.output.text import SafeFormatter, safe
 
-TOOLS = ("sim", "runs", "report", "export", "replay", "eval", "bench", "calibrate")
+TOOLS = ("sim", "runs", "report", "export", "replay", "eval", "bench", "calibrate", "service")
 """Sub-commands; anything else on the command line configures a run."""
 
 
@@ -30,7 +31,7 @@ def build_parser() -> argparse.ArgumentParser:
         prog="uav-tui", suggest=TOOLS,
         description="Camera -> your algorithm -> flight controller, with an operator dashboard.",
         epilog=f"tools: uav-tui sim | runs | report [RUN] | export [RUN] | replay RUN... | eval DATA | bench | "
-               f"calibrate (each has --help)\n\n"
+               f"calibrate | service install|remove|status (each has --help)\n\n"
                f"commands (keys, --script, web):\n{help_text()}",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
@@ -105,6 +106,10 @@ def _run_tool(name: str, argv: list[str]) -> int:
         from uav_tui import calibrate_cli
 
         return calibrate_cli.main(argv)
+    if name == "service":
+        from uav_tui.field import service
+
+        return service.main(argv)
     from uav_tui.recorded import runs_cli
 
     return runs_cli.main(name, argv)
