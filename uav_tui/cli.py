@@ -5,7 +5,7 @@
 replays recorded runs through a processor; ``uav-tui eval DATA`` scores processors on annotated video;
 ``uav-tui bench`` measures each reference processor's FPS and CPU on this computer;
 ``uav-tui calibrate`` writes a camera's calibration file from views of a chessboard; ``uav-tui service`` installs
-the platform as a boot service.
+the platform as a boot service; ``uav-tui doctor`` checks a field setup.
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from uav_tui.errors import CONFIG_ERRORS, error_line
 from uav_tui.flight.commands import help_text
 from uav_tui.output.text import SafeFormatter, safe
 
-TOOLS = ("sim", "runs", "report", "export", "replay", "eval", "bench", "calibrate", "service")
+TOOLS = ("sim", "runs", "report", "export", "replay", "eval", "bench", "calibrate", "service", "doctor")
 """Sub-commands; anything else on the command line configures a run."""
 
 
@@ -31,7 +31,7 @@ def build_parser() -> argparse.ArgumentParser:
         prog="uav-tui", suggest=TOOLS,
         description="Camera -> your algorithm -> flight controller, with an operator dashboard.",
         epilog=f"tools: uav-tui sim | runs | report [RUN] | export [RUN] | replay RUN... | eval DATA | bench | "
-               f"calibrate | service install|remove|status (each has --help)\n\n"
+               f"calibrate | service install|remove|status | doctor (each has --help)\n\n"
                f"commands (keys, --script, web):\n{help_text()}",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
@@ -110,6 +110,10 @@ def _run_tool(name: str, argv: list[str]) -> int:
         from uav_tui.field import service
 
         return service.main(argv)
+    if name == "doctor":
+        from uav_tui.field import doctor
+
+        return doctor.main(argv)
     from uav_tui.recorded import runs_cli
 
     return runs_cli.main(name, argv)

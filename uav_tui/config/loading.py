@@ -44,17 +44,25 @@ def find_config_file(explicit: str | None) -> Path | None:
 
 def load_config(path: Path | None, overrides: dict[str, Any] | None = None) -> Config:
     """Read ``path`` (None: defaults only), then apply ``overrides`` (flat key -> value, from the CLI)."""
-    data: dict[str, Any] = {}
-    if path is not None:
-        try:
-            data = tomllib.loads(path.read_text(encoding="utf-8"))
-        except tomllib.TOMLDecodeError as exc:
-            raise ConfigError(f"{path}: not valid TOML: {exc}", key="config") from None
-        except UnicodeDecodeError as exc:
-            raise ConfigError(f"{path}: not UTF-8 text (byte {exc.start}); save it as UTF-8", key="config") from None
-        except OSError as exc:
-            raise ConfigError(f"cannot read config file {path}: {exc.strerror or exc}", key="config") from None
-    where = str(path) if path else "configuration"
+    return config_from_data(read_config_data(path), overrides, str(path) if path else "configuration")
+
+
+def read_config_data(path: Path | None) -> dict[str, Any]:
+    """The TOML tables of ``path`` as read, unchecked (None: no file, empty)."""
+    if path is None:
+        return {}
+    try:
+        return tomllib.loads(path.read_text(encoding="utf-8"))
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{path}: not valid TOML: {exc}", key="config") from None
+    except UnicodeDecodeError as exc:
+        raise ConfigError(f"{path}: not UTF-8 text (byte {exc.start}); save it as UTF-8", key="config") from None
+    except OSError as exc:
+        raise ConfigError(f"cannot read config file {path}: {exc.strerror or exc}", key="config") from None
+
+
+def config_from_data(data: dict[str, Any], overrides: dict[str, Any] | None, where: str) -> Config:
+    """The configuration of TOML tables ``data`` (read from ``where``) with ``overrides`` over them, each checked."""
     top: dict[str, Any] = {}
     sections: dict[str, dict[str, Any]] = {name: {} for name in SECTIONS}
     for key, value in data.items():

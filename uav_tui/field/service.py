@@ -10,19 +10,18 @@ import argparse
 import getpass
 import os
 import shlex
-import shutil
-import subprocess
 import sys
 from pathlib import Path
 
 from uav_tui.arguments import ArgumentParser
 from uav_tui.config import find_config_file, load_config
 from uav_tui.errors import CONFIG_ERRORS, ConfigError, error_line
+from uav_tui.field.tools import run_tool
 from uav_tui.field.unit import Unit, default_unit_dir, exec_start
 from uav_tui.output.text import safe
 
 SYSTEMCTL_TIMEOUT_S = 20.0
-"""Longest a ``systemctl`` / ``journalctl`` / ``loginctl`` call may take."""
+"""Longest a ``systemctl`` step may take (``daemon-reload`` on a Pi's SD card can be slow)."""
 JOURNAL_LINES = 10
 """Lines of the journal ``status`` shows."""
 PROG = "uav-tui service"
@@ -121,12 +120,12 @@ def _status(args: argparse.Namespace, path: Path) -> int:
     print(f"installed: {path}")
     print(f"runs: {shlex.join(exec_start(path.read_text(encoding='utf-8')))}")
     for question in ("is-enabled", "is-active"):
-        ok, output = _run(["systemctl", *_scope(args.system), question, path.name])
+        ok, output = run_tool("systemctl", *_scope(args.system), question, path.name)
         print(f"{question.removeprefix('is-')}: {_one_line(output) or '?'}")
     if not args.system:
         print(_linger_advice(getpass.getuser()) or "lingering: on (starts at boot)")
-    ok, output = _run(["journalctl", *_scope(args.system), "-u", args.name, "-n", str(JOURNAL_LINES),
-                       "--no-pager", "-o", "short-iso"])
+    ok, output = run_tool("journalctl", *_scope(args.system), "-u", args.name, "-n", str(JOURNAL_LINES),
+                          "--no-pager", "-o", "short-iso")
     if ok and output.strip():
         print("last journal lines:\n" + safe(output.rstrip(), multiline=True))
     else:
@@ -136,7 +135,7 @@ def _status(args: argparse.Namespace, path: Path) -> int:
 
 def _linger_advice(user: str) -> str:
     """What to do so ``user``'s units start at boot; "" when lingering is on."""
-    ok, output = _run(["loginctl", "show-user", user, "--property=Linger", "--value"])
+    ok, output = run_tool("loginctl", "show-user", user, "--property=Linger", "--value")
     if ok and output.strip() == "yes":
         return ""
     return (f"a user unit starts at boot only with lingering (now: {_one_line(output) or 'unknown'}): "
@@ -146,23 +145,11 @@ def _linger_advice(user: str) -> str:
 def _systemctl_steps(system: bool, steps: list[list[str]]) -> bool:
     """Run ``systemctl`` steps in order; False (having said why) at the first that fails."""
     for step in steps:
-        ok, output = _run(["systemctl", *_scope(system), *step])
+        ok, output = run_tool("systemctl", *_scope(system), *step, timeout_s=SYSTEMCTL_TIMEOUT_S)
         if not ok:
             print(f"{_command_text(system, step)} failed: {_one_line(output)}")
             return False
     return True
-
-
-def _run(command: list[str]) -> tuple[bool, str]:
-    """Run a systemd tool, bounded; (succeeded, its output or why it could not run)."""
-    if shutil.which(command[0]) is None:
-        return False, f"{command[0]} not found (is this a systemd system?)"
-    try:
-        done = subprocess.run(command, capture_output=True, text=True, timeout=SYSTEMCTL_TIMEOUT_S,
-                              stdin=subprocess.DEVNULL, check=False)
-    except subprocess.TimeoutExpired:
-        return False, f"{command[0]} did not answer within {SYSTEMCTL_TIMEOUT_S:g} s"
-    return done.returncode == 0, (done.stdout + done.stderr)
 
 
 def _one_line(output: str) -> str:

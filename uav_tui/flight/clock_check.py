@@ -27,13 +27,17 @@ class ClockCheck:
         if self.checked or offset_ms is None:
             return
         self.checked = True
-        if abs(offset_ms) < CLOCK_OFF_S * 1000:
-            return
-        seconds = round(offset_ms / 1000)
-        direction = "behind" if seconds > 0 else "ahead of"
-        self.events.emit(
-            "warning", "platform",
-            f"this computer's clock is {duration(abs(seconds))} {direction} the autopilot's GPS time (no network "
+        if advice := clock_advice(offset_ms):
+            self.events.emit("warning", "platform", advice)
+
+
+def clock_advice(offset_ms: int) -> str:
+    """What to say about a GPS time ``offset_ms`` ahead of this computer's clock: "" when under :data:`CLOCK_OFF_S`."""
+    if abs(offset_ms) < CLOCK_OFF_S * 1000:
+        return ""
+    seconds = round(offset_ms / 1000)
+    direction = "behind" if seconds > 0 else "ahead of"
+    return (f"this computer's clock is {duration(abs(seconds))} {direction} the autopilot's GPS time (no network "
             "time?): run folder names and t_wall_ns use this computer's clock, and telemetry.csv's "
             f"fc_clock_offset_ms corrects them; to set the clock: sudo date -s \"@$(( $(date +%s) {seconds:+d} ))\"")
 
