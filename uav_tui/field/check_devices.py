@@ -6,6 +6,7 @@ import grp
 import os
 import stat
 import threading
+import time
 from pathlib import Path
 
 from controllers.connection import Connection, check_serial_device
@@ -21,13 +22,16 @@ PI_UARTS = ("/dev/serial0", "/dev/ttyAMA0", "/dev/ttyS0", "/dev/serial1")
 CONSOLES = ("console=serial0", "console=ttyAMA0", "console=ttyS0", "console=serial1")
 PROBE_TIMEOUT_S = 3.0
 """Longest an OpenCV probe of one camera may take (a wedged UVC camera can block ``open`` for good)."""
+PROBE_BUDGET_S = 6.0
+"""Longest all probes together may take (a Pi has a dozen codec and ISP nodes besides its cameras)."""
 
 
 def cameras(config: Config, v4l_dir: Path = V4L_DIR) -> list[Finding]:
     """One line per camera device (its name and formats), and whether the configured ``usb:`` camera is there."""
     devices = sorted(v4l_dir.glob("video*"), key=lambda p: int(p.name.removeprefix("video") or 0)) \
         if v4l_dir.is_dir() else []
-    found = [ok("camera", f"/dev/{d.name}: {_read(d / 'name') or 'unnamed'}; {_formats(f'/dev/{d.name}')}")
+    deadline = time.monotonic() + PROBE_BUDGET_S
+    found = [ok("camera", f"/dev/{d.name}: {_read(d / 'name') or 'unnamed'}; {_formats(f'/dev/{d.name}', deadline)}")
              for d in devices]
     scheme, _, target = config.source.partition(":")
     if scheme != "usb":
@@ -47,18 +51,21 @@ def _read(path: Path) -> str:
         return ""
 
 
-def _formats(device: str) -> str:
-    """What ``v4l2-ctl --list-formats`` says (the FourCCs), else an OpenCV probe's FourCC and size."""
-    done, output = run_tool("v4l2-ctl", "-d", device, "--list-formats", timeout_s=PROBE_TIMEOUT_S)
+def _formats(device: str, deadline: float) -> str:
+    """What ``v4l2-ctl --list-formats`` says (the FourCCs), else an OpenCV probe's FourCC and size, until
+    ``deadline``."""
+    if (left := min(PROBE_TIMEOUT_S, deadline - time.monotonic())) <= 0:
+        return "formats not probed (time is up; apt install v4l-utils to list them)"
+    done, output = run_tool("v4l2-ctl", "-d", device, "--list-formats", timeout_s=left)
     if done:
         fourccs = [line.split("'")[1] for line in output.splitlines() if line.count("'") >= 2]
         return "formats " + (", ".join(fourccs) or "none (a metadata node, not a camera)")
     found: list[str] = []
     probe = threading.Thread(target=_probe, args=(device, found), name=f"doctor-probe:{device}", daemon=True)
     probe.start()
-    probe.join(PROBE_TIMEOUT_S)  # a probe still blocked is left behind: the process ends soon
+    probe.join(left)  # a probe still blocked is left behind: the process ends soon
     if not found:
-        return f"formats unknown (OpenCV could not open it within {PROBE_TIMEOUT_S:g} s; apt install v4l-utils)"
+        return "formats unknown (OpenCV could not open it in time; apt install v4l-utils to list them)"
     return found[0] + " (OpenCV; apt install v4l-utils to list all formats)"
 
 
