@@ -114,3 +114,16 @@ def test_the_units_command_starts_records_stops_on_sigterm_and_never_flies(tmp_p
 def _vehicle_lines(tmp_path: Path) -> list[str]:
     """The status lines with the vehicle's state (its flight mode known) in the unit's log."""
     return re.findall(r".* hb [0-9.]+s (?!\?)\S+ .*", (tmp_path / "journal.txt").read_text())
+
+
+def test_a_system_unit_names_its_user(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                      capsys: pytest.CaptureFixture[str]) -> None:
+    """Run with sudo, the unit runs as the user who ran sudo; as plain root, it asks for --run-as."""
+    monkeypatch.setattr("getpass.getuser", lambda: "root")
+    monkeypatch.delenv("SUDO_USER", raising=False)
+    flags = ["service", "install", "--system", "--config", str(_config(tmp_path)), "--unit-dir", str(tmp_path / "u"),
+             "--no-systemctl"]
+    assert uav_main(flags) == 2 and "--run-as USER" in capsys.readouterr().err
+    monkeypatch.setenv("SUDO_USER", "pi")
+    assert uav_main(flags) == 0
+    assert "User=pi\n" in (tmp_path / "u" / "uav-tui.service").read_text()
