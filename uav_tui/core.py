@@ -278,9 +278,15 @@ class UavCore:
         """A vehicle command handed the vehicle to ``mode`` (LAND, RETURN_TO_LAUNCH), or to no mode of its own."""
         self.handed_over = mode
 
-    def stop_precland(self, reason: str) -> None:
-        """Stop sending landing targets (a fault, another operator command); said when it was on."""
-        if self.landing.release(reason):
+    def stop_precland(self, reason: str, *, landed: bool = False) -> None:
+        """Stop sending landing targets (a fault, another operator command: a warning; ``landed``: the landing's
+        normal end, said as such); said when it was on."""
+        if not self.landing.release(reason):
+            return
+        if landed:
+            sent = self.landing_sender.sent if self.landing_sender is not None else 0
+            self.events.emit("info", "autonomy", f"precland done: {reason} ({sent} landing targets sent)")
+        else:
             self.events.emit("warning", "autonomy", f"precland off, landing targets no longer sent: {reason}")
 
     def clear_processor_error(self) -> None:

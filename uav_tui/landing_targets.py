@@ -162,7 +162,7 @@ class LandingCore(Protocol):
 
     def newest_frame_age(self) -> float | None: ...
 
-    def stop_precland(self, reason: str) -> None: ...
+    def stop_precland(self, reason: str, *, landed: bool = False) -> None: ...
 
 
 def consider_landing_target(core: LandingCore, result: ProcessedFrame) -> None:
@@ -217,7 +217,8 @@ async def watch_precland(core: LandingCore) -> None:
         fault = core.gate.fault(core.newest_frame_age(), worker.busy_s, worker.consecutive_errors)
         snapshot = core.telemetry.snapshot()
         if not fault and snapshot.armed is False:
-            fault = "landed and disarmed"
+            core.stop_precland("landed and disarmed", landed=True)
+            continue
         if not fault and isinstance(core.controller, PrecisionLanding):
             fault = core.landing.left_mode(snapshot.flight_mode, core.controller.landing_modes)
         if fault:

@@ -27,6 +27,7 @@ from uav_tui.flight.autonomy import check_vector
 from uav_tui.flight.geolocate import EARTH_RADIUS_M, OK
 from uav_tui.output.text import safe
 from uav_tui.recorded.dataset import Dataset, load
+from uav_tui.recorded.report_events import executed_count, landing_lines, problem_lines
 from uav_tui.recorded.report_replay import REPLAY_PLOT, replay_figure
 from uav_tui.recorded.telemetry_notes import telemetry_notes
 from uav_tui.recording.crash import CRASH_FILE, crash_summary
@@ -102,8 +103,6 @@ def summary(run: Dataset) -> str:
     frames, telemetry, events = run.frames, run.telemetry, run.events
     duration = _duration_s(run)
     latency = _latency_ms(frames)
-    decisions = frames["decision"].fillna("")
-    executed = int((decisions == "executed").sum())
     with_vector = int(frames["vx"].notna().sum())
     lines = [
         f"run {run.path.name}: {duration:.1f} s, processor {run.info.get('processor', {}).get('name', '?')}, "
@@ -112,7 +111,8 @@ def summary(run: Dataset) -> str:
         f"frames: {len(frames)} processed ({len(frames) / duration if duration else 0:.1f}/s), "
         f"{int(frames['saved'].fillna(False).sum())} saved, {int(frames['error'].notna().sum())} with errors",
         f"latency capture->result: p50 {_pct(latency, 50)} ms, p95 {_pct(latency, 95)} ms",
-        f"vectors: {with_vector} proposed, {executed} executed",
+        f"vectors: {with_vector} proposed, {executed_count(frames)} executed (clamped ones too)",
+        *landing_lines(frames, telemetry, target_positions(run)),
     ]
     if len(telemetry):
         track = telemetry[["north_m", "east_m"]].dropna().to_numpy()
@@ -125,6 +125,7 @@ def summary(run: Dataset) -> str:
     levels = events["level"].value_counts()
     lines.append(f"events: {len(events)} ({int(levels.get('warning', 0))} warnings, "
                  f"{int(levels.get('error', 0))} errors)")
+    lines += problem_lines(events)
     drops = run.info.get("recording", {}).get("dropped")
     if drops:
         lines.append(f"recorder dropped {drops} items: {run.info['recording'].get('drops')}")
