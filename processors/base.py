@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import difflib
 import inspect
 import math
+import re
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Protocol, TypeVar, runtime_checkable
 
@@ -67,6 +69,10 @@ class ProcessorInfo:
     """The source file, for reloads and error messages."""
     capabilities: frozenset[str]
     """Which of OPTIONAL_METHODS it implements."""
+    warnings: tuple[str, ...] = ()
+    """What looks wrong but loads: a method named like a contract method but not quite (never called)."""
+    buttons: tuple[tuple[int, str], ...] = ()
+    """``(id, meaning)`` of the F-keys its class docstring describes under ``Operator buttons:``."""
 
 
 def validate_processor(instance: object, *, name: str, path: str | None) -> ProcessorInfo:
@@ -92,7 +98,44 @@ def validate_processor(instance: object, *, name: str, path: str | None) -> Proc
         capabilities.add(optional)
     if not hasattr(instance, "tmMgr"):
         instance.tmMgr = None  # type: ignore[attr-defined]
-    return ProcessorInfo(name=name, path=path, capabilities=frozenset(capabilities))
+    return ProcessorInfo(name=name, path=path, capabilities=frozenset(capabilities),
+                         warnings=misspelt_methods(type(instance)), buttons=described_buttons(type(instance)))
+
+
+CONTRACT_NAMES = ("photo_processing", *OPTIONAL_METHODS, "tmMgr")
+"""Every name the platform calls or sets on a processor."""
+
+_BUTTON = re.compile(r"^\s*F([1-4])\s*:\s*(.+?)\s*$")
+
+
+def misspelt_methods(cls: type) -> tuple[str, ...]:
+    """A warning for each public name of ``cls`` close to a contract name it does not define (``getPreparedVectr``,
+    ``customise_processing``): as written, the platform never calls it."""
+    defined = {name for name in dir(cls) if not name.startswith("_")}
+    lowered = {name.lower(): name for name in CONTRACT_NAMES}
+    warnings = []
+    for name in sorted(defined - set(CONTRACT_NAMES)):
+        close = ([lowered[name.lower()]] if name.lower() in lowered else
+                 difflib.get_close_matches(name, CONTRACT_NAMES, n=1, cutoff=0.8))
+        if close and close[0] not in defined:
+            warnings.append(f"{cls.__name__}.{name} is not a name the platform calls: did you mean {close[0]}? "
+                            "(as written it is never called)")
+    return tuple(warnings)
+
+
+def described_buttons(cls: type) -> tuple[tuple[int, str], ...]:
+    """The ``F1: ...`` lines under ``Operator buttons:`` in the docstring of ``cls`` or of a class it inherits."""
+    docs = (inspect.cleandoc(klass.__doc__ or "") for klass in cls.__mro__)
+    section = next((doc.partition("Operator buttons:")[2] for doc in docs if "Operator buttons:" in doc), "")
+    buttons: list[tuple[int, str]] = []
+    for line in section.splitlines()[1:]:
+        match = _BUTTON.match(line)
+        if match is None:
+            if buttons:
+                break
+            continue
+        buttons.append((int(match.group(1)), match.group(2).rstrip(".")))
+    return tuple(buttons)
 
 
 def _require_arity(method: Any, count: int, where: str, path: str | None, class_name: str, signature: str) -> None:

@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import ast
+import contextlib
 import difflib
 import hashlib
 import importlib
 import importlib.util
 import inspect
+import pkgutil
 import sys
 import traceback
 from dataclasses import dataclass, field
@@ -115,6 +117,40 @@ def _check_arguments(cls: type, kwargs: dict[str, Any], where: str | None) -> No
             raise ProcessorLoadError(f"{cls.__name__} ({where}) has no constructor argument {key!r} "
                                      f"(--processor-arg / [processor_args]); {hint}{takes}",
                                      path=where, class_name=cls.__name__, missing=key)
+    by_name = {p.name: p for p in parameters}
+    for key, value in kwargs.items():
+        if key in by_name and (expected := _expected_kinds(by_name[key])) and not _fits(value, expected):
+            kind = " or ".join(_KIND_WORDS[name] for name in expected)
+            raise ProcessorLoadError(f"{cls.__name__} ({where}): constructor argument {key} must be {kind}, got "
+                                     f"{type(value).__name__} {value!r:.60} (--processor-arg {key}=... is read as "
+                                     "TOML: 0.5, 3, true, \"text\")", path=where, class_name=cls.__name__,
+                                     missing=key)
+
+
+_KINDS: dict[str, tuple[type, ...]] = {"float": (int, float), "int": (int,), "bool": (bool,), "str": (str,),
+                                       "None": (type(None),)}
+"""The plain types a constructor argument is checked against (the rest is left to the constructor)."""
+_KIND_WORDS = {"float": "a number (float)", "int": "a whole number (int)", "bool": "true or false (bool)",
+               "str": "text (str, in quotes)", "None": "None"}
+
+
+def _expected_kinds(parameter: inspect.Parameter) -> tuple[str, ...]:
+    """The plain type names a parameter takes, from its annotation (``float``, ``int | None``, as written or
+    evaluated) or, without one, its default's type (an int default takes a float too); () when it says nothing
+    plain."""
+    annotation = parameter.annotation
+    if annotation is inspect.Parameter.empty:
+        default = type(parameter.default).__name__
+        return ("float",) if default in ("int", "float") else (default,) if default in ("bool", "str") else ()
+    text = annotation if isinstance(annotation, str) else getattr(annotation, "__name__", str(annotation))
+    names = tuple(name.strip() for name in text.replace("NoneType", "None").split("|"))
+    return names if all(name in _KINDS for name in names) else ()
+
+
+def _fits(value: Any, kinds: tuple[str, ...]) -> bool:
+    if isinstance(value, bool):  # an int to Python, a switch to the researcher
+        return "bool" in kinds
+    return any(isinstance(value, _KINDS[name]) for name in kinds)
 
 
 def _entry_point_target(name: str) -> str | None:
@@ -164,9 +200,28 @@ def _import_file(path: Path, class_name: str, fresh: bool) -> tuple[ModuleType, 
 
 def _import_error(exc: BaseException, path: str | None, class_name: str) -> ProcessorLoadError:
     missing = exc.name if isinstance(exc, ModuleNotFoundError) else None
-    hint = f"; install it (pip install {missing})" if missing else ""
+    hint = f"; {_install_hint(missing)}" if missing else ""
     return ProcessorLoadError(f"importing {path or 'the processor module'} for {class_name} failed: "
                               f"{_describe(exc, path)}{hint}", path=path, class_name=class_name, missing=missing)
+
+
+PIP_NAMES = {"cv2": "opencv-python", "sklearn": "scikit-learn", "skimage": "scikit-image", "PIL": "pillow",
+             "yaml": "pyyaml", "serial": "pyserial"}
+"""Modules whose package on PyPI has another name."""
+
+
+def _install_hint(missing: str) -> str:
+    """What to do about ``import missing`` failing: the installed module it is a typo of, or the command that installs
+    it into the Python uav-tui runs on (its venv: a plain ``pip`` may be another Python's)."""
+    top = missing.partition(".")[0]
+    installed = sorted({module.name for module in pkgutil.iter_modules()} | set(sys.builtin_module_names))
+    close = [name for name in difflib.get_close_matches(top, installed, n=1, cutoff=0.8) if name != top]
+    if close:
+        return f"no module {top!r} is installed, but {close[0]!r} is: is the import misspelt?"
+    python = Path(sys.executable)
+    with contextlib.suppress(ValueError):
+        python = python.relative_to(Path.cwd())
+    return f"install it into uav-tui's Python: {python} -m pip install {PIP_NAMES.get(top, top)}"
 
 
 def _describe(exc: BaseException, path: str | None) -> str:

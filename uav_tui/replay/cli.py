@@ -21,7 +21,8 @@ def build_parser() -> argparse.ArgumentParser:
         prog="uav-tui replay",
         description="Replay recorded runs (their video and telemetry, at the recorded times) through a processor. "
                     "Each replay is written as a new run whose run.json names the source run; vectors are judged "
-                    "by the autonomy gate as in the recorded run (autonomy on when it was on) and never sent.")
+                    "by the autonomy gate as in the recorded run (autonomy on when it was on) and never sent. "
+                    "Exit status: 0, 1 when a replay recorded errors (the processor raised ...), 2 when none ran.")
     parser.add_argument("runs", nargs="+", metavar="RUN", help="run folder, or its name under the runs folder")
     parser.add_argument("--processor", help="processor: short name, module:Class or path/file.py:Class "
                         "(default: each run's own, with its constructor arguments, from its run.json)")
@@ -64,4 +65,7 @@ def main(argv: list[str]) -> int:
         return 2
     for result in results:
         print(safe(summary_line(result)))  # run folders and paths: escaped
-    return 0
+    failed = sum(1 for result in results if result.errors)
+    if failed:
+        print(f"uav-tui replay: {failed} of {len(results)} replays had errors (exit status 1)", file=sys.stderr)
+    return 1 if failed else 0

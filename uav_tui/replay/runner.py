@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import json
+from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -46,6 +47,10 @@ class ReplayResult:
     """Time the replay took."""
     processor: str = ""
     """What the frames were processed by: the spec and its constructor arguments."""
+    warnings: int = 0
+    """Warnings in the replay's events.csv."""
+    errors: int = 0
+    """Errors in the replay's events.csv (the processor raising on a frame, a call that failed ...)."""
 
 
 def replay_run(job: ReplayJob) -> ReplayResult:
@@ -91,6 +96,8 @@ async def replay(job: ReplayJob) -> ReplayResult:
     """Run a core on the recorded run until its camera has shown every frame and they were processed."""
     config = replay_config(job)
     core = UavCore(config)
+    levels: Counter[str] = Counter()
+    core.events.add_listener(lambda event: levels.update((event.level,)))
     loop = asyncio.get_running_loop()
     started = loop.time()
     await core.start()
@@ -101,7 +108,8 @@ async def replay(job: ReplayJob) -> ReplayResult:
     assert core.recorder is not None and core.source is not None
     return ReplayResult(run=str(Path(job.run).expanduser()), replay=str(core.recorder.run_dir),
                         content=core.source.get_properties()["content"], frames=core.recorder.frames,
-                        seconds=loop.time() - started, processor=processor_text(config))
+                        seconds=loop.time() - started, processor=processor_text(config),
+                        warnings=levels["warning"], errors=levels["error"])
 
 
 async def _until_finished(core: UavCore) -> None:
@@ -124,5 +132,9 @@ async def _until_finished(core: UavCore) -> None:
 def summary_line(result: ReplayResult) -> str:
     """One line per replayed run for the terminal."""
     note = " (no video in that run: its saved frames only)" if result.content != "video" else ""
+    problems = ""
+    if result.errors or result.warnings:
+        problems = (f"; {result.errors} error{'s' * (result.errors != 1)}, {result.warnings} "
+                    f"warning{'s' * (result.warnings != 1)}: uav-tui report {result.replay} lists them")
     return (f"{Path(result.run).name}: {result.frames} frames through {result.processor} in {result.seconds:.1f} s "
-            f"({result.frames / result.seconds if result.seconds else 0:.0f}/s){note} -> {result.replay}")
+            f"({result.frames / result.seconds if result.seconds else 0:.0f}/s){note} -> {result.replay}{problems}")
