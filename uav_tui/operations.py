@@ -14,7 +14,9 @@ from uav_tui.errors import KNOWN_ERRORS, CommandError, NoVehicle, ProcessorLoadE
 from uav_tui.flight.autonomy import check_vector
 from uav_tui.flight.commands import VEHICLE_COMMANDS, Command, check_limits, parse
 from uav_tui.hosting.child_link import ProcessorRaised
+from uav_tui.hosting.host import Answer
 from uav_tui.hosting.operator_calls import ProcessorCalls
+from uav_tui.hosting.start import say_load_warnings
 from uav_tui.output.text import describe, shorten
 from uav_tui.status import CoreState
 
@@ -42,6 +44,9 @@ PLAIN_VEHICLE_CALLS: dict[str, tuple[str, str]] = {
     "hold": ("hold", "holding"),
 }
 """Commands that are one FlightController call without arguments: word -> (method, what to report)."""
+
+AUTONOMY_OUTPUTS = ("getPreparedVector", "getLandingTarget", "getGimbalPointing")
+"""What autonomy flies on; a processor with none of them is refused autonomy."""
 
 
 class Outcome(NamedTuple):
@@ -212,22 +217,40 @@ class Operations:
     async def _autonomy(self, switch: str, *, origin: str) -> str:
         gate = self.core.gate
         if switch == "on" or (switch == "toggle" and not gate.enabled):
+            self._check_gives_outputs()
             gate.enable(origin)
         else:
             await gate.disable(origin)
         return ""
 
+    def _check_gives_outputs(self) -> None:
+        """Refuse autonomy for a processor that has nothing it could fly on (no vector, landing target or gimbal
+        pointing): switched on, it would look armed for a flight that never comes."""
+        worker = self.core.worker
+        if worker is None or set(AUTONOMY_OUTPUTS) & worker.processor.info.capabilities:
+            return
+        info = worker.processor.info
+        close = "; ".join(info.warnings)
+        raise UavError(f"autonomy refused: processor {info.name} has no getPreparedVector() (nor getLandingTarget() "
+                       "or getGimbalPointing()), so it gives the vehicle nothing to fly"
+                       + (f"; {close}" if close else ""))
+
     async def _f(self, button: int, *, origin: str) -> Outcome:
-        taken = await self._call_processor("customize_processing", button)
-        return Outcome(f"F{button} sent to the processor", taken)
+        answer = await self._call_processor("customize_processing", button)
+        assert self.core.worker is not None  # _call_processor needs one
+        info = self.core.worker.processor.info
+        meaning = dict(info.buttons).get(button)
+        returned = "" if answer.value is None else f", returned {describe(answer.value, 100)}"
+        call = f"{info.name.rsplit(':', 1)[-1]}.customize_processing({button}) done{returned}"
+        return Outcome(f"F{button} {meaning}: {call}" if meaning else f"F{button}: {call}", answer.t_taken_ns)
 
     async def _roi(self, x: int, y: int, w: int, h: int, *, origin: str) -> Outcome:
         source = self.core.source
         width, height = source.get_frame_size() if source else (0, 0)
         if w <= 0 or h <= 0 or x + w > width or y + h > height:
             raise CommandError(f"roi ({x}, {y}, {w}, {h}) is not inside the {width}x{height} frame", key="roi")
-        taken = await self._call_processor("catch_cmd", (x, y, w, h))
-        return Outcome(f"target region ({x}, {y}, {w}, {h}) sent to the processor", taken)
+        answer = await self._call_processor("catch_cmd", (x, y, w, h))
+        return Outcome(f"target region ({x}, {y}, {w}, {h}) sent to the processor", answer.t_taken_ns)
 
     async def _snapshot(self, *, origin: str) -> str:
         if self.core.recorder is None:
@@ -244,6 +267,7 @@ class Operations:
             raise ProcessorLoadError(f"reload failed, {name} keeps running: {exc}", path=exc.path,
                                      class_name=exc.class_name, missing=exc.missing) from exc
         core.clear_processor_error()
+        say_load_warnings(info, core.events)
         return f"processor {info.name} reloaded"
 
     async def _source(self, uri: str, *, origin: str) -> str:
@@ -271,9 +295,9 @@ class Operations:
         assert self.core.controller is not None  # execute() refuses vehicle commands without one
         return self.core.controller
 
-    async def _call_processor(self, method: str, *args: Any) -> int:
-        """Call the processor's ``method`` (in order, bounded: :class:`ProcessorCalls`); returns when it began the
-        call (monotonic ns)."""
+    async def _call_processor(self, method: str, *args: Any) -> Answer:
+        """Call the processor's ``method`` (in order, bounded: :class:`ProcessorCalls`); its answer: what it returned
+        and when it began the call (monotonic ns)."""
         worker = self.core.worker
         assert worker is not None
         loaded = worker.processor
@@ -289,4 +313,4 @@ class Operations:
             raise UavError(f"{what} raised {shorten(str(exc), 500)}") from exc
         except Exception as exc:  # the researcher's code raised (thread isolation): report it, keep running
             raise UavError(f"{what} raised {type(exc).__name__}: {shorten(str(exc), 500)}") from exc
-        return answer.t_taken_ns
+        return answer
