@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 import asyncio
 import logging
+import math
 import sys
 from pathlib import Path
 
@@ -39,13 +40,25 @@ def build_parser() -> argparse.ArgumentParser:
                         "~/.config/uav-tui/uav.toml)")
     parser.add_argument("--no-ui", action="store_true", help="run headless: a status line every second")
     parser.add_argument("--json", action="store_true", help="with --no-ui: print JSON lines instead")
-    parser.add_argument("--duration", type=float, metavar="S", help="stop by itself after S seconds")
+    parser.add_argument("--duration", type=seconds, metavar="S", help="stop by itself after S seconds")
     parser.add_argument("--script", metavar="FILE", help="run operator commands from FILE, one per line")
     parser.add_argument("--on-hangup", choices=("stop", "continue"), default="stop",
                         help="when the terminal is lost (SIGHUP): hold and exit (default), or keep running headless")
     parser.add_argument("--log-level", default="WARNING", choices=("DEBUG", "INFO", "WARNING", "ERROR"))
     add_config_flags(parser)
     return parser
+
+
+def seconds(text: str) -> float:
+    """A positive, finite number of seconds (``--duration``): anything else is refused before the run starts."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number of seconds") from None
+    if not math.isfinite(value) or value <= 0:
+        raise argparse.ArgumentTypeError(f"{text} must be a positive number of seconds (the run stops by itself "
+                                         "after that long; leave --duration out to run until stopped)")
+    return value
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -191,3 +191,34 @@ def test_the_demo_counts_its_start_up_from_uav_tuis_start_not_from_its_setup(tmp
     startup = [json.loads(line)["startup_s"] for line in result.stdout.splitlines() if '"startup_s"' in line]
     # The first frame came after the setup, so uav-tui's start-up fits in the time since (before: 10 s more).
     assert 0 < [s for s in startup if s is not None][-1] < since_setup_s
+
+
+def test_more_error_lines_point_at_the_fix(tmp_path: Path) -> None:
+    """#46: a misspelt section, a duration that leaves an empty run, a text for a number, a failed import."""
+    (tmp_path / "safty.toml").write_text("[safty]\nmax_speed = 2\n")
+    (tmp_path / "nothing.toml").write_text("[zzz]\na = 1\n")
+    (tmp_path / "gain.py").write_text("class Gain:\n    def __init__(self, gain: float = 1.0):\n        pass\n\n"
+                                      "    def photo_processing(self, frame):\n        pass\n")
+    (tmp_path / "typo.py").write_text("import scipyy\n\n\nclass A:\n    def photo_processing(self, frame):\n"
+                                      "        pass\n")
+    (tmp_path / "absent.py").write_text("import notamodule_xyz\n\n\nclass A:\n    def photo_processing(self, frame):\n"
+                                        "        pass\n")
+    cases = {
+        ("--config", "safty.toml"): "safty.toml: unknown table [safty]; did you mean [safety]?",
+        ("--config", "nothing.toml"): "nothing.toml: unknown table [zzz]; the sections are [safety], [recording], "
+                                      "[web], [sim], [camera]",
+        ("--duration", "-5"): "argument --duration: -5 must be a positive number of seconds",
+        ("--duration", "nan"): "argument --duration: nan must be a positive number of seconds",
+        ("--processor", "gain.py:Gain", "--processor-arg", "gain=abc"): "constructor argument gain must be a number "
+                                                                        "(float), got str 'abc'",
+        ("--processor", "typo.py:A"): "No module named 'scipyy'; no module 'scipyy' is installed, but 'scipy' is: "
+                                      "is the import misspelt?",
+        ("--processor", "absent.py:A"): f"install it into uav-tui's Python: {sys.executable} -m pip install "
+                                        "notamodule_xyz",
+    }
+    for args, expected in cases.items():
+        flags = ("--no-ui", "--no-record") + (() if "--duration" in args else ("--duration", "5"))
+        result = uav(*args, *flags, cwd=tmp_path)
+        assert result.returncode == 2, (args, result.stdout)
+        (line,) = result.stderr.splitlines()  # one line, no usage, before anything started
+        assert line.startswith("uav-tui: error: ") and expected in line, (args, line)

@@ -133,16 +133,34 @@ _PLAIN_TYPES: dict[str, type[Any] | tuple[type[Any], ...]] = {"bool": bool, "int
                                                               "str": str}
 
 
+def _shown(name: str, value: Any) -> str:
+    return f"[{name}]" if isinstance(value, dict) else repr(name)
+
+
+def _suggestion(cls: type, key: str, value: Any, known: list[str]) -> str:
+    """``; did you mean ...?`` for an unknown key (a section's name for a table at the top), or what there is."""
+    sections = [f"[{name}]" for name in SECTIONS]
+    if cls is Config and isinstance(value, dict):
+        close = difflib.get_close_matches(key, list(SECTIONS), n=1, cutoff=0.6)
+        return f"; did you mean [{close[0]}]?" if close else f"; the sections are {', '.join(sections)}"
+    close = difflib.get_close_matches(key, known, n=1) or difflib.get_close_matches(key, _ALL_KEYS, n=1)
+    if cls is Config and not close:
+        close = [f"[{name}]" for name in difflib.get_close_matches(key, list(SECTIONS), n=1, cutoff=0.6)]
+    if close:
+        elsewhere = f" ({_place_of(close[0])})" if close[0] not in known and close[0] in _ALL_KEYS else ""
+        return f"; did you mean {close[0]!r}{elsewhere}?"
+    listed = f"; known keys: {', '.join(known)}"
+    return listed + (f"; sections: {', '.join(sections)}" if cls is Config else "")
+
+
 def _check(cls: type, key: str, value: Any, name: str, where: str) -> Any:
     known = {f.name: f for f in fields(cls) if cls is not Config or f.name not in SECTIONS}
     f = known.get(key)
     if f is None:
         if key in _ALL_KEYS:
             raise ConfigError(f"{where}: {name!r} belongs {_place_of(key)}", key=name)
-        close = difflib.get_close_matches(key, known, n=1) or difflib.get_close_matches(key, _ALL_KEYS, n=1)
-        elsewhere = f" ({_place_of(close[0])})" if close and close[0] not in known else ""
-        hint = f"; did you mean {close[0]!r}{elsewhere}?" if close else f"; known keys: {', '.join(known)}"
-        raise ConfigError(f"{where}: unknown key {name!r}{hint}", key=name)
+        raise ConfigError(f"{where}: unknown {'table' if isinstance(value, dict) else 'key'} {_shown(name, value)}"
+                          f"{_suggestion(cls, key, value, list(known))}", key=name)
     kind = str(f.type)  # the annotation as written (``from __future__ import annotations``)
     expected = _PLAIN_TYPES.get(kind, dict)
     if isinstance(value, bool) and kind != "bool" or not isinstance(value, expected):
