@@ -66,7 +66,7 @@ async def test_a_second_f_behind_a_hung_one_fails_with_it_and_is_never_sent(tmp_
         third_end, third_said = await f_key(core, 3)  # while F1 still hangs: refused at once
         assert third_end - asked < 0.5 and "has not returned from" in third_said
         await asyncio.sleep(5.5 - (time.monotonic() - first_end + TIMEOUT_S))  # F1 (4 s) has returned by now
-        assert (await f_key(core, 4))[1] == "F4 sent to the processor"
+        assert (await f_key(core, 4))[1] == "F4: HangsOnF1.customize_processing(4) done"
         assert log.read_text().split() == ["1", "4"]  # F2 and F3 never reached the processor
     finally:
         await core.stop("test finished")

@@ -97,7 +97,7 @@ def test_the_video_has_one_frame_per_index_row_each_joining_a_frame_row(flight):
 
 def test_a_processor_command_is_stamped_when_the_processor_took_it(flight):
     run = dataset.load(flight)
-    outcome = run.events[run.events["message"] == "F2 sent to the processor"].iloc[0]
+    outcome = run.events[run.events["message"] == "F2: Brightness.customize_processing(2) done"].iloc[0]
     given = run.events[run.events["message"] == "f 2"].iloc[0]
     assert outcome["command"] == "f 2" and outcome["origin"] == given["origin"] == "script"
     assert given["t_mono_ns"] < outcome["t_mono_ns"]
@@ -133,7 +133,7 @@ def test_replay_at_max_speed_is_deterministic_and_sees_the_recorded_vehicle(flig
     # The same processor on the recorded video, given the operator's F2 before the frame it reached the processor
     # before in flight: reversed from the same frame on, the same vectors (up to the video's compression).
     replayed = one.events[one.events["origin"] == "replay"]
-    assert replayed["message"].tolist() == ["f 2", "F2 sent to the processor"]
+    assert replayed["message"].tolist() == ["f 2", "F2: Brightness.customize_processing(2) done"]
     assert joined["gain_a"].isin([1.0, -1.0]).all() and (joined["gain_a"] == -1.0).any()
     assert joined["gain_a"].equals(joined["gain_b"].rename("gain_a"))
     assert np.allclose(joined["vx_a"], joined["vx_b"], atol=0.05)

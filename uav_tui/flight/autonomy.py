@@ -158,11 +158,15 @@ class AutonomyGate:
             self.refusal = "; ".join(report.problems)
             self.events.emit("error", "autonomy", f"autonomy will be refused: {self.refusal}")
 
-    def enable(self, origin: str) -> None:
+    def check_can_enable(self) -> None:
+        """Raise UavError saying why autonomy cannot go on (no vehicle, its failsafe too slow)."""
         if self.controller is None:
             raise UavError("autonomy needs a flight controller; start with --fc sim or a connection string")
         if self.refusal:
             raise UavError(f"autonomy refused: {self.refusal}")
+
+    def enable(self, origin: str) -> None:
+        self.check_can_enable()
         self.enabled, self.stop_reason, self._flown = True, "", False
         self.events.emit("info", "autonomy", "autonomy ON", origin, autonomy=True)
 
