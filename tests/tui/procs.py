@@ -23,6 +23,13 @@ class RecordingProcessor:
         self.buttons.append(id)
 
 
+class SteeringProcessor(RecordingProcessor):
+    """A RecordingProcessor with a vector method (never a vector): autonomy may go on."""
+
+    def getPreparedVector(self):
+        return None
+
+
 class PrintingProcessor:
     """Prints as a researcher debugging does: a line every 30 frames; F-key N prints N * 100 lines at once, the
     first with a terminal escape in it."""
@@ -39,3 +46,27 @@ class PrintingProcessor:
         print("\x1b[2Jcleared?")
         for n in range(1, id * 100):
             print("line", n)
+
+
+class DescribedButtons(RecordingProcessor):
+    """Says what its buttons do, as the built-in processors do.
+
+    Operator buttons:
+        F1: mark the spot.
+        F3: forget the spot.
+    """
+
+
+class MisspeltVector(RecordingProcessor):
+    """Meant to steer, but the platform never calls getPreparedVectr."""
+
+    def getPreparedVectr(self):
+        return (1.0, 0.0, 1.0)
+
+
+class Flooding(RecordingProcessor):
+    """F4 prints 20,000 lines at once, as a debugging loop does."""
+
+    def customize_processing(self, id):
+        for n in range(20000):
+            print("flood", n)

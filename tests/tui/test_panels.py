@@ -47,20 +47,34 @@ async def test_dropped_saves_are_counted_in_the_pipeline_panels_border(make_conf
         assert Text.from_markup(panel.border_subtitle).plain == "40 saves dropped (38 throttled, 2 outside a frame)"
 
 
-async def test_the_algorithm_panel_says_where_the_box_is_and_what_the_gimbal_does(make_config):
+@pytest.mark.parametrize("columns", [80, 100])
+async def test_the_algorithm_panel_says_where_the_box_is_and_what_the_gimbal_does(make_config, columns):
     target = GeoFix(OK, 47.39781, 8.5456, 488.5, 0.64, 8.485, 8.485, 9.8, "home")
     telemetry = dataclasses.replace(STATUS.telemetry, gimbal_pitch_deg=-45.0, gimbal_yaw_deg=120.0)
     status = dataclasses.replace(STATUS, target=target, telemetry=telemetry, gimbal_sent=210, gimbal_controlled=True,
                                  capabilities=STATUS.capabilities | {"getGimbalPointing"})
     app = UavApp(UavCore(make_config()), status=lambda: status, frames=lambda: (1, FRAME, None))
-    async with app.run_test(size=(80, 24)) as pilot:
+    async with app.run_test(size=(columns, 24)) as pilot:
         await pilot.pause(0.3)
         panel = app.query_one(AlgorithmPanel)
         shown = panel.describe(status).plain  # whole rows: the panel cuts them at its edge
-        first = panel.render_line(1).text.rstrip()
+        rows = [panel.render_line(y).text.rstrip() for y in range(panel.size.height)]
     assert "box  300,200 120x90 @ 47.397810,8.545600 12 m at 045 deg +-0.6 m\n" in shown, shown
-    assert "auto 42 flown, 1 rejected; gimbal P-45 Y120 (controlled, 210 sent)\n" in shown, shown
-    assert first.startswith("box  300,200 120x90 @ 47.3978"), first
+    assert rows[1].startswith("box  300,200 120x90 @ 47.3978"), rows
+    # Whole on screen (#46; before: one "auto" row, cut before the gimbal at 80 and at 100 columns).
+    assert rows[3:5] == ["auto 42 flown, 1 rejected", "gim  P-45 Y120 (controlled, 210 sent)"], rows
+
+
+async def test_the_landing_targets_have_their_row_beside_the_gimbal(make_config):
+    telemetry = dataclasses.replace(STATUS.telemetry, gimbal_pitch_deg=-90.0, gimbal_yaw_deg=0.0)
+    status = dataclasses.replace(STATUS, telemetry=telemetry, precland=True, landing_targets_sent=120,
+                                 capabilities=STATUS.capabilities | {"getLandingTarget"})
+    app = UavApp(UavCore(make_config()), status=lambda: status, frames=lambda: (1, FRAME, None))
+    async with app.run_test(size=(80, 24)) as pilot:
+        await pilot.pause(0.3)
+        panel = app.query_one(AlgorithmPanel)
+        rows = [panel.render_line(y).text.rstrip() for y in range(panel.size.height)]
+    assert rows[4] == "out  land ON, 120 sent; gim P-90 Y000", rows
 
 
 async def test_the_algorithm_panel_says_why_there_is_no_landing_target(make_config):
@@ -71,6 +85,5 @@ async def test_the_algorithm_panel_says_why_there_is_no_landing_target(make_conf
     async with app.run_test(size=(80, 24)) as pilot:
         await pilot.pause(0.3)
         shown = app.query_one(AlgorithmPanel).describe(status).plain
-    assert ("auto 42 flown, 1 rejected; precland off, 0 targets sent, the processor says: 2 markers with id 7: which "
-            "is the pad?\n") in shown, shown
+    assert "land off, 0 sent, the processor says: 2 markers with id 7: which is the pad?\n" in shown, shown
     assert "(the processor says: 2 markers with id 7: which is the pad?)" in format_status(status, 1.0)

@@ -111,7 +111,7 @@ def test_dashboard_in_a_real_terminal_takes_keys_and_quits(tmux, tmp_path):
     child = processor_process(psutil.Process(tmux.app_pid()))
     assert re.search(rf"^ proc +Rec\S*… running, pid {child.pid}, \d+ MB ", screen, re.MULTILINE), screen
     tmux.keys("F2")
-    wait(lambda: tmux.log_shows("F2 sent to the processor"), 10, "F2 in the event log")
+    wait(lambda: tmux.log_shows("F2: RecordingProcessor.customize_processing(2) done"), 10, "F2 in the event log")
     tmux.keys("q")
     wait(tmux.status.exists, 15, "the exit status")
     assert tmux.status.read_text().strip() == "0"
@@ -216,7 +216,8 @@ def test_script_and_duration_run_with_the_dashboard(tmux, tmp_path, lines, statu
     script.write_text(lines)
     tmux.start("--fc", "none", "--script", str(script), "--duration", "4", tmp_path=tmp_path)
     if status == "0":  # (a failing script ends the run at once, too fast to read the screen)
-        wait(lambda: tmux.log_shows("F3 sent to the processor"), 30, "the script's F3 in the event log")
+        wait(lambda: tmux.log_shows("F3: RecordingProcessor.customize_processing(3) done"), 30,
+             "the script's F3 in the event log")
     wait(tmux.status.exists, 30, "the run to end by itself")
     assert tmux.status.read_text().strip() == status
 

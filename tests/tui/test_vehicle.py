@@ -6,7 +6,7 @@ from uav_tui.core import CoreState
 from uav_tui.tui._header import AutonomyBadge, VehicleLine
 from uav_tui.tui.screens import ConfirmScreen
 
-from .conftest import in_log, started, wait_for
+from .conftest import HERE, in_log, started, wait_for
 from .test_keys import tui_commands
 
 
@@ -58,7 +58,7 @@ async def test_takeoff_and_disarm_ask_first(make_app):
 
 
 async def test_autonomy_key_toggles_the_badge(make_app):
-    app = make_app(fc="sim")
+    app = make_app(fc="sim", processor=f"{HERE / 'procs.py'}:SteeringProcessor")
     async with app.run_test(size=(80, 24)) as pilot:
         await started(pilot)
         badge = app.query_one(AutonomyBadge)
@@ -98,7 +98,7 @@ async def test_quit_while_the_vehicle_lands_says_it_goes_on_landing(make_app):
         await wait_for(pilot, lambda: app.core.telemetry.snapshot().flight_mode == "LAND", what="LAND mode")
         await pilot.press("q")
         assert isinstance(app.screen, ConfirmScreen)
-        assert app.screen.question == "The vehicle is ARMED. Quit? It is left in LAND mode."
+        assert app.screen.asked() == "The vehicle is ARMED. Quit? It is left in LAND mode."
         await pilot.press("y")
         await wait_for(pilot, lambda: app.core.state is CoreState.STOPPED, what="the core to stop")
         assert in_log(app, "vehicle left in LAND mode at exit: a hold would interrupt it")

@@ -15,7 +15,8 @@ MIN_NAME = 6
 
 
 class AlgorithmPanel(StatusPanel):
-    """The researcher's processor: name and host, its ``box``, last vector and decision, errors.
+    """The researcher's processor: name and host, its ``box``, last vector and decision, autonomy, the landing
+    targets or the gimbal, errors.
 
     The optional methods it lacks show as dimmed keys (ROI, F1-F4) and in the vector row. Where the row is
     too narrow for the processor's name and its host's state (pid, memory), the name is shortened.
@@ -32,15 +33,6 @@ class AlgorithmPanel(StatusPanel):
         auto = Text(f"{status.vectors_executed} flown, {status.vectors_rejected} rejected")
         if status.autonomy_stop_reason and not status.autonomy:
             auto.append(" ").append(self.styled(f"stopped: {status.autonomy_stop_reason}", "bad"))
-        if "getLandingTarget" in status.capabilities:  # precland: its landing targets sent
-            auto.append("; precland ").append(self.styled("ON", "good") if status.precland else "off")
-            auto.append(f", {status.landing_targets_sent} targets sent")
-            if status.landing_targets_failed:
-                auto.append(" ").append(self.styled(f"{status.landing_targets_failed} failed", "bad"))
-            if status.landing_none_reason:
-                auto.append(", ").append(self.styled(status.landing_none_reason, "warn"))
-        if gimbal := status.gimbal_summary():
-            auto.append(f"; {gimbal}")
         if "getPreparedVector" not in status.capabilities:
             vector = Text("no getPreparedVector")
         else:
@@ -52,7 +44,8 @@ class AlgorithmPanel(StatusPanel):
         errors = Text(str(status.pipeline.errors))
         if status.processor_error:
             errors.append(" ").append(self.styled(status.processor_error, "bad"))
-        labels = ("proc", "box", "vec", "auto", "err")
+        out_label, out = self._outputs(status)
+        labels = ("proc", "box", "vec", "auto", out_label, "err")
         proc = Text(status.processor.rsplit(":", 1)[-1])
         if (host := status.processor_state) is not None:  # where it runs: its own process (pid, memory) or a thread
             summary = Text(" ").append_text(self.styled(host.summary(), "good" if host.state == "running" else "bad"))
@@ -60,5 +53,21 @@ class AlgorithmPanel(StatusPanel):
             if room is not None and len(proc) > room:  # the name yields: it never changes
                 proc.truncate(room, overflow="ellipsis")
             proc.append_text(summary)
-        values: tuple[Text | str, ...] = (proc, box, vector, auto, errors)
+        values: tuple[Text | str, ...] = (proc, box, vector, auto, out, errors)
         return self.rows(*zip(labels, values, strict=True))
+
+    def _outputs(self, status: CoreStatus) -> tuple[str, Text]:
+        """The row of the outputs besides the vector: ``land`` (precland and its landing targets sent), ``gim`` (the
+        gimbal's attitude and the pointing sent), ``out`` with both."""
+        land = Text()
+        if "getLandingTarget" in status.capabilities:
+            land.append_text(self.styled("ON", "good") if status.precland else Text("off"))
+            land.append(f", {status.landing_targets_sent} sent")
+            if status.landing_targets_failed:
+                land.append(" ").append(self.styled(f"{status.landing_targets_failed} failed", "bad"))
+            if status.landing_none_reason:
+                land.append(", ").append(self.styled(status.landing_none_reason, "warn"))
+        gimbal = status.gimbal_summary().removeprefix("gimbal ")
+        if land and gimbal:
+            return "out", Text("land ").append_text(land).append(f"; gim {gimbal}")
+        return ("land", land) if land else ("gim", Text(gimbal or "none"))

@@ -38,10 +38,9 @@ class PipelinePanel(StatusPanel):
         if p.busy_ms > 1000:
             age.append(f" busy {p.busy_ms / 1000:.1f} s", self.get_component_rich_style("panel--warn"))
         rows: list[tuple[str, Text | str]] = [
-            ("fps", f"cam {p.capture_fps:4.1f}  proc {p.processed_fps:4.1f}"),
+            ("fps", f"cam {p.capture_fps:4.1f}  proc {p.processed_fps:4.1f}  skip {p.frames_skipped}"),
             ("age", age),
             ("time", f"p50 {p.processing_ms_p50:.1f}  p95 {p.processing_ms_p95:.1f} ms"),
-            ("skip", f"{p.frames_skipped} of {p.frames_processed + p.frames_skipped}"),
             ("rec", self._recording(status.recording)),
         ]
         if status.recording:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import ClassVar
 
 import numpy as np
@@ -25,7 +25,7 @@ from uav_tui.status import CoreStatus
 from uav_tui.tui._algorithm import AlgorithmPanel
 from uav_tui.tui._event_log import EventLogView
 from uav_tui.tui._header import StatusBar
-from uav_tui.tui._keybar import KeyBar
+from uav_tui.tui._keybar import KeyBar, key_name
 from uav_tui.tui._panel import StatusPanel
 from uav_tui.tui._pipeline import PipelinePanel
 from uav_tui.tui._preview import FramePreview, FrameProvider
@@ -62,10 +62,7 @@ KEYS: tuple[Key, ...] = (
     Key("d", "disarm", "Disarm", "DISARM the motors? In the air the vehicle would fall."),
     Key("o", "orbit 10 2", "Orbit"),
     Key("g", "autonomy toggle", "Auto"),
-    Key("f1", "f 1", "F1"),
-    Key("f2", "f 2", "F2"),
-    Key("f3", "f 3", "F3"),
-    Key("f4", "f 4", "F4"),
+    *(Key(f"f{n}", f"f {n}", f"processor button {n}") for n in range(1, 5)),
     Key("s", "snapshot", "Snap"),
     Key("R", "reload", "Reload"),
 )
@@ -156,7 +153,7 @@ class UavApp(App[None]):
             self.query_one(EventLogView).write(f"web page: {self.core.web.url}")
         self.set_interval(1 / STATUS_HZ, self.refresh_status)
         self.refresh_status()
-        self.refresh_bindings()
+        self.describe_buttons()
         self.run_worker(self._watch_quit(), name="quit watch", exit_on_error=False)
         if self._on_started is not None:
             self._on_started()
@@ -264,7 +261,25 @@ class UavApp(App[None]):
             self._command_failed(f"{command} failed: {type(exc).__name__}: {exc}")
             return
         if command.word == "reload":
-            self.refresh_bindings()
+            self.describe_buttons()
+
+    def describe_buttons(self) -> None:
+        """F1-F4 in the help (``?``) say what the processor's class docstring says they do (``Operator buttons:``);
+        the keys it lacks are dimmed (:meth:`check_action`)."""
+        if self.core.worker is not None:
+            meanings = dict(self.core.worker.processor.info.buttons)
+            for key in KEYS:
+                if (number := key.key.removeprefix("f")).isdigit():
+                    described = meanings.get(int(number), key.label)
+                    # Textual has no public way to change a binding's text; its BindingsMap is replaced in place.
+                    self._bindings.key_to_bindings[key.key] = [
+                        replace(binding, description=described) for binding in self._bindings.key_to_bindings[key.key]]
+        self.refresh_bindings()
+
+    def get_key_display(self, binding: Binding) -> str:
+        """Keys as the key bar names them (``F1``, ``?``, ``:``), in the help too; the others as Textual does."""
+        name = key_name(binding)
+        return name if name != binding.key.split(",")[0] else super().get_key_display(binding)
 
     def _command_failed(self, message: str) -> None:
         self.core.events.emit("error", "command", message, "tui")
@@ -286,14 +301,18 @@ class UavApp(App[None]):
         if self.core.state is not CoreState.RUNNING:
             await self.shutdown("quit")
             return
-        vehicle = self.core.telemetry.snapshot()
-        if vehicle.armed and self.core.replay is None:  # a replay's vehicle is a recording: nothing to put in hold
-            mode = self.core.mode_left_at_exit()
-            then = f"It is left in {mode} mode." if mode else "It is put in hold first."
-            self.push_screen(ConfirmScreen(f"The vehicle is ARMED. Quit? {then}", "Quit"),
-                             lambda yes: self.send("quit") if yes else None)
+        if self.core.telemetry.snapshot().armed and self.core.replay is None:  # a replay's vehicle is a recording
+            self.push_screen(ConfirmScreen(self._quit_question, "Quit"), lambda yes: self.send("quit") if yes else None)
         else:
             self.send("quit")
+
+    def _quit_question(self) -> str:
+        """What quitting does to the vehicle now (the dialog asks it again as the vehicle lands, disarms ...)."""
+        if not self.core.telemetry.snapshot().armed:
+            return "The vehicle is disarmed now. Quit?"
+        mode = self.core.mode_left_at_exit()
+        then = f"It is left in {mode} mode." if mode else "It is put in hold first."
+        return f"The vehicle is ARMED. Quit? {then}"
 
     def action_help(self) -> None:
         if self.screen.query("HelpPanel"):

@@ -2,15 +2,21 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 from textual.app import ComposeResult
 from textual.binding import Binding
 from textual.containers import Grid
 from textual.screen import ModalScreen
 from textual.widgets import Button, Label
 
+REASK_S = 0.5
+"""How often a question that follows the live state is asked again."""
+
 
 class ConfirmScreen(ModalScreen[bool]):
-    """Asks ``question``; dismisses with True only for ``y`` / the confirm button.
+    """Asks ``question`` (a text, or a function asked again as the state it describes changes); dismisses with True
+    only for ``y`` / the confirm button.
 
     Escape, ``n`` and the cancel button dismiss with False, so a stray key never confirms.
     """
@@ -31,19 +37,26 @@ class ConfirmScreen(ModalScreen[bool]):
         Binding("escape", "answer(False)", "Cancel"),
     ]
 
-    def __init__(self, question: str, confirm_label: str) -> None:
+    def __init__(self, question: str | Callable[[], str], confirm_label: str) -> None:
         super().__init__()
         self.question = question
+        """The question, or what asks it from the live state (asked again every :data:`REASK_S`)."""
         self.confirm_label = confirm_label
 
     def compose(self) -> ComposeResult:
         with Grid():
-            yield Label(self.question, id="question")
+            yield Label(self.asked(), id="question", markup=False)
             yield Button(f"{self.confirm_label} (y)", variant="warning", id="yes")
             yield Button("Cancel (n/Esc)", variant="default", id="no")
 
     def on_mount(self) -> None:
         self.query_one("#no", Button).focus()
+        if callable(self.question):
+            self.set_interval(REASK_S, lambda: self.query_one("#question", Label).update(self.asked()))
+
+    def asked(self) -> str:
+        """The question as it stands now."""
+        return self.question() if callable(self.question) else self.question
 
     def on_button_pressed(self, event: Button.Pressed) -> None:
         self.dismiss(event.button.id == "yes")
