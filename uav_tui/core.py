@@ -34,7 +34,13 @@ from uav_tui.hosting.exception_reports import ProcessorErrors
 from uav_tui.hosting.host import ProcessedFrame, ProcessorHost
 from uav_tui.hosting.malloc_tuning import tune_this_process
 from uav_tui.hosting.start import start_host
-from uav_tui.landing_targets import LandingTargetFeed, LandingTargetSender, consider_landing_target, watch_precland
+from uav_tui.landing_targets import (
+    LandingTargetFeed,
+    LandingTargetSender,
+    consider_landing_target,
+    say_precland_end,
+    watch_precland,
+)
 from uav_tui.operations import Operations
 from uav_tui.output.text import last_line, shorten
 from uav_tui.recording import NotRecording, Recorder, describe
@@ -279,15 +285,9 @@ class UavCore:
         self.handed_over = mode
 
     def stop_precland(self, reason: str, *, landed: bool = False) -> None:
-        """Stop sending landing targets (a fault, another operator command: a warning; ``landed``: the landing's
-        normal end, said as such); said when it was on."""
-        if not self.landing.release(reason):
-            return
-        if landed:
-            sent = self.landing_sender.sent if self.landing_sender is not None else 0
-            self.events.emit("info", "autonomy", f"precland done: {reason} ({sent} landing targets sent)")
-        else:
-            self.events.emit("warning", "autonomy", f"precland off, landing targets no longer sent: {reason}")
+        """Stop sending landing targets (a fault, another command; ``landed``: the normal end); said when it was on."""
+        if self.landing.release(reason):
+            say_precland_end(self.events, reason, self.landing_sender.sent if landed and self.landing_sender else None)
 
     def clear_processor_error(self) -> None:
         """The processor was reloaded: its last error is history."""

@@ -112,6 +112,15 @@ class LandingTargetFeed:
         return was
 
 
+def say_precland_end(events: EventLog, reason: str, landed_with: int | None) -> None:
+    """``precland`` was turned off for ``reason``: a warning, or, ``landed_with`` N landing targets sent, the landing's
+    normal end (the vehicle landed and disarmed)."""
+    if landed_with is None:
+        events.emit("warning", "autonomy", f"precland off, landing targets no longer sent: {reason}")
+    else:
+        events.emit("info", "autonomy", f"precland done: {reason} ({landed_with} landing targets sent)")
+
+
 def landing_fix(target: LandingTarget, capture_ns: int, camera: CameraModel, at_capture: Telemetry) -> LandingTargetFix:
     """The fix the controller converts for its autopilot: ``target`` with the camera's mounting and the vehicle's
     attitude and position at the frame's capture (None where the telemetry had none)."""

@@ -217,6 +217,7 @@ class Operations:
     async def _autonomy(self, switch: str, *, origin: str) -> str:
         gate = self.core.gate
         if switch == "on" or (switch == "toggle" and not gate.enabled):
+            gate.check_can_enable()  # the vehicle's reasons first
             self._check_gives_outputs()
             gate.enable(origin)
         else:

@@ -1,5 +1,5 @@
 """The dashboard's first-hour stumbles (#46) on an 80x24 terminal: what F1-F4 and ``?`` say, autonomy for a
-processor with nothing to fly, the quit question once the vehicle disarmed, a print flood."""
+processor with nothing to fly, a print flood (the quit question once the vehicle disarmed: test_vehicle.py)."""
 
 from __future__ import annotations
 
@@ -8,14 +8,11 @@ from collections import Counter
 
 from rich.console import Console
 from textual.message import Message
-from textual.widgets import Label
 from textual.widgets._key_panel import BindingsTable
 
 from uav_tui.output.line_budget import BURST_LINES
-from uav_tui.tui.screens import ConfirmScreen
 
 from .conftest import HERE, in_log, started, wait_for
-from .test_vehicle import armed
 
 
 async def test_f_keys_say_what_the_button_means_and_help_lists_keys_as_the_bar_names_them(make_app):
@@ -45,21 +42,6 @@ async def test_autonomy_for_a_processor_without_a_vector_is_refused_naming_the_t
         assert not app.core.gate.enabled  # before: autonomy ON
         assert in_log(app, "has no getPreparedVector() (nor getLandingTarget() or getGimbalPointing()), so it gives "
                            "the vehicle nothing to fly")
-
-
-async def test_the_quit_question_follows_the_vehicle_once_it_disarmed(make_app):
-    app = make_app(fc="sim")
-    async with app.run_test(size=(80, 24)) as pilot:
-        await started(pilot)
-        await pilot.press("a", "y")
-        await wait_for(pilot, lambda: armed(app), what="the vehicle to arm")
-        await pilot.press("q")
-        assert isinstance(app.screen, ConfirmScreen)
-        question = app.screen.query_one("#question", Label)
-        assert str(question.render()).startswith("The vehicle is ARMED. Quit?")
-        await app.core.execute("disarm", origin="test")  # the pilot's switch, the autopilot's auto-disarm
-        await wait_for(pilot, lambda: str(question.render()) == "The vehicle is disarmed now. Quit?",
-                       what="the question to follow the vehicle")  # before: still "ARMED"
 
 
 async def test_a_print_flood_queues_no_more_than_the_budget_on_the_loop(make_app):

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from textual.widgets import Label
+
 from uav_tui.core import CoreState
 from uav_tui.tui._header import AutonomyBadge, VehicleLine
 from uav_tui.tui.screens import ConfirmScreen
@@ -81,7 +83,13 @@ async def test_quit_while_armed_asks_and_stops_the_core(make_app):
         await pilot.press("n")
         await pilot.pause(0.3)
         assert app.is_running and app.core.state is CoreState.RUNNING
-        await pilot.press("q", "y")
+        await pilot.press("q")
+        question = app.screen.query_one("#question", Label)
+        assert str(question.render()).startswith("The vehicle is ARMED. Quit?")
+        await app.core.execute("disarm", origin="test")  # the pilot's switch, the autopilot's auto-disarm
+        await wait_for(pilot, lambda: str(question.render()) == "The vehicle is disarmed now. Quit?",
+                       what="the question to follow the vehicle")  # #46; before: still "ARMED"
+        await pilot.press("y")
         await wait_for(pilot, lambda: app.core.state is CoreState.STOPPED, what="the core to stop")
 
 
