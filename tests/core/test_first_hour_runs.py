@@ -88,12 +88,12 @@ def test_replay_says_the_errors_its_run_recorded_and_exits_1(flown: Path) -> Non
     result = uav("replay", str(flown), "--speed", "max", cwd=flown)
     assert result.returncode == 1, result.stderr  # before: 0, "replayed 1/1" and nothing else
     line = result.stdout.splitlines()[-1]
-    said = re.search(r"-> (\S+); (\d+) errors, (\d+) warnings?: uav-tui report \1 lists them$", line)
+    said = re.search(r"; (\d+) errors, (\d+) warnings? \(uav-tui report lists them\) -> (\S+)$", line)
     assert said, line
-    with (Path(said.group(1)) / "events.csv").open() as events:
+    with (Path(said.group(3)) / "events.csv").open() as events:
         levels = [row["level"] for row in csv.DictReader(events)]
-    assert int(said.group(2)) == levels.count("error") == 2  # frames 5 and 6 raised again
-    assert int(said.group(3)) == levels.count("warning")
+    assert int(said.group(1)) == levels.count("error") == 2  # frames 5 and 6 raised again
+    assert int(said.group(2)) == levels.count("warning")
     assert "1 of 1 replays had errors (exit status 1)" in result.stderr
 
 

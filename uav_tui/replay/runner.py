@@ -135,6 +135,6 @@ def summary_line(result: ReplayResult) -> str:
     problems = ""
     if result.errors or result.warnings:
         problems = (f"; {result.errors} error{'s' * (result.errors != 1)}, {result.warnings} "
-                    f"warning{'s' * (result.warnings != 1)}: uav-tui report {result.replay} lists them")
+                    f"warning{'s' * (result.warnings != 1)} (uav-tui report lists them)")
     return (f"{Path(result.run).name}: {result.frames} frames through {result.processor} in {result.seconds:.1f} s "
-            f"({result.frames / result.seconds if result.seconds else 0:.0f}/s){note} -> {result.replay}{problems}")
+            f"({result.frames / result.seconds if result.seconds else 0:.0f}/s){note}{problems} -> {result.replay}")
