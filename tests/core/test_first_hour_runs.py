@@ -61,9 +61,16 @@ def flown(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return run
 
 
-def test_the_summary_counts_clamped_vectors_as_executed_as_the_track_does(flown: Path) -> None:
+@pytest.fixture(scope="module")
+def reported(flown: Path) -> Path:
+    """The flight's folder once ``uav-tui report`` wrote into it."""
     result = uav("report", str(flown), cwd=flown)
     assert result.returncode == 0, result.stderr
+    return flown
+
+
+def test_the_summary_counts_clamped_vectors_as_executed_as_the_track_does(reported: Path) -> None:
+    flown = reported
     text = (flown / "summary.txt").read_text()
     executed = int(re.search(r"vectors: \d+ proposed, (\d+) executed", text).group(1))
     with (flown / "frames.csv").open() as frames:
@@ -72,8 +79,8 @@ def test_the_summary_counts_clamped_vectors_as_executed_as_the_track_does(flown:
     assert clamped and executed == len([d for d in decisions if d.startswith("executed")])  # before: 0 of them
 
 
-def test_the_report_lists_the_warnings_and_errors_it_counts(flown: Path) -> None:
-    uav("report", str(flown), cwd=flown)
+def test_the_report_lists_the_warnings_and_errors_it_counts(reported: Path) -> None:
+    flown = reported
     text = (flown / "summary.txt").read_text()
     counted = re.search(r"events: \d+ \((\d+) warnings, (\d+) errors\)", text)
     listed = re.findall(r"^  -?[\d.]+ s (warning|error) ", text, re.MULTILINE)
