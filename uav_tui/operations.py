@@ -231,7 +231,7 @@ class Operations:
         if worker is None or set(AUTONOMY_OUTPUTS) & worker.processor.info.capabilities:
             return
         info = worker.processor.info
-        close = "; ".join(info.warnings)
+        close = "; ".join(info.warnings)  # a misspelt getPreparedVector, most likely
         raise UavError(f"autonomy refused: processor {info.name} has no getPreparedVector() (nor getLandingTarget() "
                        "or getGimbalPointing()), so it gives the vehicle nothing to fly"
                        + (f"; {close}" if close else ""))
