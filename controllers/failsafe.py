@@ -1,12 +1,17 @@
 """What a dead client leaves the vehicle doing: the autopilot's offboard-loss parameters, checked at connect.
 
 When the platform dies (SIGKILL, power, a kernel panic) nobody sends zero or a holding mode: the
-autopilot's own failsafe decides how long the last velocity is flown. Measured (ARCHITECTURE.md,
-"Autopilot facts"): PX4 holds after ``COM_OF_LOSS_T`` (1 s) and then does ``COM_OBL_RC_ACT``;
-ArduCopter keeps a GUIDED velocity target for ``GUID_TIMEOUT`` (3 s by default), then stops.
+autopilot's own failsafe decides how long the last velocity is flown, and what the vehicle does then.
+Measured (ARCHITECTURE.md, "Autopilot facts"): PX4 switches after ``COM_OF_LOSS_T`` (1 s) to
+``COM_OBL_RC_ACT``; ArduCopter keeps a GUIDED velocity target for ``GUID_TIMEOUT`` (3 s by default), then
+stops in GUIDED.
 
-The platform's rule: a stale command never lasts longer than ``max_t`` + 0.5 s. :func:`check_failsafe`
-reads each parameter, sets the ones that break the rule (when allowed to), and reports what it found.
+The platform's rules: a stale command never lasts longer than ``max_t`` + 0.5 s, and what follows holds position
+and height (or lands) whether or not a pilot is there. PX4's default Position mode (``COM_OBL_RC_ACT`` 0) flies
+the sticks: with no radio PX4 v1.16 SITL sank from 4.9 m to 0.45 m in 8 s and drifted 0.13-0.3 m/s, so it is
+accepted only while a radio is connected and read (:class:`Radio`). ArduCopter's lapsed target holds position
+only while GUIDED stabilises it (``GUID_OPTIONS`` bits 4 and 5 clear). :func:`check_failsafe` reads each
+parameter, sets the ones that break a rule (when allowed to), and reports what it found.
 """
 
 from __future__ import annotations
@@ -26,10 +31,56 @@ STALE_MARGIN_S = 0.5
 TUNED_TIMEOUT_S = 1.0
 """The loss timeout set when the autopilot's is too long (PX4's default COM_OF_LOSS_T), capped by the limit."""
 
-PX4_STOPPING_LOSS_ACTIONS = {0: "Position mode", 4: "Land mode", 5: "Hold mode"}
-"""COM_OBL_RC_ACT values that stop the vehicle where it is (others fly home, drift, or cut the motors)."""
+PX4_HOLDING_LOSS_ACTIONS = {4: "Land mode", 5: "Hold mode"}
+"""COM_OBL_RC_ACT values that hold position and height, or land, with nobody at the sticks."""
+
+PX4_POSITION_MODE = 0
+"""COM_OBL_RC_ACT 0, Position mode: held by a pilot's centred sticks, accepted only with a :class:`Radio`."""
 
 PX4_HOLD_ACTION = 5
+
+PX4_STICKS_DISABLED = 4
+"""COM_RC_IN_MODE 4: PX4 ignores every stick input."""
+
+ARDUCOPTER_UNSTABILISED = 1 << 4 | 1 << 5
+"""GUID_OPTIONS bits 4 "Do not stabilize PositionXY" and 5 "Do not stabilize VelocityXY": a lapsed GUIDED target
+then stops correcting the position, and the vehicle drifts."""
+
+
+@dataclass(frozen=True, slots=True)
+class Radio:
+    """Whether a pilot can fly PX4's Position mode: a radio present and configured.
+
+    Attributes:
+        receiver: PX4's SYS_STATUS says the RC receiver is *present* (and healthy): PX4 sets that bit only while a
+            valid manual-control input (an RC transmitter, or a ground station's joystick) arrives within
+            COM_RC_LOSS_T. The health bit alone says nothing: PX4 sets it for an absent receiver too. None: no
+            SYS_STATUS arrived.
+        rc_in_mode: COM_RC_IN_MODE (4: stick input disabled); None when it could not be read.
+    """
+
+    receiver: bool | None
+    rc_in_mode: int | None
+
+    @property
+    def flies(self) -> bool:
+        return bool(self.receiver) and self.rc_in_mode is not None and self.rc_in_mode != PX4_STICKS_DISABLED
+
+    def describe(self) -> str:
+        mode = "unreadable" if self.rc_in_mode is None else str(self.rc_in_mode)
+        if self.flies:
+            return f"radio connected (SYS_STATUS: RC receiver present; COM_RC_IN_MODE={mode})"
+        receiver = {None: "no SYS_STATUS", False: "SYS_STATUS: no RC receiver"}.get(self.receiver,
+                                                                               "SYS_STATUS: RC receiver present")
+        return f"no radio ({receiver}; COM_RC_IN_MODE={mode})"
+
+
+@dataclass(frozen=True, slots=True)
+class Context:
+    """What a rule is judged against: the longest stale command allowed, and the radio (PX4 only)."""
+
+    limit_s: float
+    radio: Radio | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -38,40 +89,58 @@ class FailsafeParam:
 
     Attributes:
         name: the parameter's name.
-        integer: INT32 (PX4 enums) rather than a float.
-        problem: ``problem(value, limit_s)``: why ``value`` breaks the rule, or "" when it is fine.
-        safe_value: ``safe_value(limit_s)``: the value set instead.
+        integer: INT32 (PX4 enums, ArduPilot bitmasks) rather than a float.
+        problem: ``problem(value, context)``: why ``value`` breaks the rule, or "" when it is fine.
+        safe_value: ``safe_value(value, context)``: the value set instead.
     """
 
     name: str
     integer: bool
-    problem: Callable[[float, float], str]
-    safe_value: Callable[[float], float]
+    problem: Callable[[float, Context], str]
+    safe_value: Callable[[float, Context], float]
 
 
-def _timeout_problem(value: float, limit_s: float) -> str:
+def _timeout_problem(value: float, context: Context) -> str:
+    limit_s = context.limit_s
     if value <= 0 or value > limit_s:
         return f"flies a stale command for {value:g} s (more than max_t + {STALE_MARGIN_S:g} = {limit_s:g} s)"
     return ""
 
 
-def _tuned_timeout(limit_s: float) -> float:
-    return min(TUNED_TIMEOUT_S, limit_s)
+def _tuned_timeout(value: float, context: Context) -> float:
+    return min(TUNED_TIMEOUT_S, context.limit_s)
 
 
-def _loss_action_problem(value: float, limit_s: float) -> str:
-    if int(value) in PX4_STOPPING_LOSS_ACTIONS:
+def _loss_action_problem(value: float, context: Context) -> str:
+    action = int(value)
+    if action in PX4_HOLDING_LOSS_ACTIONS:
         return ""
-    return "does not stop the vehicle when the offboard client is lost (stopping: " + ", ".join(
-        f"{k} {v}" for k, v in PX4_STOPPING_LOSS_ACTIONS.items()) + ")"
+    if action == PX4_POSITION_MODE:
+        if context.radio is not None and context.radio.flies:
+            return ""
+        radio = context.radio.describe() if context.radio is not None else "no radio"
+        return (f"is Position mode, which flies the sticks, and there is {radio}: with nobody at them PX4 sinks "
+                "and drifts")
+    return "does not hold or land the vehicle when the offboard client is lost (holding: " + ", ".join(
+        f"{k} {v}" for k, v in PX4_HOLDING_LOSS_ACTIONS.items()) + f"; {PX4_POSITION_MODE} Position mode with a radio)"
+
+
+def _guided_options_problem(value: float, context: Context) -> str:
+    if int(value) & ARDUCOPTER_UNSTABILISED:
+        return "stops GUIDED stabilising the position (bits 4/5): a lapsed target leaves the vehicle drifting"
+    return ""
 
 
 RULES: dict[str, tuple[FailsafeParam, ...]] = {
     "px4": (
         FailsafeParam("COM_OF_LOSS_T", False, _timeout_problem, _tuned_timeout),
-        FailsafeParam("COM_OBL_RC_ACT", True, _loss_action_problem, lambda limit: PX4_HOLD_ACTION),
+        FailsafeParam("COM_OBL_RC_ACT", True, _loss_action_problem, lambda value, context: PX4_HOLD_ACTION),
     ),
-    "ardupilot": (FailsafeParam("GUID_TIMEOUT", False, _timeout_problem, _tuned_timeout),),
+    "ardupilot": (
+        FailsafeParam("GUID_TIMEOUT", False, _timeout_problem, _tuned_timeout),
+        FailsafeParam("GUID_OPTIONS", True, _guided_options_problem,
+                      lambda value, context: int(value) & ~ARDUCOPTER_UNSTABILISED),
+    ),
 }
 """The parameters checked per autopilot (``MavsdkController.autopilot``)."""
 
@@ -93,8 +162,12 @@ class ParamAccess:
         self._bound = bound
 
     async def get(self, param: FailsafeParam) -> float:
-        read = self._plugin.get_param_int if param.integer else self._plugin.get_param_float
-        return float(await self._bound(f"read {param.name}", lambda: read(param.name)))
+        return await self.read(param.name, integer=param.integer)
+
+    async def read(self, name: str, *, integer: bool) -> float:
+        """One parameter's value (INT32 with ``integer``, else REAL32)."""
+        read = self._plugin.get_param_int if integer else self._plugin.get_param_float
+        return float(await self._bound(f"read {name}", lambda: read(name)))
 
     async def set(self, param: FailsafeParam, value: float) -> None:
         if param.integer:
@@ -114,6 +187,8 @@ class FailsafeReport:
     """
 
     limit_s: float
+    radio: str = ""
+    """PX4: what says whether a pilot could fly Position mode (:meth:`Radio.describe`); "" elsewhere."""
     found: dict[str, float] = field(default_factory=dict)
     changed: dict[str, tuple[float, float]] = field(default_factory=dict)
     problems: list[str] = field(default_factory=list)
@@ -126,19 +201,24 @@ class FailsafeReport:
         """One line: what was found, what was changed."""
         found = ", ".join(f"{k}={v:g}" for k, v in self.found.items()) or "nothing"
         text = f"autopilot failsafe: found {found}"
+        if self.radio:
+            text += f" ({self.radio})"
         if self.changed:
             text += "; set " + ", ".join(f"{k} {old:g} -> {new:g}" for k, (old, new) in self.changed.items())
         return text
 
 
-async def check_failsafe(autopilot: str, params: ParamAccess, limit_s: float, *, tune: bool) -> FailsafeReport:
-    """Read the autopilot's offboard-loss parameters; set those that allow a longer stale command.
+async def check_failsafe(autopilot: str, params: ParamAccess, limit_s: float, *, tune: bool,
+                         rc_receiver: Callable[[], Awaitable[bool | None]] | None = None) -> FailsafeReport:
+    """Read the autopilot's offboard-loss parameters; set those that break a rule.
 
     Args:
         autopilot: ``"px4"``, ``"ardupilot"`` or ``"unknown"``.
         params: bounded parameter calls of the connected controller.
         limit_s: the longest a stale command may be flown (``max_t`` + :data:`STALE_MARGIN_S`).
-        tune: set parameters that break the rule; when False they are only reported.
+        tune: set parameters that break a rule; when False they are only reported.
+        rc_receiver: PX4: asked whether SYS_STATUS shows the RC receiver present (see :class:`Radio`; None: no
+            SYS_STATUS arrived).
 
     Returns:
         The report; ``report.problems`` says, per parameter, what is wrong and what to do.
@@ -149,6 +229,11 @@ async def check_failsafe(autopilot: str, params: ParamAccess, limit_s: float, *,
         report.problems.append(f"cannot check the offboard-loss failsafe of an {autopilot} autopilot "
                                "(PX4 and ArduPilot are known)")
         return report
+    context = Context(limit_s)
+    if autopilot == "px4":
+        receiver = await rc_receiver() if rc_receiver is not None else None
+        context = Context(limit_s, Radio(receiver, await _rc_in_mode(params)))
+        report.radio = context.radio.describe() if context.radio is not None else ""
     for param in rules:
         try:
             value = await params.get(param)
@@ -156,10 +241,10 @@ async def check_failsafe(autopilot: str, params: ParamAccess, limit_s: float, *,
             report.problems.append(f"could not read {param.name}: {exc}")
             continue
         report.found[param.name] = value
-        problem = param.problem(value, limit_s)
+        problem = param.problem(value, context)
         if not problem:
             continue
-        wanted = param.safe_value(limit_s)
+        wanted = param.safe_value(value, context)
         if tune:
             try:
                 await params.set(param, wanted)
@@ -167,7 +252,7 @@ async def check_failsafe(autopilot: str, params: ParamAccess, limit_s: float, *,
             except ControllerError as exc:
                 problem += f"; setting it to {wanted:g} failed: {exc}"
             else:
-                if not param.problem(now, limit_s):
+                if not param.problem(now, context):
                     report.changed[param.name] = (value, now)
                     continue
                 problem += f"; set to {wanted:g}, it still reads {now:g}"
@@ -176,3 +261,12 @@ async def check_failsafe(autopilot: str, params: ParamAccess, limit_s: float, *,
         report.problems.append(f"{param.name} = {value:g} {problem}: set {param.name} to {wanted:g}")
     logger.info("%s%s", report.summary(), "" if report.ok else "; problems: " + "; ".join(report.problems))
     return report
+
+
+async def _rc_in_mode(params: ParamAccess) -> int | None:
+    """PX4's COM_RC_IN_MODE, or None when it cannot be read (then no radio is assumed)."""
+    try:
+        return int(await params.read("COM_RC_IN_MODE", integer=True))
+    except ControllerError as exc:
+        logger.warning("could not read COM_RC_IN_MODE (%s): taken as no radio", exc)
+        return None

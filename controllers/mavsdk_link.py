@@ -26,6 +26,12 @@ MAV_AUTOPILOT_INVALID = 8
 UNNAMED = "UNKNOWN"
 """MAVSDK's name for every mode it has no name for."""
 
+MAV_SYS_STATUS_SENSOR_RC_RECEIVER = 0x10000
+"""SYS_STATUS sensor bit of the RC receiver (PX4: any valid manual-control input, RC or joystick)."""
+
+SYS_STATUS_WAIT_S = 3.0
+"""How long to wait for a first SYS_STATUS (PX4 sends it at 1 Hz or more)."""
+
 
 class LinkMonitor:
     """Follows the autopilot's HEARTBEAT and flight mode in two readers of ``subscriptions``.
@@ -50,11 +56,14 @@ class LinkMonitor:
         self._decoded_mode: str | None = None
         """The mode decoded from the last HEARTBEAT."""
         self._listeners: list[Callable[[dict[str, Any]], None]] = []
+        self._rc_receiver: bool | None = None
+        self._sys_status = asyncio.Event()
 
     def start(self) -> None:
         """Follow heartbeats and flight modes until ``subscriptions`` is closed."""
         self._subscriptions.read(self._direct.subscribe_message("HEARTBEAT"), self._on_heartbeat, "mavsdk-heartbeat")
         self._subscriptions.read(self._telemetry.subscribe_flight_mode(), self._on_flight_mode, "mavsdk-flight-mode")
+        self._subscriptions.read(self._direct.subscribe_message("SYS_STATUS"), self._on_sys_status, "mavsdk-sys-status")
 
     def heartbeat_age_s(self) -> float:
         """Seconds since the autopilot's last heartbeat."""
@@ -91,6 +100,25 @@ class LinkMonitor:
                         if health.is_armable and health.is_global_position_ok and health.is_home_position_ok:
                             return True
         return False
+
+    async def rc_receiver_present(self, timeout_s: float = SYS_STATUS_WAIT_S) -> bool | None:
+        """Whether the last SYS_STATUS shows the RC receiver present and healthy (waiting up to ``timeout_s`` for a
+        first one); None when none arrived. Only *present* means a receiver: PX4 sets the health bit of an absent
+        one too."""
+        with contextlib.suppress(TimeoutError):
+            async with asyncio.timeout(timeout_s):
+                await self._sys_status.wait()
+        return self._rc_receiver
+
+    def _on_sys_status(self, message: MavlinkMessage) -> None:
+        if message.system_id != self._system_id:
+            return
+        with contextlib.suppress(KeyError, TypeError, ValueError):
+            fields = json.loads(message.fields_json)
+            bit = MAV_SYS_STATUS_SENSOR_RC_RECEIVER
+            self._rc_receiver = bool(int(fields["onboard_control_sensors_present"]) & bit
+                                     and int(fields["onboard_control_sensors_health"]) & bit)
+            self._sys_status.set()
 
     def _on_heartbeat(self, message: MavlinkMessage) -> None:
         if message.system_id != self._system_id:

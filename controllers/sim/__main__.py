@@ -58,8 +58,13 @@ def build_parser(parser_class: type[argparse.ArgumentParser] = argparse.Argument
         type=int,
         default=0,
         choices=sorted(OFFBOARD_LOSS_ACTIONS),
-        help="what the offboard-loss failsafe does: 0/5 hold, 3 return, 4 land (PX4 COM_OBL_RC_ACT)",
+        help="what the offboard-loss failsafe does: 0 Position mode (sinks without --radio), 3 return, 4 land, "
+        "5 hold (PX4 COM_OBL_RC_ACT)",
     )
+    p.add_argument("--radio", action="store_true",
+                   help="PX4: a radio is connected (SYS_STATUS shows the RC receiver; Position mode is held)")
+    p.add_argument("--climb-drift", type=float, default=0.0, metavar="M_S",
+                   help="velocity setpoints drift upwards this fast (PX4 SIH: about 0.2); position holds correct it")
     p.add_argument(
         "--failsafe-land-after",
         type=float,
@@ -91,6 +96,7 @@ def config_from_args(args: argparse.Namespace) -> ServerConfig:
         takeoff_alt_m=args.takeoff_alt,
         rtl_alt_m=args.rtl_alt,
         gps_fix_after_s=args.gps_delay,
+        climb_drift_ms=args.climb_drift,
     )
     return ServerConfig(
         mavlink_port=args.mavlink_port,
@@ -103,6 +109,7 @@ def config_from_args(args: argparse.Namespace) -> ServerConfig:
         offboard_loss_timeout_s=args.offboard_loss_timeout,
         offboard_loss_action=args.offboard_loss_action,
         failsafe_land_after_s=args.failsafe_land_after,
+        radio=args.radio,
         parent_pid=args.parent_pid,
         gps_clock_offset_s=args.gps_clock_offset,
         precland_enabled=args.plnd_enabled,

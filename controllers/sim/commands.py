@@ -102,6 +102,7 @@ class CommandHandler:
                 bind("GUID_TIMEOUT", cfg, "guided_timeout_s"),
                 bind("PILOT_SPD_UP", stick, "speed_up_ms"),
                 bind("PILOT_SPD_DN", stick, "speed_dn_ms"),
+                *ParamStore.constants(GUID_OPTIONS=0),
             ]
         return [
             bind("MIS_TAKEOFF_ALT", pc, "takeoff_alt_m"),
@@ -120,6 +121,7 @@ class CommandHandler:
                 MAV_TYPE=2,
                 SYS_HITL=0,
                 NAV_DLL_ACT=0,
+                COM_RC_IN_MODE=3,
                 CAL_GYRO0_ID=1,
                 CAL_ACC0_ID=1,
                 CAL_MAG0_ID=1,

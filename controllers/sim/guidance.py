@@ -91,10 +91,13 @@ class ThrottleStick:
         return 0.0
 
 
-OFFBOARD_LOSS_ACTIONS = {0: "hold", 3: "rtl", 4: "land", 5: "hold"}
-"""PX4's COM_OBL_RC_ACT values the simulator honours -> :class:`Guidance` method: 0 Position mode (no
-sticks: it holds, shown as HOLD), 3 Return, 4 Land, 5 Hold. PX4's others (Altitude, Manual, Terminate,
-Disarm) need a pilot's sticks or end in a crash, and are not simulated."""
+OFFBOARD_LOSS_ACTIONS = {0: "position_mode", 3: "rtl", 4: "land", 5: "hold"}
+"""PX4's COM_OBL_RC_ACT values the simulator honours -> :class:`Guidance` method: 0 Position mode (POSCTL: held by
+a pilot's centred sticks with a radio, sinking without one), 3 Return, 4 Land, 5 Hold. PX4's others (Altitude,
+Manual, Terminate, Disarm) need a pilot's sticks or end in a crash, and are not simulated."""
+
+UNPILOTED_SINK_MS = 0.55
+"""How fast PX4 v1.16 SITL sank in Position mode with no radio after an offboard loss (4.9 m -> 0.45 m in 8 s)."""
 
 Demand = tuple[np.ndarray, float | None, float | None]
 """Velocity demand (NED m/s), yaw goal (rad) or None, yaw rate (rad/s) or None."""
@@ -114,6 +117,10 @@ class Guidance:
         self._yaw_goal: float | None = None
         self.stick: ThrottleStick | None = None
         """The RC throttle (ArduCopter dialect); None: no RC, as the PX4 dialect is flown."""
+        self.radio = False
+        """A radio connected and read (PX4 dialect, ``--rc``): a pilot's centred sticks hold POSCTL."""
+        self.unpiloted = False
+        """In POSCTL as an offboard-loss fallback with no radio: nobody holds the sticks, it sinks."""
         self.hold_mode = Mode.HOLD
         """What a finished takeoff holds in: PX4 switches to HOLD, ArduCopter stays in GUIDED."""
         self.pad: Callable[[], np.ndarray | None] | None = None
@@ -124,6 +131,7 @@ class Guidance:
     # ------------------------------------------------------------ transitions
     def _enter(self, mode: Mode) -> None:
         self.mode = mode
+        self.unpiloted = False
         self._yaw_goal = self.v.yaw
 
     def _stopping_point(self) -> np.ndarray:
@@ -139,6 +147,11 @@ class Guidance:
         self._enter(mode)
         self.target = self._stopping_point()
         self.target_speed = None
+
+    def position_mode(self) -> None:
+        """PX4's Position mode as the offboard-loss action: the pilot's sticks hold it, or nobody's sink it."""
+        self.hold(Mode.POSCTL)
+        self.unpiloted = not self.radio
 
     def guided(self) -> None:
         """ArduCopter GUIDED without a target: brake and keep the stopping point (``ModeGuided::init``)."""
@@ -202,6 +215,7 @@ class Guidance:
             Mode.OFFBOARD: self._offboard,
             Mode.GUIDED: self._guided,
             Mode.LOITER: self._loiter,
+            Mode.POSCTL: self._posctl,
         }.get(self.mode, self._hold)
         return handler()
 
@@ -228,7 +242,13 @@ class Guidance:
         return self._hold() if self.setpoint is None else self._offboard()
 
     def _loiter(self) -> Demand:
-        rate = self.stick.climb_rate() if self.stick is not None else 0.0
+        return self._climbing(self.stick.climb_rate() if self.stick is not None else 0.0)
+
+    def _posctl(self) -> Demand:
+        return self._climbing(-UNPILOTED_SINK_MS if self.unpiloted else 0.0)
+
+    def _climbing(self, rate: float) -> Demand:
+        """Hold the horizontal stopping point while climbing at ``rate`` (m/s, up positive; 0: hold the height)."""
         if rate:  # the altitude target follows the stick: where the vehicle would stop
             vz = float(self.v.vel[2])
             self.target[2] = self.v.pos[2] + vz * abs(vz) / (2.0 * self.v.cfg.max_accel_ms2)

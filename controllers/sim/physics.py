@@ -52,6 +52,9 @@ class PhysicsConfig:
     gps_fix_after_s: float = 0.5
     takeoff_alt_m: float = 2.5
     rtl_alt_m: float = 10.0
+    climb_drift_ms: float = 0.0
+    """A vertical velocity the controllers do not see (PX4 SIH's EKF: 9.4 m -> 12.1 m in 14 s of velocity setpoints
+    with vertical speed 0): a velocity demand is flown this much upwards; position holds correct it."""
     noise: bool = False
     noise_sigma: dict[str, float] = field(default_factory=lambda: {"pos": 0.03, "vel": 0.03, "att_deg": 0.3})
 
@@ -166,6 +169,7 @@ class Multicopter:
             self._idle_on_ground()
             return
         a_cmd = (v_cmd - self.vel) / cfg.speed_time_constant_s
+        a_cmd[2] -= cfg.climb_drift_ms / cfg.speed_time_constant_s
         h = float(np.hypot(a_cmd[0], a_cmd[1]))
         if h > cfg.max_accel_ms2:
             a_cmd[:2] *= cfg.max_accel_ms2 / h

@@ -59,6 +59,7 @@ _SENSORS = (
 )
 _GPS = M.MAV_SYS_STATUS_SENSOR_GPS
 _PREARM = M.MAV_SYS_STATUS_PREARM_CHECK
+_RC = M.MAV_SYS_STATUS_SENSOR_RC_RECEIVER
 
 
 def landed_state(v: Multicopter) -> int:
@@ -177,8 +178,8 @@ class TelemetryStreams:
 
     def sys_status(self) -> mavlink.MAVLink_message:
         v = self.v
-        present = _SENSORS | _GPS | _PREARM
-        health = _SENSORS | ((_GPS | _PREARM) if v.gps_fix else 0)
+        present = _SENSORS | _GPS | _PREARM | (_RC if v.guidance.radio else 0)
+        health = _SENSORS | _RC | ((_GPS | _PREARM) if v.gps_fix else 0)  # PX4: an absent receiver is "healthy"
         return self.enc.sys_status_encode(
             present,
             present,

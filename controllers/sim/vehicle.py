@@ -49,6 +49,8 @@ class ServerConfig:
     guided_timeout_s: float = 3.0
     """ArduCopter's GUID_TIMEOUT: a GUIDED velocity target older than this lapses into a hold (a position
     target does not)."""
+    radio: bool = False
+    """PX4 dialect: a radio connected and read (SYS_STATUS shows the RC receiver present; POSCTL is held)."""
     rc_throttle_pwm: int = 1000
     """ArduCopter dialect: the RC throttle input (SITL's default, the stick's minimum); LOITER follows it."""
     parent_pid: int | None = None
@@ -69,6 +71,7 @@ class SimVehicleServer:
         self.lock = threading.RLock()
         self.dialect = DIALECTS[config.autopilot]
         self.vehicle = Multicopter(config.physics, wind=config.wind, seed=config.seed)
+        self.vehicle.guidance.radio = config.radio
         if self.dialect.ardupilot:
             self.vehicle.guidance.stick = ThrottleStick(config.rc_throttle_pwm)
             self.vehicle.guidance.hold_mode = Mode.GUIDED

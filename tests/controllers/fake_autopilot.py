@@ -75,7 +75,8 @@ class FakeAutopilot:
         self.received: list[Any] = []
         self.mode, self.armed = 0, False
         self.params: dict[str, float] = {}
-        """REAL32 parameters it serves (PARAM_REQUEST_READ) and stores (PARAM_SET)."""
+        """Parameters it serves (PARAM_REQUEST_READ) and stores (PARAM_SET): REAL32, INT32 for an ``int`` (in
+        ArduPilot's C-cast encoding, the value as a float)."""
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name="fake-autopilot", daemon=True)
 
@@ -134,10 +135,11 @@ class FakeAutopilot:
         elif kind == "PARAM_SET":
             name = msg.param_id if isinstance(msg.param_id, str) else msg.param_id.decode()
             if name in self.params:
-                self.params[name] = msg.param_value
+                self.params[name] = int(msg.param_value) if isinstance(self.params[name], int) else msg.param_value
             self._send(self.tx.param_value_encode(name.encode(), msg.param_value, msg.param_type, 1, 0))
         elif kind == "PARAM_REQUEST_READ":
             name = msg.param_id if isinstance(msg.param_id, str) else msg.param_id.decode()
             if name in self.params:  # unknown: silent, as autopilots are
-                value, real32 = self.params[name], mavlink.MAV_PARAM_TYPE_REAL32
-                self._send(self.tx.param_value_encode(name.encode(), value, real32, len(self.params), 0))
+                value = self.params[name]
+                kind = mavlink.MAV_PARAM_TYPE_INT32 if isinstance(value, int) else mavlink.MAV_PARAM_TYPE_REAL32
+                self._send(self.tx.param_value_encode(name.encode(), value, kind, len(self.params), 0))

@@ -89,6 +89,7 @@ async def airborne() -> AsyncIterator[Flight]:
     sim = await asyncio.to_thread(SimVehicle().start)
     flight = await start_flight(sim)
     try:
+        assert (await flight.fc.check_failsafe(2.0, tune=True)).ok  # as the platform does at connect: Hold on loss
         await arm_when_ready(flight.fc)
         await flight.fc.takeoff(ALT_M)
         await flight.until(lambda s: -s["d"] > ALT_M - 0.15 and abs(s["vd"]) < 0.1, 15, "takeoff")

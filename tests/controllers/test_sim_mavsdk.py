@@ -127,7 +127,8 @@ async def request(truth: TruthClient, cmd: dict[str, Any]) -> dict[str, Any]:
     return reply
 
 
-@pytest.mark.parametrize("sim_vehicle", [{"extra_args": ["--failsafe-land-after", "1.0"]}], indirect=True)
+@pytest.mark.parametrize("sim_vehicle", [{"extra_args": ["--failsafe-land-after", "1.0",
+                                                         "--offboard-loss-action", "5"]}], indirect=True)
 async def test_body_velocity_follows_heading_and_setpoint_loss_holds_then_lands(
     sim_vehicle: SimVehicle,
 ) -> None:
@@ -149,7 +150,7 @@ async def test_body_velocity_follows_heading_and_setpoint_loss_holds_then_lands(
     assert forward["e"] - start["e"] > 0.8 and abs(forward["n"] - start["n"]) < 0.1
     assert right["vn"] == pytest.approx(-1.0, abs=0.15) and abs(right["ve"]) < 0.15
     assert abs(right["d"] - start["d"]) < 0.1 and right["yaw"] == pytest.approx(90.0, abs=1.0)
-    # the ground station is gone, so are the setpoints: HOLD after COM_OF_LOSS_T, then LAND
+    # the ground station is gone, so are the setpoints: HOLD (COM_OBL_RC_ACT 5) after COM_OF_LOSS_T, then LAND
     held = await wait_truth(truth, lambda s: s["mode"] != "OFFBOARD", 3.0, "offboard-loss failsafe")
     records = (await request(truth, {"cmd": "setpoints", "since_mono_ns": 0}))["records"]
     assert held["mode"] == "HOLD" and held["in_air"]

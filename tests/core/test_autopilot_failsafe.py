@@ -35,7 +35,8 @@ async def test_without_tuning_autonomy_is_refused_naming_the_parameter(sim_vehic
             await core.execute("autonomy on")
         assert not core.gate.enabled
         messages = [e.message for e in core.events.recent]
-        assert "autopilot failsafe: found COM_OF_LOSS_T=10, COM_OBL_RC_ACT=3" in messages
+        assert ("autopilot failsafe: found COM_OF_LOSS_T=10, COM_OBL_RC_ACT=3 (no radio (SYS_STATUS: no RC receiver; "
+                "COM_RC_IN_MODE=3))") in messages
     finally:
         await core.stop()
 
