@@ -72,15 +72,17 @@ def px4_set_mode(target_system: int, mode: str) -> MavlinkMessage:
     return command_long(target_system, MAV_CMD_DO_SET_MODE, MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, main, sub)
 
 
-def velocity_body_setpoint(target_system: int, forward_ms: float, right_ms: float) -> MavlinkMessage:
-    """SET_POSITION_TARGET_LOCAL_NED: body velocity; vertical speed and yaw rate 0 (altitude, yaw held)."""
+def velocity_body_setpoint(target_system: int, forward_ms: float, right_ms: float,
+                           down_ms: float = 0.0) -> MavlinkMessage:
+    """SET_POSITION_TARGET_LOCAL_NED: body velocity (``down_ms``: the height hold's correction); yaw rate 0."""
     fields = {
         "time_boot_ms": 0,
         "coordinate_frame": MAV_FRAME_BODY_NED,
         "type_mask": VELOCITY_ONLY_MASK,
-        **dict.fromkeys(("x", "y", "z", "vz", "afx", "afy", "afz", "yaw", "yaw_rate"), 0.0),
+        **dict.fromkeys(("x", "y", "z", "afx", "afy", "afz", "yaw", "yaw_rate"), 0.0),
         "vx": float(forward_ms),
         "vy": float(right_ms),
+        "vz": float(down_ms),
     }
     return _message("SET_POSITION_TARGET_LOCAL_NED", target_system, fields)
 

@@ -129,7 +129,8 @@ class MavsdkController:
                                                                     reached.direct)
         self._link = LinkMonitor(self._direct, self._telemetry, self._sysid, self._subscriptions)
         self._link.start()
-        self._landing, self._offboard.reached = MavsdkLanding(reached, self._command), reached
+        self._landing = MavsdkLanding(reached, self._command)
+        self._offboard.attach(reached, self._subscriptions)
         self._gimbal = MavsdkGimbal(reached.system, self._command)
         self._gimbal.watch_list(self._subscriptions)
         self._subscriptions.read(self._direct.subscribe_message("ATTITUDE"), self._landing.on_attitude,
@@ -189,10 +190,11 @@ class MavsdkController:
 
         Args:
             max_t: the longest vector; a dead platform's last command may last ``max_t`` + 0.5 s.
-            tune: set parameters that allow longer; otherwise only report them.
+            tune: set parameters that break a rule; otherwise only report them.
         """
         access = ParamAccess(self._param, lambda name, call: bounded(name, call, PARAM_TIMEOUT_S, self.heartbeat_age_s))
-        return await check_failsafe(self.autopilot, access, max_t + STALE_MARGIN_S, tune=tune)
+        return await check_failsafe(self.autopilot, access, max_t + STALE_MARGIN_S, tune=tune,
+                                    rc_receiver=self._link.rc_receiver_present if self._link is not None else None)
 
     # ---- commands --------------------------------------------------------------------------------
 
@@ -252,13 +254,13 @@ class MavsdkController:
                                                                       here.longitude_deg, math.nan))
 
     async def set_fly_vector(self, vx: float, vy: float, t: float, *, yield_to_others: bool = False) -> None:
-        """Fly body-frame (vx forward, vy right) m/s for t s, altitude and yaw held; then zero + hold.
+        """Fly body-frame (vx forward, vy right) m/s for t s, yaw and height held (:mod:`~controllers.height_hold`).
 
         ``yield_to_others`` (autonomy's vectors, not an operator's command): refused when the vehicle reports, right
         before the switch to offboard, a mode that is not the platform's own (a pilot switched as it was sent).
 
-        Returns once the first setpoint is out and offboard is engaged; a new vector replaces a
-        running one without leaving offboard.
+        Returns once the first setpoint is out and offboard is engaged; then zero + hold at the end. A new vector
+        replaces a running one without leaving offboard.
 
         Raises:
             ValueError: non-finite speeds or t <= 0 (the autonomy gate rejects those first).

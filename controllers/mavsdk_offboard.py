@@ -8,9 +8,10 @@ from typing import Protocol
 
 from controllers import ardupilot
 from controllers.errors import ControllerError
+from controllers.height_hold import HeightHold
 from controllers.mavlink_commands import px4_set_mode, send_command, velocity_body_setpoint
 from controllers.mavsdk_attach import ReachedAutopilot
-from controllers.mavsdk_calls import Command
+from controllers.mavsdk_calls import Command, Subscriptions
 
 
 class ModeWatch(Protocol):
@@ -34,7 +35,15 @@ class MavsdkOffboard:
         self._modes = modes
         self._command = command
         self.reached: ReachedAutopilot | None = None
-        """The autopilot and its plugins (set by the controller once it is connected)."""
+        """The autopilot and its plugins (set by :meth:`attach` once the controller is connected)."""
+        self.height: HeightHold | None = None
+        """The height held while velocity control is engaged (set by :meth:`attach`)."""
+
+    def attach(self, reached: ReachedAutopilot, subscriptions: Subscriptions) -> None:
+        """The controller connected: drive ``reached``, and follow its height until ``subscriptions`` close."""
+        self.reached = reached
+        self.height = HeightHold(reached.sysid)
+        self.height.follow(reached.direct, subscriptions)
 
     def flight_mode_since(self, t_mono: float) -> str | None:
         return self._modes.flight_mode_since(t_mono)
@@ -46,7 +55,8 @@ class MavsdkOffboard:
 
     async def send_velocity_body(self, forward_ms: float, right_ms: float) -> None:
         reached = self._connected("set_fly_vector")
-        setpoint = velocity_body_setpoint(reached.sysid, forward_ms, right_ms)
+        down_ms = self.height.vertical_speed() if self.height is not None else 0.0
+        setpoint = velocity_body_setpoint(reached.sysid, forward_ms, right_ms, down_ms)
         await self._command("set_fly_vector", lambda: reached.direct.send_message(setpoint))
 
     async def start_offboard(self, *, yield_to_others: bool = False) -> None:
@@ -68,9 +78,13 @@ class MavsdkOffboard:
             # PX4 accepts OFFBOARD only while setpoints stream (VectorStream streams first).
             command = px4_set_mode(reached.sysid, "OFFBOARD")
             await self._command("set_fly_vector", lambda: send_command(reached.direct, command))
+        if self.height is not None:
+            self.height.engage()
 
     async def stop_offboard(self) -> None:
         reached = self._connected("hold")
+        if self.height is not None:
+            self.height.release()
         if reached.autopilot == "ardupilot":  # not LOITER: it flies the RC throttle (see ardupilot.hold)
             await self._command("hold", lambda: ardupilot.hold(reached.direct, reached.sysid))
         else:  # PX4 HOLD (Auto Loiter): automatic, the sticks only matter when a pilot moves them to take over
