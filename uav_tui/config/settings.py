@@ -41,8 +41,9 @@ class SafetyConfig:
                                      maximum=1000, default=3)
     takeoff_alt: float = _key("default takeoff altitude, m", minimum=1, maximum=120, default=5.0)
     tune_autopilot_failsafe: bool = _key("at connect, set the autopilot's offboard-loss failsafe (COM_OF_LOSS_T, "
-                                         "COM_OBL_RC_ACT, GUID_TIMEOUT) when it would fly a dead platform's last "
-                                         "command longer than max_t + 0.5 s; off: refuse autonomy instead",
+                                         "COM_OBL_RC_ACT, GUID_TIMEOUT, GUID_OPTIONS) when it would fly a dead "
+                                         "platform's last command longer than max_t + 0.5 s or not hold without a "
+                                         "pilot; off: refuse autonomy instead",
                                          default=True)
     max_altitude: float = _key("highest altitude a takeoff command may ask for, m", minimum=1, maximum=10000,
                                default=120.0)

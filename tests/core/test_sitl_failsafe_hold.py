@@ -1,0 +1,139 @@
+"""Issue 47, point 0, on the real autopilots (``sitl``): holds that hold without a pilot, judged by an independent
+client.
+
+``uav-tui --no-ui`` takes off to 5 m with the autopilot's own defaults (PX4: ``COM_OBL_RC_ACT`` 0, Position mode,
+and no radio) and flies the steering processor's 0.6 m/s vectors under autonomy for 20 s, then is SIGKILLed
+mid-vector. A pymavlink client on a second link (ArduCopter's SERIAL1, PX4's GCS port) records the autopilot's
+LOCAL_POSITION_NED throughout:
+
+- during the 20 s of autonomy the height stays within 0.5 m of where autonomy engaged;
+- after the kill the vehicle stops (judged by displacement: PX4 SIH's velocity estimate wanders), then moves
+  less than 1 m in the 5 s that follow, and loses less than 0.5 m of height from the kill to their end.
+
+The same flights on the built-in vehicle: ``test_failsafe_hold.py``.
+"""
+
+from __future__ import annotations
+
+import math
+import signal
+import threading
+import time
+from collections.abc import Callable
+from contextlib import AbstractContextManager
+from pathlib import Path
+
+import pytest
+from pymavlink import mavutil
+
+from tests import sitl
+from tests.core.flight_helpers import start_steering_flight
+from tests.core.test_failsafe_hold import AUTONOMY_S, HEIGHT_BAND_M, MOVED_GOAL_M, STILL_WINDOW_S, SUNK_GOAL_M
+from tests.core.test_sitl_precland import observer_url
+from tests.core.test_sitl_sigkill import wait_line
+
+pytestmark = pytest.mark.sitl
+
+ALTITUDE_M = 5.0
+"""The issue's PX4 run sank from 4.9 m."""
+STOPPED_MS = 0.3
+"""Stopped: displaced less than this per second over :data:`SPEED_WINDOW_S`."""
+SPEED_WINDOW_S = 0.5
+
+Sample = tuple[float, float, float, float]
+"""(time.monotonic(), north, east, height above the local origin)."""
+
+
+class Track:
+    """A second MAVLink client recording LOCAL_POSITION_NED and the flight mode on its own link."""
+
+    def __init__(self, url: str) -> None:
+        self.link = mavutil.mavlink_connection(url, source_system=202)
+        self.samples: list[Sample] = []
+        self.mode = ""
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._read, name="failsafe-observer", daemon=True)
+        self._thread.start()
+
+    def _read(self) -> None:
+        asked = 0.0
+        while not self._stop.is_set():
+            if time.monotonic() - asked > 1.0:  # PX4 answers the last sender on its GCS port; ArduCopter needs asking
+                mav = self.link.mav
+                mav.heartbeat_send(mavutil.mavlink.MAV_TYPE_GCS, mavutil.mavlink.MAV_AUTOPILOT_INVALID, 0, 0, 0)
+                mav.command_long_send(1, 1, mavutil.mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, 0,
+                                      mavutil.mavlink.MAVLINK_MSG_ID_LOCAL_POSITION_NED, 50_000, 0, 0, 0, 0, 0)
+                asked = time.monotonic()
+            msg = self.link.recv_match(type=["LOCAL_POSITION_NED", "HEARTBEAT"], blocking=True, timeout=0.2)
+            if msg is None or msg.get_srcSystem() != 1 or msg.get_srcComponent() != 1:
+                continue
+            if msg.get_type() == "LOCAL_POSITION_NED":
+                self.samples.append((time.monotonic(), msg.x, msg.y, -msg.z))
+            else:
+                self.mode = mavutil.mode_string_v10(msg)
+
+    def since(self, t: float) -> list[Sample]:
+        return [s for s in list(self.samples) if s[0] >= t]
+
+    def close(self) -> None:
+        self._stop.set()
+        self._thread.join(timeout=2)
+        self.link.close()
+
+
+def stop_time(samples: list[Sample]) -> float | None:
+    """The first time from which the vehicle moves less than :data:`STOPPED_MS` over :data:`SPEED_WINDOW_S`."""
+    for i, first in enumerate(samples):
+        later = next((s for s in samples[i:] if s[0] - first[0] >= SPEED_WINDOW_S), None)
+        if later is None:
+            return None
+        if math.hypot(later[1] - first[1], later[2] - first[2]) / (later[0] - first[0]) < STOPPED_MS:
+            return first[0]
+    return None
+
+
+@pytest.mark.timeout(420)
+@pytest.mark.parametrize("launch", [sitl.px4_sih, sitl.arducopter], ids=["px4_sih", "arducopter"])
+def test_height_held_in_autonomy_and_after_sigkill(launch: Callable[..., AbstractContextManager[sitl.Sitl]],
+                                                   tmp_path: Path) -> None:
+    workdir = tmp_path / "sitl"
+    workdir.mkdir()
+    with launch(workdir) as vehicle:
+        script = (f"wait {vehicle.ready_after_s:g}\narm\ntakeoff {ALTITUDE_M:g}\nwait 12\nf 1\nautonomy on\n"
+                  "wait 180\n")
+        track = Track(observer_url(vehicle))
+        process = start_steering_flight(tmp_path, vehicle.connection_string, script)
+        try:
+            seen = wait_line(process, "autonomy ON", vehicle.ready_after_s + 90)
+            seen += wait_line(process, "s (executed)", 20)
+            engaged = time.monotonic()
+            time.sleep(AUTONOMY_S)
+            autonomy = track.since(engaged)
+            process.send_signal(signal.SIGKILL)
+            killed = time.monotonic()
+            process.communicate(timeout=10)
+            deadline = killed + 20
+            while (stopped := stop_time(track.since(killed))) is None or time.monotonic() < stopped + STILL_WINDOW_S:
+                assert time.monotonic() < deadline, f"not stopped 20 s after the kill (in {track.mode})"
+                time.sleep(0.2)
+            after = track.since(killed)
+            mode = track.mode
+        finally:
+            process.kill()
+            process.communicate()
+            track.close()
+    heights = [s[3] - autonomy[0][3] for s in autonomy]
+    flown = math.hypot(autonomy[-1][1] - autonomy[0][1], autonomy[-1][2] - autonomy[0][2])
+    at_kill = after[0]
+    still = [s for s in after if stopped <= s[0] <= stopped + STILL_WINDOW_S]
+    moved = max(math.hypot(s[1] - still[0][1], s[2] - still[0][2]) for s in still)
+    sunk = at_kill[3] - min(s[3] for s in after if s[0] <= stopped + STILL_WINDOW_S)
+    print(f"{vehicle.name}: {AUTONOMY_S:g} s of autonomy from {autonomy[0][3]:.2f} m flew {flown:.1f} m, height "
+          f"{min(heights):+.2f}..{max(heights):+.2f} m; after SIGKILL at {at_kill[3]:.2f} m: stopped after "
+          f"{stopped - killed:.2f} s, then moved {moved:.2f} m in {STILL_WINDOW_S:g} s, sank {sunk:.2f} m, in {mode}")
+    output = "".join(seen)
+    assert flown > 6.0, f"the vectors did not fly ({flown:.1f} m)\n{output[-3000:]}"
+    assert max(map(abs, heights)) < HEIGHT_BAND_M
+    assert moved < MOVED_GOAL_M and sunk < SUNK_GOAL_M
+    if vehicle.name == "px4":
+        assert "set COM_OBL_RC_ACT 0 -> 5" in output
