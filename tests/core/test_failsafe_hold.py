@@ -52,8 +52,19 @@ def after_kill(truth: TruthClient) -> tuple[dict[str, Any], list[dict[str, Any]]
     return stopped, follow(truth, STILL_WINDOW_S)
 
 
-@pytest.mark.parametrize("sim_vehicle", [{}, {"autopilot": "ardupilot"}], ids=["px4", "ardupilot"], indirect=True)
-def test_after_sigkill_the_vehicle_holds_where_it_stopped(tmp_path: Path, sim_vehicle: SimVehicle) -> None:
+EXPECTED = {
+    "px4": ("HOLD", ["set COM_OBL_RC_ACT 0 -> 5", "no radio (SYS_STATUS: no RC receiver; COM_RC_IN_MODE=3)"]),
+    # a pilot's radio: Position mode is kept, and the pilot's centred sticks hold it
+    "px4-radio": ("POSCTL", ["radio connected (SYS_STATUS: RC receiver present; COM_RC_IN_MODE=3)"]),
+    "ardupilot": ("GUIDED", ["set GUID_TIMEOUT 3 -> 1"]),
+}
+"""Per case: the mode the vehicle holds in, and what uav-tui said at connect."""
+
+
+@pytest.mark.parametrize("sim_vehicle", [{}, {"extra_args": ["--radio"]}, {"autopilot": "ardupilot"}],
+                         ids=list(EXPECTED), indirect=True)
+def test_after_sigkill_the_vehicle_holds_where_it_stopped(tmp_path: Path, sim_vehicle: SimVehicle,
+                                                          request: pytest.FixtureRequest) -> None:
     process = start_steering_flight(tmp_path, sim_vehicle.connection_string, FLIGHT)
     truth = sim_vehicle.truth()
     try:
@@ -71,10 +82,9 @@ def test_after_sigkill_the_vehicle_holds_where_it_stopped(tmp_path: Path, sim_ve
     assert moved < MOVED_GOAL_M and sunk < SUNK_GOAL_M, (
         f"moved {moved:.2f} m in {STILL_WINDOW_S:g} s after stopping, sank {sunk:.2f} m, in {window[-1]['mode']}\n"
         f"{out}")
-    if sim_vehicle.extra_args[1] == "px4":
-        assert window[-1]["mode"] == "HOLD"  # not POSCTL: Position mode with nobody at the sticks
-        assert "set COM_OBL_RC_ACT 0 -> 5" in out
-        assert "no radio (SYS_STATUS: no RC receiver; COM_RC_IN_MODE=3)" in out
+    mode, said = EXPECTED[request.node.callspec.id]
+    assert window[-1]["mode"] == mode  # PX4 without a radio: not POSCTL, Position mode with nobody at the sticks
+    assert all(text in out for text in said), out
 
 
 @pytest.mark.parametrize("sim_vehicle", [{"extra_args": ["--climb-drift", "0.2"]}], indirect=True)
