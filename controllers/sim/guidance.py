@@ -118,7 +118,7 @@ class Guidance:
         self.stick: ThrottleStick | None = None
         """The RC throttle (ArduCopter dialect); None: no RC, as the PX4 dialect is flown."""
         self.radio = False
-        """A radio connected and read (PX4 dialect, ``--rc``): a pilot's centred sticks hold POSCTL."""
+        """A radio connected and read (PX4 dialect, ``--radio``): a pilot's centred sticks hold POSCTL."""
         self.unpiloted = False
         """In POSCTL as an offboard-loss fallback with no radio: nobody holds the sticks, it sinks."""
         self.hold_mode = Mode.HOLD
