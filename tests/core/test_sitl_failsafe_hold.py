@@ -1,7 +1,7 @@
 """Issue 47, point 0, on the real autopilots (``sitl``): holds that hold without a pilot, judged by an independent
 client.
 
-``uav-tui --no-ui`` takes off to 5 m with the autopilot's own defaults (PX4: ``COM_OBL_RC_ACT`` 0, Position mode,
+``uav-tui --no-ui`` takes off to 10 m with the autopilot's own defaults (PX4: ``COM_OBL_RC_ACT`` 0, Position mode,
 and no radio) and flies the steering processor's 0.6 m/s vectors under autonomy for 20 s, then is SIGKILLed
 mid-vector. A pymavlink client on a second link (ArduCopter's SERIAL1, PX4's GCS port) records the autopilot's
 LOCAL_POSITION_NED throughout:
@@ -34,8 +34,9 @@ from tests.core.test_sitl_sigkill import wait_line
 
 pytestmark = pytest.mark.sitl
 
-ALTITUDE_M = 5.0
-"""The issue's PX4 run sank from 4.9 m."""
+ALTITUDE_M = 10.0
+"""The issue's PX4 autonomy climbed from 9.4 m (at 5 m the old code's drift stayed within 0.5 m in one run: -0.46..
++0.23 m; at 10 m it climbed 1.02 m in 20 s)."""
 STOPPED_MS = 0.3
 """Stopped: displaced less than this per second over :data:`SPEED_WINDOW_S`."""
 SPEED_WINDOW_S = 0.5
