@@ -14,10 +14,13 @@ from dataclasses import dataclass
 from typing import Any
 
 from controllers.connection import Connection, connection_failed, no_heartbeat_error
-from controllers.failsafe import RULES, STALE_MARGIN_S, FailsafeParam
+from controllers.failsafe import RULES, STALE_MARGIN_S, Context, Radio
 from controllers.mavsdk_attach import AUTOPILOT_NAMES
 from uav_tui.config import Config
 from uav_tui.field.finding import Finding, fail, ok, warn
+
+RC_RECEIVER = 0x10000
+"""MAV_SYS_STATUS_SENSOR_RC_RECEIVER."""
 
 PARAM_TIMEOUT_S = 2.0
 """Longest the answer to one parameter read may take."""
@@ -98,14 +101,15 @@ def _failsafe(mav: Any, config: Config, autopilot: str, target: tuple[int, int])
                                  "(PX4 and ArduPilot are known): autonomy will be refused")]
     limit_s = config.safety.max_t + STALE_MARGIN_S
     tuned = config.safety.tune_autopilot_failsafe
+    context = Context(limit_s, _radio(mav, target) if autopilot == "px4" else None)
     findings = []
     for param in rules:
-        value = _read_param(mav, param, target, bytewise=autopilot == "px4")
+        value = _read_param(mav, param.name, param.integer, target, bytewise=autopilot == "px4")
         if value is None:
             findings.append(warn("failsafe", f"{param.name} did not come within {PARAM_TIMEOUT_S:g} s: the "
                                              "platform reads it again at connect"))
-        elif problem := param.problem(value, limit_s):
-            wanted = f"{param.safe_value(limit_s):g}"
+        elif problem := param.problem(value, context):
+            wanted = f"{param.safe_value(value, context):g}"
             if tuned:
                 findings.append(warn("failsafe", f"{param.name} = {value:g} {problem}: uav-tui sets it to {wanted} "
                                                  "at connect (tune_autopilot_failsafe)"))
@@ -117,13 +121,21 @@ def _failsafe(mav: Any, config: Config, autopilot: str, target: tuple[int, int])
     return findings
 
 
-def _read_param(mav: Any, param: FailsafeParam, target: tuple[int, int], *, bytewise: bool) -> float | None:
+def _radio(mav: Any, target: tuple[int, int]) -> Radio:
+    """PX4's radio as the platform judges it at connect: the RC receiver present in SYS_STATUS, COM_RC_IN_MODE."""
+    status = _wait(mav, ("SYS_STATUS",), PARAM_TIMEOUT_S, lambda m: True)
+    receiver = None if status is None else bool(status.onboard_control_sensors_present & RC_RECEIVER
+                                                   and status.onboard_control_sensors_health & RC_RECEIVER)
+    rc_in_mode = _read_param(mav, "COM_RC_IN_MODE", True, target, bytewise=True)
+    return Radio(receiver, None if rc_in_mode is None else int(rc_in_mode))
+
+
+def _read_param(mav: Any, name: str, integer: bool, target: tuple[int, int], *, bytewise: bool) -> float | None:
     """One PARAM_REQUEST_READ, bounded; PX4 carries an INT32 in the float's bytes (MAVSDK decodes it the same way)."""
-    name = param.name.encode()
-    mav.mav.param_request_read_send(*target, name, -1)
-    reply = _wait(mav, ("PARAM_VALUE",), PARAM_TIMEOUT_S, lambda m: m.param_id == param.name)
+    mav.mav.param_request_read_send(*target, name.encode(), -1)
+    reply = _wait(mav, ("PARAM_VALUE",), PARAM_TIMEOUT_S, lambda m: m.param_id == name)
     if reply is None:
         return None
-    if param.integer and bytewise:
+    if integer and bytewise:
         return float(struct.unpack("<i", struct.pack("<f", reply.param_value))[0])
     return float(reply.param_value)
