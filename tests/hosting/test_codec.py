@@ -2,6 +2,11 @@
 
 from __future__ import annotations
 
+import multiprocessing
+import os
+import struct
+from multiprocessing.connection import wait
+
 import msgspec
 import numpy as np
 import pytest
@@ -19,7 +24,8 @@ from uav_tui.hosting.codec import (
     camera_model,
     decode_from_child,
 )
-from uav_tui.hosting.wire import Reply, Result, ResultHead
+from uav_tui.hosting.pipe import Inbox, PipeCorrupt
+from uav_tui.hosting.wire import Call, Reply, Result, ResultHead
 
 
 def result(vector: object = None, **fields: object) -> Result:
@@ -76,3 +82,55 @@ def test_a_reply_that_does_not_fit_keeps_its_call_id() -> None:
     assert caught.value.head.call_id == 12
     assert decode_from_child(encoded(Reply(12, True, 5, ("s",), {"a": [1]}, ())), []) == Reply(
         12, True, 5, ("s",), {"a": [1]}, ())
+
+
+def nested(depth: int) -> bytes:
+    return b"\x91" * depth + b"\xc0"  # [[[...[None]...]]]
+
+
+@pytest.mark.parametrize("data, reason", [
+    (b"\x9d" + b"".join(msgspec.msgpack.encode(v) for v in (6, 3, 1, 2, 0, ["slot-a"], 0)) + nested(100_000)
+     + msgspec.msgpack.encode(None) * 4 + msgspec.msgpack.encode([]), "recursion limit|nested|depth"),
+    (msgspec.msgpack.encode([6, 3, 1, 2, 0, ["slot-a"], 0, None, None, None, None, None,
+                             [[ext(OUT_OF_BAND, (-1, "|u1", (4,))), {}]]]), "was not sent"),
+    (msgspec.msgpack.encode([6, 3, 1, 2, 0, ["slot-a"], 0, None, None, None, None, None,
+                             [[ext(OUT_OF_BAND, (0, "|u1", (2**62, 4))), {}]]]), "does not match"),
+    (msgspec.msgpack.encode([6, 3, 1, 2, 0, ["slot-a"], 0, None, None, None, None, None,
+                             [[ext(OUT_OF_BAND, (0, "<f8", (1, 1))), {}]]]), "8-bit"),
+    (msgspec.msgpack.encode([6, 3, 1, 2, 0, ["slot-a"], 0, None, None, None, None, None, [[None, {"frame": 1}]]]),
+     "other than 'frame'"),
+], ids=["deep", "negative buffer", "overflowing shape", "float image", "frame field"])
+def test_what_a_hostile_child_crafts_is_that_frames_error(data: bytes, reason: str) -> None:
+    with pytest.raises(WireError, match=reason):
+        decode_from_child(data, [bytearray(8)])
+
+
+def test_a_deep_or_circular_value_is_sent_as_text() -> None:
+    circular: list[object] = []
+    circular.append(circular)
+    assert as_data(circular, arrays=False) == "[[...]]"
+    deep: list[object] = []
+    for _ in range(100_000):
+        deep = [deep]
+    assert isinstance(as_data(deep, arrays=False), str)
+
+
+@pytest.mark.parametrize("frame, reason", [
+    (struct.pack("!i", -2), "-2 bytes"), (struct.pack("!iQ", -1, 2**63), "bytes"),
+    (struct.pack("!i", 8) + struct.pack("!I", 2**32 - 1) + b"\xc0\xc0\xc0\xc0", "out-of-band"),
+], ids=["negative length", "huge length", "buffer count"])
+def test_frames_no_sender_makes_end_the_pipe_and_allocate_nothing(frame: bytes, reason: str) -> None:
+    ours, theirs = multiprocessing.Pipe()
+    inbox = Inbox(ours)
+    os.write(theirs.fileno(), frame)
+    assert wait([inbox], timeout=10)
+    with pytest.raises(PipeCorrupt, match=reason):
+        inbox.read()
+    inbox.close()
+    ours.close()
+    theirs.close()
+
+
+def test_an_roi_reaches_catch_cmd_as_a_tuple() -> None:
+    message = TO_CHILD.decode(Encoder(out_of_band=False).encode(Call(1, "catch_cmd", ((10, 20, 30, 40),)))[0])
+    assert message.args == ((10, 20, 30, 40),) and type(message.args[0]) is tuple

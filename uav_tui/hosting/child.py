@@ -276,10 +276,18 @@ class ChildRunner:
         outcome = call_frame(self.instance, image, vector=self.has_vector, outputs=self.outputs,
                              let_through=(MemoryError,), frame_seq=offer.seq)
         del image
-        outputs = outcome.outputs if outcome.outputs != NO_OUTPUTS else None
-        return Result(offer.gen, outcome.t_start_ns, outcome.t_end_ns, outcome.t_vector_ns,
-                      tuple(self.slots.released()), self._take_throttled(), as_data(outcome.vector, arrays=False),
-                      outputs, outcome.box, outcome.detections, outcome.error, self._take_saves())
+        released, throttled = tuple(self.slots.released()), self._take_throttled()
+        try:
+            outputs = outcome.outputs if outcome.outputs != NO_OUTPUTS else None
+            return Result(offer.gen, outcome.t_start_ns, outcome.t_end_ns, outcome.t_vector_ns, released, throttled,
+                          as_data(outcome.vector, arrays=False), outputs, outcome.box, outcome.detections,
+                          outcome.error, self._take_saves())
+        except MemoryError:
+            raise
+        except Exception as exc:  # noqa: BLE001 - a returned object's own methods raised: that frame's error
+            return Result(offer.gen, outcome.t_start_ns, outcome.t_end_ns, outcome.t_vector_ns, released, throttled,
+                          None, None, None, None, f"the processor's outputs are not data: {type(exc).__name__}: {exc}",
+                          ())
 
     def _keep_save(self, image: np.ndarray, extra: dict[str, Any]) -> None:
         # A copy: the image as it is now, not with what photo_processing draws on it afterwards.

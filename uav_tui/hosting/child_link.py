@@ -20,7 +20,7 @@ from processors.errors import ProcessorLoadError
 from uav_tui.hosting.child_process import ChildProcess, PendingCall
 from uav_tui.hosting.codec import UnreadableResult, WireError, decode_from_child
 from uav_tui.hosting.host import Answer
-from uav_tui.hosting.pipe import send_to_child
+from uav_tui.hosting.pipe import PipeCorrupt, send_to_child
 from uav_tui.hosting.wire import Call, FromChild, LoadError, Ready, Reply, ReplyHead, Result, Save, ToChild
 
 logger = logging.getLogger(__name__)
@@ -95,7 +95,12 @@ class ChildLink:
 
     def read(self, child: ChildProcess) -> int | None:
         """Handle every message that has arrived; how many there were, None when the pipe ended."""
-        messages = child.inbox.read()
+        try:
+            messages = child.inbox.read()
+        except PipeCorrupt as exc:
+            logger.warning("SubprocessHost(%s): pid %s wrote what is no message (%s): its pipe is closed and it is "
+                           "restarted", self.spec, child.pid, exc)
+            messages = None
         if messages is None:
             self.hang_up(child)
             return None
@@ -106,8 +111,10 @@ class ChildLink:
                 self._unreadable(child, exc)
                 continue
             except WireError as exc:
-                logger.warning("SubprocessHost(%s): a message from pid %s that is not one: %s", self.spec,
-                               child.pid, exc)
+                child.unreadable += 1
+                if child.unreadable in (1, 10, 100, 1000) or child.unreadable % 10_000 == 0:
+                    logger.warning("SubprocessHost(%s): %d messages from pid %s were not messages, the last: %s",
+                                   self.spec, child.unreadable, child.pid, exc)
                 continue
             if isinstance(message, Result):
                 self._on_result(child, message)

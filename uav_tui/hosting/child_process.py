@@ -94,6 +94,8 @@ class ChildProcess:
     """Reports its end once its last output is in."""
     last_read_s: float = 0.0
     """When (monotonic s) its pipe was last found readable."""
+    unreadable: int = 0
+    """Messages from it that did not decode (a hostile or broken child): counted, a few said."""
 
     def __post_init__(self) -> None:
         self.inbox = Inbox(self.conn)

@@ -13,6 +13,7 @@ is refused there (:func:`as_data` puts its ``repr`` in its place, as the text it
 
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING, Any
 
 import msgspec
@@ -100,8 +101,10 @@ class Decoder:
         self._buffers = buffers or []
         try:
             return self._decoder.decode(data)
-        except (msgspec.DecodeError, msgspec.ValidationError, ValueError, TypeError) as exc:
-            raise WireError(str(exc)) from None
+        except RecursionError:
+            raise WireError("nested deeper than the interpreter's recursion limit") from None
+        except Exception as exc:  # noqa: BLE001 - whatever the bytes make msgspec or a hook raise: not a message
+            raise WireError(f"{type(exc).__name__}: {exc}"[:500]) from None
         finally:
             self._buffers = []
 
@@ -127,7 +130,7 @@ def _array(dtype_text: str, shape: tuple[int, ...], buffer: bytearray) -> np.nda
     dtype = np.dtype(dtype_text)
     if dtype.kind not in ARRAY_KINDS or dtype.fields is not None or dtype.subdtype is not None:
         raise ValueError(f"array dtype {dtype_text!r} is not a number type")
-    if any(n < 0 for n in shape) or int(np.prod(shape, dtype=np.int64)) * dtype.itemsize != len(buffer):
+    if any(n < 0 for n in shape) or math.prod(shape) * dtype.itemsize != len(buffer):
         raise ValueError(f"array shape {shape} of {dtype_text} does not match its {len(buffer)} bytes")
     return np.frombuffer(buffer, dtype).reshape(shape)
 
@@ -199,19 +202,37 @@ def as_data(value: Any, *, arrays: bool = True) -> Any:
     """``value`` itself when the wire takes it (the child's encoder; an array or bytes only with ``arrays``), else
     its ``repr`` cut to 200 characters: what a researcher returned is reported, never fatal."""
     if not arrays and isinstance(value, np.ndarray | bytes):
-        return repr(value)[:200]
+        return _repr(value)
     for attempt in (value, None):
         try:
-            _CHILD_VALUES.encode(value)
+            _CHECK.encode(value)
         except OverflowError:
             if attempt is None:
                 break
-            value = _big_ints(value)
-        except (TypeError, ValueError):
+            try:
+                value = _big_ints(value)
+            except RecursionError:
+                break
+        except (TypeError, ValueError, RecursionError):
             break
         else:
             return value
-    return repr(value)[:200]
+    return _repr(value)
+
+
+def _repr(value: Any) -> str:
+    """``repr(value)`` cut to 200 characters; the type's name when even that fails (a value nested too deep)."""
+    try:
+        return repr(value)[:200]
+    except Exception:  # noqa: BLE001 - a researcher's __repr__ may raise anything
+        return f"<a {type(value).__name__} whose repr failed>"
+
+
+def _checked(value: Any) -> Any:
+    """The wire check of an array without its bytes (``tmMgr.save`` fields are checked, not copied twice)."""
+    if isinstance(value, np.ndarray) and value.dtype.kind in ARRAY_KINDS:
+        return None
+    return _PLAIN_HOOK(value)
 
 
 class _BigInt(int):
@@ -229,5 +250,8 @@ def _big_ints(value: Any) -> Any:
     return value
 
 
-_CHILD_VALUES = msgspec.msgpack.Encoder(enc_hook=Encoder(out_of_band=False)._hook)
+_PLAIN_HOOK = Encoder(out_of_band=False)._hook
+PLAIN = msgspec.msgpack.Encoder(enc_hook=_PLAIN_HOOK)
+"""Values as plain data (NumPy scalars as numbers, arrays inline): the telemetry a frame carries to the child."""
+_CHECK = msgspec.msgpack.Encoder(enc_hook=_checked)
 

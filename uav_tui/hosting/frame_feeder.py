@@ -17,7 +17,6 @@ import time
 from collections.abc import Callable, Iterable
 from typing import TYPE_CHECKING
 
-import msgspec
 import numpy as np
 
 from controllers.base import TELEMETRY_FIELDS
@@ -25,7 +24,7 @@ from sources.buffer import Frame, FrameBuffer
 from uav_tui.events import EventLog
 from uav_tui.flight.telemetry import TelemetryManager
 from uav_tui.hosting.child_process import ChildProcess, Offered
-from uav_tui.hosting.codec import camera_message
+from uav_tui.hosting.codec import PLAIN, camera_message
 from uav_tui.hosting.frame_mailbox import TELEMETRY_BYTES, MailboxGone, Offer
 from uav_tui.hosting.frame_ring import FrameRing
 from uav_tui.hosting.wire import Forget, Result, ToChild
@@ -280,8 +279,7 @@ class FrameFeeder:
             return b"", None
         latest, heartbeat_age = self.telemetry.at(t_mono_ns)
         if latest is not self._encoded_telemetry[0]:
-            data = msgspec.msgpack.encode({name: getattr(latest, name) for name in TELEMETRY_FIELDS
-                                           if name != "heartbeat_age_s"})
+            data = PLAIN.encode({name: getattr(latest, name) for name in TELEMETRY_FIELDS if name != "heartbeat_age_s"})
             if len(data) > TELEMETRY_BYTES:  # never seen: the fields are numbers and short names
                 logger.warning("SubprocessHost: telemetry of %d bytes does not fit the frame mailbox; not attached",
                                len(data))

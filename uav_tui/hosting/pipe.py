@@ -17,6 +17,15 @@ from uav_tui.hosting.wire import FromChild, ToChild
 
 BUFFER_COUNT = struct.Struct("!I")
 """Leads every frame that carries a message (:func:`send_message`): how many out-of-band frames follow it."""
+MAX_BUFFERS = 64
+"""The most out-of-band frames one message may have (a frame's ``tmMgr.save`` calls are throttled to a few)."""
+MAX_FRAME_BYTES = 256 * 2**20
+"""The longest frame a child may send: a saved 8K image is 100 MB. A longer one is never allocated."""
+
+
+class PipeCorrupt(Exception):
+    """A child wrote bytes that are not frames of messages (a length or count no sender makes): the pipe is read
+    no further."""
 
 _CHILD = Encoder(out_of_band=True)
 _PLATFORM = Encoder(out_of_band=False)
@@ -80,14 +89,22 @@ class Inbox:
 
     def read(self) -> list[tuple[memoryview, list[bytearray]]] | None:
         """The messages completed by what has arrived, maybe none, as ``(document, buffers)`` for
-        :func:`~uav_tui.hosting.codec.decode_from_child`; None at the end of the pipe."""
+        :func:`~uav_tui.hosting.codec.decode_from_child`; None at the end of the pipe.
+
+        Raises:
+            PipeCorrupt: the bytes are not frames of messages.
+        """
         frames = self._frames()
         if frames is None:
             return None
         messages: list[tuple[memoryview, list[bytearray]]] = []
         for frame in frames:
             if self._message is None:
+                if len(frame) < BUFFER_COUNT.size:
+                    raise PipeCorrupt(f"a frame of {len(frame)} bytes has no message header")
                 (count,), data = BUFFER_COUNT.unpack_from(frame), memoryview(frame)[BUFFER_COUNT.size:]
+                if count > MAX_BUFFERS:
+                    raise PipeCorrupt(f"a message with {count} out-of-band frames (at most {MAX_BUFFERS})")
                 if count == 0:
                     messages.append((data, []))
                 else:
@@ -136,6 +153,8 @@ class Inbox:
                 if len(pending) - at < 12:
                     break
                 (length,), start = struct.unpack_from("!Q", pending, at + 4), at + 12
+            if not 0 <= length <= MAX_FRAME_BYTES:
+                raise PipeCorrupt(f"a frame of {length} bytes (at most {MAX_FRAME_BYTES})")
             if start + length > len(pending):
                 if length > self.CHUNK:  # the rest goes straight into its own buffer
                     have = len(pending) - start

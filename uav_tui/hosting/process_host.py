@@ -214,6 +214,9 @@ class SubprocessHost(DeliversResults):
         self.current = result
         try:
             for save in saves:
-                self.telemetry.save(save.image, **save.extra)
+                try:
+                    self.telemetry.save(save.image, **save.extra)
+                except (TypeError, ValueError) as exc:  # what the recorder refuses costs that save alone
+                    self.events.emit("error", "processor", f"a tmMgr.save from the processor was refused: {exc}")
         finally:
             self.current = None

@@ -28,19 +28,40 @@ from processors.outputs import FrameOutputs
 
 Value = tuple[Any, ...] | dict[Any, Any] | str | bool | int | float | None
 """A value a processor returned (a vector, a call's answer), as plain data: a sequence arrives as a tuple (inside it,
-lists), as from the thread host; an array or bytes as its ``repr`` (:func:`~uav_tui.hosting.codec.as_data`)."""
+lists), as from the thread host. The child sends an array or bytes as its ``repr``
+(:func:`~uav_tui.hosting.codec.as_data`); one that arrives anyway (a hostile child) is a value of the wrong type to
+the gate and text to the operator, never code."""
 
 
 class _Record(msgspec.Struct, frozen=True, array_like=True):
     """A message: an array on the wire, its kind's number first."""
 
 
+MAX_SAVE_PIXELS = 8192 * 8192
+"""The largest ``tmMgr.save`` image a child may send (an 8K frame is a quarter of it)."""
+
+
 class Save(_Record, frozen=True):
     """One ``tmMgr.save(frame, **extra)`` call: the image copied at the call (None when the platform does not
-    record: nothing is copied or sent), and ``extra`` (plain data; arrays allowed)."""
+    record: nothing is copied or sent), and ``extra`` (plain data; arrays allowed).
+
+    Checked on arrival: an image is 8-bit, grey or 3/4 channels, at most :data:`MAX_SAVE_PIXELS`; each field name
+    is an identifier the recorder can make a column of (never ``frame``).
+    """
 
     image: np.ndarray | None
     extra: dict[str, Any]
+
+    def __post_init__(self) -> None:
+        image = self.image
+        if image is not None and not (image.dtype == np.uint8 and (image.ndim == 2 or image.ndim == 3
+                                                                    and image.shape[2] in (1, 3, 4))
+                                      and image.shape[0] * image.shape[1] <= MAX_SAVE_PIXELS):
+            raise ValueError(f"a saved image must be 8-bit HxW or HxWx1/3/4 of at most {MAX_SAVE_PIXELS} pixels, "
+                             f"not {image.dtype} {image.shape}")
+        for name in self.extra:
+            if not (isinstance(name, str) and name.isidentifier() and name != "frame"):
+                raise ValueError(f"a saved field's name must be an identifier other than 'frame', not {name!r}")
 
 
 class Load(_Record, frozen=True, tag=0):
@@ -53,12 +74,16 @@ class Load(_Record, frozen=True, tag=0):
     save_max_hz: float
 
 
+Argument = tuple[int | float, ...] | str | bool | int | float | None
+"""An operator call's argument: an ROI ``(x, y, w, h)`` arrives as a tuple, as in a thread."""
+
+
 class Call(_Record, frozen=True, tag=1):
     """An operator's call (``catch_cmd``, ``customize_processing``), answered with a :class:`Reply`."""
 
     call_id: int
     method: str
-    args: tuple[Any, ...]
+    args: tuple[Argument, ...]
 
 
 class Forget(_Record, frozen=True, tag=2):
