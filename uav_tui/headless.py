@@ -89,7 +89,7 @@ def format_status(status: CoreStatus, elapsed_s: float) -> str:
             line += f" ({status.vehicle_problem})"
     if status.target is not None and (where := describe_target(status.target)):
         line += f" | target {where}"
-    if detected := describe_shown(status.detections, status.detections_total):
+    if detected := describe_shown(status.detections, status.detections_total, status.tracks_total):
         line += f" | {detected}"
     if status.saves_dropped:
         line += f" | {saves_dropped_text(status.saves_dropped)}"

@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 
 from controllers.base import Telemetry
 from uav_tui.flight.autonomy import Verdict
-from uav_tui.flight.geo_detections import LocatedDetection, describe_shown, locate_shown
+from uav_tui.flight.geo_detections import LocatedDetection, count_tracks, describe_shown, locate_shown
 from uav_tui.flight.geolocate import GeoFix, describe, locate_row
 from uav_tui.hosting.host import ProcessorState
 from uav_tui.output.text import safe
@@ -86,6 +86,8 @@ class CoreStatus:
     :data:`~uav_tui.flight.geo_detections.MAX_SHOWN`)."""
     detections_total: int = 0
     """How many detections that frame had."""
+    tracks_total: int = 0
+    """How many tracks those detections are of (each detection's ``track_id``: :mod:`uav_tui.hosting.tracks`)."""
     last_verdict: Verdict | None = None
     """What ``last_decision`` decided (None before the first vector)."""
     saves_dropped: dict[str, int] = field(default_factory=dict)
@@ -142,7 +144,7 @@ class CoreStatus:
         if self.target is not None:
             data["target"].update(distance_m=self.target.distance_m, bearing_deg=self.target.bearing_deg,
                                   range_m=self.target.range_m, description=describe(self.target))
-        data["detections_description"] = describe_shown(self.detections, self.detections_total)
+        data["detections_description"] = describe_shown(self.detections, self.detections_total, self.tracks_total)
         for shown, located in zip(data["detections"], self.detections, strict=True):
             shown["target"].update(distance_m=located.target.distance_m, bearing_deg=located.target.bearing_deg)
         return data
@@ -232,6 +234,7 @@ def core_status(core: ObservedCore) -> CoreStatus:
         target=target,
         detections=locate_shown(found, core.camera, seen, at_ns),
         detections_total=len(found),
+        tracks_total=count_tracks(found),
         saves_dropped=_saves_dropped(core),
     )
 

@@ -1,5 +1,5 @@
-"""A processor's ``detections`` over the built-in simulator's two cars: each located, recorded, shown and exported;
-malformed ones are the processor's error and nothing of them is recorded."""
+"""A processor's ``detections`` over the built-in simulator's two cars: each located, tracked, recorded, shown and
+exported; malformed ones are the processor's error and nothing of them is recorded."""
 
 from __future__ import annotations
 
@@ -42,9 +42,11 @@ async def test_each_detection_is_located_recorded_shown_and_exported(tmp_path):
     assert status.detections_total == 2 and [d.label for d in status.detections] == ["car", "car"]
     assert all(d.target.status == OK for d in status.detections)
     assert status.detections[0].score >= status.detections[1].score
-    assert " | 2 detected: car 0." in line and " m at " in line, line
+    assert " | 2 detected, 2 tracks: #" in line and " car 0." in line and " m at " in line, line
     as_json = json.loads(json.dumps(status.as_dict(), default=str))
-    assert as_json["detections_description"].startswith("2 detected: car")
+    assert as_json["detections_description"].startswith("2 detected, 2 tracks: #")
+    assert as_json["tracks_total"] == 2 and {d["track_id"] for d in as_json["detections"]} == \
+        {d.track_id for d in status.detections} and None not in {d.track_id for d in status.detections}
     assert {round(d["target"]["distance_m"]) for d in as_json["detections"]} == \
         {round(d.target.distance_m) for d in status.detections}
     assert broken.detections_total == 0 and "detections[0]: score nan must be in [0, 1]" in broken.processor_error
@@ -64,6 +66,12 @@ async def test_each_detection_is_located_recorded_shown_and_exported(tmp_path):
         n, e, _ = home.to_local(lat, lon, 0.0)
         errors.append(min(math.hypot(n - car_n, e - car_e) for car_n, car_e in cars))
     assert np.percentile(errors, 95) <= 1.5, np.percentile(errors, [50, 95, 100])  # issue 39: <= 1 m at 20 m
+    # Each car one track, the same before and after the second without detections (issue 50).
+    nearest = [min(range(len(cars)), key=lambda i, n=n, e=e: math.hypot(n - cars[i][0], e - cars[i][1]))
+               for n, e, _ in (home.to_local(lat, lon, 0.0) for lat, lon in
+                               located[["target_lat_deg", "target_lon_deg"]].to_numpy(dtype=np.float64))]
+    ids = located.assign(car=nearest).groupby("car")["track_id"].agg(["nunique", "first"])
+    assert list(ids["nunique"]) == [1, 1] and ids["first"].nunique() == 2, ids
     assert (located["target_height_from"] == "rangefinder").all()
     assert np.allclose(detections.groupby("frame_id")["score"].sum(), 1.0, atol=1e-3)  # every one of a frame
 
@@ -84,7 +92,15 @@ async def test_each_detection_is_located_recorded_shown_and_exported(tmp_path):
     assert np.allclose([p["geometry"]["coordinates"][:2] for p in points],
                        ok[["target_lon_deg", "target_lat_deg"]].to_numpy(dtype=np.float64), atol=1e-8)
     assert np.allclose([p["properties"]["score"] for p in points], ok["score"].to_numpy(dtype=np.float64))
+    tracks = {f["properties"]["track_id"]: f for f in features if f["properties"]["kind"] == "track"}
+    assert set(ids["first"]) <= set(tracks) and all(f["geometry"]["type"] == "LineString" for f in tracks.values())
+    for track_id, feature in tracks.items():
+        rows = ok[ok["track_id"] == track_id]
+        assert np.allclose(feature["geometry"]["coordinates"],
+                           rows[["target_lon_deg", "target_lat_deg"]].to_numpy(dtype=np.float64), atol=1e-8)
+        assert feature["properties"]["label"] == "car" and len(feature["properties"]["times"]) == len(rows)
     kml = ET.parse(run_dir / "track.kml").getroot()
     names = [n.text for n in kml.iterfind(".//{http://www.opengis.net/kml/2.2}Placemark/"
                                           "{http://www.opengis.net/kml/2.2}name")]
     assert sum(name.startswith(("car 0.", "car 1.")) for name in names) == len(points)
+    assert sorted(name for name in names if name.startswith("track ")) == sorted(f"track {i} car" for i in tracks)

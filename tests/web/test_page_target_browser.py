@@ -64,7 +64,7 @@ async def test_the_page_says_why_a_box_is_not_located() -> None:
     assert text == "target not located: no GPS position" and kind == "target warn"
 
 
-DETECTED = re.compile(r"^car (\d\.\d\d) (-?\d+\.\d{6}),(-?\d+\.\d{6}) (\d+) m at (\d{3}) deg \+-(\d+\.\d) m$")
+DETECTED = re.compile(r"^#\d+ car (\d\.\d\d) (-?\d+\.\d{6}),(-?\d+\.\d{6}) (\d+) m at (\d{3}) deg \+-(\d+\.\d) m$")
 
 
 async def test_the_page_lists_each_detection_where_it_is(tmp_path: Path) -> None:
@@ -96,3 +96,4 @@ async def test_the_page_lists_each_detection_where_it_is(tmp_path: Path) -> None
         assert min(math.hypot(north - n, east - e) for n, e in cars) <= 1.5, (text, cars)
         scores.append(score)
     assert scores == sorted(scores, reverse=True)  # the most confident first
+    assert len({text.split()[0] for text in texts}) == 2, texts  # each its own track (issue 50)

@@ -29,15 +29,23 @@ def locate_shown(detections: tuple[Detected, ...], camera: CameraModel | None, t
     """The :data:`MAX_SHOWN` most confident of ``detections``, located with ``telemetry`` (at the capture ``at_ns``)."""
     best = sorted(detections, key=lambda found: -found.score)[:MAX_SHOWN]
     return tuple(LocatedDetection(found.box, safe(found.label), found.score,
-                                  locate_row(camera, found.box, telemetry, at_ns=at_ns)) for found in best)
+                                  locate_row(camera, found.box, telemetry, at_ns=at_ns), track_id=found.track_id)
+                 for found in best)
 
 
-def describe_shown(shown: tuple[LocatedDetection, ...], total: int) -> str:
-    """``3 detected: person 0.91 12 m at 045 deg, car 0.80 no position, +1 more``; "" when none was."""
+def count_tracks(detections: tuple[Detected, ...]) -> int:
+    """How many tracks ``detections`` are of (the distinct ``track_id``; a detection without one is none)."""
+    return len({found.track_id for found in detections if found.track_id is not None})
+
+
+def describe_shown(shown: tuple[LocatedDetection, ...], total: int, tracks: int = 0) -> str:
+    """``3 detected, 2 tracks: #4 person 0.91 12 m at 045 deg, car 0.80 no position, +1 more`` (``#`` the track
+    id); "" when none was."""
     if not total:
         return ""
-    parts = [f"{found.label} {found.score:.2f} {range_and_bearing(found.target) or 'no position'}" for found in shown]
+    parts = [f"{'' if found.track_id is None else f'#{found.track_id} '}{found.label} {found.score:.2f} "
+             f"{range_and_bearing(found.target) or 'no position'}" for found in shown]
     if total > len(shown):
         parts.append(f"+{total - len(shown)} more")
-    return f"{total} detected: {', '.join(parts)}"
+    return f"{total} detected{f', {tracks} tracks' if tracks else ''}: {', '.join(parts)}"
 

@@ -62,6 +62,7 @@ from uav_tui.hosting.codec import TO_CHILD, as_data, camera_model
 from uav_tui.hosting.frame_call import call_frame
 from uav_tui.hosting.frame_mailbox import FrameMailbox, Offer, Segment
 from uav_tui.hosting.pipe import send_message
+from uav_tui.hosting.tracks import DetectionTracks
 from uav_tui.hosting.wire import Call, Camera, Forget, Load, LoadError, Ready, Reply, Result, Save, ToChild
 
 JOB_SIGNALS = frozenset({signal.SIGINT, signal.SIGQUIT, signal.SIGHUP, signal.SIGTSTP, signal.SIGTTIN, signal.SIGTTOU})
@@ -218,6 +219,7 @@ class ChildRunner:
         self.slots = Slots()
         self.has_vector = "getPreparedVector" in loaded.info.capabilities
         self.outputs = output_methods(loaded.info.capabilities)
+        self.tracks = DetectionTracks()
         self._telemetry: tuple[bytes, dict[str, Any]] = (b"", {})
         """The last frame's encoded telemetry and its fields (telemetry changes slower than frames)."""
         self._messages = select.poll()
@@ -274,7 +276,8 @@ class ChildRunner:
         self.telemetry.begin(offer.seq, offer.t_mono_ns, offer.t_wall_ns, self._telemetry[1], offer.heartbeat_age_s)
         image = self.slots.view(offer.slot, offer.shape)
         outcome = call_frame(self.instance, image, vector=self.has_vector, outputs=self.outputs,
-                             let_through=(MemoryError,), frame_seq=offer.seq)
+                             let_through=(MemoryError,), frame_seq=offer.seq, tracks=self.tracks,
+                             seen_ns=offer.t_mono_ns)
         del image
         released, throttled = tuple(self.slots.released()), self._take_throttled()
         try:

@@ -3,7 +3,8 @@
 ``photo_processing(image)`` timed, then ``getPreparedVector()`` and the output methods (``getLandingTarget()``,
 ``getGimbalPointing()``: :mod:`processors.outputs`) when asked for, then its ``box``
 (:func:`processors.base.read_box`) and ``detections`` (:func:`processors.detections.read_detections`: malformed ones
-are the processor's error); an exception is caught and kept as text, never raised, so that no
+are the processor's error; each then numbered by the host's :class:`~uav_tui.hosting.tracks.DetectionTracks`); an
+exception is caught and kept as text, never raised, so that no
 reference to the frame outlives the call (the processor's process reuses a frame's shared-memory slot only
 once no view of it is left).
 """
@@ -20,6 +21,7 @@ from typing import Any
 from processors.base import Box, read_box
 from processors.detections import Detected, read_detections
 from processors.outputs import NO_OUTPUTS, FrameOutputs, read_outputs
+from uav_tui.hosting.tracks import DetectionTracks
 
 
 @dataclass(slots=True)
@@ -45,10 +47,13 @@ class FrameOutcome:
 
 
 def call_frame(instance: Any, image: Any, *, vector: bool, outputs: Collection[str] = (),
-               let_through: tuple[type[BaseException], ...] = (), frame_seq: int | None = None) -> FrameOutcome:
+               let_through: tuple[type[BaseException], ...] = (), frame_seq: int | None = None,
+               tracks: DetectionTracks | None = None, seen_ns: int | None = None) -> FrameOutcome:
     """Process ``image`` (the frame ``frame_seq``) with ``instance``; ``vector``: call ``getPreparedVector`` too;
     ``outputs``: these output methods (:func:`processors.outputs.read_outputs`: a value of the wrong type is the
-    processor's error; a landing target is stamped with ``frame_seq``). Exceptions
+    processor's error; a landing target is stamped with ``frame_seq``); ``tracks``: the processor's tracks, which
+    number its ``detections`` as seen at ``seen_ns`` (the frame's capture, monotonic; the call's start when None).
+    Exceptions
     of the types in ``let_through`` propagate (the processor's process ends on a MemoryError); any other is kept in
     the outcome."""
     start = time.monotonic_ns()
@@ -62,6 +67,8 @@ def call_frame(instance: Any, image: Any, *, vector: bool, outputs: Collection[s
         outcome.outputs = read_outputs(instance, outputs, frame_seq)
         outcome.box = read_box(instance)
         outcome.detections = read_detections(instance)
+        if tracks is not None:
+            outcome.detections = tracks.assign(outcome.detections, start if seen_ns is None else seen_ns)
     except let_through:
         raise
     except Exception as exc:  # noqa: BLE001 - counted and reported by the caller, never fatal

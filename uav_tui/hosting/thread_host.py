@@ -26,6 +26,7 @@ from uav_tui.flight.telemetry import TelemetryManager
 from uav_tui.hosting.frame_call import call_frame
 from uav_tui.hosting.host import Answer, DeliversResults, ProcessedFrame, ProcessorState
 from uav_tui.hosting.thread_logs import ThreadLogBudget
+from uav_tui.hosting.tracks import DetectionTracks
 from uav_tui.stats import PipelineStats, RollingStats
 
 if TYPE_CHECKING:
@@ -77,6 +78,7 @@ class ThreadHost(DeliversResults):
         self._thread: threading.Thread | None = None
         self._loop: asyncio.AbstractEventLoop | None = None
         self._busy_since_ns: int | None = None
+        self._tracks = DetectionTracks()
 
     # -- loop side -------------------------------------------------------------------------------
 
@@ -238,7 +240,8 @@ class ThreadHost(DeliversResults):
         try:
             capabilities = self.processor.info.capabilities
             outcome = call_frame(instance, frame.image, vector="getPreparedVector" in capabilities,
-                                 outputs=output_methods(capabilities), frame_seq=frame.seq)
+                                 outputs=output_methods(capabilities), frame_seq=frame.seq, tracks=self._tracks,
+                                 seen_ns=frame.t_mono_ns)
         finally:
             self._busy_since_ns = None
             self.current = None

@@ -47,7 +47,7 @@ _TEXT = ("flight_mode", "gps_fix", "decision", "landing", "gimbal", "error", "im
          "kind", "origin", "message", "command", "target_status", "target_height_from", "target_height_note", "label")
 _FLAGS = ("armed", "in_air", "health_ok", "saved", "autonomy")
 _INTEGERS = ("fc_boot_ms", "fc_clock_offset_ms", "satellites", "frame_id", "seq", "box_x", "box_y", "box_w", "box_h",
-             "rangefinder_t_ns", "terrain_t_ns", "index")
+             "rangefinder_t_ns", "terrain_t_ns", "index", "track_id")
 
 
 @dataclass(frozen=True)

@@ -2,9 +2,10 @@
 
 The track is the telemetry's positions (latitude, longitude, altitude AMSL), the targets are the frames whose box
 was geo-located (``target_status`` ``ok``), each with its time (UTC), frame id and 1-sigma uncertainty; the
-detections are the geo-located rows of detections.csv, likewise, with their label and score. Coordinates that
-cannot be true (latitude 91, an infinite altitude: an edited or corrupted recording) are left out, never written:
-no map takes them, and JSON has no ``Infinity``.
+detections are the geo-located rows of detections.csv, likewise, with their label and score; each track (the
+detections of one ``track_id``, :mod:`uav_tui.hosting.tracks`) is one line through its located detections.
+Coordinates that cannot be true (latitude 91, an infinite altitude: an edited or corrupted recording) are left
+out, never written: no map takes them, and JSON has no ``Infinity``.
 """
 
 from __future__ import annotations
@@ -63,6 +64,14 @@ def _points(run: Dataset) -> list[tuple[pd.Timestamp, pd.Series, str]]:
               for time, row in _located(run.detections, "score").iterrows())]
 
 
+def _tracks(run: Dataset) -> list[tuple[int, str, pd.DataFrame]]:
+    """Each track with at least two located detections: (track_id, its most frequent label, its rows in time
+    order)."""
+    located = _located(run.detections, "score").dropna(subset=["track_id"])
+    return [(int(track_id), str(rows["label"].mode().iloc[0]), rows.sort_values("t_mono_ns"))
+            for track_id, rows in located.groupby("track_id") if len(rows) >= 2]
+
+
 def _when(time: pd.Timestamp) -> str:
     return time.strftime("%Y-%m-%dT%H:%M:%S.%fZ")
 
@@ -85,12 +94,17 @@ def geojson(run: Dataset) -> dict[str, Any]:
             properties |= {"kind": "detection", "label": str(row["label"]), "score": float(row["score"])}
         features.append({"type": "Feature", "geometry": {"type": "Point", "coordinates": point},
                          "properties": properties})
+    for track_id, label, rows in _tracks(run):
+        features.append({"type": "Feature", "properties": {
+            "kind": "track", "track_id": track_id, "label": label, "times": [_when(t) for t in rows.index]},
+            "geometry": {"type": "LineString", "coordinates": [
+                [round(lon, 8), round(lat, 8)] for lon, lat in rows[["target_lon_deg", "target_lat_deg"]].to_numpy()]}})
     return {"type": "FeatureCollection", "features": features}
 
 
 def kml(run: Dataset) -> str:
     """A KML 2.2 document: the vehicle's track (LineString, absolute altitude), one timed Placemark per target and
-    per detection."""
+    per detection, one LineString per detections' track (on the ground)."""
     ET.register_namespace("", KML_NS)
     root = ET.Element(f"{{{KML_NS}}}kml")
     document = ET.SubElement(root, f"{{{KML_NS}}}Document")
@@ -113,6 +127,16 @@ def kml(run: Dataset) -> str:
         ET.SubElement(point, f"{{{KML_NS}}}altitudeMode").text = "clampToGround"
         ET.SubElement(point, f"{{{KML_NS}}}coordinates").text = \
             f"{float(row['target_lon_deg']):.8f},{float(row['target_lat_deg']):.8f}"
+    for track_id, label, rows in _tracks(run):
+        placemark = ET.SubElement(document, f"{{{KML_NS}}}Placemark")
+        ET.SubElement(placemark, f"{{{KML_NS}}}name").text = f"track {track_id} {label}"
+        span = ET.SubElement(placemark, f"{{{KML_NS}}}TimeSpan")
+        ET.SubElement(span, f"{{{KML_NS}}}begin").text = _when(rows.index[0])
+        ET.SubElement(span, f"{{{KML_NS}}}end").text = _when(rows.index[-1])
+        line = ET.SubElement(placemark, f"{{{KML_NS}}}LineString")
+        ET.SubElement(line, f"{{{KML_NS}}}altitudeMode").text = "clampToGround"
+        ET.SubElement(line, f"{{{KML_NS}}}coordinates").text = " ".join(
+            f"{lon:.8f},{lat:.8f}" for lon, lat in rows[["target_lon_deg", "target_lat_deg"]].to_numpy())
     ET.indent(root)
     return ET.tostring(root, encoding="unicode", xml_declaration=True) + "\n"
 

@@ -20,10 +20,11 @@ without a box; else why there is no position), where the height above the ground
 (:data:`uav_tui.flight.geolocate.HEIGHT_SIGMAS`: ``rangefinder``, ``terrain`` or ``home``) and why a better one was
 not used (``rangefinder 0.8 s old``: older than :data:`uav_tui.flight.geolocate.READING_MAX_AGE_S`)."""
 
-DETECTION_COLUMNS: tuple[str, ...] = ("frame_id", "t_wall_ns", "t_mono_ns", "index", "label", "score",
+DETECTION_COLUMNS: tuple[str, ...] = ("frame_id", "t_wall_ns", "t_mono_ns", "index", "track_id", "label", "score",
                                       "box_x", "box_y", "box_w", "box_h", *GEO_COLUMNS)
 """detections.csv: one row per detection the processor reported (its ``detections`` attribute), keyed by the
-frame's ``frame_id`` and capture times (the frames.csv row's), ``index`` its place in the processor's list; its box
+frame's ``frame_id`` and capture times (the frames.csv row's), ``index`` its place in the processor's list,
+``track_id`` the object it is (:mod:`uav_tui.hosting.tracks`; empty while it is no track yet); its box
 geo-located as frames.csv's ``box`` is, with the same telemetry. A frame with no detections has no row."""
 
 
@@ -39,6 +40,6 @@ def geo_cells(fix: GeoFix) -> tuple[Any, ...]:
 def detection_rows(frame_id: int, t_wall_ns: int, t_mono_ns: int, detections: tuple[Detected, ...],
                    camera: CameraModel | None, telemetry: Mapping[str, Any]) -> list[list[Any]]:
     """The :data:`DETECTION_COLUMNS` of each detection of one frame, located with ``telemetry`` (at its capture)."""
-    return [[frame_id, t_wall_ns, t_mono_ns, index, found.label, round(found.score, 4), *found.box,
+    return [[frame_id, t_wall_ns, t_mono_ns, index, found.track_id, found.label, round(found.score, 4), *found.box,
              *geo_cells(locate_row(camera, found.box, telemetry, at_ns=t_mono_ns))]
             for index, found in enumerate(detections)]

@@ -28,7 +28,7 @@ class AlgorithmPanel(StatusPanel):
         box = "none" if status.box is None else "{},{} {}x{}".format(*status.box)
         if status.target is not None and (where := describe_target(status.target)):
             box += f" @ {where}"
-        if detected := describe_shown(status.detections, status.detections_total):
+        if detected := describe_shown(status.detections, status.detections_total, status.tracks_total):
             box += f"; {detected}"  # one row, cut at the panel's edge
         auto = Text(f"{status.vectors_executed} flown, {status.vectors_rejected} rejected")
         if status.autonomy_stop_reason and not status.autonomy:

@@ -160,7 +160,7 @@ function showStatus(message) {
   if (s.box) line += ` | box ${s.box[0]},${s.box[1]} ${s.box[2]}x${s.box[3]}`;
   showTracked(s.box, message.frame);
   showTarget(s.target);
-  showDetections(s.detections || [], s.detections_total || 0);
+  showDetections(s.detections || [], s.detections_total || 0, s.tracks_total || 0);
   if (s.last_decision) line += ` | ${s.last_decision}`;
   if (s.gimbal) line += ` | ${s.gimbal}`;
   const host = s.processor_state;
@@ -185,16 +185,18 @@ function showTarget(target) {
 
 // The processor's detections, over the picture's top corner: the few most confident (the status carries at most
 // five), each with where it is on the ground, and how many more there are.
-function showDetections(shown, total) {
+function showDetections(shown, total, tracks) {
   const list = $("detections");
   list.hidden = !total;
+  list.title = tracks ? `${total} detected, ${tracks} tracks` : `${total} detected`;
   list.replaceChildren(...shown.map((d) => {
     const item = document.createElement("li"), t = d.target;
     const where = t.status === "ok" ?
       `${t.lat_deg.toFixed(6)},${t.lon_deg.toFixed(6)} ${t.distance_m.toFixed(0)} m at ` +
       `${String(Math.round(t.bearing_deg) % 360).padStart(3, "0")} deg +-${t.uncertainty_m.toFixed(1)} m` :
       `not located${t.status ? ": " + t.status : ""}`;
-    item.textContent = `${d.label} ${d.score.toFixed(2)} ${where}`;
+    const id = d.track_id === null || d.track_id === undefined ? "" : `#${d.track_id} `;
+    item.textContent = `${id}${d.label} ${d.score.toFixed(2)} ${where}`;
     return item;
   }));
   if (total > shown.length) {
