@@ -205,7 +205,7 @@ class ChildRunner:
     """Serves one processor: calls as they arrive, the newest frame whenever no call waits; one at a time."""
 
     def __init__(self, conn: Connection, mailbox: FrameMailbox, loaded: Any, *, save_images: bool = True,
-                 save_max_hz: float = DEFAULT_SAVE_MAX_HZ) -> None:
+                 save_max_hz: float = DEFAULT_SAVE_MAX_HZ, first_track_id: int = 0) -> None:
         self.conn = conn
         self.mailbox = mailbox
         self.loaded = loaded
@@ -219,7 +219,7 @@ class ChildRunner:
         self.slots = Slots()
         self.has_vector = "getPreparedVector" in loaded.info.capabilities
         self.outputs = output_methods(loaded.info.capabilities)
-        self.tracks = DetectionTracks()
+        self.tracks = DetectionTracks(first_track_id)
         self._telemetry: tuple[bytes, dict[str, Any]] = (b"", {})
         """The last frame's encoded telemetry and its fields (telemetry changes slower than frames)."""
         self._messages = select.poll()
@@ -337,7 +337,8 @@ def main(fd: int, mailbox_address: str) -> int:
             send_message(conn, LoadError(str(exc), exc.path, exc.class_name, exc.missing))
             return 0
         send_message(conn, Ready(loaded.info))
-        ChildRunner(conn, mailbox, loaded, save_images=load.save_images, save_max_hz=load.save_max_hz).serve()
+        ChildRunner(conn, mailbox, loaded, save_images=load.save_images, save_max_hz=load.save_max_hz,
+                    first_track_id=load.first_track_id).serve()
     except MemoryError:
         traceback.print_exc()
         print(f"processor_memory_mb = {load.memory_mb:g} MB reached", file=sys.stderr, flush=True)

@@ -187,6 +187,9 @@ class SubprocessHost(DeliversResults):
                                 outputs=message.outputs or NO_OUTPUTS, error=message.error,
                                 box=message.box, detections=message.detections)
         self._store(message.saves, result)
+        if message.detections:
+            self._supervisor.next_track_id = max(self._supervisor.next_track_id, 1 + max(
+                (found.track_id for found in message.detections if found.track_id is not None), default=-1))
         if result.error:
             self.stats.errors += 1
             self.consecutive_errors += 1

@@ -61,6 +61,8 @@ class ChildSupervisor:
         self.save_images = save_images
         self.save_max_hz = save_max_hz
         self.first_backoff_s = first_backoff_s
+        self.next_track_id = 0
+        """Above every ``track_id`` seen: where a new child's tracks are numbered from."""
         self.state_text = "starting"
         self.children: list[ChildProcess] = []
         """Every child not yet seen to end (the current one, those being replaced or killed)."""
@@ -95,7 +97,8 @@ class ChildSupervisor:
         self.children.append(child)
         child.watch_exit(functools.partial(_call_soon, loop, self._ended, child))
         self._link.listen(child)
-        self._link.send(child, Load(self.spec, self.kwargs, self.memory_mb, self.save_images, self.save_max_hz))
+        self._link.send(child, Load(self.spec, self.kwargs, self.memory_mb, self.save_images, self.save_max_hz,
+                                    self.next_track_id))
         try:
             await asyncio.wait_for(asyncio.shield(child.ready), LOAD_TIMEOUT_S)
         except TimeoutError:

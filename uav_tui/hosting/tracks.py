@@ -41,11 +41,12 @@ _NAMES_KEPT = 256
 class DetectionTracks:
     """One processor's tracks: :meth:`assign` each frame's detections, in capture order."""
 
-    def __init__(self) -> None:
+    def __init__(self, first_id: int = 0) -> None:
+        """``first_id``: the number of the first track (a restarted processor's go on from its last)."""
         self._tracker = ByteTrack(high_conf=NEW_TRACK_SCORE, iou=MATCH_IOU, update=KALMAN_UPDATE,
                                    lifespan_ns=int(KEEP_LOST_S * 1e9))
         self._ids: dict[str, int] = {}
-        self._next_id = 0
+        self._next_id = first_id % MAX_TRACK_ID
 
     def assign(self, detections: tuple[Detected, ...] | None, at_ns: int) -> tuple[Detected, ...] | None:
         """``detections`` (seen at ``at_ns``, monotonic) each with its ``track_id``; None stays None (a processor

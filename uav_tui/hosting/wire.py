@@ -72,6 +72,9 @@ class Load(_Record, frozen=True, tag=0):
     memory_mb: float | None
     save_images: bool
     save_max_hz: float
+    first_track_id: int = 0
+    """Where the platform's track numbers go on (:mod:`uav_tui.hosting.tracks`): a restarted processor's new
+    tracks do not take the numbers of the ones recorded before."""
 
 
 Argument = tuple[int | float, ...] | str | bool | int | float | None
