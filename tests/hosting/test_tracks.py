@@ -12,10 +12,8 @@ import pytest
 
 from processors.detections import MAX_TRACK_ID
 from sources import open_source
-from sources.sim_camera import SimCameraSource
-from sources.sim_geometry import Pose, project_ground_point
-from sources.uri import SourceUri
 from tests.core.flight_helpers import wait_until
+from tests.hosting.sim_cars import GAP_S, track_ids
 from tests.videos import create_video_file
 from uav_tui.events import EventLog
 from uav_tui.hosting.frame_call import call_frame
@@ -23,40 +21,10 @@ from uav_tui.hosting.host import ProcessedFrame
 from uav_tui.hosting.process_host import SubprocessHost
 from uav_tui.hosting.tracks import DetectionTracks
 
-SIM = "sim:?mount=forward&tilt=30&targets=3&target_speed=4"
-"""Three cars on rings of 6, 12 and 18 m, seen from 30 m south of their centre, 15 m up, looking north: between
-12.3 s and 13.3 s cars 0 and 1 cross (their left-to-right order in the image turns over)."""
-POSE = Pose(n=-30.0, e=0.0, d=-15.0)
-GAP_S = (12.3, 13.3)
-"""The detector sees nothing for this second, while cars 0 and 1 cross."""
-
-
-def _truth_boxes(source: SimCameraSource, t: float, rng: np.random.Generator) -> list[tuple[int, tuple[float, ...]]]:
-    """(car, box with 1.5 px noise) of each car wholly in the sim camera's image at ``t``."""
-    cam, found = source.camera, []
-    for car, target in enumerate(source.targets):
-        corners = [project_ground_point(n, e, POSE, cam) for n, e in target.corners(t)]
-        us, vs = zip(*(c for c in corners if c is not None), strict=True)
-        x, y, w, h = np.array([min(us), min(vs), max(us) - min(us), max(vs) - min(vs)]) + rng.normal(0.0, 1.5, 4)
-        if len(us) == 4 and x >= 0 and y >= 0 and x + w < cam.width and y + h < cam.height:
-            found.append((car, (x, y, w, h)))
-    return found
-
 
 def test_tracks_keep_their_ids_through_a_crossing_and_a_1_s_gap() -> None:
-    source = SimCameraSource.from_uri(SourceUri.parse(SIM))
-    rng = np.random.default_rng(1)
-    tracks, ids, order = DetectionTracks(), {}, {}
-    for t in np.arange(9.0, 17.0, 1 / 10):  # 10 fps (a detector on a Pi), 8 s
-        truth = [] if GAP_S[0] <= t < GAP_S[1] else _truth_boxes(source, t, rng)
-        detector = SimpleNamespace(photo_processing=lambda frame: None,
-                                   detections=[(box, "car", 0.9) for _, box in truth])  # a detector that sees all
-        outcome = call_frame(detector, None, vector=False, tracks=tracks, seen_ns=round(t * 1e9))  # as hosts call it
-        assert outcome.error is None and outcome.detections is not None
-        for (car, box), found in zip(truth, outcome.detections, strict=True):
-            ids.setdefault(car, []).append(found.track_id)
-            order.setdefault(round(t, 3), {})[car] = box[0]
-    before, after = (order[min(order, key=lambda s: abs(s - edge))] for edge in GAP_S)
+    ids, lefts = track_ids(10, DetectionTracks())  # 10 fps: a detector on a Pi
+    before, after = (lefts[min(lefts, key=lambda s: abs(s - edge))] for edge in GAP_S)
     assert (before[0] > before[1]) != (after[0] > after[1])  # cars 0 and 1 crossed during the gap
     assert {car: set(seen) for car, seen in ids.items()} == {0: {0}, 1: {1}, 2: {2}}, ids
 
