@@ -1,24 +1,19 @@
-"""The platform's tracks over a processor's ``detections`` (issue 50): stable ids through a crossing and a gap, a
-processor's own ids taken or refused, and new numbers after a restart."""
+"""The platform's tracks over a processor's ``detections`` (issue 50): stable ids through a crossing and a gap, and a
+processor's own ids taken or refused. A restarted processor's new numbers: tests/hosting/test_restarts.py."""
 
 from __future__ import annotations
 
-import asyncio
-from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
 from processors.detections import MAX_TRACK_ID
-from sources import open_source
-from tests.core.flight_helpers import wait_until
+from sources.synthetic import SyntheticSource
+from tests.hosting.hosts import BOTH, collect, running_worker
 from tests.hosting.sim_cars import GAP_S, track_ids
-from tests.videos import create_video_file
-from uav_tui.events import EventLog
 from uav_tui.hosting.frame_call import call_frame
 from uav_tui.hosting.host import ProcessedFrame
-from uav_tui.hosting.process_host import SubprocessHost
 from uav_tui.hosting.tracks import DetectionTracks
 
 
@@ -59,39 +54,16 @@ def test_one_track_id_on_two_detections_of_a_frame_is_the_processors_error() -> 
     assert outcome.detections is None and "track_id 4 is on two detections of one frame" in outcome.raised
 
 
-DETECTS_AND_DIES_ONCE = '''
-import os
-from pathlib import Path
 
-class DetectsAndDiesOnce:
-    """One car standing still; dies on its third frame, the first time it runs."""
-
-    def __init__(self, marker):
-        self.marker, self.frames, self.detections = Path(marker), 0, []
-
-    def photo_processing(self, frame):
-        self.frames += 1
-        if self.frames == 3 and not self.marker.exists():
-            self.marker.touch()
-            os._exit(3)
-        self.detections = [((10, 10, 20, 20), "car", 0.9)]
-'''
-
-
-async def test_a_restarted_processors_tracks_do_not_take_the_numbers_recorded_before(tmp_path: Path) -> None:
-    (tmp_path / "detects.py").write_text(DETECTS_AND_DIES_ONCE)
-    video = create_video_file(tmp_path / "clip.mp4", width=64, height=48)
-    source = open_source(f"file:{video}?realtime=0")
+@BOTH
+async def test_either_host_numbers_a_processors_detections(isolation: str) -> None:
+    source = SyntheticSource(fps=100, width=160, height=120)
     results: list[ProcessedFrame] = []
-    worker = await SubprocessHost.start(f"{tmp_path}/detects.py:DetectsAndDiesOnce", {"marker": str(tmp_path / "x")},
-                                       results.append, events=EventLog(), on_fault=print, first_backoff_s=0.05)
-    worker.attach(source.buffer)
-    task = asyncio.create_task(worker.run())
+    assert source.open()
     try:
-        await wait_until(lambda: len(results) >= 6, 30, "frames from the restarted processor")
+        async with running_worker(isolation, "tests.recording.recorder_processors:FixedBox", results.append) as worker:
+            worker.attach(source.buffer)
+            await collect(worker, results, 5)
     finally:
-        task.cancel()
-        await asyncio.gather(task, return_exceptions=True)
         source.close()
-    ids = [(r.frame.seq, r.detections[0].track_id) for r in results if r.detections]
-    assert ids[:2] == [(1, 0), (2, 0)] and {i for seq, i in ids if seq > 3} == {1}, ids  # the car again: a new track
+    assert {found.track_id for r in results[:5] for found in r.detections or ()} == {0}  # one object, one track
