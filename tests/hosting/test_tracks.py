@@ -7,8 +7,10 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from skimage import data
 
 from processors.detections import MAX_TRACK_ID
+from processors.yolo_detector import YoloDetector
 from sources.synthetic import SyntheticSource
 from tests.hosting.hosts import BOTH, collect, running_worker
 from tests.hosting.sim_cars import GAP_S, track_ids
@@ -67,3 +69,16 @@ async def test_either_host_numbers_a_processors_detections(isolation: str) -> No
     finally:
         source.close()
     assert {found.track_id for r in results[:5] for found in r.detections or ()} == {0}  # one object, one track
+
+
+def test_the_yolo_references_person_is_one_track_as_she_moves() -> None:
+    """The shipped ``yolo`` as it runs by default (Yolo-Fastest on OpenCV's Darknet loader every third frame, optical
+    flow between) on a photograph shifted 4 px a frame."""
+    photo = np.ascontiguousarray(data.astronaut()[..., ::-1])
+    detector, tracks, ids = YoloDetector(), DetectionTracks(), []
+    for n in range(4):
+        outcome = call_frame(detector, np.roll(photo, 4 * n, axis=1), vector=False, tracks=tracks,
+                             seen_ns=n * 100_000_000)  # 10 fps
+        assert outcome.error is None and outcome.detections
+        ids.append(next(found.track_id for found in outcome.detections if found.label == "person"))
+    assert len(set(ids)) == 1 and ids[0] is not None, ids
