@@ -76,7 +76,8 @@ class Faulty:
 '''
 
 CHILD_MODULES = ["uav_tui", "uav_tui.hosting", "uav_tui.hosting.codec", "uav_tui.hosting.frame_call",
-                 "uav_tui.hosting.frame_mailbox", "uav_tui.hosting.pipe", "uav_tui.hosting.wire"]
+                 "uav_tui.hosting.frame_mailbox", "uav_tui.hosting.pipe", "uav_tui.hosting.tracks",
+                 "uav_tui.hosting.wire"]
 """The platform's modules the processor's process imports beside its main loop (``__main__``, from
 ``uav_tui.hosting.child``): what it shares with the platform."""
 MODULES = '''
