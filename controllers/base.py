@@ -50,7 +50,7 @@ class FlightController(Protocol):
 
     @property
     def vector_active(self) -> bool:
-        """True while a vector's setpoints are being streamed."""
+        """True while a vector's setpoints are being streamed, and until its end (zero, then the hold) is out."""
         ...
 
     @property

@@ -274,7 +274,7 @@ class MavsdkController:
 
     @property
     def vector_active(self) -> bool:
-        """True while a vector's setpoints are being streamed."""
+        """True while a vector's setpoints are being streamed, and until its end (zero, then the hold) is out."""
         return self._vectors.active
 
     @property

@@ -74,7 +74,7 @@ class VectorStream:
 
     @property
     def active(self) -> bool:
-        """True while a vector's setpoints are being streamed."""
+        """True while a vector's setpoints are being streamed, and until its end (zero, then the hold) is out."""
         return self._task is not None and not self._task.done()
 
     async def start(self, vx: float, vy: float, t: float, *, yield_to_others: bool = False) -> None:
@@ -147,9 +147,9 @@ class VectorStream:
                     async with self._lock:
                         if time.monotonic() < self._deadline:
                             continue  # replaced while we waited for the lock
-                        self._task = None
                         self.last_end = "completed"
                         await self._zero_and_hold()
+                        self._task = None  # active until the hold is out: a caller's next step must not race it
                         return
                 await asyncio.sleep(max(0.0, min(next_at, self._deadline) - now))
                 if self._vehicle_left_offboard():
@@ -158,13 +158,13 @@ class VectorStream:
                     await self._send(*self._target)
         except ControllerError as exc:
             logger.error("%s: streaming failed (%s); trying to hold", self._name, exc)
-            self._task = None
             self.last_end = f"failed: {exc}"
             try:
                 await self._port.stop_offboard()
                 self.engaged = False
             except ControllerError as hold_exc:
                 logger.error("%s: hold after a failed stream failed too: %s", self._name, hold_exc)
+            self._task = None
 
     def _vehicle_left_offboard(self) -> bool:
         """True (and the vector abandoned, no hold sent) once the vehicle was seen leaving offboard.

@@ -73,6 +73,8 @@ class FakeAutopilot:
         self.rx = mavlink.MAVLink(None)
         self.rx.robust_parsing = True
         self.received: list[Any] = []
+        self._arrived: list[tuple[float, Any]] = []
+        """(time.monotonic() at arrival, message) of each of ``received``."""
         self.mode, self.armed = 0, False
         self.params: dict[str, float] = {}
         """Parameters it serves (PARAM_REQUEST_READ) and stores (PARAM_SET): REAL32, INT32 for an ``int`` (in
@@ -100,6 +102,10 @@ class FakeAutopilot:
     def of_type(self, name: str) -> list[Any]:
         return [m for m in list(self.received) if m.get_type() == name]
 
+    def arrivals(self, name: str) -> list[tuple[float, Any]]:
+        """(arrival time, message) of every ``name`` received, oldest first."""
+        return [(t, m) for t, m in list(self._arrived) if m.get_type() == name]
+
     def _send(self, msg: Any) -> None:
         self.link.write(msg.pack(self.tx))
 
@@ -114,6 +120,7 @@ class FakeAutopilot:
                 self._heartbeat()
                 last = time.monotonic()
             for msg in self.rx.parse_buffer(self.link.read()) or []:
+                self._arrived.append((time.monotonic(), msg))
                 self.received.append(msg)
                 self._answer(msg)
 

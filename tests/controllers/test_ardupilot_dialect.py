@@ -9,6 +9,7 @@ simulator's ``ardupilot`` dialect and ``test_ardupilot_hold.py`` check that).
 from __future__ import annotations
 
 import asyncio
+import itertools
 from collections.abc import AsyncIterator
 
 import pytest
@@ -65,14 +66,16 @@ async def test_vector_in_guided_then_held_in_guided(copter: tuple[MavsdkControll
     async with asyncio.timeout(10):
         while fc.flight_mode_since(0.0) != "OFFBOARD":  # MAVSDK's name of GUIDED
             await asyncio.sleep(0.05)
-    await fc.set_fly_vector(0.5, 0.25, 0.5)
-    async with asyncio.timeout(10):  # a 0.5 s vector; a stream that never ends fails here, not at the suite timeout
+    await fc.set_fly_vector(0.5, 0.25, 1.0)
+    async with asyncio.timeout(10):  # a 1 s vector; a stream that never ends fails here, not at the suite timeout
         while fc.vector_active:
             await asyncio.sleep(0.05)
     assert set_modes(fake)[-2:] == [GUIDED, GUIDED]  # LOITER would fly the RC throttle stick
     setpoints = fake.of_type("SET_POSITION_TARGET_LOCAL_NED")
-    moving = [s for s in setpoints if (s.vx, s.vy) == (0.5, 0.25)]
-    assert len(moving) >= 8  # 0.5 s at 20 Hz, well within GUID_TIMEOUT
+    moving = [t for t, s in fake.arrivals("SET_POSITION_TARGET_LOCAL_NED") if (s.vx, s.vy) == (0.5, 0.25)]
+    # Streamed, each target renewed well within GUID_TIMEOUT (3 s by default): what ArduCopter needs. Not a count: a
+    # loaded loop sends fewer than 20 Hz makes in 1 s (the rate: scripts/bench_command_latency.py).
+    assert len(moving) >= 2 and max(b - a for a, b in itertools.pairwise(moving)) < 1.5
     assert all(s.coordinate_frame == mavlink.MAV_FRAME_BODY_NED for s in setpoints)
     assert (setpoints[-1].vx, setpoints[-1].vy) == (0.0, 0.0)
     assert fc.last_vector_end == "completed"
