@@ -70,4 +70,5 @@ async def collect(worker: Worker, results: list[ProcessedFrame], count: int, tim
             await asyncio.sleep(0.01)
     finally:
         task.cancel()
+        await asyncio.gather(task, return_exceptions=True)  # its stop ran whole: nothing of it left to the loop's end
     assert len(results) >= count, f"only {len(results)} frames processed"

@@ -113,10 +113,12 @@ class ThreadHost(DeliversResults):
             await asyncio.Event().wait()
         finally:
             self.close()
-            # Let the current call finish before the interpreter exits: OpenCV aborts the process when its
-            # code is still running in a thread at shutdown. A hung processor is abandoned after the wait.
-            await asyncio.get_running_loop().run_in_executor(None, self._thread.join, JOIN_TIMEOUT_S)
-            logs.remove()
+            try:
+                # Let the current call finish before the interpreter exits: OpenCV aborts the process when its
+                # code is still running in a thread at shutdown. A hung processor is abandoned after the wait.
+                await asyncio.get_running_loop().run_in_executor(None, self._thread.join, JOIN_TIMEOUT_S)
+            finally:  # a wait cancelled too (a loop shutting down) must not leave the filter on the handlers
+                logs.remove()
 
     def _say_left_out(self, count: int) -> None:
         text = f"{count} more log records of the processor left out (too many at once)"

@@ -47,7 +47,8 @@ class ThreadLogBudget(logging.Filter):
         self._budget.close()
 
     def filter(self, record: logging.LogRecord) -> bool:
-        if record.thread != self._thread.ident or getattr(self._judging, "active", False):
+        # The thread itself, not its ident: a thread started after ``thread`` ended may get the same ident.
+        if threading.current_thread() is not self._thread or getattr(self._judging, "active", False):
             return True  # another thread's, or said while judging one (the count's event)
         verdict = record.__dict__.get(_VERDICT)
         if verdict is None:
