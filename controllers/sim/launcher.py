@@ -68,6 +68,11 @@ def free_udp_port() -> int:
     return free_ports(1)[0]
 
 
+START_TIMEOUT_S = 30.0
+"""How long a simulator may take to answer after its spawn: over 10 s was seen on two cores at load 20 (its
+imports); a process that exits is reported at once."""
+
+
 class SimVehicle:
     """The simulator process on its own free ports.
 
@@ -153,7 +158,7 @@ class SimVehicle:
             *self.extra_args,
         ]
 
-    def start(self, timeout: float = 10.0) -> SimVehicle:
+    def start(self, timeout: float = START_TIMEOUT_S) -> SimVehicle:
         """Spawn the process and wait until its truth channel answers.
 
         Raises:

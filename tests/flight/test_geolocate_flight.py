@@ -10,7 +10,7 @@ import xml.etree.ElementTree as ET
 import numpy as np
 import pytest
 
-from tests.flight.car_flight import GOALS_P95_M, fly_over_the_car
+from tests.flight.car_flight import GOALS_P95_M, STILL_MS, fly_over_the_car
 from uav_tui.flight.geolocate import OK, RANGEFINDER_SIGMA_M
 from uav_tui.headless import format_status
 from uav_tui.recorded import runs_cli
@@ -36,12 +36,16 @@ async def test_a_recorded_flight_locates_the_car_it_sees(tmp_path, altitude, hei
     as_json = json.loads(json.dumps(status.as_dict(), default=str))["target"]  # --json lines, the web page
     assert as_json["status"] == OK and as_json["distance_m"] == pytest.approx(status.target.distance_m)
     assert set(GEO_COLUMNS) <= set(frames.columns)
-    assert len(located) >= 60, frames["target_status"].value_counts()  # the climb, 1 s hovering, 7 s flown at 15 fps
+    # the climb, 1 s hovering, 7 s flown at 15 fps: over 60 quiet, 57 when a loaded machine starved the renderer
+    assert len(located) >= 40, frames["target_status"].value_counts()
     # The ground is home's altitude, to millimetres, except on the frames drawn while the simulator tilts within
     # one tick (the range, read along the body's axis, and the attitude that corrects it are then from different
     # instants): most within the rangefinder's assumed 1-sigma, all within 3. How many such frames there are is the
     # machine's load: at load 5-20, p95 0.115-0.158 m and max 0.24-0.29 m were seen at 20 m (0.05 m at 50 m, load 1).
-    heights = np.abs(flight.ground_m)
+    # Not while climbing (see the range's check below): at 5 m/s a reading a loaded loop stamped 0.1 s late is 0.5 m
+    # off; with those frames, 15 % were outside the 1-sigma at load 20.
+    level = np.abs(located["vd_ms"]).to_numpy(dtype=np.float64) < STILL_MS
+    heights = np.abs(flight.ground_m[level])
     assert np.median(heights) <= 0.01 and np.mean(heights <= RANGEFINDER_SIGMA_M) >= 0.9 \
         and heights.max() <= 3 * RANGEFINDER_SIGMA_M, np.percentile(heights, [50, 90, 95, 100])
     assert np.percentile(errors, 95) <= GOALS_P95_M[altitude], np.percentile(errors, [50, 95, 100])
@@ -61,9 +65,13 @@ async def test_a_recorded_flight_locates_the_car_it_sees(tmp_path, altitude, hei
     assert (located.loc[low, "target_height_from"] == "rangefinder").all()
     assert (located.loc[high, "target_height_from"] == "terrain").all()
     assert (located.loc[hovering | fast, "target_height_from"] == height_from).all()
-    ranged = located[low]  # along the tilted body axis
+    # Along the tilted body axis: never shorter than the height. Not while climbing: the range and the altitude are
+    # stamped as each arrives, and at the climb's 5 m/s a reading 0.1 s later than the altitude (a loaded loop) is
+    # 0.5 m apart; at under STILL_MS the loop may be 0.5 s late before 0.1 m.
+    ranged = located[low & level]
     assert (ranged["rangefinder_m"] >= ranged["rel_alt_m"] - 0.1).all()
     if height_from == "rangefinder":
+        assert len(ranged) > 10, "the flight must range level frames to mean anything"
         assert (located.loc[tilted, "rangefinder_m"] > located.loc[tilted, "rel_alt_m"] + 0.01).any()
     run_dir = flight.run_dir
 
