@@ -76,6 +76,9 @@ def build_parser(parser_class: type[argparse.ArgumentParser] = argparse.Argument
     p.add_argument("--max-accel", type=float, default=3.0, metavar="M_S2", help="acceleration limit")
     p.add_argument("--takeoff-alt", type=float, default=2.5, metavar="M", help="MIS_TAKEOFF_ALT")
     p.add_argument("--rtl-alt", type=float, default=10.0, metavar="M", help="RTL_RETURN_ALT")
+    p.add_argument("--battery", type=float, default=100.0, metavar="PCT", help="battery charge at boot, percent")
+    p.add_argument("--battery-minutes", type=float, default=20.0, metavar="MIN",
+                   help="minutes of flight from a full battery to an empty one")
     p.add_argument("--gps-delay", type=float, default=0.5, metavar="S", help="seconds until a 3D fix")
     p.add_argument("--rate", type=float, default=50.0, metavar="HZ", help="physics step rate")
     p.add_argument("--gps-clock-offset", type=float, default=0.0, metavar="S",
@@ -97,6 +100,8 @@ def config_from_args(args: argparse.Namespace) -> ServerConfig:
         rtl_alt_m=args.rtl_alt,
         gps_fix_after_s=args.gps_delay,
         climb_drift_ms=args.climb_drift,
+        battery_start=max(0.0, min(1.0, args.battery / 100.0)),
+        battery_flight_minutes=max(0.1, args.battery_minutes),
     )
     return ServerConfig(
         mavlink_port=args.mavlink_port,

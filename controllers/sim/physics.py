@@ -49,6 +49,8 @@ class PhysicsConfig:
     land_disarm_delay_s: float = 1.0
     preflight_disarm_s: float = 10.0
     battery_flight_minutes: float = 20.0
+    battery_start: float = 1.0
+    """The battery's charge at boot, 0..1."""
     gps_fix_after_s: float = 0.5
     takeoff_alt_m: float = 2.5
     rtl_alt_m: float = 10.0
@@ -74,7 +76,7 @@ class Multicopter:
         self.wind = np.array([wind[0], wind[1], 0.0])
         self.armed = False
         self.in_air = False
-        self.battery = 1.0
+        self.battery = self.cfg.battery_start
         self.time_s = 0.0
         self.guidance = Guidance(self)
         self.rng = np.random.default_rng(seed)

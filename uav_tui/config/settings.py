@@ -123,10 +123,16 @@ class SimConfig:
                      metavar="N,E")
     noise: bool = _key("add sensor noise to the simulated vehicle's telemetry", default=False)
     seed: int = _key("random seed of the simulated vehicle's noise", minimum=0, maximum=2**31 - 1, default=0)
+    battery_pct: float = _key("the simulated vehicle's battery charge at boot, percent", minimum=0, maximum=100,
+                              default=100.0)
+    battery_minutes: float = _key("minutes of flight the simulated vehicle's full battery lasts (it drains a tenth "
+                                  "as fast on the ground)", minimum=0.1, maximum=1000, default=20.0)
 
     def vehicle(self) -> dict[str, Any]:
         """The arguments of :class:`controllers.sim.launcher.SimVehicle` these settings give."""
-        return {"home": _home(self.home), "wind": parse_wind(self.wind), "seed": self.seed, "noise": self.noise}
+        battery = ("--battery", f"{self.battery_pct:g}", "--battery-minutes", f"{self.battery_minutes:g}")
+        return {"home": _home(self.home), "wind": parse_wind(self.wind), "seed": self.seed, "noise": self.noise,
+                "extra_args": battery}
 
 
 def _calibration_file(path: str) -> None:
