@@ -135,7 +135,7 @@ class UavCore:
                 self.add_frame_listener(lambda result: replay.frame_done())
                 commands = recorded_commands(self.controller.run_dir)
                 replay.before_show = CommandReplay(self, loop, commands).before_show
-            self.gate.telemetry, self.gate.controller = self.telemetry, self.controller
+            self.gate.bind(self.telemetry, self.controller, self.config)
             self.active_camera.controller, self.active_camera.replay = self.controller, self.replay
             if isinstance(self.controller, LandingTargets):
                 self.landing_sender = LandingTargetSender(self.controller, self.events)

@@ -29,7 +29,7 @@ class _Vehicle:
     holds: int = 0
 
     def snapshot(self) -> Telemetry:
-        return Telemetry(armed=True, in_air=True, flight_mode=self.flight_mode)
+        return Telemetry(armed=True, in_air=True, flight_mode=self.flight_mode, rel_alt_m=3.0)  # in the height band
 
     def heartbeat_age_s(self) -> float:
         return 0.0

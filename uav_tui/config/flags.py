@@ -7,11 +7,21 @@ import tomllib
 from dataclasses import fields
 from typing import Any
 
-from uav_tui.config.settings import SECTIONS, CameraConfig, Config, RecordingConfig, SafetyConfig, SimConfig, WebConfig
+from uav_tui.config.settings import (
+    SECTIONS,
+    CameraConfig,
+    Config,
+    EnvelopeConfig,
+    RecordingConfig,
+    SafetyConfig,
+    SimConfig,
+    WebConfig,
+)
 from uav_tui.errors import ConfigError
 from uav_tui.output.text import describe
 
 _FLAG_GROUPS = {Config: "camera, processor, flight controller (top of uav.toml)", SafetyConfig: "safety ([safety])",
+                EnvelopeConfig: "where, how high and how long autonomy may fly ([envelope])",
                 RecordingConfig: "recording ([recording])", WebConfig: "web page ([web])",
                 SimConfig: "built-in simulated vehicle, --fc sim ([sim])",
                 CameraConfig: "camera model, for sources that do not state one ([camera])"}

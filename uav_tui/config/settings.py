@@ -58,6 +58,64 @@ class SafetyConfig:
                               "lower takeoff_alt or raise max_altitude", key="takeoff_alt")
 
 
+ENVELOPE_ACTIONS = ("hold", "rtl", "land")
+"""What a breach of the envelope makes the vehicle do (``*_action`` keys)."""
+
+
+def _action(text: str) -> None:
+    if text not in ENVELOPE_ACTIONS:
+        raise ValueError(f"must be one of {', '.join(ENVELOPE_ACTIONS)}, got {text!r}")
+
+
+def _polygon_file(path: str) -> None:
+    if path.strip():
+        from uav_tui.flight.envelope_shape import read_polygon
+
+        read_polygon(path)
+
+
+@dataclass(frozen=True)
+class EnvelopeConfig:
+    """Where, how high and how long the processor may fly the vehicle (docs/safety.md, "The envelope")."""
+
+    radius_m: float = _key("horizontal distance from home a vector may take the vehicle, m (0 = off)", minimum=0,
+                           maximum=100000, default=0.0)
+    polygon: str = _key("GeoJSON file with the one Polygon the vehicle must stay in (empty = off)", default="",
+                        parse=_polygon_file, metavar="FILE")
+    response_lag_s: float = _key("how far a vector carries on after it ends (the vehicle's braking), s of its "
+                                 "velocity, added to each vector's predicted end point", minimum=0, maximum=5,
+                                 default=0.6)
+    boundary_band_m: float = _key("within this distance of the boundary a vector's outward component is removed "
+                                  "(it slides along), m", minimum=0, maximum=100, default=0.5)
+    min_height_m: float = _key("lowest height above the ground under autonomy, m (rangefinder, else the autopilot's "
+                               "terrain height, else above home; 0 = off)", minimum=0, maximum=10000, default=0.0)
+    max_height_m: float = _key("highest height above the ground under autonomy, m (0 = off)", minimum=0,
+                               maximum=10000, default=0.0)
+    min_home_height_m: float = _key("lowest height above home under autonomy, m (0 = off)", minimum=0,
+                                    maximum=10000, default=0.0)
+    max_home_height_m: float = _key("highest height above home under autonomy, m (0 = off)", minimum=0,
+                                    maximum=10000, default=120.0)
+    height_action: str = _key("what a vehicle outside the height band does: hold, rtl or land", default="hold",
+                              parse=_action, metavar="hold|rtl|land")
+    max_autonomy_s: float = _key("longest one engagement of autonomy, s (0 = off)", minimum=0, maximum=86400,
+                                 default=0.0)
+    time_action: str = _key("what the vehicle does when max_autonomy_s runs out: hold, rtl or land", default="hold",
+                            parse=_action, metavar="hold|rtl|land")
+    battery_floor_pct: float = _key("battery percentage below which autonomy ends (0 = off)", minimum=0,
+                                    maximum=100, default=20.0)
+    battery_floor_v: float = _key("battery voltage below which autonomy ends (0 = off)", minimum=0, maximum=100,
+                                  default=0.0)
+    battery_action: str = _key("what the vehicle does at the battery floor: hold, rtl or land", default="rtl",
+                               parse=_action, metavar="hold|rtl|land")
+
+    def __post_init__(self) -> None:
+        for low, high in (("min_height_m", "max_height_m"), ("min_home_height_m", "max_home_height_m")):
+            floor, ceiling = getattr(self, low), getattr(self, high)
+            if floor and ceiling and floor >= ceiling:
+                raise ConfigError(f"envelope: {low} = {floor:g} is not below {high} = {ceiling:g}; lower the floor "
+                                  "or raise the ceiling", key=low)
+
+
 @dataclass(frozen=True)
 class RecordingConfig:
     """The flight dataset written under ``runs_dir``."""
@@ -197,6 +255,7 @@ class Config:
     processor_memory_mb: float = _key("cap on the processor process's address space, MB (RLIMIT_AS; 0 = no cap)",
                                       minimum=0, maximum=1e6, default=0)
     safety: SafetyConfig = field(default_factory=SafetyConfig)
+    envelope: EnvelopeConfig = field(default_factory=EnvelopeConfig)
     recording: RecordingConfig = field(default_factory=RecordingConfig)
     web: WebConfig = field(default_factory=WebConfig)
     sim: SimConfig = field(default_factory=SimConfig)
@@ -206,6 +265,6 @@ class Config:
 ISOLATION_MODES = ("process", "thread")
 """Values of ``isolation``."""
 
-SECTIONS = {"safety": SafetyConfig, "recording": RecordingConfig, "web": WebConfig, "sim": SimConfig,
-            "camera": CameraConfig}
+SECTIONS = {"safety": SafetyConfig, "envelope": EnvelopeConfig, "recording": RecordingConfig, "web": WebConfig,
+            "sim": SimConfig, "camera": CameraConfig}
 """TOML table name -> the dataclass its keys go to."""

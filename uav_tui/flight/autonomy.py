@@ -19,9 +19,10 @@ from numbers import Real
 from typing import Any
 
 from controllers.base import FailsafeCheck, FlightController, OwnModes
-from uav_tui.config import SafetyConfig
+from uav_tui.config import Config, EnvelopeConfig, SafetyConfig
 from uav_tui.errors import KNOWN_ERRORS, UavError
 from uav_tui.events import EventLog, Level, Repeats
+from uav_tui.flight.envelope import Breach, Envelope, carry_out, configured_envelope
 from uav_tui.flight.telemetry import TelemetryManager
 from uav_tui.hosting.host import ProcessedFrame
 from uav_tui.output.text import describe
@@ -128,6 +129,8 @@ class AutonomyGate:
         self.telemetry = telemetry
         self.events = events
         self.controller: FlightController | None = None
+        self.envelope = Envelope(EnvelopeConfig(), events)
+        """Where, how high and how long vectors may fly (the platform sets the configured one)."""
         self.enabled = False
         self.stop_reason = ""
         """Why autonomy last stopped by itself (shown on every interface)."""
@@ -148,6 +151,12 @@ class AutonomyGate:
         """Called with the reason each time autonomy is turned off (or told off again, at exit): what else the
         processor drives stops with the vectors (the gimbal)."""
 
+    def bind(self, telemetry: TelemetryManager, controller: FlightController | None, config: Config) -> None:
+        """The run's vehicle and its telemetry, once connected, and the configured envelope (ConfigError: it
+        cannot be used)."""
+        self.telemetry, self.controller = telemetry, controller
+        self.envelope = configured_envelope(config, self.events, telemetry)
+
     async def check_autopilot_failsafe(self) -> None:
         """Read (and set) the autopilot's offboard-loss failsafe; autonomy is refused while it is too slow."""
         if not isinstance(self.controller, FailsafeCheck):
@@ -162,11 +171,14 @@ class AutonomyGate:
         """Raise UavError saying why autonomy cannot go on (no vehicle, its failsafe too slow)."""
         if self.controller is None:
             raise UavError("autonomy needs a flight controller; start with --fc sim or a connection string")
-        if self.refusal:
-            raise UavError(f"autonomy refused: {self.refusal}")
+        if self.refusal or self.envelope.refusal:
+            raise UavError(f"autonomy refused: {self.refusal or self.envelope.refusal}")
 
     def enable(self, origin: str) -> None:
         self.check_can_enable()
+        self.envelope.engage()
+        if (breach := self._breach()) is not None:
+            raise UavError(f"autonomy refused: {breach.reason}")
         self.enabled, self.stop_reason, self._flown = True, "", False
         self.events.emit("info", "autonomy", "autonomy ON", origin, autonomy=True)
 
@@ -196,14 +208,18 @@ class AutonomyGate:
                                                                                              "no vector")
             return
         vector, note = check_vector(result.vector, self.safety)
+        key, why_not = note, "" if vector is None else self._why_not(result)
+        if vector is not None and not why_not:  # a vector that would fly: within the envelope?
+            confined = self.envelope.confine(vector, self.telemetry.snapshot())
+            vector, key = confined.vector, confined.key or note
+            note = confined.note if vector is None else "; ".join(filter(None, (note, confined.note)))
         if vector is None:
             self.rejected += 1
             result.decision = self.last_decision = Decision(Verdict.REJECTED, note)
             self.last_vector = None  # no stale vector beside this decision
-            self._rejections.report(note, f"frame {result.frame.seq}: vector {note}")
+            self._rejections.report(key, f"frame {result.frame.seq}: vector {note}")
             return
         self.last_vector = vector
-        why_not = self._why_not(result)
         result.decision = self.last_decision = (
             Decision(Verdict.NOT_EXECUTED, why_not) if why_not else
             Decision(Verdict.EXECUTED, "executed" + (f" ({note})" if note else "")))
@@ -273,6 +289,23 @@ class AutonomyGate:
                 cause, reason = failure
                 # Whoever switched modes has the vehicle: a hold from here would override them.
                 await self.disable("watchdog", reason, hold=cause is not StopCause.TAKEN_OVER)
+            elif (breach := self._breach()) is not None:
+                await self._breached(breach)
+
+    def _breach(self) -> Breach | None:
+        """A limit of the envelope the vehicle in the air is past (on the ground nothing flies anyway)."""
+        snapshot = self.telemetry.snapshot()
+        return self.envelope.breach(snapshot) if snapshot.in_air else None
+
+    async def _breached(self, breach: Breach) -> None:
+        """A limit of the envelope is past: autonomy off, then the limit's action (hold, RTL, land)."""
+        await self.disable("envelope", f"{breach.reason}: {breach.action.upper()}", hold=breach.action == "hold")
+        if breach.action != "hold" and self.controller is not None:
+            try:
+                await carry_out(self.controller, breach.action)
+            except KNOWN_ERRORS as exc:
+                self.events.emit("error", "autonomy", f"{breach.action.upper()} at the envelope failed: {exc}; "
+                                 "take over with the remote", "envelope")
 
     def fault(self, frame_age: float | None, busy_s: float, errors: int) -> str:
         """Why whatever the processor drives must stop now (processor stalled or failing, camera stalled, link lost),

@@ -1,0 +1,146 @@
+"""The envelope on the built-in vehicle: a processor that only ever says "forward at full speed" stays inside.
+
+Judged on the simulator's truth (where the vehicle really is), sampled all through each flight.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import math
+import re
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from tests.core.flight_helpers import flying_core, speed, wait_until
+from tests.flight.test_envelope import polygon_file
+from uav_tui.errors import UavError
+from uav_tui.flight.envelope_shape import Polygon
+
+PUSHING_PROCESSOR = '''
+class Pushing:
+    """Test processor: F1 forward, F2 backward, F3 right, each asking for five times any sane speed."""
+
+    def __init__(self):
+        self.tmMgr = None
+        self.vector = None
+
+    def photo_processing(self, frame):
+        pass
+
+    def customize_processing(self, id):
+        self.vector = {1: (5.0, 0.0, 2.0), 2: (-5.0, 0.0, 2.0), 3: (0.0, 5.0, 2.0)}[id]
+
+    def catch_cmd(self, roi):
+        pass
+
+    def getPreparedVector(self):
+        return self.vector
+'''
+
+
+def pushing(tmp_path: Path) -> str:
+    (tmp_path / "pushing.py").write_text(PUSHING_PROCESSOR)
+    return f"{tmp_path / 'pushing.py'}:Pushing"
+
+
+class Track:
+    """The truth's positions, sampled every 20 ms while the flight runs."""
+
+    def __init__(self, truth: Any) -> None:
+        self.truth = truth
+        self.points: list[tuple[float, float]] = []
+        self._task = asyncio.create_task(self._sample())
+
+    async def _sample(self) -> None:
+        while True:
+            state = self.truth.latest()
+            self.points.append((state["n"], state["e"]))
+            await asyncio.sleep(0.02)
+
+    def stop(self) -> None:
+        self._task.cancel()
+
+
+def radius(state: dict[str, Any]) -> float:
+    return math.hypot(state["n"], state["e"])
+
+
+async def settle(core: Any, refused_more_than: int, what: str, timeout: float = 25) -> None:
+    """Until the gate has refused more vectors than ``refused_more_than`` and the vehicle stands still."""
+    await wait_until(lambda: core.gate.envelope.refused > refused_more_than and speed(core.truth.latest()) < 0.05,
+                     timeout, what)
+
+
+async def test_forward_at_full_speed_stops_on_the_radius_and_from_outside_only_comes_back(tmp_path: Path) -> None:
+    async with flying_core(tmp_path, processor=pushing(tmp_path), radius_m=3.0) as core:
+        track = Track(core.truth)
+        await core.execute("f 1")
+        await core.execute("autonomy on")
+        await settle(core, 5, "the vehicle to stop at the 3 m radius")
+        stopped = radius(core.truth.latest())
+        assert max(math.hypot(*p) for p in track.points) <= 3.0, "the vehicle flew beyond the radius"
+        assert 2.0 <= stopped <= 3.0
+        assert core.gate.executed > 0 and core.gate.envelope.cut > 0
+        assert core.gate.last_decision.startswith("refused: at the 3 m radius")
+
+        await core.execute("autonomy off")  # the operator flies it out (the envelope set in flight, wind)
+        await core.execute("vector 1 0 2")
+        await wait_until(lambda: not core.controller.vector_active and speed(core.truth.latest()) < 0.05, 10,
+                         "the operator's vector to end")
+        outside = radius(core.truth.latest())
+        assert outside > 3.5
+        for key, what in (("f 1", "forward: further out"), ("f 3", "right: along the boundary")):
+            await core.execute(key)
+            await core.execute("autonomy on")
+            await wait_until(lambda before=core.gate.envelope.refused: core.gate.envelope.refused > before + 10, 10,
+                             f"{what} refused")
+            assert radius(core.truth.latest()) <= outside + 0.05, f"{what} flew"
+            assert "outside the 3 m radius: only a vector back in flies" in core.gate.last_decision
+            await core.execute("autonomy off")
+        track.points.clear()
+        await core.execute("f 2")  # backward: back in, then on to the far side of the radius
+        await core.execute("autonomy on")
+        await wait_until(lambda: radius(core.truth.latest()) < 2.5, 15, "the vehicle back inside")
+        await wait_until(lambda: core.truth.latest()["n"] < 0 and speed(core.truth.latest()) < 0.05, 25,
+                         "the vehicle to stop at the far side")
+        track.stop()
+        assert min(n for n, _ in track.points) >= -3.0
+        assert radius(core.truth.latest()) >= 2.0
+
+
+async def test_a_polygon_edge_is_slid_along_into_its_corner_never_through(tmp_path: Path) -> None:
+    corners = [(5.0, -3.0), (-10.0, -3.0), (-10.0, 10.0), (3.0, 10.0)]  # the north edge slants up to the west
+    field = polygon_file(tmp_path / "field.geojson", corners)
+    async with flying_core(tmp_path, processor=pushing(tmp_path), polygon=str(field)) as core:
+        track = Track(core.truth)
+        await core.execute("f 1")  # forward = north, into the slanted edge
+        await core.execute("autonomy on")
+        await settle(core, 5, "the vehicle to stop in the corner")
+        track.stop()
+        shape = Polygon(corners)
+        deepest_out = min(shape.nearest(p)[0] for p in track.points)
+        assert deepest_out >= -0.05, f"the vehicle went {-deepest_out:.2f} m through the boundary"
+        state = core.truth.latest()
+        assert math.hypot(state["n"] - 5.0, state["e"] + 3.0) < 1.5, "it did not slide into the corner"
+
+
+async def test_outside_the_height_band_autonomy_is_refused_and_the_battery_floor_returns_home(
+        tmp_path: Path) -> None:
+    async with flying_core(tmp_path, processor=pushing(tmp_path), min_height_m=4.0, battery_pct=50.0,
+                           battery_minutes=0.5) as core:
+        await core.execute("f 1")
+        with pytest.raises(UavError, match=r"autonomy refused: height \d\.\d m above the ground \(rangefinder\) is "
+                                           "below the floor 4 m"):
+            await core.execute("autonomy on")
+        await asyncio.sleep(0.3)
+        assert core.gate.executed == 0 and speed(core.truth.latest()) < 0.1
+        await core.execute("takeoff 5")
+        await wait_until(lambda: -core.truth.latest()["d"] > 4.7, 15, "the climb to 5 m")
+        await core.execute("autonomy on")
+        await wait_until(lambda: any("below the floor 20 %: RTL" in e.message for e in core.events.recent), 30,
+                         "the battery floor")
+        assert not core.gate.enabled and core.gate.executed > 0
+        assert re.fullmatch(r"battery 1\d % below the floor 20 %: RTL", core.gate.stop_reason)
+        await wait_until(lambda: core.truth.latest()["mode"] == "RTL", 5, "the return home")
