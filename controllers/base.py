@@ -13,6 +13,7 @@ from uav_values.telemetry import Telemetry as Telemetry
 
 if TYPE_CHECKING:
     from controllers.failsafe import FailsafeReport
+    from controllers.fence import FenceReport
     from controllers.landing_target import LandingTargetFix
     from controllers.replay_timeline import ReplayTimeline
 
@@ -74,6 +75,13 @@ class FailsafeCheck(Protocol):
     async def check_failsafe(self, max_t: float, *, tune: bool) -> FailsafeReport:
         """Check the failsafe against vectors of up to ``max_t`` s; with ``tune``, set what allows longer."""
         ...
+
+
+@runtime_checkable
+class FenceCheck(Protocol):
+    """A controller that can read whether the autopilot's own geofence is set up (MAVLink autopilots)."""
+
+    async def check_fence(self) -> FenceReport: ...
 
 
 @runtime_checkable

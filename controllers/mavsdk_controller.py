@@ -19,6 +19,7 @@ from controllers.base import PoseSample
 from controllers.connection import Connection, check_serial_device, parse_connection
 from controllers.errors import ControllerError
 from controllers.failsafe import STALE_MARGIN_S, FailsafeReport, ParamAccess, check_failsafe
+from controllers.fence import ReadsFence
 from controllers.landing_target import LandingTargetFix
 from controllers.mavsdk_attach import AUTOPILOT_NAMES, SETUP_TIMEOUT_S, ask_for_telemetry, reach_autopilot
 from controllers.mavsdk_calls import AbandoningExecutor, Subscriptions, bounded, release, use_abandoning_executor
@@ -50,7 +51,7 @@ RELEASE_TIMEOUT_S = 2.0
 """close(): how long MAVSDK may take to release its connections before it is abandoned."""
 
 
-class MavsdkController:
+class MavsdkController(ReadsFence):
     """A flight controller reached through MAVSDK 4.
 
     Example::
@@ -192,9 +193,11 @@ class MavsdkController:
             max_t: the longest vector; a dead platform's last command may last ``max_t`` + 0.5 s.
             tune: set parameters that break a rule; otherwise only report them.
         """
-        access = ParamAccess(self._param, lambda name, call: bounded(name, call, PARAM_TIMEOUT_S, self.heartbeat_age_s))
-        return await check_failsafe(self.autopilot, access, max_t + STALE_MARGIN_S, tune=tune,
+        return await check_failsafe(self.autopilot, self._params(), max_t + STALE_MARGIN_S, tune=tune,
                                     rc_receiver=self._link.rc_receiver_present if self._link is not None else None)
+
+    def _params(self) -> ParamAccess:
+        return ParamAccess(self._param, lambda name, call: bounded(name, call, PARAM_TIMEOUT_S, self.heartbeat_age_s))
 
     # ---- commands --------------------------------------------------------------------------------
 

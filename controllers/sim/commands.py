@@ -103,6 +103,8 @@ class CommandHandler:
                 bind("PILOT_SPD_UP", stick, "speed_up_ms"),
                 bind("PILOT_SPD_DN", stick, "speed_dn_ms"),
                 *ParamStore.constants(GUID_OPTIONS=0),
+                *ParamStore.settable(FENCE_ENABLE=0, FENCE_ACTION=1, FENCE_TYPE=7, FENCE_RADIUS=150.0,
+                                     FENCE_ALT_MAX=100.0),  # ArduCopter's defaults: no fence
             ]
         return [
             bind("MIS_TAKEOFF_ALT", pc, "takeoff_alt_m"),
@@ -115,6 +117,7 @@ class CommandHandler:
             bind("COM_DISARM_PRFLT", pc, "preflight_disarm_s"),
             bind("COM_OF_LOSS_T", cfg, "offboard_loss_timeout_s"),
             Param("COM_OBL_RC_ACT", M.MAV_PARAM_TYPE_INT32, lambda: cfg.offboard_loss_action, self._set_loss_action),
+            *ParamStore.settable(GF_ACTION=1, GF_MAX_HOR_DIST=0.0, GF_MAX_VER_DIST=0.0),  # PX4's: warns of no fence
             *ParamStore.constants(
                 SYS_AUTOSTART=10016,
                 MAV_SYS_ID=1,

@@ -59,6 +59,17 @@ class ParamStore:
         """Read-only parameters; ints become INT32, floats REAL32."""
         return [Param(k, INT32 if isinstance(v, int) else REAL32, _constant(v)) for k, v in values.items()]
 
+    @classmethod
+    def settable(cls, **values: float) -> list[Param]:
+        """Parameters kept as set (nothing the simulator does reads them); ints become INT32, floats REAL32."""
+        store = dict(values)
+
+        def kept(name: str, value: float) -> Param:
+            return Param(name, INT32 if isinstance(value, int) else REAL32, lambda: store[name],
+                         lambda new: store.__setitem__(name, new))
+
+        return [kept(name, value) for name, value in values.items()]
+
     def __len__(self) -> int:
         return len(self._order)
 

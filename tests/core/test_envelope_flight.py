@@ -8,6 +8,7 @@ from __future__ import annotations
 import asyncio
 import math
 import re
+import time
 from pathlib import Path
 from typing import Any
 
@@ -20,17 +21,20 @@ from uav_tui.flight.envelope_shape import Polygon
 
 PUSHING_PROCESSOR = '''
 class Pushing:
-    """Test processor: F1 forward, F2 backward, F3 right, each asking for five times any sane speed."""
+    """Test processor: F1 forward, F2 backward, F3 right, each asking for five times any sane speed with its target
+    in view; F4: the target lost (no box, no vector)."""
 
     def __init__(self):
         self.tmMgr = None
         self.vector = None
+        self.box = None
 
     def photo_processing(self, frame):
         pass
 
     def customize_processing(self, id):
-        self.vector = {1: (5.0, 0.0, 2.0), 2: (-5.0, 0.0, 2.0), 3: (0.0, 5.0, 2.0)}[id]
+        self.vector = {1: (5.0, 0.0, 2.0), 2: (-5.0, 0.0, 2.0), 3: (0.0, 5.0, 2.0), 4: None}[id]
+        self.box = None if self.vector is None else (60, 40, 40, 40)
 
     def catch_cmd(self, roi):
         pass
@@ -110,10 +114,11 @@ async def test_forward_at_full_speed_stops_on_the_radius_and_from_outside_only_c
         assert radius(core.truth.latest()) >= 2.0
 
 
-async def test_a_polygon_edge_is_slid_along_into_its_corner_never_through(tmp_path: Path) -> None:
+async def test_a_polygon_edge_is_slid_along_into_its_corner_never_through_and_a_lost_target_holds(
+        tmp_path: Path) -> None:
     corners = [(5.0, -3.0), (-10.0, -3.0), (-10.0, 10.0), (3.0, 10.0)]  # the north edge slants up to the west
     field = polygon_file(tmp_path / "field.geojson", corners)
-    async with flying_core(tmp_path, processor=pushing(tmp_path), polygon=str(field)) as core:
+    async with flying_core(tmp_path, processor=pushing(tmp_path), polygon=str(field), lost_after_s=1.5) as core:
         track = Track(core.truth)
         await core.execute("f 1")  # forward = north, into the slanted edge
         await core.execute("autonomy on")
@@ -124,6 +129,18 @@ async def test_a_polygon_edge_is_slid_along_into_its_corner_never_through(tmp_pa
         assert deepest_out >= -0.05, f"the vehicle went {-deepest_out:.2f} m through the boundary"
         state = core.truth.latest()
         assert math.hypot(state["n"] - 5.0, state["e"] + 3.0) < 1.5, "it did not slide into the corner"
+
+        await core.execute("f 4")  # lost, and found again before lost_after_s
+        await asyncio.sleep(0.5)
+        await core.execute("f 1")
+        await asyncio.sleep(1.5)
+        assert core.gate.enabled, core.gate.stop_reason
+        lost_at = time.monotonic()
+        await core.execute("f 4")
+        await wait_until(lambda: not core.gate.enabled, 10, "autonomy to end with the target lost")
+        assert time.monotonic() - lost_at >= 1.5
+        assert core.gate.stop_reason == "target lost for 1.5 s: HOLD"
+        assert any(e.message == "autonomy OFF: target lost for 1.5 s: HOLD" for e in core.events.recent)
 
 
 async def test_outside_the_height_band_autonomy_is_refused_and_the_battery_floor_returns_home(

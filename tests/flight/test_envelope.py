@@ -96,6 +96,8 @@ def test_a_vector_is_cut_to_end_on_the_radius_then_refused_there() -> None:
     refused = fence.confine((1.0, 0.0, 2.0), at(9.8, 0))
     assert refused.vector is None and refused.note == "refused: at the 10 m radius, the vector points out"
     assert fence.refused == 1
+    braking = fence.confine((1.0, 0.0, 2.0), at(9.8, 0, vn_ms=0.8, ve_ms=0.0))  # still coasting out: brake it
+    assert braking.vector == pytest.approx((-0.8, 0.0, 0.5)) and "slid along the 10 m radius" in braking.note
 
 
 def test_outside_only_the_way_back_in_flies() -> None:

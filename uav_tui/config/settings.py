@@ -107,6 +107,12 @@ class EnvelopeConfig:
                                   default=0.0)
     battery_action: str = _key("what the vehicle does at the battery floor: hold, rtl or land", default="rtl",
                                parse=_action, metavar="hold|rtl|land")
+    lost_after_s: float = _key("the processor's target gone this long (no box and no vector after either) ends "
+                               "autonomy, s (0 = off)", minimum=0, maximum=600, default=0.0)
+    lost_action: str = _key("what the vehicle does when the target is lost: hold, rtl or land", default="hold",
+                            parse=_action, metavar="hold|rtl|land")
+    require_autopilot_fence: bool = _key("refuse autonomy unless the autopilot's own geofence is set up to act "
+                                         "(ArduPilot FENCE_*, PX4 GF_*; read at connect)", default=False)
 
     def __post_init__(self) -> None:
         for low, high in (("min_height_m", "max_height_m"), ("min_home_height_m", "max_home_height_m")):

@@ -18,7 +18,7 @@ from collections.abc import Callable
 from numbers import Real
 from typing import Any
 
-from controllers.base import FailsafeCheck, FlightController, OwnModes
+from controllers.base import FailsafeCheck, FenceCheck, FlightController, OwnModes
 from uav_tui.config import Config, EnvelopeConfig, SafetyConfig
 from uav_tui.errors import KNOWN_ERRORS, UavError
 from uav_tui.events import EventLog, Level, Repeats
@@ -158,13 +158,20 @@ class AutonomyGate:
         self.envelope = configured_envelope(config, self.events, telemetry)
 
     async def check_autopilot_failsafe(self) -> None:
-        """Read (and set) the autopilot's offboard-loss failsafe; autonomy is refused while it is too slow."""
-        if not isinstance(self.controller, FailsafeCheck):
-            return
-        report = await self.controller.check_failsafe(self.safety.max_t, tune=self.safety.tune_autopilot_failsafe)
-        self.events.emit("info", "autonomy", report.summary())
-        if not report.ok:
-            self.refusal = "; ".join(report.problems)
+        """Read (and set) the autopilot's offboard-loss failsafe and read its fence; autonomy is refused while the
+        failsafe is too slow, or without a fence when ``require_autopilot_fence`` is set."""
+        problems: list[str] = []
+        if isinstance(self.controller, FailsafeCheck):
+            report = await self.controller.check_failsafe(self.safety.max_t, tune=self.safety.tune_autopilot_failsafe)
+            self.events.emit("info", "autonomy", report.summary())
+            problems += report.problems
+        if isinstance(self.controller, FenceCheck):
+            fence = await self.controller.check_fence()
+            self.events.emit("info", "autonomy", fence.summary)
+            if not fence.enabled and self.envelope.config.require_autopilot_fence:
+                problems.append("the autopilot has no fence that acts (require_autopilot_fence): set one up")
+        self.refusal = "; ".join(problems)
+        if problems:
             self.events.emit("error", "autonomy", f"autonomy will be refused: {self.refusal}")
 
     def check_can_enable(self) -> None:
@@ -203,6 +210,8 @@ class AutonomyGate:
 
     def consider(self, result: ProcessedFrame) -> None:
         """Decide on ``result``'s vector (on the loop, right after processing); sets ``result.decision``."""
+        if self.enabled:
+            self.envelope.saw(result.box is not None or result.vector is not None)
         if result.vector is None:
             result.decision = Decision(Verdict.ERROR, "error") if result.error else Decision(Verdict.NO_VECTOR,
                                                                                              "no vector")

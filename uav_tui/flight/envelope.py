@@ -5,8 +5,8 @@ point (position + velocity x (duration + ``response_lag_s``)) leaves the radius 
 on the boundary, or refused when nothing of it is left; within ``boundary_band_m`` of the boundary its outward
 component is removed first (it slides along the boundary, never through it); a vehicle outside (the envelope was
 set in flight, wind) is flown only back in. Its watchdog asks :meth:`Envelope.breach`: a vehicle outside the
-height band, an engagement longer than ``max_autonomy_s`` or a battery below its floor ends autonomy with the
-configured action (:func:`carry_out`).
+height band, an engagement longer than ``max_autonomy_s``, a battery below its floor or a target the processor
+stopped reporting for ``lost_after_s`` ends autonomy with the configured action (:func:`carry_out`).
 """
 
 from __future__ import annotations
@@ -28,6 +28,9 @@ from uav_tui.flight.telemetry import TelemetryManager
 
 MIN_VECTOR_S = 0.05
 """A vector cut shorter than this is refused: one setpoint, nothing a processor can steer with."""
+
+MIN_DRIFT_MS = 0.05
+"""Outward speed below this, in the boundary band, is not braked (a vehicle holding still, sensor noise)."""
 
 _GROUND_FIELDS = ("roll_deg", "pitch_deg", "rangefinder_m", "terrain_height_m", "rangefinder_t_ns", "terrain_t_ns",
                   "rel_alt_m")
@@ -72,6 +75,8 @@ class Envelope:
         self._vertices = read_polygon(config.polygon) if config.polygon.strip() else None
         self.shapes: list[Shape] = [Circle(config.radius_m)] if config.radius_m > 0 else []
         self._engaged_at: float | None = None
+        self._seen_at: float | None = None
+        """When the processor last reported its target (a box or a vector) in this engagement."""
 
     @property
     def horizontal(self) -> bool:
@@ -104,7 +109,12 @@ class Envelope:
 
     def engage(self) -> None:
         """Autonomy was switched on: the engagement's clock starts."""
-        self._engaged_at = self.clock()
+        self._engaged_at, self._seen_at = self.clock(), None
+
+    def saw(self, target: bool) -> None:
+        """A frame under autonomy: whether the processor reported its target on it (a box or a vector)."""
+        if target:
+            self._seen_at = self.clock()
 
     def breach(self, t: Telemetry, *, strict: bool = False) -> Breach | None:
         """The first limit the vehicle is past (height, engagement time, battery), or None; with ``strict`` also a
@@ -125,6 +135,8 @@ class Envelope:
                 return Breach(c.height_action, f"height {height:.1f} m {what} is above the ceiling {high:g} m")
         if c.max_autonomy_s and self._engaged_at is not None and self.clock() - self._engaged_at > c.max_autonomy_s:
             return Breach(c.time_action, f"autonomy ran its longest engagement, {c.max_autonomy_s:g} s")
+        if c.lost_after_s and self._seen_at is not None and self.clock() - self._seen_at > c.lost_after_s:
+            return Breach(c.lost_action, f"target lost for {c.lost_after_s:g} s")
         if c.battery_floor_pct and t.battery_pct is not None and t.battery_pct < c.battery_floor_pct:
             return Breach(c.battery_action, f"battery {t.battery_pct:.0f} % below the floor {c.battery_floor_pct:g} %")
         if c.battery_floor_v and t.battery_v is not None and t.battery_v < c.battery_floor_v:
@@ -146,7 +158,8 @@ class Envelope:
         forward, right = (math.cos(yaw), math.sin(yaw)), (-math.sin(yaw), math.cos(yaw))
         vx, vy, duration = vector
         v = (vx * forward[0] + vy * right[0], vx * forward[1] + vy * right[1])
-        confined = self._confine_ned((t.north_m, t.east_m), v, duration)  # type: ignore[arg-type]
+        moving = None if t.vn_ms is None or t.ve_ms is None else (t.vn_ms, t.ve_ms)
+        confined = self._confine_ned((t.north_m, t.east_m), v, duration, moving)  # type: ignore[arg-type]
         if confined.vector is None:
             return self._refuse(confined.note, confined.key)
         (vn, ve, duration) = confined.vector
@@ -154,8 +167,12 @@ class Envelope:
             self.cut += 1
         return Confined((vn * forward[0] + ve * forward[1], vn * right[0] + ve * right[1], duration), confined.note)
 
-    def _confine_ned(self, p: Point, v: Point, duration: float) -> Confined:
-        """:meth:`confine` in NED: ``v`` (north, east) for ``duration`` s from ``p``."""
+    def _confine_ned(self, p: Point, v: Point, duration: float, moving: Point | None) -> Confined:
+        """:meth:`confine` in NED: ``v`` (north, east) for ``duration`` s from ``p``, the vehicle ``moving`` so.
+
+        In the boundary band the vehicle's own outward speed is taken off the vector too (it brakes what it carries
+        towards the boundary instead of coasting through), for at most ``response_lag_s``.
+        """
         nearest = [(s.nearest(p), s) for s in self.shapes]
         (depth, outward), shape = min(nearest, key=lambda found: found[0][0])
         if depth < 0:
@@ -167,10 +184,16 @@ class Envelope:
                             f"{-depth:.1f} m outside {shape.describe()}: flown straight back in")
         notes = []
         for (depth, outward), s in nearest:
-            out = v[0] * outward[0] + v[1] * outward[1]
-            if depth < self.config.boundary_band_m and out > 0:
-                v = (v[0] - out * outward[0], v[1] - out * outward[1])
+            if depth >= self.config.boundary_band_m:
+                continue
+            out = max(0.0, v[0] * outward[0] + v[1] * outward[1])
+            drift = 0.0 if moving is None else moving[0] * outward[0] + moving[1] * outward[1]
+            drift = drift if drift > MIN_DRIFT_MS else 0.0
+            if out or drift:
+                v = (v[0] - (out + drift) * outward[0], v[1] - (out + drift) * outward[1])
                 notes.append(f"slid along {s.describe()}")
+            if drift:
+                duration = min(duration, self.config.response_lag_s)
         if math.hypot(*v) < 1e-3:
             return Confined(None, f"refused: at {shape.describe()}, the vector points out", "at the boundary")
         span = duration + self.config.response_lag_s

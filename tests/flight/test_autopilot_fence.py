@@ -1,0 +1,68 @@
+"""The autopilot's own fence, read at connect: said on every interface, and required when configured."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from controllers.errors import ControllerError
+from controllers.failsafe import ParamAccess
+from controllers.fence import read_fence
+from tests.core.flight_helpers import steering_config
+from uav_tui.core import UavCore
+from uav_tui.errors import UavError
+
+
+class _Params:
+    """ArduPilot's parameters as MAVSDK's Param plugin returns them (no ArduPilot SITL here)."""
+
+    def __init__(self, **values: float) -> None:
+        self.values = values
+
+    async def get_param_int(self, name: str) -> int:
+        if name not in self.values:
+            raise ControllerError(f"{name}: no such parameter")
+        return int(self.values[name])
+
+    async def get_param_float(self, name: str) -> float:
+        return float(self.values[name])
+
+
+async def _bound(name: str, call: Any) -> Any:
+    return await call()
+
+
+@pytest.mark.parametrize(("values", "enabled", "summary"), [
+    ({"FENCE_ENABLE": 0}, False, "autopilot fence: none (FENCE_ENABLE is 0)"),
+    ({"FENCE_ENABLE": 1, "FENCE_ACTION": 0}, False, "autopilot fence: reports only (FENCE_ACTION is 0)"),
+    ({"FENCE_ENABLE": 1, "FENCE_ACTION": 1, "FENCE_TYPE": 3, "FENCE_RADIUS": 80.0, "FENCE_ALT_MAX": 60.0}, True,
+     "autopilot fence: circle 80 m, ceiling 60 m (ArduPilot FENCE_*)"),
+    ({}, False, "autopilot fence: unknown, a parameter could not be read (FENCE_ENABLE: no such parameter)"),
+])
+async def test_ardupilot_fence_parameters_say_whether_a_fence_acts(values: dict[str, float], enabled: bool,
+                                                                   summary: str) -> None:
+    report = await read_fence("ardupilot", ParamAccess(_Params(**values), _bound))
+    assert (report.enabled, report.summary) == (enabled, summary)
+
+
+async def test_without_a_fence_the_platform_says_so_and_autonomy_is_refused_when_one_is_required(
+        tmp_path: Path) -> None:
+    core = UavCore(steering_config(tmp_path, require_autopilot_fence=True))
+    await core.start()
+    try:
+        said = [e.message for e in core.events.recent]
+        assert ("autopilot fence: none (GF_ACTION does nothing; a geofence plan uploaded as polygons is not "
+                "seen)") in said
+        with pytest.raises(UavError, match=r"autonomy refused: the autopilot has no fence that acts"):
+            await core.execute("autonomy on")
+        param = core.controller._param  # type: ignore[union-attr]
+        await param.set_param_int("GF_ACTION", 3)
+        await param.set_param_float("GF_MAX_HOR_DIST", 100.0)
+        await core.gate.check_autopilot_failsafe()  # as at the next connect
+        assert core.events.recent[-1].message == "autopilot fence: radius 100 m, then return (PX4 GF_*)"
+        await core.execute("autonomy on")
+        assert core.gate.enabled
+    finally:
+        await core.stop("test finished")
