@@ -78,7 +78,7 @@ async def settle(core: Any, refused_more_than: int, what: str, timeout: float = 
 
 
 async def test_forward_at_full_speed_stops_on_the_radius_and_from_outside_only_comes_back(tmp_path: Path) -> None:
-    async with flying_core(tmp_path, processor=pushing(tmp_path), radius_m=3.0) as core:
+    async with flying_core(tmp_path, processor=pushing(tmp_path), radius_m=3.0, max_home_height_m=6.0) as core:
         track = Track(core.truth)
         await core.execute("f 1")
         await core.execute("autonomy on")
@@ -112,6 +112,13 @@ async def test_forward_at_full_speed_stops_on_the_radius_and_from_outside_only_c
         track.stop()
         assert min(n for n, _ in track.points) >= -3.0
         assert radius(core.truth.latest()) >= 2.0
+
+        assert core.gate.enabled  # above the ceiling (an updraft): autonomy ends with height_action, hold
+        core.truth.request({"cmd": "teleport", "d": -7.0})
+        await wait_until(lambda: not core.gate.enabled, 5, "autonomy to end above the ceiling")
+        assert re.fullmatch(r"height 7\.\d m above home is above the ceiling 6 m: HOLD", core.gate.stop_reason)
+        await wait_until(lambda: core.truth.latest()["mode"] == "HOLD" and speed(core.truth.latest()) < 0.05, 5,
+                         "the hold")
 
 
 async def test_a_polygon_edge_is_slid_along_into_its_corner_never_through_and_a_lost_target_holds(
