@@ -73,6 +73,16 @@ def test_a_polygon_without_home_stops_a_start_with_the_simulator(tmp_path: Path)
         configured_envelope(config, EventLog())
 
 
+def test_the_limits_in_force_are_said_in_one_line(tmp_path: Path) -> None:
+    assert envelope().describe() == "envelope: height <= 120 m above home (hold); battery above 20 % (rtl)"
+    field = polygon_file(tmp_path / "field.geojson", [(-10, -10), (-10, 10), (10, 10), (10, -10)])
+    assert envelope(radius_m=50.0, polygon=str(field), min_height_m=3.0, max_home_height_m=0.0, max_autonomy_s=90.0,
+                    battery_floor_v=14.2, lost_after_s=2.0, lost_action="rtl").describe() == (
+        "envelope: radius 50 m; polygon field.geojson; height >= 3 m above the ground (hold); 90 s an engagement "
+        "(hold); battery above 20 % or 14.2 V (rtl); target lost 2 s (rtl)")
+    assert envelope(battery_floor_pct=0.0, max_home_height_m=0.0).describe() == "envelope: none"
+
+
 def test_a_polygon_is_placed_when_the_first_position_gives_home(tmp_path: Path) -> None:
     field = polygon_file(tmp_path / "field.geojson", [(-10, -10), (-10, 10), (10, 10), (10, -10)])
     events = EventLog()

@@ -78,6 +78,22 @@ class Envelope:
         self._seen_at: float | None = None
         """When the processor last reported its target (a box or a vector) in this engagement."""
 
+    def describe(self) -> str:
+        """The limits in force, in one line (said at start)."""
+        c = self.config
+        limits = [f"radius {c.radius_m:g} m"] if c.radius_m else []
+        limits += [f"polygon {Path(c.polygon).name}"] if c.polygon.strip() else []
+        for low, high, what in ((c.min_height_m, c.max_height_m, "above the ground"),
+                                (c.min_home_height_m, c.max_home_height_m, "above home")):
+            band = " to ".join(f"{v:g} m" for v in (low, high) if v)
+            limits += [f"height {'>= ' if low and not high else '<= ' if high and not low else ''}{band} {what} "
+                       f"({c.height_action})"] if band else []
+        limits += [f"{c.max_autonomy_s:g} s an engagement ({c.time_action})"] if c.max_autonomy_s else []
+        floors = " or ".join(f"{v:g} {unit}" for v, unit in ((c.battery_floor_pct, "%"), (c.battery_floor_v, "V")) if v)
+        limits += [f"battery above {floors} ({c.battery_action})"] if floors else []
+        limits += [f"target lost {c.lost_after_s:g} s ({c.lost_action})"] if c.lost_after_s else []
+        return "envelope: " + ("; ".join(limits) or "none")
+
     @property
     def horizontal(self) -> bool:
         """A radius or a polygon is configured."""
@@ -235,4 +251,5 @@ def configured_envelope(config: Config, events: EventLog, telemetry: TelemetryMa
         envelope.set_home(home.lat_deg, home.lon_deg)
     if telemetry is not None:
         telemetry.add_listener(envelope.on_telemetry)
+    events.emit("info", "autonomy", envelope.describe())
     return envelope
