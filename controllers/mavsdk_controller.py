@@ -187,12 +187,8 @@ class MavsdkController(ReadsFence):
     # ---- failsafe parameters ---------------------------------------------------------------------
 
     async def check_failsafe(self, max_t: float, *, tune: bool) -> FailsafeReport:
-        """Check (and with ``tune`` set) the autopilot's offboard-loss parameters, see :mod:`controllers.failsafe`.
-
-        Args:
-            max_t: the longest vector; a dead platform's last command may last ``max_t`` + 0.5 s.
-            tune: set parameters that break a rule; otherwise only report them.
-        """
+        """Check (and with ``tune`` set: set those that break a rule) the autopilot's offboard-loss parameters, see
+        :mod:`controllers.failsafe`; ``max_t``: the longest vector (a dead platform's last lasts ``max_t`` + 0.5 s)."""
         return await check_failsafe(self.autopilot, self._params(), max_t + STALE_MARGIN_S, tune=tune,
                                     rc_receiver=self._link.rc_receiver_present if self._link is not None else None)
 
