@@ -182,10 +182,11 @@ def consider_landing_target(core: LandingCore, result: ProcessedFrame) -> None:
     landing = core.landing
     if target is None:
         status = result.outputs.landing_status
-        landing.why_none = f"the processor says: {status}" if status else landing.why_none
+        landing.why_none = f"the processor says: {status}" if status else "no target in the newest frame"
         return
     if core.camera is None:
         result.landing = "not sent: no camera model to check it against"
+        landing.why_none = "no camera model to check the target against (set camera_hfov or a calibration file)"
         return
     capture_ns = result.frame.t_mono_ns
     at_capture = core.telemetry.at(capture_ns)[0]

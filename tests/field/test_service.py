@@ -127,3 +127,22 @@ def test_a_system_unit_names_its_user(tmp_path: Path, monkeypatch: pytest.Monkey
     monkeypatch.setenv("SUDO_USER", "pi")
     assert uav_main(flags) == 0
     assert "User=pi\n" in (tmp_path / "u" / "uav-tui.service").read_text()
+
+
+@pytest.mark.parametrize("name", ["../escape", "a\nExecStartPre=/bin/sh", "%h", ".hidden"],
+                         ids=["folder", "new line", "specifier", "dot"])
+def test_a_unit_name_that_is_no_name_is_refused(tmp_path: Path, name: str, capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit) as exited:
+        uav_main(["service", "install", "--name", name, "--config", str(_config(tmp_path)),
+                  "--unit-dir", str(tmp_path / "u"), "--no-systemctl"])
+    assert exited.value.code == 2 and "is not a unit name" in capsys.readouterr().err
+    assert not (tmp_path / "u").exists() and not (tmp_path / "escape.service").exists()
+
+
+def test_a_percent_in_the_working_folder_is_no_specifier(tmp_path: Path) -> None:
+    folder = tmp_path / "runs 100%h"
+    folder.mkdir()
+    units = tmp_path / "units"
+    assert uav_main(["service", "install", "--config", str(_config(tmp_path)), "--unit-dir", str(units),
+                     "--working-dir", str(folder), "--no-systemctl"]) == 0
+    assert f"WorkingDirectory={tmp_path}/runs 100%%h\n" in (units / "uav-tui.service").read_text()

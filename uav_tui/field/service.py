@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import getpass
 import os
+import re
 import shlex
 import sys
 from pathlib import Path
@@ -25,6 +26,7 @@ SYSTEMCTL_TIMEOUT_S = 20.0
 JOURNAL_LINES = 10
 """Lines of the journal ``status`` shows."""
 PROG = "uav-tui service"
+UNIT_NAME = re.compile(r"[A-Za-z0-9:_.\-]{1,200}")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -34,7 +36,8 @@ def build_parser() -> argparse.ArgumentParser:
                        ("remove", "disable and stop the unit, delete it"),
                        ("status", "installed? enabled? running? and its last journal lines")):
         action = actions.add_parser(name, help=text, description=text)
-        action.add_argument("--name", default="uav-tui", help="the unit's name (default: uav-tui)")
+        action.add_argument("--name", default="uav-tui", type=_unit_name,
+                            help="the unit's name: letters, digits, - _ . : (default: uav-tui)")
         action.add_argument("--system", action="store_true",
                             help="a system unit (root writes it; runs as --run-as) instead of your user's unit")
         action.add_argument("--unit-dir", metavar="DIR", help="where the unit file goes (default: systemd's folder)")
@@ -48,6 +51,13 @@ def build_parser() -> argparse.ArgumentParser:
     install.add_argument("--working-dir", metavar="DIR",
                          help="where the config's relative paths start (runs_dir...); default: this folder")
     return parser
+
+
+def _unit_name(text: str) -> str:
+    """A systemd unit name (no folder, nothing systemd reads as a specifier or a new line)."""
+    if not UNIT_NAME.fullmatch(text) or text.startswith("."):
+        raise argparse.ArgumentTypeError(f"{text!r} is not a unit name: use letters, digits and - _ . :")
+    return text
 
 
 def main(argv: list[str]) -> int:

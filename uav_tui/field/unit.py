@@ -59,7 +59,7 @@ class Unit:
         service = [
             "Type=exec",
             f"ExecStart={' '.join(_quote(arg) for arg in self.command())}",
-            f"WorkingDirectory={self.working_dir}",
+            f"WorkingDirectory={_path(self.working_dir)}",
             *(f"Environment={key}={value}" for key, value in self.environment().items()),
             "StandardInput=null",
             "StandardOutput=journal",
@@ -77,7 +77,7 @@ class Unit:
         return "\n".join([
             f"# Written by `uav-tui service install`; remove with `uav-tui service remove --name {self.name}`.",
             "[Unit]",
-            f"Description=uav-tui platform, headless ({self.config})",
+            f"Description=uav-tui platform, headless ({_path(self.config)})",
             "After=network.target",
             f"StartLimitIntervalSec={START_LIMIT_INTERVAL_SEC}",
             f"StartLimitBurst={START_LIMIT_BURST}",
@@ -103,6 +103,14 @@ def default_unit_dir(system: bool) -> Path:
         return Path("/etc/systemd/system")
     config_home = Path(os.environ.get("XDG_CONFIG_HOME") or Path.home() / ".config")
     return config_home / "systemd" / "user"
+
+
+def _path(path: Path) -> str:
+    """A path as a unit file's value: ``%`` doubled (systemd's specifiers); a line break refused (a new setting)."""
+    text = str(path)
+    if "\n" in text or "\r" in text:
+        raise ValueError(f"{text!r}: a path with a line break cannot go in a unit file")
+    return text.replace("%", "%%")
 
 
 def _quote(arg: str) -> str:

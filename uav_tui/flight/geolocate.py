@@ -160,11 +160,11 @@ def locate(camera: CameraModel | None, box: tuple[float, float, float, float] | 
         lat_deg, lon_deg: the vehicle's position at the capture.
         height_m: the vehicle's height above the ground (above it: > 0).
         abs_alt_m: the vehicle's altitude AMSL, for the target's altitude (optional).
+        height_from: where ``height_m`` came from (a key of :data:`HEIGHT_SIGMAS`): its assumed error.
+        height_note: why a better height was not used (kept in the fix).
 
     Values that cannot be true (:mod:`~uav_tui.flight.telemetry_sanity`: a recording's telemetry is checked here, not
     at the vehicle's boundary) count as not known.
-        height_from: where ``height_m`` came from (a key of :data:`HEIGHT_SIGMAS`): its assumed error.
-        height_note: why a better height was not used (kept in the fix).
     """
     if box is None:
         return GeoFix(NO_BOX)

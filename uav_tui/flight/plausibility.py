@@ -1,8 +1,9 @@
 """Whether an output the processor gave can be true, checked at its relay just before it is sent.
 
 The value types check themselves when they are built (:mod:`processors.landing_target`, :mod:`processors.gimbal`),
-but a processor can change the object afterwards (``object.__setattr__``; the process boundary's pickle rebuilds
-it without the check), and a target that type-checks can still be impossible. So each frame, the relay asks here:
+but a processor in the platform's process (``isolation = "thread"``) can change the object afterwards
+(``object.__setattr__``; from its own process the wire rebuilds it with the check), and a target that type-checks
+can still be impossible. So each frame, the relay asks here:
 
 * a landing target: every field again (the value type's own check, on a copy the processor does not hold); the
   frame it was seen in; its direction inside the camera's view and below the vehicle's horizon; its distance

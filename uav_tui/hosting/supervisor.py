@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import errno
 import functools
 import logging
 import time
@@ -39,6 +40,9 @@ LOAD_TIMEOUT_S = 60.0
 MAX_RESTARTS = 5
 """Restarts allowed within :data:`RESTART_WINDOW_S`; one more crash and the platform gives up."""
 RESTART_WINDOW_S = 60.0
+SHORT_OF_ROOM = frozenset({errno.EMFILE, errno.ENFILE, errno.EAGAIN, errno.ENOMEM, errno.ENOSPC})
+"""Why a process cannot start for now (the system is out of descriptors, processes or memory): tried again, not
+counted as a restart. Any other OSError (a moved interpreter, no permission) counts like a failed load."""
 
 
 class ChildSupervisor:
@@ -246,7 +250,12 @@ class ChildSupervisor:
                 reason = f"restart failed: {exc}"
                 self.events.emit("error", "processor", f"restart {attempt} failed: {exc}")
                 continue
-            except OSError as exc:  # the system's limit (descriptors, processes, memory), not the processor's fault
+            except OSError as exc:
+                if exc.errno not in SHORT_OF_ROOM:  # a moved interpreter, no permission: counted like a failure
+                    reason = f"restart failed: {exc}"
+                    self.events.emit("error", "processor", f"restart {attempt} failed: {exc}")
+                    continue
+                # the system's limit (descriptors, processes, memory), not the processor's fault
                 self._restarts.pop()  # not counted: the same attempt again after its wait, until the system has room
                 if not short_of:
                     self.events.emit("error", "processor", f"restart {attempt} could not start a process "
