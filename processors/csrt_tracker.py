@@ -11,7 +11,7 @@ import cv2
 import numpy as np
 
 from processors import sift_match, target_search
-from processors.follow import TargetFollower
+from processors.follow import FOLLOW_GAIN, TargetFollower
 from processors.steering import Box, as_box
 
 logger = logging.getLogger(__name__)
@@ -94,7 +94,7 @@ class CSRTTrackingProcessor(TargetFollower):
         self,
         mode: str = "fast",
         camera: str = "down",
-        gain: float = 0.8,
+        gain: float = FOLLOW_GAIN,
         dead_band: float = 0.05,
         max_speed: float = 1.0,
         vector_t: float = 0.5,

@@ -23,6 +23,12 @@ logger = logging.getLogger(__name__)
 MIN_ROI = 4
 """Shortest side, in frame pixels, of a selection that is taken."""
 
+FOLLOW_GAIN = 2.0
+"""The trackers' default steering gain (m/s per normalised offset). Following a target that moves at ``v`` m/s, a
+proportional follower settles with it ``v / gain`` of the half-frame off centre, whatever the height: at the former
+0.8 a 1 m/s car (the ``sim:`` demo's) sat at 1.25, out of the frame, and the quick start lost it at its edge; at 2
+it sits half-way out, and a 1 m/s target is what ``max_speed`` lets the vehicle follow anyway."""
+
 FOLLOW_MODES = ("vehicle", "gimbal")
 """What keeps the target centred: the vehicle's vectors, or the gimbal's rates while the vehicle holds."""
 

@@ -12,7 +12,7 @@ import cv2
 import numpy as np
 
 from processors import target_search
-from processors.follow import TargetFollower
+from processors.follow import FOLLOW_GAIN, TargetFollower
 from processors.nanotrack_net import HOLD_SHARPNESS, RIVAL_LEVEL, NanoTrackNet
 from processors.steering import Box, as_box
 
@@ -79,7 +79,7 @@ class NanoTrackProcessor(TargetFollower):
     def __init__(
         self,
         camera: str = "down",
-        gain: float = 0.8,
+        gain: float = FOLLOW_GAIN,
         dead_band: float = 0.05,
         max_speed: float = 1.0,
         vector_t: float = 0.5,
