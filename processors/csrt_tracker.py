@@ -248,10 +248,7 @@ class CSRTTrackingProcessor(TargetFollower):
         self._work_box = box
         self._quality.append(self.score)
         if self.score >= baseline and match is not None:
-            gray, x0, y0 = self._gray_window(work, box, 0.0)
-            current = target_search.template(gray, (box[0] - x0, box[1] - y0, box[2], box[3]))
-            if current is not None:
-                self._templates[1] = target_search.blend(self._templates[1], current, _ADAPT_RATE)
+            self._templates[1] = target_search.adapted(self._templates[1], work, box, _ADAPT_RATE)
 
     def _search_near(self, work: np.ndarray) -> None:
         """Correlation search around the last position, wider the longer the target is lost (bounded)."""

@@ -23,13 +23,19 @@ _APPEARANCE_HISTORY = 5
 gradual change of appearance moves it and only a sudden drop counts as evidence (as in ``csrt``)."""
 
 _MIN_LOOK = 0.3
-"""Correlation below this says nothing about the target: a searched place under it is not tried."""
+"""Correlation below this says nothing about the target: a searched place under it is not tried, nor taken where the
+target's own level has fallen under it (a car that turned away from its selected appearance: its median then
+passed a bush beside it)."""
 
 _SURE = 2.0
 """A place found by the whole-frame search is taken only with a peak this many times ``hold`` as sharp (the 10th
 percentile on tracked frames is 7.3, twice the default) and an appearance at least its median: elsewhere in the
 frame a look-alike (another walker, another car) is likelier than the target, and the nearby wait takes the target
 back at the usual evidence."""
+
+_ADAPT_RATE = 0.01
+"""Weight of the box's patch in the adapted appearance on a sure frame that matches as well as usual: it follows
+the quick start's car as it turns (10 degrees a second), and at 0.02 or more it learned car14's look-alike too."""
 
 _EXEMPLAR_PX = 64
 """About how many pixels NanoTrack's 127-px template gives the target (the template spans twice its size):
@@ -47,7 +53,8 @@ class NanoTrackProcessor(TargetFollower):
     Whether the box is reported is judged apart from tracking. NanoTrack's own score stays high when the target
     has gone (the network finds *something*), so each frame is judged on two questions: is NanoTrack *sure*
     (its map's peak is sharp) and is the target *there* (the appearance at the box, normalised correlation with
-    the selected target (:mod:`processors.target_search`), is at least ``loss_ratio`` of its own recent median,
+    the selected target or with a copy adapted slowly as it changes, whichever is higher
+    (:mod:`processors.target_search`), is at least ``loss_ratio`` of its own recent median,
     and no peak of ``rival`` or more stands away from the box). A frame is evidence of loss when the target is
     not there and NanoTrack is unsure or the box is at the frame's edge (a target leaving the view, where a
     sharp peak on what is left of it says little); ``lost_after`` such frames in a row make the target lost
@@ -110,7 +117,7 @@ class NanoTrackProcessor(TargetFollower):
         if appearance is None:
             logger.warning("NanoTrackProcessor: ROI %s is too small to track, ignored", roi)
             return False
-        self._templates = [appearance]
+        self._templates = [appearance, appearance.copy()]
         self._net = NanoTrackNet(self.hold, self.rival)
         self._net.init(work, tuple(int(round(v)) for v in box))
         self._looks.clear()
@@ -125,7 +132,7 @@ class NanoTrackProcessor(TargetFollower):
         box, sure, there = self._step(self._net, work)
         search_due = False
         if self._tracking:
-            self._update(box, sure, there, _at_edge(box, work))
+            self._update(work, box, sure, there)
         elif sure and there:
             logger.info("NanoTrackProcessor: back on the target (sharpness %.1f, appearance %.2f)",
                         self._net.sharpness, self.look)
@@ -161,8 +168,10 @@ class NanoTrackProcessor(TargetFollower):
     def _look_median(self) -> float:
         return statistics.median(self._looks) if self._looks else self.look  # numpy's costs 50x on 5 values
 
-    def _update(self, box: Box, sure: bool, there: bool, at_edge: bool) -> None:
-        """A tracked frame: count the evidence, else take the box (and learn the appearance on a sure frame)."""
+    def _update(self, work: np.ndarray, box: Box, sure: bool, there: bool) -> None:
+        """A tracked frame: count the evidence, else take the box (and on a sure frame learn the appearance's level,
+        and move the adapted appearance towards the box's where it matches as well as usual, away from the edge)."""
+        at_edge = _at_edge(box, work)
         if (not sure or at_edge) and not there:
             self._evidence += 1
             if self._evidence >= self.lost_after:
@@ -174,7 +183,10 @@ class NanoTrackProcessor(TargetFollower):
         self._evidence = 0
         self._work_box = box
         if sure:
+            usual = self._look_median()
             self._looks.append(self.look)
+            if self.look >= usual and not at_edge:  # at the edge the patch may be partly the frame's surroundings
+                self._templates[1] = target_search.adapted(self._templates[1], work, box, _ADAPT_RATE)
 
     def _appearance(self, work: np.ndarray, box: Box, radius: float = 0.25,
                     scales: tuple[float, ...] = (1.0,)) -> target_search.Found | None:
@@ -207,7 +219,7 @@ class NanoTrackProcessor(TargetFollower):
         probe.move_to(found.box)
         tracked = self.score, self.look
         box, _, there = self._step(probe, work)
-        if there and probe.sharpness >= _SURE * self.hold and self.look >= self._look_median():
+        if there and probe.sharpness >= _SURE * self.hold and self.look >= max(self._look_median(), _MIN_LOOK):
             logger.info("NanoTrackProcessor: re-acquired in the whole frame (sharpness %.1f, appearance %.2f)",
                         probe.sharpness, self.look)
             self._net = probe

@@ -45,6 +45,18 @@ def blend(old: np.ndarray, new: np.ndarray, rate: float) -> np.ndarray:
     return ((1.0 - rate) * old + rate * new).astype(np.float32)
 
 
+def adapted(old: np.ndarray, image: np.ndarray, box: Box, rate: float) -> np.ndarray:
+    """``old`` blended (:func:`blend`) towards the appearance under ``box`` in the BGR ``image`` (only the box and a
+    2-px margin are converted); ``old`` itself when the box is too small or off the image."""
+    x, y, w, h = box
+    x0, y0 = max(int(x - 2), 0), max(int(y - 2), 0)
+    x1, y1 = min(int(x + w + 2) + 1, image.shape[1]), min(int(y + h + 2) + 1, image.shape[0])
+    if x1 <= x0 or y1 <= y0:
+        return old
+    current = template(cv2.cvtColor(image[y0:y1, x0:x1], cv2.COLOR_BGR2GRAY), (x - x0, y - y0, w, h))
+    return old if current is None else blend(old, current, rate)
+
+
 def search(gray: np.ndarray, templates: list[np.ndarray], box: Box, radius: float,
            scales: tuple[float, ...] = (1.0,), max_side: int = MAX_SIDE) -> Found | None:
     """Best match of any template around ``box``: shifted up to ``radius`` x its size, at each scale.
