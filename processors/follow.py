@@ -13,10 +13,10 @@ import logging
 import cv2
 import numpy as np
 
-from processors.frame_telemetry import FrameTelemetry
+from processors.frame_telemetry import FrameTelemetry, frame_time_s
 from processors.gimbal import GimbalPointing
 from processors.gimbal_steering import GimbalSteering
-from processors.steering import Box, Steering, Vector, as_box, draw_target
+from processors.steering import Box, Ramp, Steering, Vector, as_box, draw_target
 
 logger = logging.getLogger(__name__)
 
@@ -41,7 +41,8 @@ class TargetFollower:
     ``_drop()`` (forget the target) and ``_search_now()`` (look for the target on the next frame), and the
     ``box`` (full-frame pixels, None while lost) and ``selected`` properties. ``score`` is drawn beside the box.
 
-    Vector: body-frame velocity (vx forward, vy right, m/s, clamped to ``max_speed`` <= 1) that moves the
+    Vector: body-frame velocity (vx forward, vy right, m/s, clamped to ``max_speed`` <= 1, eased in by
+    :class:`~processors.steering.Ramp`) that moves the
     vehicle so that the target comes to the frame centre (``camera="down"``), or keeps it centred
     horizontally and at its selection-time size (``camera="forward"``); ``t`` = ``vector_t`` s.
     ``getPreparedVector`` returns None when no target is selected or it is lost.
@@ -63,6 +64,7 @@ class TargetFollower:
             raise ValueError(f"follow must be one of {', '.join(FOLLOW_MODES)}, got {follow!r}")
         self.tmMgr: FrameTelemetry | None = None
         self.steering = Steering(camera, gain, dead_band, max_speed, vector_t)
+        self._ramp = Ramp()
         self.follow = follow
         self.gimbal_steering = GimbalSteering(gimbal_gain, max_rate=gimbal_max_rate)
         self._pointing: GimbalPointing | None = None
@@ -100,7 +102,8 @@ class TargetFollower:
             self._vector = None
             self._pointing = self._gimbal_rates(box, size) if box else None
         else:
-            self._vector = self.steering.vector(box, size, self._ref_height) if box else None
+            vector = self.steering.vector(box, size, self._ref_height) if box else None
+            self._vector = self._ramp(vector, frame_time_s(self.tmMgr))
         self._draw(frame, box)
 
     def catch_cmd(self, roi: tuple[int, int, int, int]) -> None:

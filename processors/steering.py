@@ -94,6 +94,31 @@ class Steering:
         logger.info("Steering gain now %.2f", self.gain)
 
 
+@dataclass
+class Ramp:
+    """Eases vectors in: each velocity moves from the last by at most ``accel`` m/s per second of the frames' time
+    (direction kept); after no vector (no target: the vehicle holds) the next starts from standstill. A 1 m/s step
+    tilts the vehicle ~14 degrees at once (its ~0.4 s velocity response), which swings a down camera's view by a
+    fifth of the frame: a target near the edge, as the quick start's car is when autonomy goes on, leaves it."""
+
+    accel: float = 1.0
+    _velocity: tuple[float, float] = (0.0, 0.0)
+    _t: float | None = None
+
+    def __call__(self, vector: Vector | None, now: float) -> Vector | None:
+        """``vector`` eased in at ``now`` (s: the frame's capture time, so a replay eases alike)."""
+        dt = 0.0 if self._t is None else min(max(now - self._t, 0.0), 1.0)
+        self._t = now
+        if vector is None:
+            self._velocity = (0.0, 0.0)
+            return None
+        (ux, uy), (vx, vy, t) = self._velocity, vector
+        change = math.hypot(vx - ux, vy - uy)
+        k = min(1.0, self.accel * dt / change) if change > 0 else 1.0
+        self._velocity = (ux + k * (vx - ux), uy + k * (vy - uy))
+        return *self._velocity, t
+
+
 def velocity_toward(
     forward_m: float, right_m: float, gain: float, max_speed: float, dead_band_m: float, t: float
 ) -> Vector:

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from processors.steering import Steering, draw_target, velocity_toward
+from processors.steering import Ramp, Steering, draw_target, velocity_toward
 
 FRAME = (640, 480)
 
@@ -60,3 +60,14 @@ def test_draw_target_draws_box_and_arrow() -> None:
     draw_target(frame, _box_at(480, 240), (0.0, 0.4, 0.5), label="x")
     assert (frame[220:261, 460] == (0, 255, 0)).all()  # left edge of the box
     assert (frame[240, 330:350] == (0, 0, 255)).any()  # arrow pointing right from the centre
+
+
+def test_a_ramp_eases_a_step_in_at_its_acceleration_and_starts_again_from_standstill() -> None:
+    ramp = Ramp(accel=1.0)
+    assert ramp((1.0, 0.0, 0.5), 10.0) == (0.0, 0.0, 0.5)  # the first vector: no time has passed yet
+    vx, vy, t = ramp((1.0, 1.0, 0.5), 10.5)  # 0.5 s at 1 m/s/s: 0.5 m/s towards (1, 1), direction kept
+    assert (round(vx, 3), round(vy, 3), t) == (0.354, 0.354, 0.5)
+    assert ramp((0.2, 0.3, 0.5), 11.5) == (0.2, 0.3, 0.5)  # within reach: as asked
+    assert ramp(None, 11.6) is None
+    vx, _, _ = ramp((1.0, 0.0, 0.5), 11.7)  # after no vector the vehicle held: from standstill again
+    assert round(vx, 3) == 0.1
