@@ -1,6 +1,7 @@
 """The README's quick start, followed: ``uav-tui --fc sim --source "sim:?targets=1" --processor nanotrack
 --takeoff-alt 15``, the car selected loosely (a box of 1.5 x its area), autonomy on, for two minutes (issue 46):
-the box on the car on :data:`MIN_SHARE` of the frames, never lost while the car is wholly in view.
+the box on the car on :data:`MIN_SHARE` of the frames, never lost while the car is wholly in view. One test module
+a tracker (``test_quickstart_follow_*.py``), so that CI flies the two-minute flights on two workers at once.
 
 The box is scored against the ``sim:`` camera's truth: the car's outline as drawn in each frame the processor was
 given (the pose and instant that frame was rendered with, taken on the capture thread as the frame is published).
@@ -15,7 +16,6 @@ from pathlib import Path
 
 import cv2
 import numpy as np
-import pytest
 
 from sources.buffer import Frame
 from sources.sim_geometry import Pose
@@ -91,10 +91,7 @@ def scores(scored: list[tuple[int, Box | None]], drawn: dict[int, Outline | None
     return overlaps, lost_in_view
 
 
-@pytest.mark.timeout(TIMEOUT_S)
-@pytest.mark.parametrize(("processor", "by_iou"), [("nanotrack", True), ("csrt", False)], ids=["nanotrack", "csrt"])
-async def test_the_quick_start_tracker_follows_the_demo_car_for_two_minutes(tmp_path: Path, processor: str,
-                                                                           by_iou: bool) -> None:
+async def follow_the_demo_car(tmp_path: Path, processor: str, by_iou: bool) -> None:
     """On :data:`MIN_SHARE` of the frames nanotrack's box overlaps the car by :data:`MIN_IOU`; csrt's has its centre
     on the car. CSRT's box keeps the selection's shape (its scale moves both sides alike): 1.22 x a car that then
     turns across it overlaps it by 0.28-0.35, so its IoU is held over 0.3 on 0.94-0.96 of the frames by geometry
