@@ -1,6 +1,6 @@
 """ArduCopter quirks, each a small function with the measured fact that requires it.
 
-Measured against ArduCopter 4.8-dev SITL with MAVSDK 4.1 (see ARCHITECTURE.md, "Autopilot facts").
+Measured against ArduCopter 4.8-dev SITL with MAVSDK 4.1 (see docs/flight-controllers.md, "Measured autopilot facts").
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 
 When the platform dies (SIGKILL, power, a kernel panic) nobody sends zero or a holding mode: the
 autopilot's own failsafe decides how long the last velocity is flown, and what the vehicle does then.
-Measured (ARCHITECTURE.md, "Autopilot facts"): PX4 switches after ``COM_OF_LOSS_T`` (1 s) to
+Measured (docs/flight-controllers.md, "Measured autopilot facts"): PX4 switches after ``COM_OF_LOSS_T`` (1 s) to
 ``COM_OBL_RC_ACT``; ArduCopter keeps a GUIDED velocity target for ``GUID_TIMEOUT`` (3 s by default), then
 stops in GUIDED.
 

@@ -1,4 +1,4 @@
-"""The safety rules of ARCHITECTURE.md, each enforced by the platform, on the simulated vehicle.
+"""The safety rules of docs/safety.md, each enforced by the platform, on the simulated vehicle.
 
 Every test flies through a real UavCore, real MAVSDK and the simulator process; ground truth and
 the setpoints as they arrived come from the simulator's truth channel. These hold real time to bounds (the module

@@ -1,4 +1,4 @@
-"""Safety rules of ARCHITECTURE.md whose tests hold no real time to a bound: what the gate refuses and when it lets go.
+"""Safety rules of docs/safety.md whose tests hold no real time to a bound: what the gate refuses and when it lets go.
 
 Every test flies through a real UavCore, real MAVSDK and the simulator process (as ``test_safety.py``, whose tests
 hold real-time bounds and run alone in CI); their waits are limits on how long to wait for an outcome, not the

@@ -1,6 +1,6 @@
 """The autonomy gate: the only path from a processor's vector to the flight controller.
 
-It enforces the safety rules of ARCHITECTURE.md: vectors are validated and clamped (rule 1), executed
+It enforces the safety rules of docs/safety.md: vectors are validated and clamped (rule 1), executed
 only while autonomy is on, the vehicle is armed and in the air, the link is alive and the frame is
 fresh (rule 2), and a watchdog stops autonomy (zero velocity, hold) on a processor stall, repeated
 processor errors, a camera stall or link loss (rule 4). Streaming at >= 10 Hz and the final
