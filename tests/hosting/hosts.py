@@ -8,9 +8,11 @@ from collections.abc import AsyncIterator, Callable
 from contextlib import asynccontextmanager
 from typing import Any
 
+import numpy as np
 import pytest
 
 from processors import load_processor
+from sources.buffer import FrameBuffer
 from uav_tui.events import EventLog
 from uav_tui.hosting.host import ProcessedFrame
 from uav_tui.hosting.process_host import SubprocessHost
@@ -72,3 +74,16 @@ async def collect(worker: Worker, results: list[ProcessedFrame], count: int, tim
         task.cancel()
         await asyncio.gather(task, return_exceptions=True)  # its stop ran whole: nothing of it left to the loop's end
     assert len(results) >= count, f"only {len(results)} frames processed"
+
+
+async def one_at_a_time(worker: Worker, buffer: FrameBuffer, results: list[ProcessedFrame], frames: int) -> None:
+    """Put ``frames`` small frames, each once the one before was processed (so none is skipped)."""
+    worker.attach(buffer)
+    task = asyncio.create_task(worker.run())
+    try:
+        for n in range(1, frames + 1):
+            buffer.put(np.zeros((4, 4, 3), np.uint8))
+            await until(lambda n=n: len(results) == n, f"frame {n} processed")
+    finally:
+        task.cancel()
+        await asyncio.gather(task, return_exceptions=True)

@@ -17,7 +17,7 @@ import pytest
 
 from sources.buffer import FrameBuffer
 from sources.synthetic import SyntheticSource
-from tests.hosting.hosts import BOTH, SLOW, collect, running_worker, until
+from tests.hosting.hosts import BOTH, SLOW, collect, one_at_a_time, running_worker, until
 from uav_tui.events import EventLog
 from uav_tui.flight.telemetry import TelemetryManager
 from uav_tui.hosting.host import ProcessedFrame
@@ -204,14 +204,7 @@ async def test_exceptions_are_caught_counted_and_keep_the_loop_alive(tmp_path: P
     buffer = FrameBuffer()
     results: list[ProcessedFrame] = []
     async with running_worker(isolation, f"{tmp_path}/failing.py:Failing", results.append) as worker:
-        worker.attach(buffer)
-        task = asyncio.create_task(worker.run())
-        try:
-            for n in range(1, 7):  # one frame at a time: each is processed before the next arrives
-                buffer.put(np.zeros((4, 4, 3), np.uint8))
-                await until(lambda n=n: len(results) == n, f"frame {n} processed")
-        finally:
-            task.cancel()
+        await one_at_a_time(worker, buffer, results, 6)
     failed = [r for r in results if r.error]
     assert len(failed) == 3 and worker.snapshot().errors == 3
     assert "failing.py\", line 10" in failed[0].error and "ValueError: bad frame 1" in failed[0].error

@@ -6,13 +6,10 @@ Pickle, the wire before, called whatever ``__reduce__`` a returned object named 
 
 from __future__ import annotations
 
-import asyncio
 from pathlib import Path
 
-import numpy as np
-
 from sources.buffer import FrameBuffer
-from tests.hosting.hosts import running_worker, until
+from tests.hosting.hosts import one_at_a_time, running_worker
 from uav_tui.hosting.host import ProcessedFrame
 
 HOSTILE = '''
@@ -68,14 +65,7 @@ async def test_a_processor_returning_code_gets_frame_errors_and_the_platform_run
     buffer = FrameBuffer()
     results: list[ProcessedFrame] = []
     async with running_worker("process", f"{tmp_path}/hostile.py:Hostile", results.append) as worker:
-        worker.attach(buffer)
-        task = asyncio.create_task(worker.run())
-        try:
-            for n in range(1, 7):  # one frame at a time: each is processed before the next arrives
-                buffer.put(np.zeros((4, 4, 3), np.uint8))
-                await until(lambda n=n: len(results) == n, f"frame {n} processed")
-        finally:
-            task.cancel()
+        await one_at_a_time(worker, buffer, results, 6)
         assert worker.state_text == "running"  # the same child throughout: nothing ended it
     first, second, third, *rest = results
     assert isinstance(first.vector, str) and "Exits object" in first.vector  # its repr: the gate rejects text
