@@ -94,11 +94,11 @@ class Plugins:
     """MavlinkDirect and Telemetry as LinkMonitor uses them: HEARTBEATs and MAVSDK's flight modes, pushed by hand."""
 
     def __init__(self) -> None:
-        self.heartbeats, self.modes = Feed(), Feed()
+        self.heartbeats, self.modes, self.sys_status = Feed(), Feed(), Feed()
 
     def subscribe_message(self, name: str) -> AsyncGenerator[Any, None]:
-        assert name == "HEARTBEAT"
-        return self.heartbeats.stream()
+        assert name in ("HEARTBEAT", "SYS_STATUS")  # the link reads the radio's presence from SYS_STATUS too
+        return (self.heartbeats if name == "HEARTBEAT" else self.sys_status).stream()
 
     def subscribe_flight_mode(self) -> AsyncGenerator[Any, None]:
         return self.modes.stream()

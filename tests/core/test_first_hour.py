@@ -205,8 +205,8 @@ def test_more_error_lines_point_at_the_fix(tmp_path: Path) -> None:
                                         "        pass\n")
     cases = {
         ("--config", "safty.toml"): "safty.toml: unknown table [safty]; did you mean [safety]?",
-        ("--config", "nothing.toml"): "nothing.toml: unknown table [zzz]; the sections are [safety], [recording], "
-                                      "[web], [sim], [camera]",
+        ("--config", "nothing.toml"): "nothing.toml: unknown table [zzz]; the sections are [safety], [envelope], "
+                                      "[recording], [web], [sim], [camera]",
         ("--duration", "-5"): "argument --duration: -5 must be a positive number of seconds",
         ("--duration", "nan"): "argument --duration: nan must be a positive number of seconds",
         ("--processor", "gain.py:Gain", "--processor-arg", "gain=abc"): "constructor argument gain must be a number "
