@@ -182,7 +182,7 @@ def consider_landing_target(core: LandingCore, result: ProcessedFrame) -> None:
     landing = core.landing
     if target is None:
         status = result.outputs.landing_status
-        landing.why_none = f"the processor says: {status}" if status else "no target in the newest frame"
+        landing.why_none = f"the processor says: {status}" if status else ""  # not an older frame's reason
         return
     if core.camera is None:
         result.landing = "not sent: no camera model to check it against"
