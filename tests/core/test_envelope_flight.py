@@ -87,7 +87,8 @@ async def test_forward_at_full_speed_stops_on_the_radius_and_from_outside_only_c
         assert max(math.hypot(*p) for p in track.points) <= 3.0, "the vehicle flew beyond the radius"
         assert 2.0 <= stopped <= 3.0
         assert core.gate.executed > 0 and core.gate.envelope.cut > 0
-        assert core.gate.last_decision.startswith("refused: at the 3 m radius")
+        # at the boundary a vector is refused, or slides along it when the vehicle stands a little off the axis
+        assert "the 3 m radius" in core.gate.last_decision and "beyond" not in core.gate.last_decision
 
         await core.execute("autonomy off")  # the operator flies it out (the envelope set in flight, wind)
         await core.execute("vector 1 0 2")
