@@ -84,7 +84,9 @@ async def test_connects_as_px4_quadrotor_with_telemetry_flowing(sim_vehicle: Sim
         home = await drone.telemetry.home()
         assert home.latitude_deg == pytest.approx(47.397742, abs=1e-6)
         assert home.absolute_altitude_m == pytest.approx(488.0, abs=0.01)
-        gps = await drone.telemetry.gps_info()
+        stream = drone.telemetry.subscribe_gps_info()  # the first GPS_RAW_INT, not MAVSDK's empty value before it
+        async with aclosing(stream), asyncio.timeout(10):
+            gps = await anext(g async for g in stream if g.num_satellites)
         assert gps.num_satellites >= 8
         battery = await drone.telemetry.battery()
         assert battery.voltage_v == pytest.approx(16.8, abs=0.1) and battery.remaining_percent > 99.0
