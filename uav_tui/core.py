@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Any
 import psutil
 
 from controllers import connect_controller
-from controllers.base import BlockingCalls, FlightController, GimbalControl, LandingTargets, RecordedVehicle
+from controllers.base import BlockingCalls, FlightController, LandingTargets, RecordedVehicle
 from controllers.replay_timeline import ReplayTimeline
 from sources import CameraSource
 from sources.camera_model import CameraModel
@@ -27,7 +27,6 @@ from uav_tui.flight.autonomy import AutonomyGate
 from uav_tui.flight.clock_check import ClockCheck
 from uav_tui.flight.commands import Command
 from uav_tui.flight.exit_hold import hold_before_exit, mode_left_at_exit
-from uav_tui.flight.gimbal_relay import GimbalRelay, consider_gimbal
 from uav_tui.flight.link import LinkWatch
 from uav_tui.flight.telemetry import TelemetryManager
 from uav_tui.hosting.exception_reports import ProcessorErrors
@@ -44,6 +43,8 @@ from uav_tui.landing_targets import (
 from uav_tui.operations import Operations
 from uav_tui.output.text import last_line, shorten
 from uav_tui.recording import NotRecording, Recorder, describe
+from uav_tui.relays.contract import OutputRelay
+from uav_tui.relays.registry import build_relays, consider_all
 from uav_tui.replay.gate import ReplayGate, stage_clock
 from uav_tui.replay.operator import CommandReplay, recorded_commands
 from uav_tui.status import CoreState, CoreStatus, core_status
@@ -73,8 +74,8 @@ class UavCore:
         """The processor's landing targets and the operator's ``precland`` switch."""
         self.landing_sender: LandingTargetSender | None = None
         """Sends the landing targets (None without a controller that takes them)."""
-        self.gimbal_relay: GimbalRelay | None = None
-        """Sends the processor's gimbal pointing (None without a controller that points a gimbal)."""
+        self.relays: dict[str, OutputRelay] = {}
+        """The output relays the controller can serve (:func:`~uav_tui.relays.registry.build_relays`), by field."""
         self.controller: FlightController | None = None
         self.active_camera = ActiveCamera(config.camera, self.events, self._spawn)
         """The source frames come from and its camera model (``source`` and ``camera`` read it)."""
@@ -139,8 +140,7 @@ class UavCore:
             self.active_camera.controller, self.active_camera.replay = self.controller, self.replay
             if isinstance(self.controller, LandingTargets):
                 self.landing_sender = LandingTargetSender(self.controller, self.events)
-            if isinstance(self.controller, GimbalControl):
-                self.gimbal_relay = GimbalRelay(self.controller, self.gate, self.config.safety, self.events)
+            self.relays = build_relays(self.controller, self.gate, self.config.safety, self.events)
             await self.gate.check_autopilot_failsafe()
             self.worker.bind_telemetry(self.telemetry)
             await camera_ready
@@ -215,9 +215,10 @@ class UavCore:
         self.state = CoreState.STOPPED
 
     async def _cancel_tasks(self) -> None:
-        for relay in (self.landing_sender, self.gimbal_relay):
-            if relay is not None:
-                await relay.close()
+        if self.landing_sender is not None:
+            await self.landing_sender.close()
+        for relay in self.relays.values():
+            await relay.close()
         for task in self._tasks:
             task.cancel()
         await asyncio.gather(*self._tasks, return_exceptions=True)
@@ -337,7 +338,7 @@ class UavCore:
             self.processor_error = exception
         self.gate.consider(result)
         consider_landing_target(self, result)
-        consider_gimbal(self.gimbal_relay, result)
+        consider_all(self.relays, result)
         for listener in tuple(self._frame_listeners):
             listener(result)
 

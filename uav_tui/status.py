@@ -12,6 +12,7 @@ from uav_tui.flight.geo_detections import LocatedDetection, count_tracks, descri
 from uav_tui.flight.geolocate import GeoFix, describe, locate_row
 from uav_tui.hosting.host import ProcessorState
 from uav_tui.output.text import safe
+from uav_tui.relays.registry import gimbal_relay
 from uav_tui.stats import PipelineStats
 
 if TYPE_CHECKING:
@@ -20,11 +21,11 @@ if TYPE_CHECKING:
     from sources.camera_model import CameraModel
     from uav_tui.config import Config
     from uav_tui.flight.autonomy import AutonomyGate
-    from uav_tui.flight.gimbal_relay import GimbalRelay
     from uav_tui.flight.link import LinkWatch
     from uav_tui.flight.telemetry import TelemetryManager
     from uav_tui.hosting.host import ProcessorHost
     from uav_tui.landing_targets import LandingTargetFeed, LandingTargetSender
+    from uav_tui.relays.contract import OutputRelay
 
 
 class CoreState(enum.Enum):
@@ -166,7 +167,7 @@ class ObservedCore(Protocol):
     startup_s: float | None
     landing: LandingTargetFeed
     landing_sender: LandingTargetSender | None
-    gimbal_relay: GimbalRelay | None
+    relays: dict[str, OutputRelay]
 
     @property
     def camera(self) -> CameraModel | None: ...
@@ -190,6 +191,7 @@ class ObservedCore(Protocol):
 def core_status(core: ObservedCore) -> CoreStatus:
     """Everything an interface shows of a running core, as one immutable snapshot."""
     worker, source, controller, gate, link = core.worker, core.source, core.controller, core.gate, core.link
+    gimbal = gimbal_relay(core.relays)
     assert worker is not None and source is not None
     last = worker.last
     box = last.box if last is not None else None
@@ -218,9 +220,9 @@ def core_status(core: ObservedCore) -> CoreStatus:
         landing_targets_failed=core.landing_sender.failed if core.landing_sender is not None else 0,
         landing_targets_refused=core.landing.refusals.refused,
         landing_none_reason=core.landing.why_none,
-        gimbal_sent=core.gimbal_relay.sent if core.gimbal_relay is not None else 0,
-        gimbal_failed=core.gimbal_relay.failed if core.gimbal_relay is not None else 0,
-        gimbal_controlled=core.gimbal_relay is not None and core.gimbal_relay.controller.gimbal_controlled,
+        gimbal_sent=gimbal.sent if gimbal is not None else 0,
+        gimbal_failed=gimbal.failed if gimbal is not None else 0,
+        gimbal_controlled=gimbal is not None and gimbal.controller.gimbal_controlled,
         last_vector=gate.last_vector,
         last_decision=gate.last_decision,
         last_verdict=gate.last_decision.verdict,

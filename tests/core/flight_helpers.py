@@ -17,6 +17,7 @@ from controllers.sim.launcher import SimVehicle
 from controllers.sim.truth import TruthClient
 from uav_tui.config import Config, load_config
 from uav_tui.core import UavCore
+from uav_tui.relays.registry import gimbal_relay
 
 STEERING_PROCESSOR = '''
 import math, time
@@ -123,7 +124,7 @@ autonomy, which is not what those tests are about (``test_safety`` tests the sta
 
 def what_happened(core: UavCore) -> str:
     """For a failure message: the last frame's box and decisions, the gimbal setpoints and the recent warnings."""
-    last, relay = core.worker.last, core.gimbal_relay
+    last, relay = core.worker.last, gimbal_relay(core.relays)
     gimbal = "" if relay is None else f"gimbal setpoints sent {relay.sent}, failed {relay.failed}; "
     frame = "no frame processed" if last is None else (
         f"last frame: box {last.box}, vector {last.decision!r}, gimbal {last.gimbal!r}")

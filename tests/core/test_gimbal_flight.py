@@ -18,6 +18,7 @@ from controllers.sim.launcher import SimVehicle
 from sources.sim_geometry import Pose, project_ground_point
 from tests.core.flight_helpers import RENDERER_STALL_S, flying_core, wait_until, what_happened
 from uav_tui.recorded import dataset
+from uav_tui.relays.registry import gimbal_relay
 
 WIDTH, HEIGHT = 480, 360
 SOURCE = f"sim:?width={WIDTH}&height={HEIGHT}&mount=gimbal&targets=1&target_speed=1.0"
@@ -95,7 +96,7 @@ async def test_a_tracker_keeps_a_driving_car_centred_with_the_gimbal_while_the_v
         assert not off, f"the car was more than 10 % of the frame off centre: {off[:5]}...; {what_happened(core)}"
         assert math.hypot(turned["n"] - hover["n"], turned["e"] - hover["e"]) < 0.5  # the vehicle hovered
         assert core.gate.executed == 0 and turned["gimbal_controlled"]
-        assert core.gimbal_relay is not None and core.gimbal_relay.sent > 30
+        assert gimbal_relay(core.relays) is not None and gimbal_relay(core.relays).sent > 30
         status = core.status().gimbal_summary()
         assert status.startswith("gimbal P-") and "controlled" in status, status
         assert core.status().as_dict()["gimbal"].startswith("gimbal P-")  # --json and the web page's status line
@@ -144,4 +145,4 @@ async def test_nothing_is_sent_while_autonomy_is_off(tmp_path: Path, sim_vehicle
         await wait_until(lambda: core.worker.last is not None and core.worker.last.gimbal, 5, "a frame judged")
         await asyncio.sleep(0.5)
         assert core.worker.last.gimbal == "not sent: autonomy off"
-        assert not core.truth.latest()["gimbal_controlled"] and core.gimbal_relay.sent == 0
+        assert not core.truth.latest()["gimbal_controlled"] and gimbal_relay(core.relays).sent == 0

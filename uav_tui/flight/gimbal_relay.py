@@ -41,7 +41,8 @@ STOP = GimbalPointing.rates(0.0, 0.0)
 
 
 class GimbalRelay:
-    """Sends each frame's gimbal pointing while the gate allows it; stops and releases the gimbal when it stops.
+    """Sends each frame's gimbal pointing while the gate allows it; stops and releases the gimbal when it stops (the
+    ``gimbal`` :class:`~uav_tui.relays.contract.OutputRelay`).
 
     Args:
         controller: the flight controller; a :class:`~controllers.base.GimbalControl`, else TypeError.
@@ -55,6 +56,7 @@ class GimbalRelay:
         if not isinstance(controller, GimbalControl):
             raise TypeError(f"{controller.description} has no gimbal control")
         self.controller: GimbalControl = controller
+        self.field = "gimbal"
         self.gate = gate
         self.safety = safety
         self.events = events
@@ -139,6 +141,10 @@ class GimbalRelay:
         else:
             self.releases += 1
             self.events.emit("info", "autonomy", f"gimbal stopped and released: {reason}")
+
+    @property
+    def counts(self) -> dict[str, int]:
+        return {"sent": self.sent, "failed": self.failed}
 
     @property
     def sent(self) -> int:
