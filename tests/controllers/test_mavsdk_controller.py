@@ -238,8 +238,11 @@ async def test_vector_moves_along_the_heading_then_holds(
     await airborne.fc.set_fly_vector(vx, vy, 2.0)
     assert airborne.fc.vector_active
     await airborne.until(lambda s: s["mode"] == "OFFBOARD", 1.0, "offboard")
-    ended = await airborne.until(lambda s: s["mode"] == "HOLD", 3.5, "hold after the vector")
-    assert not airborne.fc.vector_active
+    # The simulator reports HOLD when the command arrives, the controller clears vector_active when its ack is back:
+    # two processes, so wait for both rather than assume an order between them.
+    ended = await airborne.until(
+        lambda s: s["mode"] == "HOLD" and not airborne.fc.vector_active, 3.5, "hold after the vector, acknowledged"
+    )
     assert airborne.fc.last_vector_end == "completed"
     assert ended["t_mono_ns"] - since < 3.0e9
     after = await airborne.until(lambda s: math.hypot(s["vn"], s["ve"]) < 0.05, 3.0, "stopped")
