@@ -14,8 +14,10 @@ done
 python3 -c 'import sys; sys.exit(sys.version_info < (3, 11))' || { echo "uav-tui needs Python >= 3.11" >&2; exit 1; }
 [ -x .venv/bin/python ] || python3 -m venv .venv
 rm -f .venv/.setup-run .venv/.setup-dev
-.venv/bin/python -m pip install -q --upgrade pip
-.venv/bin/python -m pip install -q -e ".${extras:+[$extras]}"
+# uv resolves and installs the same versions as pip, an order of magnitude faster (11 s against 157 s for `dev`
+# on two busy cores): pip only fetches uv itself.
+.venv/bin/python -m pip install -q --disable-pip-version-check uv
+.venv/bin/uv pip install -q --python .venv/bin/python -e ".${extras:+[$extras]}"
 # Exactly one package may provide cv2, and it must be the contrib build (CSRT, Darknet loader).
 .venv/bin/python scripts/check_opencv.py
 echo "$inputs" > ".venv/.setup-${extras:-run}"
