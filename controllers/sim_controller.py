@@ -38,7 +38,13 @@ async def start_sim_controller(*, heartbeat_timeout: float = 10.0, **vehicle: An
     """Start a simulator process (``vehicle``: :class:`SimVehicle`'s home, wind, seed, noise) and connect to
     it; the simulator is stopped again if that fails."""
     sim = SimVehicle(**vehicle)
-    await asyncio.to_thread(sim.start)
+    starting = asyncio.ensure_future(asyncio.to_thread(sim.start))
+    try:
+        await asyncio.shield(starting)
+    except asyncio.CancelledError:  # the spawn goes on in its thread: let it finish, then stop what it started
+        await asyncio.gather(starting, return_exceptions=True)
+        await asyncio.to_thread(sim.stop)
+        raise
     controller = SimController(sim)
     try:
         await controller.connect(sim.connection_string, heartbeat_timeout=heartbeat_timeout)

@@ -123,16 +123,14 @@ class UavCore:
         # The camera's one-off preparation (the sim: camera's ground) overlaps loading and connecting.
         camera_ready = self.active_camera.warm_up(self.config.source)
         try:
-            self.worker = await start_host(self.config, self._on_result, self.events, self._on_processor_fault)
-            self.controller = await connect_controller(self.config.fc, heartbeat_timeout=self.config.connect_timeout,
-                                                       sim_vehicle=self.config.sim.vehicle())
+            worker = await self._load_and_connect()
             self.telemetry = TelemetryManager(self.controller)
             if self.controller is not None and not isinstance(self.controller, RecordedVehicle):
                 self.telemetry.add_listener(ClockCheck(self.events))  # a replay's clock was the recording's
             if isinstance(self.controller, RecordedVehicle):
                 replay = self.replay = self.controller.timeline
                 self.gate = ReplayGate(self.config.safety, self.telemetry, self.events, self.controller)
-                self.worker.stage_clock = stage_clock(replay)
+                worker.stage_clock = stage_clock(replay)
                 self.add_frame_listener(lambda result: replay.frame_done())
                 commands = recorded_commands(self.controller.run_dir)
                 replay.before_show = CommandReplay(self, loop, commands).before_show
@@ -142,7 +140,7 @@ class UavCore:
                 self.landing_sender = LandingTargetSender(self.controller, self.events)
             self.relays = build_relays(self.controller, self.gate, self.config.safety, self.events)
             await self.gate.check_autopilot_failsafe()
-            self.worker.bind_telemetry(self.telemetry)
+            worker.bind_telemetry(self.telemetry)
             await camera_ready
             source = await self.active_camera.start(self.config.source)
             if self.config.recording.record:
@@ -156,25 +154,44 @@ class UavCore:
         except BaseException:
             await self._release()
             raise
-        self.worker.attach(source.buffer, self.camera)
-        self._spawn(self.worker.run(), "processor")
+        worker.attach(source.buffer, self.camera)
+        self._spawn(worker.run(), "processor")
         self._spawn(self.telemetry.run(), "telemetry")
         if self.controller is not None:
             self.link = LinkWatch(self.controller, self.events, self.config.safety.link_timeout)
             self._spawn(self.link.run(), "link")
         self._spawn(self.gate.run(), "autonomy")
-        worker = self.worker
         self._spawn(self.gate.watch(self.newest_frame_age, lambda: worker.busy_s,
                                     lambda: worker.consecutive_errors), "watchdog")
         self._spawn(watch_precland(self), "precland watchdog")
         self.state = CoreState.RUNNING
         self.events.emit("info", "platform", f"started: source {self.config.source}, processor "
-                         f"{self.worker.processor.info.name} ({self.config.isolation}), fc {self.config.fc}")
+                         f"{worker.processor.info.name} ({self.config.isolation}), fc {self.config.fc}")
         try:
             await self.side_channels.start(self)
         except BaseException:
             await self._release()
             raise
+
+    async def _load_and_connect(self) -> ProcessorHost:
+        """Start the processor's host and connect the vehicle at once (each takes about a second: a process to
+        spawn); whichever fails first cancels the other, and what did start is on ``self`` for ``_release``."""
+
+        async def load() -> None:
+            self.worker = await start_host(self.config, self._on_result, self.events, self._on_processor_fault)
+
+        async def connect() -> None:
+            self.controller = await connect_controller(self.config.fc, heartbeat_timeout=self.config.connect_timeout,
+                                                       sim_vehicle=self.config.sim.vehicle())
+
+        try:
+            async with asyncio.TaskGroup() as parts:
+                parts.create_task(load(), name="load the processor")
+                parts.create_task(connect(), name="connect the vehicle")
+        except BaseExceptionGroup as failed:
+            raise failed.exceptions[0] from None  # the part that failed first says what to fix
+        assert self.worker is not None
+        return self.worker
 
     def _on_processor_fault(self, reason: str) -> None:
         """The processor's process died or was killed: autonomy off, and hold if a vector flies."""

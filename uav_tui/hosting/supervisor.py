@@ -97,7 +97,12 @@ class ChildSupervisor:
     async def start_child(self) -> ChildProcess:
         """A new child with the processor loaded in it (ProcessorLoadError when it cannot be, or takes too long)."""
         loop = asyncio.get_running_loop()
-        child = await loop.run_in_executor(self._spawner, spawn, loop.create_future(), self._output.lines)
+        spawning = loop.run_in_executor(self._spawner, spawn, loop.create_future(), self._output.lines)
+        try:
+            child = await asyncio.shield(spawning)
+        except asyncio.CancelledError:  # the spawn goes on in its thread: kill what it starts
+            spawning.add_done_callback(_abandon_spawned)
+            raise
         self.children.append(child)
         child.watch_exit(functools.partial(_call_soon, loop, self._ended, child))
         self._link.listen(child)
@@ -279,6 +284,11 @@ def _abandon(child: ChildProcess) -> None:
         child.ready.cancel()
     elif not child.ready.cancelled():
         child.ready.exception()  # retrieved: what it says is reported by whoever started it, if anyone
+
+
+def _abandon_spawned(spawning: asyncio.Future[ChildProcess]) -> None:
+    if spawning.exception() is None:
+        _abandon(spawning.result())
 
 
 def _call_soon(loop: asyncio.AbstractEventLoop, callback: Callable[..., None], *args: Any) -> None:
