@@ -25,6 +25,16 @@ a terminal; .ci/run runs them alone, after the others have run on both cores, so
 cannot stretch them. Measured at load average 14 with test_isolation.py too: 51 tests, 620 s; these take about
 420 s of it."""
 
+LONG = (
+    "tests/processors/test_quickstart_follow_nanotrack.py", "tests/processors/test_quickstart_follow_csrt.py",
+    "tests/core/test_failsafe_hold.py", "tests/core/test_shutdown_safety.py", "tests/core/test_envelope_flight.py",
+    "tests/core/test_precland_hostile.py", "tests/hosting/test_processor_hardening.py",
+    "tests/controllers/test_sim_precland.py", "tests/core/test_cli.py", "tests/flight/test_geolocate_flight.py",
+    "tests/web/test_page_target_browser.py",
+)
+"""Modules of over 40 s (CI's list of its slowest tests says which), longest first: collected first, so that
+.ci/run's workers (``--dist loadfile`` hands out modules in collection order) start them before the many short
+ones and none is left to run alone at the end (the quick-start follows were collected late: 127 s each)."""
 SOAK = frozenset({"tests/processors/test_csrt_real_video.py", "tests/processors/test_nanotrack_real_video.py"})
 """Modules marked ``soak``: minutes of real video through the trackers (correctness bounds, none on time); .ci/run
 runs them on one worker beside the first step, niced."""
@@ -33,7 +43,9 @@ SOAK_TIMEOUT_S = 900
 
 
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
-    for item in items:
+    rank = {module: place for place, module in enumerate(LONG)}
+    items.sort(key=lambda item: rank.get(item.path.relative_to(ROOT).as_posix(), len(LONG)))  # stable: others keep
+    for item in items:                                                                       # their order
         module = item.path.relative_to(ROOT).as_posix()
         if module in SERIAL:
             item.add_marker(pytest.mark.serial)
