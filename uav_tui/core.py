@@ -15,7 +15,6 @@ from typing import TYPE_CHECKING, Any
 
 import psutil
 
-from controllers import connect_controller
 from controllers.base import BlockingCalls, FlightController, LandingTargets, RecordedVehicle
 from controllers.replay_timeline import ReplayTimeline
 from sources import CameraSource
@@ -32,7 +31,6 @@ from uav_tui.flight.telemetry import TelemetryManager
 from uav_tui.hosting.exception_reports import ProcessorErrors
 from uav_tui.hosting.host import ProcessedFrame, ProcessorHost
 from uav_tui.hosting.malloc_tuning import tune_this_process
-from uav_tui.hosting.start import start_host
 from uav_tui.landing_targets import (
     LandingTargetFeed,
     LandingTargetSender,
@@ -47,6 +45,7 @@ from uav_tui.relays.contract import OutputRelay
 from uav_tui.relays.registry import build_relays, consider_all
 from uav_tui.replay.gate import ReplayGate, stage_clock
 from uav_tui.replay.operator import CommandReplay, recorded_commands
+from uav_tui.start_parts import load_and_connect
 from uav_tui.status import CoreState, CoreStatus, core_status
 from uav_tui.web.side_channels import SideChannels
 
@@ -123,7 +122,9 @@ class UavCore:
         # The camera's one-off preparation (the sim: camera's ground) overlaps loading and connecting.
         camera_ready = self.active_camera.warm_up(self.config.source)
         try:
-            worker = await self._load_and_connect()
+            worker, self.controller = await load_and_connect(self.config, self._on_result, self.events,
+                                                             self._on_processor_fault)
+            self.worker = worker
             self.telemetry = TelemetryManager(self.controller)
             if self.controller is not None and not isinstance(self.controller, RecordedVehicle):
                 self.telemetry.add_listener(ClockCheck(self.events))  # a replay's clock was the recording's
@@ -172,26 +173,6 @@ class UavCore:
         except BaseException:
             await self._release()
             raise
-
-    async def _load_and_connect(self) -> ProcessorHost:
-        """Start the processor's host and connect the vehicle at once (each takes about a second: a process to
-        spawn); whichever fails first cancels the other, and what did start is on ``self`` for ``_release``."""
-
-        async def load() -> None:
-            self.worker = await start_host(self.config, self._on_result, self.events, self._on_processor_fault)
-
-        async def connect() -> None:
-            self.controller = await connect_controller(self.config.fc, heartbeat_timeout=self.config.connect_timeout,
-                                                       sim_vehicle=self.config.sim.vehicle())
-
-        try:
-            async with asyncio.TaskGroup() as parts:
-                parts.create_task(load(), name="load the processor")
-                parts.create_task(connect(), name="connect the vehicle")
-        except BaseExceptionGroup as failed:
-            raise failed.exceptions[0] from None  # the part that failed first says what to fix
-        assert self.worker is not None
-        return self.worker
 
     def _on_processor_fault(self, reason: str) -> None:
         """The processor's process died or was killed: autonomy off, and hold if a vector flies."""
