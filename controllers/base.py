@@ -6,6 +6,8 @@ from collections.abc import AsyncIterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
+from controllers.vector_end import VectorEnd as VectorEnd
+from controllers.vector_end import VectorEndKind as VectorEndKind
 from uav_values.telemetry import RECEIVE_STAMPS as RECEIVE_STAMPS
 from uav_values.telemetry import TELEMETRY_FIELDS as TELEMETRY_FIELDS
 from uav_values.telemetry import PoseSample as PoseSample
@@ -55,8 +57,9 @@ class FlightController(Protocol):
         ...
 
     @property
-    def last_vector_end(self) -> str:
-        """How the last vector ended: ``completed``, ``stopped``, ``vehicle left offboard (MODE)``, ``failed: ...``."""
+    def last_vector_end(self) -> VectorEnd:
+        """How the last vector ended (its ``kind``); ``str()`` reads ``completed``, ``stopped``,
+        ``vehicle left offboard (MODE)`` or ``failed: ...``."""
         ...
 
     def heartbeat_age_s(self) -> float:

@@ -32,6 +32,7 @@ from controllers.mavsdk_pose import POSE_RATE_HZ, pose_samples, request_pose_rat
 from controllers.mavsdk_telemetry import merged_updates
 from controllers.mavsdk_terrain import terrain_reports
 from controllers.precland import LANDING_MODES
+from controllers.vector_end import VectorEnd
 from controllers.vector_stream import DEFAULT_RATE_HZ, VectorStream
 
 logger = logging.getLogger(__name__)
@@ -277,8 +278,8 @@ class MavsdkController(ReadsFence):
         return self._vectors.active
 
     @property
-    def last_vector_end(self) -> str:
-        """How the last vector ended: completed, stopped, vehicle left offboard (MODE), failed: ..."""
+    def last_vector_end(self) -> VectorEnd:
+        """How the last vector ended (see :class:`~controllers.vector_end.VectorEnd`)."""
         return self._vectors.last_end
 
     # ---- landing target -------------------------------------------------------------------------

@@ -21,6 +21,7 @@ from urllib.parse import parse_qs
 from controllers.base import Telemetry
 from controllers.errors import ConnectError, NotSupported
 from controllers.replay_timeline import ReplayTimeline, parse_speed
+from controllers.vector_end import VectorEnd
 
 logger = logging.getLogger(__name__)
 
@@ -151,8 +152,8 @@ class ReplayController:
         return False
 
     @property
-    def last_vector_end(self) -> str:
-        return ""
+    def last_vector_end(self) -> VectorEnd:
+        return VectorEnd()
 
     async def set_fly_vector(self, vx: float, vy: float, t: float, *, yield_to_others: bool = False) -> None:
         raise self._refuse("vector")

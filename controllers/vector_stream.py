@@ -14,6 +14,7 @@ import time
 from typing import Protocol
 
 from controllers.errors import ControllerError
+from controllers.vector_end import VectorEnd, VectorEndKind
 
 logger = logging.getLogger(__name__)
 
@@ -22,6 +23,12 @@ DEFAULT_RATE_HZ = 20.0
 
 PRESTREAM_S = 0.1
 """PX4 accepts offboard only while setpoints are already streaming; stream this long before asking."""
+
+_STOPPED = VectorEnd(VectorEndKind.STOPPED)
+"""A vector cut short by a command or a stop."""
+
+_REFUSED = VectorEnd(VectorEndKind.FAILED, "offboard refused")
+"""A vector whose start_offboard failed (or was cancelled)."""
 
 
 class OffboardPort(Protocol):
@@ -69,8 +76,8 @@ class VectorStream:
         """Setpoints sent since construction (diagnostics)."""
         self._seen_offboard = False
         self._engaged_at = 0.0
-        self.last_end = ""
-        """How the last vector ended: completed, stopped, vehicle left offboard (MODE), failed: ..."""
+        self.last_end = VectorEnd()
+        """How the last vector ended (none yet, completed, stopped, failed, left offboard)."""
 
     @property
     def active(self) -> bool:
@@ -110,16 +117,16 @@ class VectorStream:
         Used when an operator command pre-empts the vector: the caller sends the vehicle elsewhere.
         """
         async with self._lock:
-            await self._cancel_task("stopped")
+            await self._cancel_task(_STOPPED)
             return self.engaged
 
     async def stop_and_hold(self) -> None:
         """Stop streaming, send zero velocity, and leave offboard into a holding mode (if engaged)."""
         async with self._lock:
-            await self._cancel_task("stopped")
+            await self._cancel_task(_STOPPED)
             await self._zero_and_hold()
 
-    async def _cancel_task(self, why: str = "failed: offboard refused") -> None:
+    async def _cancel_task(self, why: VectorEnd = _REFUSED) -> None:
         task, self._task = self._task, None
         if task is not None and task is not asyncio.current_task():
             task.cancel()
@@ -147,7 +154,7 @@ class VectorStream:
                     async with self._lock:
                         if time.monotonic() < self._deadline:
                             continue  # replaced while we waited for the lock
-                        self.last_end = "completed"
+                        self.last_end = VectorEnd(VectorEndKind.COMPLETED)
                         await self._zero_and_hold()
                         self._task = None  # active until the hold is out: a caller's next step must not race it
                         return
@@ -158,7 +165,7 @@ class VectorStream:
                     await self._send(*self._target)
         except ControllerError as exc:
             logger.error("%s: streaming failed (%s); trying to hold", self._name, exc)
-            self.last_end = f"failed: {exc}"
+            self.last_end = VectorEnd(VectorEndKind.FAILED, str(exc))
             try:
                 await self._port.stop_offboard()
                 self.engaged = False
@@ -181,6 +188,6 @@ class VectorStream:
             )
             self._task = None
             self.engaged = False
-            self.last_end = f"vehicle left offboard ({mode})"
+            self.last_end = VectorEnd(VectorEndKind.LEFT_OFFBOARD, mode)
             return True
         return False

@@ -18,6 +18,7 @@ import pytest_asyncio
 from controllers import ardupilot
 from controllers.mavsdk_controller import MavsdkController
 from controllers.sim.launcher import free_udp_port
+from controllers.vector_end import VectorEnd, VectorEndKind
 from tests.controllers.fake_autopilot import FakeAutopilot, UdpLink, mavlink
 
 GUIDED, CIRCLE = 4, 7
@@ -78,7 +79,7 @@ async def test_vector_in_guided_then_held_in_guided(copter: tuple[MavsdkControll
     assert len(moving) >= 2 and max(b - a for a, b in itertools.pairwise(moving)) < 1.5
     assert all(s.coordinate_frame == mavlink.MAV_FRAME_BODY_NED for s in setpoints)
     assert (setpoints[-1].vx, setpoints[-1].vy) == (0.0, 0.0)
-    assert fc.last_vector_end == "completed"
+    assert fc.last_vector_end == VectorEnd(VectorEndKind.COMPLETED)
 
 
 async def test_orbit_is_circle_mode_and_hold_is_guided(copter: tuple[MavsdkController, FakeAutopilot],

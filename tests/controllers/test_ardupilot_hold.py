@@ -20,6 +20,7 @@ from controllers.errors import ControllerError
 from controllers.mavsdk_controller import MavsdkController
 from controllers.sim.launcher import SimVehicle
 from controllers.sim.truth import TruthClient
+from controllers.vector_end import VectorEnd, VectorEndKind
 
 ALTITUDE_M = 5.0
 HOLD_WINDOW_S = 20.0
@@ -87,7 +88,7 @@ async def test_altitude_kept_after_a_vector_and_after_hold(copter: tuple[MavsdkC
     fc, truth = copter
     await fc.set_fly_vector(1.0, 0.0, 2.0)
     await wait_until(lambda: not fc.vector_active, 10.0, "vector end")
-    assert fc.last_vector_end == "completed"
+    assert fc.last_vector_end == VectorEnd(VectorEndKind.COMPLETED)
     mode_after_vector = truth.wait_latest()["mode"]
     after_vector = await altitude_band(truth_altitude(truth))
 

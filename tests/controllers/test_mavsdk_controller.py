@@ -22,6 +22,7 @@ from controllers import mavsdk_calls, mavsdk_controller
 from controllers.mavsdk_controller import MavsdkController
 from controllers.sim.launcher import SimVehicle
 from controllers.sim.truth import TruthClient
+from controllers.vector_end import VectorEnd, VectorEndKind
 from uav_tui.errors import CommandDenied
 
 pytestmark = pytest.mark.asyncio(loop_scope="module")
@@ -243,7 +244,7 @@ async def test_vector_moves_along_the_heading_then_holds(
     ended = await airborne.until(
         lambda s: s["mode"] == "HOLD" and not airborne.fc.vector_active, 3.5, "hold after the vector, acknowledged"
     )
-    assert airborne.fc.last_vector_end == "completed"
+    assert airborne.fc.last_vector_end == VectorEnd(VectorEndKind.COMPLETED)
     assert ended["t_mono_ns"] - since < 3.0e9
     after = await airborne.until(lambda s: math.hypot(s["vn"], s["ve"]) < 0.05, 3.0, "stopped")
     moved_forward, moved_right = body_displacement(before, after)
@@ -306,7 +307,7 @@ async def test_a_stalled_loop_stops_the_setpoints_and_the_vehicle_fails_safe(air
     assert [r for r in records if stalled_at + 0.1e9 < r["t_mono_ns"] < resumed_at - 0.1e9] == []
     await asyncio.sleep(0.2)  # the stream sees the mode change and gives up the vector
     assert not airborne.fc.vector_active
-    assert airborne.fc.last_vector_end == "vehicle left offboard (HOLD)"
+    assert airborne.fc.last_vector_end == VectorEnd(VectorEndKind.LEFT_OFFBOARD, "HOLD")
     since = time.monotonic_ns()
     await asyncio.sleep(0.3)
     assert (await airborne.request(cmd="setpoints", since_mono_ns=since))["records"] == []

@@ -19,6 +19,7 @@ from pymavlink import mavutil
 
 from controllers.errors import ControllerError
 from controllers.mavsdk_controller import MavsdkController
+from controllers.vector_end import VectorEnd, VectorEndKind
 from tests.controllers.test_ardupilot_hold import ALLOWED_DRIFT_M, HOLD_WINDOW_S, altitude_band, wait_until
 from tests.sitl import arducopter
 
@@ -99,7 +100,7 @@ async def test_arducopter_keeps_its_altitude_after_a_vector_and_after_hold(tmp_p
 
             await fc.set_fly_vector(1.0, 0.0, 2.0)
             await wait_until(lambda: not fc.vector_active, 10.0, "vector end")
-            assert fc.last_vector_end == "completed"
+            assert fc.last_vector_end == VectorEnd(VectorEndKind.COMPLETED)
             mode_after_vector = observer.mode
             after_vector = await altitude_band(observer.altitude)
 

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import asyncio
 
+from controllers.vector_end import VectorEnd, VectorEndKind
 from controllers.vector_stream import VectorStream
 
 SLOW_HOLD_S = 0.3
@@ -43,4 +44,11 @@ async def test_a_completed_vector_is_active_until_its_hold_is_answered() -> None
             await asyncio.sleep(0.01)
     assert port.holds_done == 1  # inactive with the hold still on its way: a caller's next step raced it
     assert port.sent[-1] == (0.0, 0.0)
-    assert (stream.last_end, stream.engaged) == ("completed", False)
+    assert (stream.last_end, stream.engaged) == (VectorEnd(VectorEndKind.COMPLETED), False)
+
+
+def test_a_vector_end_reads_as_its_text_always_did() -> None:
+    ends = [VectorEnd(), VectorEnd(VectorEndKind.COMPLETED), VectorEnd(VectorEndKind.STOPPED),
+            VectorEnd(VectorEndKind.FAILED, "offboard refused"), VectorEnd(VectorEndKind.LEFT_OFFBOARD, "HOLD")]
+    assert [str(end) for end in ends] == ["", "completed", "stopped", "failed: offboard refused",
+                                          "vehicle left offboard (HOLD)"]

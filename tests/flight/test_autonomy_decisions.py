@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from controllers.base import Telemetry
+from controllers.base import Telemetry, VectorEnd, VectorEndKind
 from sources.buffer import Frame
 from uav_tui.config import SafetyConfig
 from uav_tui.events import EventLog
@@ -24,7 +24,7 @@ class _Vehicle:
 
     flight_mode: str = "HOLD"
     vector_active: bool = False
-    last_vector_end: str = "completed"
+    last_vector_end: VectorEnd = VectorEnd(VectorEndKind.COMPLETED)
     vectors: list[tuple[float, float, float]] = field(default_factory=list)
     holds: int = 0
 

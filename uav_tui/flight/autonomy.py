@@ -18,7 +18,7 @@ from collections.abc import Callable
 from numbers import Real
 from typing import Any
 
-from controllers.base import FailsafeCheck, FenceCheck, FlightController, OwnModes
+from controllers.base import FailsafeCheck, FenceCheck, FlightController, OwnModes, VectorEndKind
 from uav_tui.config import Config, EnvelopeConfig, SafetyConfig
 from uav_tui.errors import KNOWN_ERRORS, UavError
 from uav_tui.events import EventLog, Level, Repeats
@@ -282,7 +282,7 @@ class AutonomyGate:
         """Why autonomy must let go: the vehicle left offboard under a running vector (pilot, failsafe)."""
         assert self.controller is not None
         end = self.controller.last_vector_end
-        if self._flown and not self.controller.vector_active and end.startswith("vehicle left offboard"):
+        if self._flown and not self.controller.vector_active and end.kind is VectorEndKind.LEFT_OFFBOARD:
             return f"{end}: the pilot, a mission or a failsafe took over"
         return ""
 
