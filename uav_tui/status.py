@@ -73,7 +73,7 @@ class CoreStatus:
     startup_s: float | None = None
     """Seconds from the process start to the first processed frame (None before it)."""
     processor_state: ProcessorState | None = None
-    """Where the processor runs and how it is doing: running, restarting N, crashed: reason; PID, memory."""
+    """Where the processor runs and how it is doing (running, restarting N, crashed: reason), its PID, memory."""
     link_lost: bool = False
     """No heartbeat for ``link_timeout``: the telemetry is stale (as old as ``heartbeat_age_s``)."""
     vehicle_problem: str = ""
@@ -121,8 +121,9 @@ class CoreStatus:
             elif isinstance(value, dict):
                 object.__setattr__(self, f.name, {k: safe(v) if isinstance(v, str) else v for k, v in value.items()})
         if self.processor_state is not None:
+            phase = self.processor_state.phase
             object.__setattr__(self, "processor_state", replace(self.processor_state,
-                                                                state=safe(self.processor_state.state)))
+                                                                phase=replace(phase, reason=safe(phase.reason))))
 
     def gimbal_summary(self) -> str:
         """``gimbal P-45 Y120 (controlled, 210 sent)``: the gimbal's attitude (pitch from the horizon, yaw from north)
@@ -142,6 +143,8 @@ class CoreStatus:
         data["capabilities"] = sorted(self.capabilities)
         data["last_verdict"] = self.last_verdict.value if self.last_verdict is not None else None
         data["gimbal"] = self.gimbal_summary()
+        if self.processor_state is not None:  # the page shows the text; the typed parts ride along in "phase"
+            data["processor_state"]["state"] = str(self.processor_state.phase)
         if self.target is not None:
             data["target"].update(distance_m=self.target.distance_m, bearing_deg=self.target.bearing_deg,
                                   range_m=self.target.range_m, description=describe(self.target))

@@ -28,6 +28,7 @@ from uav_tui.errors import ConfigError, ProcessorLoadError, UavError
 from uav_tui.events import EventLog
 from uav_tui.headless import format_status
 from uav_tui.hosting import frame_feeder
+from uav_tui.hosting.host import HostState
 from uav_tui.hosting.process_host import SubprocessHost
 from uav_tui.recorded import dataset
 
@@ -102,6 +103,12 @@ def messages(core: UavCore, kind: str) -> list[str]:
     return [e.message for e in core.events.recent if e.kind == kind]
 
 
+def restarted(core: UavCore, old_pid: int | None) -> bool:
+    """A processor other than ``old_pid``'s is running."""
+    state = core.worker.state()
+    return state.phase.state is HostState.RUNNING and state.pid != old_pid
+
+
 def held(core: UavCore) -> bool:
     truth = core.truth.latest()
     return truth["mode"] == "HOLD" and speed(truth) < 0.15
@@ -152,8 +159,7 @@ async def test_a_gil_hog_cannot_freeze_the_platform(tmp_path: Path) -> None:
         # processor_timeout: the child is killed and a fresh one started
         await wait_until(lambda: any("processor_timeout = 4 s" in m for m in messages(core, "processor")), 6,
                          "the hung process to be killed")
-        await wait_until(lambda: core.worker.state().state == "running" and core.worker.state().pid != old_pid, 10,
-                         "a fresh processor")
+        await wait_until(lambda: restarted(core, old_pid), 10, "a fresh processor")
         assert any("select the target again" in m for m in messages(core, "processor"))
 
 
@@ -181,8 +187,7 @@ async def test_a_dying_processor_is_reported_the_vehicle_holds_and_it_restarts(
         report = next(m for m in messages(core, "processor") if cause in m)
         assert {"segfault": "Segmentation fault", "memory": "MemoryError", "exit": ""}[crash] in report
         assert crash == "exit" or "faulty.py" in report  # where in the researcher's code it died
-        await wait_until(lambda: core.worker.state().state == "running" and core.worker.state().pid != old_pid, 10,
-                         "the restart")
+        await wait_until(lambda: restarted(core, old_pid), 10, "the restart")
         run_dir = core.recorder.run_dir
     frames = dataset.load(run_dir).frames
     kept = frames[frames.frame_id <= frames_before]
@@ -205,10 +210,9 @@ async def test_a_constructor_that_fails_on_restart_is_reported_and_retried(tmp_p
                          "the first restart to fail")  # a new interpreter starting: seconds on a busy machine
         failure = next(m for m in messages(core, "processor") if "restart 1 failed" in m)
         assert "raised while constructing" in failure and "constructor fails while the marker exists" in failure
-        assert core.status().processor_state.state.startswith("restarting")
+        assert core.status().processor_state.phase.state is HostState.RESTARTING
         Path(f"{marker}.broken").unlink()  # the researcher fixed it: the next attempt (after 2 s) loads
-        await wait_until(lambda: core.worker.state().state == "running" and core.worker.state().pid != old_pid, 30,
-                         "the second restart")
+        await wait_until(lambda: restarted(core, old_pid), 30, "the second restart")
 
 
 async def test_a_hung_call_times_out_and_never_blocks_other_commands(tmp_path: Path) -> None:
@@ -242,6 +246,7 @@ def test_sigterm_leaves_within_3_s_whatever_the_processor_does(tmp_path: Path) -
                     status = line if "pipeline" in line else status
             child = status["processor_state"]["pid"]
             assert status["processor_state"]["isolation"] == "process" and child != proc.pid
+            assert status["processor_state"]["state"] == "running"  # the text the web page shows
             sent = time.monotonic()
             proc.terminate()
             assert proc.wait(3.0) == 0 and time.monotonic() - sent < 3.0

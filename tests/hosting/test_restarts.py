@@ -15,7 +15,7 @@ from sources.buffer import FrameBuffer
 from tests.core.flight_helpers import wait_until
 from tests.videos import create_video_file
 from uav_tui.events import EventLog
-from uav_tui.hosting.host import ProcessedFrame
+from uav_tui.hosting.host import HostPhase, HostState, ProcessedFrame
 from uav_tui.hosting.process_host import SubprocessHost
 
 CRASH_LOOP = '''
@@ -36,6 +36,12 @@ class CrashLoop:
 '''
 
 
+def test_the_host_state_reads_as_its_text_always_did() -> None:
+    phases = [HostPhase(HostState.STARTING), HostPhase(HostState.RUNNING), HostPhase(HostState.RESTARTING, 2),
+              HostPhase(HostState.CRASHED), HostPhase(HostState.CRASHED, reason="exited with code 3")]
+    assert [str(p) for p in phases] == ["starting", "running", "restarting 2", "crashed", "crashed: exited with code 3"]
+
+
 async def test_after_five_restarts_in_a_minute_it_gives_up_and_says_so(tmp_path: Path) -> None:
     (tmp_path / "crash_loop.py").write_text(CRASH_LOOP)
     events, faults = EventLog(), []
@@ -46,7 +52,7 @@ async def test_after_five_restarts_in_a_minute_it_gives_up_and_says_so(tmp_path:
     task = asyncio.create_task(worker.run())
     try:
         buffer.put(np.zeros((4, 4, 3), np.uint8))
-        await wait_until(lambda: worker.state().state.startswith("crashed: "), 30, "the platform to give up")
+        await wait_until(lambda: worker.state().phase.reason, 30, "the platform to give up")
     finally:
         task.cancel()
         await asyncio.gather(task, return_exceptions=True)
@@ -54,7 +60,9 @@ async def test_after_five_restarts_in_a_minute_it_gives_up_and_says_so(tmp_path:
     restarts = [m.split(":")[0] for m in messages if m.startswith("restart ")]
     assert restarts == [f"restart {n} failed" for n in range(1, 6)]
     assert any(m.startswith("gave up: 5 restarts within 60 s") for m in messages)
-    assert worker.state().state == "crashed: restart failed: " + messages[-2].partition(" failed: ")[2]
+    phase = worker.state().phase
+    assert phase == HostPhase(HostState.CRASHED, reason="restart failed: " + messages[-2].partition(" failed: ")[2])
+    assert str(phase) == f"crashed: {phase.reason}"
     assert len(faults) == 1 and "exited with code 3" in faults[0]  # autonomy was stopped once, at the death
 
 
@@ -135,7 +143,7 @@ async def test_a_restart_the_system_refuses_for_lack_of_descriptors_is_tried_aga
         for _ in range(3):
             buffer.put(np.zeros((4, 4, 3), np.uint8))
             await asyncio.sleep(0.1)
-        await wait_until(lambda: worker.state().state == "running" and (tmp_path / "died").exists(), 30,
+        await wait_until(lambda: worker.state().phase.state is HostState.RUNNING and (tmp_path / "died").exists(), 30,
                          "the processor to be restarted once descriptors are free again")
     finally:
         task.cancel()

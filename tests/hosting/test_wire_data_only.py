@@ -10,7 +10,7 @@ from pathlib import Path
 
 from sources.buffer import FrameBuffer
 from tests.hosting.hosts import one_at_a_time, running_worker
-from uav_tui.hosting.host import ProcessedFrame
+from uav_tui.hosting.host import HostPhase, HostState, ProcessedFrame
 
 HOSTILE = '''
 import os, struct, sys
@@ -66,7 +66,7 @@ async def test_a_processor_returning_code_gets_frame_errors_and_the_platform_run
     results: list[ProcessedFrame] = []
     async with running_worker("process", f"{tmp_path}/hostile.py:Hostile", results.append) as worker:
         await one_at_a_time(worker, buffer, results, 6)
-        assert worker.state_text == "running"  # the same child throughout: nothing ended it
+        assert worker.phase == HostPhase(HostState.RUNNING)  # the same child throughout: nothing ended it
     first, second, third, *rest = results
     assert isinstance(first.vector, str) and "Exits object" in first.vector  # its repr: the gate rejects text
     target = second.outputs.landing_target

@@ -17,7 +17,7 @@ from sources.synthetic import SyntheticScene
 from uav_tui.core import UavCore
 from uav_tui.events import Event
 from uav_tui.flight.autonomy import Verdict
-from uav_tui.hosting.host import ProcessorState
+from uav_tui.hosting.host import HostPhase, HostState, ProcessorState
 from uav_tui.stats import PipelineStats
 from uav_tui.status import CoreStatus
 from uav_tui.tui._event_log import EventLogView
@@ -52,7 +52,7 @@ STATUS = CoreStatus(
     vectors_rejected=1,
     recording={"run_dir": "runs/2026-11-22T08-00-00Z", "frames_saved": 57, "dropped": 3},
     box=(300, 200, 120, 90),
-    processor_state=ProcessorState("process", "running", 4242, 38.0),
+    processor_state=ProcessorState("process", HostPhase(HostState.RUNNING), 4242, 38.0),
 )
 
 EVENTS = [

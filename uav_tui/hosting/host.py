@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from enum import StrEnum
 from typing import TYPE_CHECKING, Any, Protocol
 
 from processors.base import Box
@@ -63,14 +64,41 @@ class Answer:
     """When the processor began the call (monotonic ns): the frames it started after that saw its effect."""
 
 
+class HostState(StrEnum):
+    """Where the processor's host is in its life."""
+
+    STARTING = "starting"  # the first child is loading
+    RUNNING = "running"  # a loaded child gets the frames
+    RESTARTING = "restarting"  # the child died; a fresh one is started after a back-off
+    CRASHED = "crashed"  # the child died (and, with a reason, the restarts gave up: the processor stays off)
+
+
+@dataclass(frozen=True, slots=True)
+class HostPhase:
+    """The host's state with what it counts; ``str()`` reads ``running``, ``restarting 2``, ``crashed: reason``."""
+
+    state: HostState
+    restart: int = 0
+    """The restart being waited for (1, 2, ...) while ``RESTARTING``, else 0."""
+    reason: str = ""
+    """Why the processor stays off, once ``CRASHED`` for good; "" otherwise."""
+
+    def __str__(self) -> str:
+        if self.state is HostState.RESTARTING:
+            return f"{self.state} {self.restart}"
+        if self.reason:
+            return f"{self.state}: {self.reason}"
+        return self.state.value
+
+
 @dataclass(frozen=True, slots=True)
 class ProcessorState:
     """How the processor's host is doing, for the status line, the TUI and the web page."""
 
     isolation: str
     """``process`` (its own process) or ``thread`` (a thread of the platform)."""
-    state: str
-    """``starting``, ``running``, ``restarting N`` or ``crashed: reason``."""
+    phase: HostPhase
+    """Starting, running, restarting (and which restart) or crashed (and why it stays off)."""
     pid: int | None
     memory_mb: float | None
     """Resident memory of the processor's process (None in thread mode: it is the platform's)."""
@@ -79,7 +107,7 @@ class ProcessorState:
         """``running, pid 4242, 38 MB``; ``restarting 2``; ``crashed: reason``; ``in a platform thread``."""
         if self.isolation == "thread":
             return "in a platform thread"
-        parts = [self.state]
+        parts = [str(self.phase)]
         if self.pid is not None:
             parts.append(f"pid {self.pid}")
         if self.memory_mb is not None:

@@ -27,7 +27,7 @@ from uav_tui.hosting.child_link import ChildLink
 from uav_tui.hosting.child_process import ChildProcess, rss_mb
 from uav_tui.hosting.codec import UnreadableResult
 from uav_tui.hosting.frame_feeder import FrameFeeder
-from uav_tui.hosting.host import Answer, DeliversResults, ProcessedFrame, ProcessorState
+from uav_tui.hosting.host import Answer, DeliversResults, HostPhase, ProcessedFrame, ProcessorState
 from uav_tui.hosting.supervisor import ChildSupervisor
 from uav_tui.hosting.wire import Result, ResultHead, Save
 from uav_tui.stats import PipelineStats, RollingStats
@@ -100,9 +100,9 @@ class SubprocessHost(DeliversResults):
         return self._supervisor.processor
 
     @property
-    def state_text(self) -> str:
-        """``starting``, ``running``, ``crashed``, ``restarting N`` or ``crashed: reason``."""
-        return self._supervisor.state_text
+    def phase(self) -> HostPhase:
+        """Starting, running, restarting N, crashed (and why, once the restarts gave up)."""
+        return self._supervisor.phase
 
     def bind_telemetry(self, telemetry: TelemetryManager) -> None:
         """Attach the telemetry at each frame's capture to it as it is handed over; store ``tmMgr.save`` through it."""
@@ -144,7 +144,7 @@ class SubprocessHost(DeliversResults):
                            f"restarted after processor_timeout = {self.timeout_s:g} s")
         answer = self._link.call(child, method, args)
         if answer is None:
-            raise UavError(f"the processor is not running ({self.state_text})")
+            raise UavError(f"the processor is not running ({self.phase})")
         return await answer
 
     async def reload(self) -> ProcessorInfo:
@@ -167,7 +167,7 @@ class SubprocessHost(DeliversResults):
     def state(self) -> ProcessorState:
         child = self._supervisor.child
         pid = child.pid if child is not None else None
-        return ProcessorState(self.isolation, self.state_text, pid, rss_mb(pid) if pid else None)
+        return ProcessorState(self.isolation, self.phase, pid, rss_mb(pid) if pid else None)
 
     def close(self) -> None:
         """Stop taking frames and kill every child at once (whatever the processor is doing). Idempotent."""

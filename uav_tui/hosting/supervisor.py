@@ -29,6 +29,7 @@ from uav_tui.events import EventLog
 from uav_tui.hosting.child_link import ChildLink
 from uav_tui.hosting.child_process import ChildProcess, describe_exit, say_output, spawn
 from uav_tui.hosting.frame_feeder import FrameFeeder
+from uav_tui.hosting.host import HostPhase, HostState
 from uav_tui.hosting.wire import Load
 from uav_tui.output.line_budget import LineBudget
 
@@ -67,7 +68,7 @@ class ChildSupervisor:
         self.first_backoff_s = first_backoff_s
         self.next_track_id = 0
         """Above every ``track_id`` seen: where a new child's tracks are numbered from."""
-        self.state_text = "starting"
+        self.phase = HostPhase(HostState.STARTING)
         self.children: list[ChildProcess] = []
         """Every child not yet seen to end (the current one, those being replaced or killed)."""
         self._link = link
@@ -91,7 +92,7 @@ class ChildSupervisor:
         """The current child; UavError when there is none running."""
         child = self.child
         if child is None or child.ended.is_set():
-            raise UavError(f"the processor is not running ({self.state_text})")
+            raise UavError(f"the processor is not running ({self.phase})")
         return child
 
     async def start_child(self) -> ChildProcess:
@@ -123,7 +124,7 @@ class ChildSupervisor:
         """Make ``child`` (loaded) the current one: it gets the frames from now on."""
         self.processor = LoadedProcessor(instance=None, info=child.ready.result(), spec=self.spec, kwargs=self.kwargs)
         self._feeder.feed(child)
-        self.state_text = "running"
+        self.phase = HostPhase(HostState.RUNNING)
 
     async def replace(self) -> ProcessorInfo:
         """Start a new child with the code as it is now; swap only once it loaded (else the old one keeps running)."""
@@ -202,7 +203,7 @@ class ChildSupervisor:
     def _on_death(self, child: ChildProcess, returncode: int) -> None:
         """The current child is gone: stop autonomy at once (``on_fault``), before anything else."""
         if child is self.child and not self._closing:
-            self.state_text = "crashed"
+            self.phase = HostPhase(HostState.CRASHED)
             self._on_fault(f"processor (pid {child.pid}) {self._reason(child, returncode)}")
 
     def _reason(self, child: ChildProcess, returncode: int) -> str:
@@ -241,12 +242,12 @@ class ChildSupervisor:
             while self._restarts and self._restarts[0] < now - RESTART_WINDOW_S:
                 self._restarts.popleft()
             if len(self._restarts) >= MAX_RESTARTS:
-                self.state_text = f"crashed: {reason}"
+                self.phase = HostPhase(HostState.CRASHED, reason=reason)
                 self.events.emit("error", "processor", f"gave up: {MAX_RESTARTS} restarts within "
                                  f"{RESTART_WINDOW_S:g} s; the processor stays off ({reason}); fix it and 'reload'")
                 return
             attempt = len(self._restarts) + 1
-            self.state_text = f"restarting {attempt}"
+            self.phase = HostPhase(HostState.RESTARTING, attempt)
             await asyncio.sleep(self.first_backoff_s * 2 ** (attempt - 1))
             self._restarts.append(time.monotonic())
             try:

@@ -24,7 +24,7 @@ from sources.buffer import Frame, FrameBuffer
 from uav_tui.events import EventLog
 from uav_tui.flight.telemetry import TelemetryManager
 from uav_tui.hosting.frame_call import call_frame
-from uav_tui.hosting.host import Answer, DeliversResults, ProcessedFrame, ProcessorState
+from uav_tui.hosting.host import Answer, DeliversResults, HostPhase, HostState, ProcessedFrame, ProcessorState
 from uav_tui.hosting.thread_logs import ThreadLogBudget
 from uav_tui.hosting.tracks import DetectionTracks
 from uav_tui.stats import PipelineStats, RollingStats
@@ -154,7 +154,7 @@ class ThreadHost(DeliversResults):
         return fresh.info
 
     def state(self) -> ProcessorState:
-        return ProcessorState(self.isolation, "running", os.getpid(), None)
+        return ProcessorState(self.isolation, HostPhase(HostState.RUNNING), os.getpid(), None)
 
     def snapshot(self) -> PipelineStats:
         captured = self._buffer.captured if self._buffer is not None else 0

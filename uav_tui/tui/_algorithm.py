@@ -7,6 +7,7 @@ from rich.text import Text
 from uav_tui.flight.autonomy import Verdict
 from uav_tui.flight.geo_detections import describe_shown
 from uav_tui.flight.geolocate import describe as describe_target
+from uav_tui.hosting.host import HostState
 from uav_tui.status import CoreStatus
 from uav_tui.tui._panel import StatusPanel
 
@@ -48,7 +49,8 @@ class AlgorithmPanel(StatusPanel):
         labels = ("proc", "box", "vec", "auto", out_label, "err")
         proc = Text(status.processor.rsplit(":", 1)[-1])
         if (host := status.processor_state) is not None:  # where it runs: its own process (pid, memory) or a thread
-            summary = Text(" ").append_text(self.styled(host.summary(), "good" if host.state == "running" else "bad"))
+            running = host.phase.state is HostState.RUNNING
+            summary = Text(" ").append_text(self.styled(host.summary(), "good" if running else "bad"))
             room = self.room_before(summary, labels, MIN_NAME)
             if room is not None and len(proc) > room:  # the name yields: it never changes
                 proc.truncate(room, overflow="ellipsis")
