@@ -21,6 +21,7 @@ from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, field
 from typing import Any
 
+from controllers.autopilots import Autopilot
 from controllers.errors import ControllerError
 
 logger = logging.getLogger(__name__)
@@ -131,12 +132,12 @@ def _guided_options_problem(value: float, context: Context) -> str:
     return ""
 
 
-RULES: dict[str, tuple[FailsafeParam, ...]] = {
-    "px4": (
+RULES: dict[Autopilot, tuple[FailsafeParam, ...]] = {
+    Autopilot.PX4: (
         FailsafeParam("COM_OF_LOSS_T", False, _timeout_problem, _tuned_timeout),
         FailsafeParam("COM_OBL_RC_ACT", True, _loss_action_problem, lambda value, context: PX4_HOLD_ACTION),
     ),
-    "ardupilot": (
+    Autopilot.ARDUPILOT: (
         FailsafeParam("GUID_TIMEOUT", False, _timeout_problem, _tuned_timeout),
         FailsafeParam("GUID_OPTIONS", True, _guided_options_problem,
                       lambda value, context: int(value) & ~ARDUCOPTER_UNSTABILISED),
@@ -208,12 +209,12 @@ class FailsafeReport:
         return text
 
 
-async def check_failsafe(autopilot: str, params: ParamAccess, limit_s: float, *, tune: bool,
+async def check_failsafe(autopilot: Autopilot, params: ParamAccess, limit_s: float, *, tune: bool,
                          rc_receiver: Callable[[], Awaitable[bool | None]] | None = None) -> FailsafeReport:
     """Read the autopilot's offboard-loss parameters; set those that break a rule.
 
     Args:
-        autopilot: ``"px4"``, ``"ardupilot"`` or ``"unknown"``.
+        autopilot: the kind reached (another than PX4 or ArduPilot: reported as not checkable).
         params: bounded parameter calls of the connected controller.
         limit_s: the longest a stale command may be flown (``max_t`` + :data:`STALE_MARGIN_S`).
         tune: set parameters that break a rule; when False they are only reported.
@@ -230,7 +231,7 @@ async def check_failsafe(autopilot: str, params: ParamAccess, limit_s: float, *,
                                "(PX4 and ArduPilot are known)")
         return report
     context = Context(limit_s)
-    if autopilot == "px4":
+    if autopilot is Autopilot.PX4:
         receiver = await rc_receiver() if rc_receiver is not None else None
         context = Context(limit_s, Radio(receiver, await _rc_in_mode(params)))
         report.radio = context.radio.describe() if context.radio is not None else ""

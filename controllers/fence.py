@@ -13,6 +13,7 @@ from __future__ import annotations
 from abc import abstractmethod
 from dataclasses import dataclass
 
+from controllers.autopilots import Autopilot
 from controllers.errors import ControllerError
 from controllers.failsafe import ParamAccess
 
@@ -28,12 +29,12 @@ class FenceReport:
     summary: str
 
 
-async def read_fence(autopilot: str, params: ParamAccess) -> FenceReport:
-    """Read the fence parameters of a ``"px4"`` or ``"ardupilot"`` autopilot (any other: not known)."""
+async def read_fence(autopilot: Autopilot, params: ParamAccess) -> FenceReport:
+    """Read the fence parameters of a PX4 or ArduPilot autopilot (any other: not known)."""
     try:
-        if autopilot == "px4":
+        if autopilot is Autopilot.PX4:
             return await _px4(params)
-        if autopilot == "ardupilot":
+        if autopilot is Autopilot.ARDUPILOT:
             return await _ardupilot(params)
     except ControllerError as exc:
         return FenceReport(False, f"autopilot fence: unknown, a parameter could not be read ({exc})")
@@ -70,7 +71,7 @@ class ReadsFence:
     """``check_fence`` (:class:`controllers.base.FenceCheck`) for a MAVLink controller, from its autopilot's kind
     and its bounded parameter calls."""
 
-    autopilot: str
+    autopilot: Autopilot
 
     @abstractmethod
     def _params(self) -> ParamAccess:

@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from controllers.autopilots import Autopilot
 from controllers.errors import ControllerError
 
 MAV_FRAME_LOCAL_NED = 1
@@ -116,16 +117,16 @@ def px4_fields(fix: LandingTargetFix, time_usec: int) -> dict[str, Any]:
             "angle_y": angles[1], "x": float(north), "y": float(east), "z": float(down), "position_valid": 1}
 
 
-def landing_target_fields(autopilot: str, fix: LandingTargetFix, time_usec: int) -> dict[str, Any]:
-    """The LANDING_TARGET fields ``autopilot`` (``"px4"`` or ``"ardupilot"``) takes for ``fix``.
+def landing_target_fields(autopilot: Autopilot, fix: LandingTargetFix, time_usec: int) -> dict[str, Any]:
+    """The LANDING_TARGET fields ``autopilot`` (PX4 or ArduPilot) takes for ``fix``.
 
     Raises:
         LandingTargetError: an unknown autopilot, a fix it cannot be given, or fields that would not be finite.
     """
-    if autopilot not in ("ardupilot", "px4"):
-        raise LandingTargetError(f"landing target: unknown autopilot {autopilot!r} (PX4 and ArduPilot take "
+    if autopilot not in (Autopilot.ARDUPILOT, Autopilot.PX4):
+        raise LandingTargetError(f"landing target: unknown autopilot {autopilot.value!r} (PX4 and ArduPilot take "
                                  "LANDING_TARGET differently): not sent")
-    fields = ardupilot_fields(fix, time_usec) if autopilot == "ardupilot" else px4_fields(fix, time_usec)
+    fields = ardupilot_fields(fix, time_usec) if autopilot is Autopilot.ARDUPILOT else px4_fields(fix, time_usec)
     broken = sorted(name for name, value in fields.items() if isinstance(value, float) and not math.isfinite(value))
     if broken:  # MAVLink would carry it; MAVSDK's JSON parser is no place to find out
         raise LandingTargetError(f"landing target: {', '.join(broken)} not finite (direction {fix.direction_camera}, "

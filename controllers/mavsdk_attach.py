@@ -9,13 +9,15 @@ import logging
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from mavsdk.asyncio import Autopilot, Mavsdk, MavsdkConnectionError, System
+from mavsdk.asyncio import Autopilot as MavsdkAutopilot
+from mavsdk.asyncio import Mavsdk, MavsdkConnectionError, System
 from mavsdk.asyncio.plugins.action import ActionAsync
 from mavsdk.asyncio.plugins.mavlink_direct import MavlinkDirectAsync
 from mavsdk.asyncio.plugins.param import ParamAsync
 from mavsdk.asyncio.plugins.telemetry import TelemetryAsync
 
 from controllers import ardupilot
+from controllers.autopilots import Autopilot
 from controllers.connection import Connection, connection_failed, no_heartbeat_error
 from controllers.mavsdk_calls import bounded
 from controllers.mavsdk_telemetry import set_rates
@@ -25,7 +27,8 @@ logger = logging.getLogger(__name__)
 SETUP_TIMEOUT_S = 5.0
 """Upper bound on opening the connection, and on asking for telemetry rates after connecting."""
 
-AUTOPILOT_NAMES = {"px4": "PX4", "ardupilot": "ArduPilot", "unknown": "unknown autopilot"}
+_KINDS = {MavsdkAutopilot.PX4: Autopilot.PX4, MavsdkAutopilot.ARDUPILOT: Autopilot.ARDUPILOT}
+"""MAVSDK's autopilot types that the platform knows; any other is :attr:`Autopilot.UNKNOWN`."""
 
 
 @dataclass(frozen=True)
@@ -34,8 +37,8 @@ class ReachedAutopilot:
 
     system: System
     sysid: int
-    autopilot: str
-    """``"px4"``, ``"ardupilot"`` or ``"unknown"``, from the heartbeat's autopilot field."""
+    autopilot: Autopilot
+    """From the heartbeat's autopilot field."""
     action: ActionAsync
     telemetry: TelemetryAsync
     param: ParamAsync
@@ -62,14 +65,14 @@ async def reach_autopilot(mavsdk: Mavsdk, conn: Connection, heartbeat_timeout: f
     if system is None:
         raise await no_heartbeat_error(conn, heartbeat_timeout)
     sysid = await system.get_system_id()
-    kind = {Autopilot.PX4: "px4", Autopilot.ARDUPILOT: "ardupilot"}.get(await system.autopilot_type(), "unknown")
+    kind = _KINDS.get(await system.autopilot_type(), Autopilot.UNKNOWN)
     return ReachedAutopilot(system, sysid, kind, ActionAsync(system), TelemetryAsync(system), ParamAsync(system),
                             MavlinkDirectAsync(system))
 
 
 async def ask_for_telemetry(reached: ReachedAutopilot, heartbeat_age_s: Callable[[], float]) -> None:
     """ArduPilot's data streams, then MAVSDK's telemetry rates; a rate nobody answers keeps the current one."""
-    if reached.autopilot == "ardupilot":
+    if reached.autopilot is Autopilot.ARDUPILOT:
         await bounded("request_data_stream", lambda: ardupilot.request_streams(reached.direct, reached.sysid),
                       SETUP_TIMEOUT_S, heartbeat_age_s)
     try:

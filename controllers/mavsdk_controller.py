@@ -15,13 +15,14 @@ from mavsdk.asyncio.plugins.param import ParamAsync
 from mavsdk.asyncio.plugins.telemetry import TelemetryAsync
 
 from controllers import ardupilot
+from controllers.autopilots import Autopilot
 from controllers.base import PoseSample
 from controllers.connection import Connection, check_serial_device, parse_connection
 from controllers.errors import ControllerError
 from controllers.failsafe import STALE_MARGIN_S, FailsafeReport, ParamAccess, check_failsafe
 from controllers.fence import ReadsFence
 from controllers.landing_target import LandingTargetFix
-from controllers.mavsdk_attach import AUTOPILOT_NAMES, SETUP_TIMEOUT_S, ask_for_telemetry, reach_autopilot
+from controllers.mavsdk_attach import SETUP_TIMEOUT_S, ask_for_telemetry, reach_autopilot
 from controllers.mavsdk_calls import AbandoningExecutor, Subscriptions, bounded, release, use_abandoning_executor
 from controllers.mavsdk_gimbal import MavsdkGimbal
 from controllers.mavsdk_landing import MavsdkLanding
@@ -71,8 +72,8 @@ class MavsdkController(ReadsFence):
     def __init__(self, *, vector_rate_hz: float = DEFAULT_RATE_HZ,
                  command_timeout_s: float = COMMAND_TIMEOUT_S) -> None:
         self.description = "MAVSDK (not connected)"
-        self.autopilot = "unknown"
-        """``"px4"``, ``"ardupilot"`` or ``"unknown"``, from the heartbeat's autopilot field."""
+        self.autopilot = Autopilot.UNKNOWN
+        """PX4, ArduPilot or unknown, from the heartbeat's autopilot field."""
         self.connection: Connection | None = None
         self._command_timeout_s = command_timeout_s
         self._mavsdk: Mavsdk | None = None
@@ -120,7 +121,7 @@ class MavsdkController(ReadsFence):
         except BaseException:
             await self.close()
             raise
-        self.description = f"{AUTOPILOT_NAMES[self.autopilot]} via {conn.url}"
+        self.description = f"{self.autopilot.label} via {conn.url}"
         logger.info("MavsdkController connected: %s (system %d)", self.description, self._sysid)
 
     async def _attach(self, conn: Connection, heartbeat_timeout: float) -> None:
@@ -146,7 +147,7 @@ class MavsdkController(ReadsFence):
         ArduCopter's hold is GUIDED (OFFBOARD), never LOITER or BRAKE (HOLD): a vehicle in HOLD there
         was put there by a pilot or a failsafe.
         """
-        return frozenset({"OFFBOARD"}) if self.autopilot == "ardupilot" else frozenset({"HOLD", "OFFBOARD"})
+        return frozenset({"OFFBOARD"}) if self.autopilot is Autopilot.ARDUPILOT else frozenset({"HOLD", "OFFBOARD"})
 
     def heartbeat_age_s(self) -> float:
         """Seconds since the last heartbeat from the autopilot (inf before the first)."""
@@ -214,7 +215,7 @@ class MavsdkController(ReadsFence):
 
     async def takeoff(self, altitude_m: float | None = None) -> None:
         await self._vectors.stop_and_hold()
-        if self.autopilot == "ardupilot":
+        if self.autopilot is Autopilot.ARDUPILOT:
             await self._offboard.guided("takeoff")
             alt = altitude_m if altitude_m is not None else ardupilot.DEFAULT_TAKEOFF_ALT_M
             await self._command("takeoff", lambda: ardupilot.takeoff(self._direct, self._sysid, alt))
@@ -239,7 +240,7 @@ class MavsdkController(ReadsFence):
 
     async def do_orbit(self, radius_m: float, velocity_ms: float) -> None:
         await self._vectors.stop_and_hold()
-        if self.autopilot == "ardupilot":
+        if self.autopilot is Autopilot.ARDUPILOT:
             await self._command(
                 "do_orbit",
                 lambda: ardupilot.start_circle(self._direct, self._param, self._sysid, radius_m, velocity_ms),

@@ -11,9 +11,10 @@ from typing import Any
 
 from mavsdk.asyncio.plugins.mavlink_direct import MavlinkMessage
 
+from controllers.autopilots import Autopilot
 from controllers.landing_target import LandingTargetError, LandingTargetFix, landing_target_fields
 from controllers.mavlink_commands import landing_target, px4_set_mode, send_command
-from controllers.mavsdk_attach import AUTOPILOT_NAMES, ReachedAutopilot
+from controllers.mavsdk_attach import ReachedAutopilot
 from controllers.mavsdk_calls import Command
 from controllers.mavsdk_pose import BootClock
 from controllers.precland import PrecisionLandingError, check_ardupilot_params
@@ -74,13 +75,13 @@ class MavsdkLanding:
             ControllerError: the landing was refused, or the link is lost.
         """
         reached = self.reached
-        if reached.autopilot == "ardupilot":
+        if reached.autopilot is Autopilot.ARDUPILOT:
             found = await check_ardupilot_params(
                 lambda name: self._command(f"read {name}", lambda: reached.param.get_param_int(name)))
             await land()
             return "precision landing (LAND, " + ", ".join(f"{k}={v}" for k, v in found.items()) + ")"
-        if reached.autopilot != "px4":
-            raise PrecisionLandingError(f"precland: {AUTOPILOT_NAMES[reached.autopilot]}: only PX4 and ArduPilot "
+        if reached.autopilot is not Autopilot.PX4:
+            raise PrecisionLandingError(f"precland: {reached.autopilot.label}: only PX4 and ArduPilot "
                                         "are known to land on LANDING_TARGET")
         await stop_and_hold()
         command = px4_set_mode(reached.sysid, "PRECLAND")

@@ -7,6 +7,7 @@ import math
 from typing import Protocol
 
 from controllers import ardupilot
+from controllers.autopilots import Autopilot
 from controllers.errors import ControllerError
 from controllers.height_hold import HeightHold
 from controllers.mavlink_commands import px4_set_mode, send_command, velocity_body_setpoint
@@ -50,7 +51,7 @@ class MavsdkOffboard:
 
     async def guided(self, command: str) -> None:
         """ArduCopter: switch to GUIDED first (arming, take-off and velocity targets need it)."""
-        if self.reached is not None and self.reached.autopilot == "ardupilot":
+        if self.reached is not None and self.reached.autopilot is Autopilot.ARDUPILOT:
             await self._ardupilot_mode(self.reached, "GUIDED", command)
 
     async def send_velocity_body(self, forward_ms: float, right_ms: float) -> None:
@@ -71,7 +72,7 @@ class MavsdkOffboard:
             raise ControllerError(f"the vehicle is in {mode} mode (a pilot, a mission or a failsafe chose it): "
                                   "not taken back")
         reached = self._connected("set_fly_vector")
-        if reached.autopilot == "ardupilot":
+        if reached.autopilot is Autopilot.ARDUPILOT:
             # GUIDED takes velocity targets; they must be renewed within GUID_TIMEOUT (3 s).
             await self._ardupilot_mode(reached, "GUIDED", "set_fly_vector")
         else:
@@ -85,7 +86,7 @@ class MavsdkOffboard:
         reached = self._connected("hold")
         if self.height is not None:
             self.height.release()
-        if reached.autopilot == "ardupilot":  # not LOITER: it flies the RC throttle (see ardupilot.hold)
+        if reached.autopilot is Autopilot.ARDUPILOT:  # not LOITER: it flies the RC throttle (see ardupilot.hold)
             await self._command("hold", lambda: ardupilot.hold(reached.direct, reached.sysid))
         else:  # PX4 HOLD (Auto Loiter): automatic, the sticks only matter when a pilot moves them to take over
             await self._command("hold", reached.action.hold)

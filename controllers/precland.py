@@ -16,9 +16,10 @@ from __future__ import annotations
 from collections.abc import Awaitable, Callable
 from typing import Any
 
+from controllers.autopilots import Autopilot
 from controllers.errors import ControllerError
 
-LANDING_MODES = {"ardupilot": frozenset({"LAND"}), "px4": frozenset({"PRECISION_LAND"})}
+LANDING_MODES = {Autopilot.ARDUPILOT: frozenset({"LAND"}), Autopilot.PX4: frozenset({"PRECISION_LAND"})}
 """The flight modes (:mod:`controllers.flight_modes` names) each autopilot reports while it lands precisely."""
 
 ARDUPILOT_PARAMS = {"PLND_ENABLED": (1, "precision landing on"), "PLND_TYPE": (1, "companion computer: "

@@ -42,6 +42,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from controllers.autopilots import Autopilot  # noqa: E402
 from controllers.sim.geo import parse_wind  # noqa: E402
 from controllers.sim.launcher import SimVehicle  # noqa: E402
 from controllers.sim.truth import TruthClient  # noqa: E402
@@ -106,7 +107,7 @@ async def land_once(pad_ne: tuple[float, float], wind: tuple[float, float], alti
             sent[result.frame.t_mono_ns] = (result.t_start_ns, result.t_end_ns, time.monotonic_ns())
 
     source = (f"sim:?marker={MARKER_ID}&marker_size={MARKER_SIZE_M:g}&marker_at={pad_ne[0]:.3f},{pad_ne[1]:.3f}")
-    with SimVehicle(wind=wind, autopilot="ardupilot", extra_args=["--plnd-enabled"]) as vehicle:
+    with SimVehicle(wind=wind, autopilot=Autopilot.ARDUPILOT, extra_args=["--plnd-enabled"]) as vehicle:
         async with flying_core(folder, vehicle=vehicle, altitude=altitude, source=source, processor="precision_land",
                                processor_args={"marker_id": MARKER_ID, "marker_size_m": MARKER_SIZE_M}) as core:
             truth: TruthClient = core.truth  # type: ignore[attr-defined]

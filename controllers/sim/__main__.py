@@ -8,6 +8,7 @@ import signal
 import sys
 from collections.abc import Sequence
 
+from controllers.autopilots import Autopilot
 from controllers.sim.dialect import DIALECTS
 from controllers.sim.geo import Home, parse_wind
 from controllers.sim.guidance import OFFBOARD_LOSS_ACTIONS
@@ -38,7 +39,7 @@ def build_parser(parser_class: type[argparse.ArgumentParser] = argparse.Argument
         "Connect MAVSDK with udpin://127.0.0.1:MAVLINK_PORT.",
     )
     p.add_argument("--mavlink-port", type=int, default=14540, help="ground side's listening UDP port")
-    p.add_argument("--autopilot", choices=sorted(DIALECTS), default="px4",
+    p.add_argument("--autopilot", choices=sorted(map(str, DIALECTS)), default="px4",
                    help="the autopilot it plays: px4, or ardupilot (ArduCopter modes; LOITER follows an RC throttle "
                    "held at its minimum, as in ArduCopter SITL)")
     p.add_argument("--truth-port", type=int, default=14600, help="ground-truth JSON channel (0 = any free)")
@@ -105,7 +106,7 @@ def config_from_args(args: argparse.Namespace) -> ServerConfig:
     )
     return ServerConfig(
         mavlink_port=args.mavlink_port,
-        autopilot=args.autopilot,
+        autopilot=Autopilot(args.autopilot),
         truth_port=args.truth_port,
         home=args.home,
         wind=args.wind,

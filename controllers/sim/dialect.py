@@ -15,6 +15,7 @@ from typing import Protocol
 
 from pymavlink.dialects.v20 import common as mavlink
 
+from controllers.autopilots import Autopilot
 from controllers.sim import ardupilot_modes, px4_modes
 from controllers.sim.guidance import Mode
 
@@ -33,7 +34,7 @@ class ModeEncoding(Protocol):
 class Dialect:
     """One autopilot's way of saying things."""
 
-    name: str
+    name: Autopilot
     autopilot: int
     """HEARTBEAT.autopilot (MAV_AUTOPILOT_*)."""
     modes: ModeEncoding
@@ -46,7 +47,7 @@ class Dialect:
 
     @property
     def ardupilot(self) -> bool:
-        return self.name == "ardupilot"
+        return self.name is Autopilot.ARDUPILOT
 
 
 _COMMON_CAPABILITIES = (
@@ -60,13 +61,13 @@ _COMMON_CAPABILITIES = (
 )
 
 DIALECTS = {
-    "px4": Dialect("px4", M.MAV_AUTOPILOT_PX4, px4_modes,
-                   _COMMON_CAPABILITIES | M.MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_BYTEWISE,
-                   (1 << 24) | (16 << 16) | (0 << 8) | 255,  # PX4 v1.16.0 release
-                   takeoff_above_home=False),
-    "ardupilot": Dialect("ardupilot", M.MAV_AUTOPILOT_ARDUPILOTMEGA, ardupilot_modes,
-                         _COMMON_CAPABILITIES | M.MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_C_CAST,
-                         (4 << 24) | (8 << 16) | (0 << 8) | 0,  # ArduCopter 4.8.0-dev
-                         takeoff_above_home=True),
+    Autopilot.PX4: Dialect(Autopilot.PX4, M.MAV_AUTOPILOT_PX4, px4_modes,
+                           _COMMON_CAPABILITIES | M.MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_BYTEWISE,
+                           (1 << 24) | (16 << 16) | (0 << 8) | 255,  # PX4 v1.16.0 release
+                           takeoff_above_home=False),
+    Autopilot.ARDUPILOT: Dialect(Autopilot.ARDUPILOT, M.MAV_AUTOPILOT_ARDUPILOTMEGA, ardupilot_modes,
+                                 _COMMON_CAPABILITIES | M.MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_C_CAST,
+                                 (4 << 24) | (8 << 16) | (0 << 8) | 0,  # ArduCopter 4.8.0-dev
+                                 takeoff_above_home=True),
 }
 """The dialects by ``--autopilot`` name."""

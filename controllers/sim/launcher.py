@@ -15,6 +15,7 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
+from controllers.autopilots import Autopilot
 from controllers.errors import ControllerError
 from controllers.sim.geo import Home
 from controllers.sim.truth import TruthClient
@@ -88,7 +89,7 @@ class SimVehicle:
         seed: random seed for the noise.
         noise: add sensor noise to the telemetry.
         extra_args: more ``python -m controllers.sim`` options, e.g. ``("--rtl-alt", "20")``.
-        autopilot: the dialect it speaks, ``"px4"`` or ``"ardupilot"`` (see :mod:`controllers.sim.dialect`).
+        autopilot: the dialect it speaks, PX4 or ArduPilot (see :mod:`controllers.sim.dialect`).
     """
 
     def __init__(
@@ -98,7 +99,7 @@ class SimVehicle:
         seed: int = 0,
         extra_args: Sequence[str] = (),
         noise: bool = False,
-        autopilot: str = "px4",
+        autopilot: Autopilot = Autopilot.PX4,
     ) -> None:
         self.home = Home(*home) if isinstance(home, tuple) else (home or Home())
         self.wind = wind or (0.0, 0.0)

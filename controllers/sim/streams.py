@@ -10,6 +10,7 @@ from collections.abc import Callable
 import numpy as np
 from pymavlink.dialects.v20 import common as mavlink
 
+from controllers.autopilots import Autopilot
 from controllers.quaternion import quaternion
 from controllers.sim.dialect import DIALECTS, Dialect
 from controllers.sim.geo import Home
@@ -77,7 +78,7 @@ class TelemetryStreams:
     """Builds telemetry messages from a :class:`Multicopter` and decides which are due."""
 
     def __init__(self, encoder: mavlink.MAVLink, vehicle: Multicopter, home: Home, *,
-                 gps_clock_offset_s: float = 0.0, dialect: Dialect = DIALECTS["px4"],
+                 gps_clock_offset_s: float = 0.0, dialect: Dialect = DIALECTS[Autopilot.PX4],
                  gimbal: SimGimbal | None = None) -> None:
         self.enc = encoder
         self.dialect = dialect

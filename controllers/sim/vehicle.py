@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 
 from pymavlink.dialects.v20 import common as mavlink
 
+from controllers.autopilots import Autopilot
 from controllers.sim.commands import CommandHandler
 from controllers.sim.dialect import DIALECTS
 from controllers.sim.geo import Home
@@ -34,7 +35,7 @@ class ServerConfig:
     """Process-level options of the simulator (see ``python -m controllers.sim --help``)."""
 
     mavlink_port: int = 14540
-    autopilot: str = "px4"
+    autopilot: Autopilot = Autopilot.PX4
     """The dialect spoken (:data:`controllers.sim.dialect.DIALECTS`): ``px4`` or ``ardupilot``."""
     truth_port: int = 14600
     home: Home = field(default_factory=Home)

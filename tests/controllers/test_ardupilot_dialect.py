@@ -16,6 +16,7 @@ import pytest
 import pytest_asyncio
 
 from controllers import ardupilot
+from controllers.autopilots import Autopilot
 from controllers.mavsdk_controller import MavsdkController
 from controllers.sim.launcher import free_udp_port
 from controllers.vector_end import VectorEnd, VectorEndKind
@@ -43,7 +44,7 @@ def set_modes(fake: FakeAutopilot) -> list[int]:
 
 async def test_detected_and_asked_for_its_streams(copter: tuple[MavsdkController, FakeAutopilot]) -> None:
     fc, fake = copter
-    assert fc.autopilot == "ardupilot"
+    assert fc.autopilot is Autopilot.ARDUPILOT
     assert fc.description.startswith("ArduPilot via udpin://")
     (request,) = fake.of_type("REQUEST_DATA_STREAM")
     assert (request.req_stream_id, request.start_stop, request.req_message_rate) == (0, 1, 10)

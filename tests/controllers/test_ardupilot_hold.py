@@ -16,6 +16,7 @@ from collections.abc import AsyncIterator, Callable
 import pytest
 import pytest_asyncio
 
+from controllers.autopilots import Autopilot
 from controllers.errors import ControllerError
 from controllers.mavsdk_controller import MavsdkController
 from controllers.sim.launcher import SimVehicle
@@ -55,7 +56,7 @@ async def copter() -> AsyncIterator[tuple[MavsdkController, TruthClient]]:
         fc = MavsdkController()
         await fc.connect(sim.connection_string, heartbeat_timeout=10.0)
         try:
-            assert fc.autopilot == "ardupilot"
+            assert fc.autopilot is Autopilot.ARDUPILOT
             assert (await fc.check_failsafe(2.0, tune=True)).ok  # as the platform does at connect
             assert await fc.wait_ready(10.0)
             await fc.arm()

@@ -12,6 +12,7 @@ import pytest
 import pytest_asyncio
 from pymavlink.dialects.v20 import common as mavlink
 
+from controllers.autopilots import Autopilot
 from controllers.landing_target import (
     MAV_FRAME_BODY_FRD,
     MAV_FRAME_LOCAL_NED,
@@ -89,7 +90,7 @@ def test_px4_needs_distance_attitude_and_position(missing: str) -> None:
 
 def test_an_unknown_autopilot_is_refused() -> None:
     with pytest.raises(LandingTargetError, match="unknown autopilot"):
-        landing_target_fields("unknown", LandingTargetFix(0, (0.0, 0.0, 1.0), 5.0, NADIR), 0)
+        landing_target_fields(Autopilot.UNKNOWN, LandingTargetFix(0, (0.0, 0.0, 1.0), 5.0, NADIR), 0)
 
 
 # ---- as the autopilot receives it ---------------------------------------------------------------
@@ -133,7 +134,7 @@ async def test_landing_target_as_the_autopilot_receives_it(sim_vehicle: SimVehic
     arrived_ns, message = tap.wait_for("LANDING_TARGET")
     received = message.to_dict()
     assert fc.autopilot == sim_vehicle.extra_args[sim_vehicle.extra_args.index("--autopilot") + 1]
-    if fc.autopilot == "ardupilot":
+    if fc.autopilot is Autopilot.ARDUPILOT:
         assert (received["frame"], received["position_valid"]) == (MAV_FRAME_BODY_FRD, 0)
         # a nadir camera, the top of the image to the nose: ArduPilot's angles are the camera's own
         assert received["angle_x"] == pytest.approx(math.atan2(0.5, 7.0), abs=1e-6)
@@ -158,9 +159,9 @@ async def test_landing_target_as_the_autopilot_receives_it(sim_vehicle: SimVehic
     assert received["time_usec"] < (arrived_ns - boot_ns) / 1000  # the capture, not the send
 
 
-@pytest.mark.parametrize("autopilot", ["px4", "ardupilot"])
+@pytest.mark.parametrize("autopilot", [Autopilot.PX4, Autopilot.ARDUPILOT])
 @pytest.mark.parametrize("mount", ["down", "45"], ids=["nadir", "tilted-45"])
-def test_the_processors_target_points_each_autopilot_at_the_sim_marker(autopilot: str, mount: str) -> None:
+def test_the_processors_target_points_each_autopilot_at_the_sim_marker(autopilot: Autopilot, mount: str) -> None:
     """sim: camera -> precision_land -> conversion -> the autopilot's reading: the pad where the simulator put it."""
     tilt = "" if mount == "down" else f"&tilt={mount}"
     camera = create_source(f"sim:?marker=5&marker_size=0.6&marker_at=4,2&noise=0{tilt}")
@@ -179,7 +180,7 @@ def test_the_processors_target_points_each_autopilot_at_the_sim_marker(autopilot
     fix = LandingTargetFix(0, target.direction, target.distance_m, model.rotation_body_camera, model.mount.offset_m,
                            (pose.roll, pose.pitch, pose.yaw), (pose.n, pose.e, pose.d))
     fields = landing_target_fields(autopilot, fix, 0)
-    estimate = PadEstimate(ardupilot=autopilot == "ardupilot")
+    estimate = PadEstimate(ardupilot=autopilot is Autopilot.ARDUPILOT)
     estimate.enabled = True
     message = mavlink.MAVLink_landing_target_message(**{**fields, "q": [1.0, 0.0, 0.0, 0.0]})
     estimate.on_message(message, 0, np.array([pose.n, pose.e, pose.d]),
@@ -189,10 +190,10 @@ def test_the_processors_target_points_each_autopilot_at_the_sim_marker(autopilot
     assert math.dist(pad, (4.0, 2.0)) < 0.02 * target.distance_m, f"{pad} from {target.distance_m:.1f} m"
 
 
-@pytest.mark.parametrize("autopilot", ["px4", "ardupilot"])
-def test_a_fix_that_gives_fields_that_are_not_finite_is_refused_before_mavlink(autopilot: str) -> None:
+@pytest.mark.parametrize("autopilot", [Autopilot.PX4, Autopilot.ARDUPILOT])
+def test_a_fix_that_gives_fields_that_are_not_finite_is_refused_before_mavlink(autopilot: Autopilot) -> None:
     fix = LandingTargetFix(0, (0.0, 0.0, 1.0), 8.0, NADIR, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (math.inf, 0.0, -8.0))
-    if autopilot == "ardupilot":
+    if autopilot is Autopilot.ARDUPILOT:
         fix = LandingTargetFix(0, (0.0, 0.0, 1.0), math.nan, NADIR)
     with pytest.raises(LandingTargetError, match="not finite"):
         landing_target_fields(autopilot, fix, 0)

@@ -19,6 +19,7 @@ import pytest
 import pytest_asyncio
 
 from controllers import mavsdk_calls, mavsdk_controller
+from controllers.autopilots import Autopilot
 from controllers.mavsdk_controller import MavsdkController
 from controllers.sim.launcher import SimVehicle
 from controllers.sim.truth import TruthClient
@@ -129,7 +130,7 @@ SLOW_KEYS = ("battery_v", "gps_fix", "armed", "flight_mode", "in_air", "health_o
 async def test_connect_detects_px4_and_telemetry_arrives_at_documented_rates(sim_vehicle: SimVehicle) -> None:
     flight = await start_flight(sim_vehicle)
     try:
-        assert flight.fc.autopilot == "px4"
+        assert flight.fc.autopilot is Autopilot.PX4
         assert flight.fc.description == f"PX4 via {flight.sim.connection_string}"
         counts: dict[str, int] = {}
         boot_ms: list[int] = []

@@ -7,6 +7,7 @@ from typing import Any
 
 import pytest
 
+from controllers.autopilots import Autopilot
 from controllers.errors import ControllerError
 from controllers.failsafe import ParamAccess
 from controllers.fence import read_fence
@@ -43,7 +44,7 @@ async def _bound(name: str, call: Any) -> Any:
 ])
 async def test_ardupilot_fence_parameters_say_whether_a_fence_acts(values: dict[str, float], enabled: bool,
                                                                    summary: str) -> None:
-    report = await read_fence("ardupilot", ParamAccess(_Params(**values), _bound))
+    report = await read_fence(Autopilot.ARDUPILOT, ParamAccess(_Params(**values), _bound))
     assert (report.enabled, report.summary) == (enabled, summary)
 
 

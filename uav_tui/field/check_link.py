@@ -13,9 +13,9 @@ import time
 from dataclasses import dataclass
 from typing import Any
 
+from controllers.autopilots import Autopilot
 from controllers.connection import Connection, connection_failed, no_heartbeat_error
 from controllers.failsafe import RULES, STALE_MARGIN_S, Context, Radio
-from controllers.mavsdk_attach import AUTOPILOT_NAMES
 from uav_tui.config import Config
 from uav_tui.field.finding import Finding, fail, ok, warn
 
@@ -69,8 +69,8 @@ def _check(mav: Any, config: Config, connection: Connection, timeout_s: float) -
         error = asyncio.run(no_heartbeat_error(connection, timeout_s))
         return LinkReport([fail("heartbeat", str(error))])
     system, component = heartbeat.get_srcSystem(), heartbeat.get_srcComponent()
-    autopilot = {_PX4: "px4", _ARDUPILOT: "ardupilot"}.get(heartbeat.autopilot, "unknown")
-    report = LinkReport([ok("heartbeat", f"{AUTOPILOT_NAMES[autopilot]}, system {system}, on {connection.url}")])
+    autopilot = {_PX4: Autopilot.PX4, _ARDUPILOT: Autopilot.ARDUPILOT}.get(heartbeat.autopilot, Autopilot.UNKNOWN)
+    report = LinkReport([ok("heartbeat", f"{autopilot.label}, system {system}, on {connection.url}")])
     report.findings += _failsafe(mav, config, autopilot, (system, component))
     clock = _wait(mav, ("SYSTEM_TIME",), CLOCK_WAIT_S, lambda m: m.get_srcSystem() == system)
     if clock is not None and clock.time_unix_usec > 0:
@@ -93,18 +93,18 @@ def _wait(mav: Any, types: tuple[str, ...], timeout_s: float, wanted: Any) -> An
     return None
 
 
-def _failsafe(mav: Any, config: Config, autopilot: str, target: tuple[int, int]) -> list[Finding]:
+def _failsafe(mav: Any, config: Config, autopilot: Autopilot, target: tuple[int, int]) -> list[Finding]:
     """The platform's failsafe rules on the values read (nothing set: ``tune_autopilot_failsafe`` does that)."""
     rules = RULES.get(autopilot)
     if rules is None:
-        return [warn("failsafe", f"cannot check the offboard-loss failsafe of an {AUTOPILOT_NAMES[autopilot]} "
+        return [warn("failsafe", f"cannot check the offboard-loss failsafe of an {autopilot.label} "
                                  "(PX4 and ArduPilot are known): autonomy will be refused")]
     limit_s = config.safety.max_t + STALE_MARGIN_S
     tuned = config.safety.tune_autopilot_failsafe
-    context = Context(limit_s, _radio(mav, target) if autopilot == "px4" else None)
+    context = Context(limit_s, _radio(mav, target) if autopilot is Autopilot.PX4 else None)
     findings = []
     for param in rules:
-        value = _read_param(mav, param.name, param.integer, target, bytewise=autopilot == "px4")
+        value = _read_param(mav, param.name, param.integer, target, bytewise=autopilot is Autopilot.PX4)
         if value is None:
             findings.append(warn("failsafe", f"{param.name} did not come within {PARAM_TIMEOUT_S:g} s: the "
                                              "platform reads it again at connect"))
