@@ -7,12 +7,14 @@ for what they change (the vehicle handed over, the processor's error cleared, th
 from __future__ import annotations
 
 import asyncio
+import functools
+from collections.abc import Awaitable, Callable
 from typing import TYPE_CHECKING, Any, NamedTuple, Protocol
 
 from controllers.base import PrecisionLanding
 from uav_tui.errors import KNOWN_ERRORS, CommandError, NoVehicle, ProcessorLoadError, SourceError, UavError
 from uav_tui.flight.autonomy import check_vector
-from uav_tui.flight.commands import VEHICLE_COMMANDS, Command, check_limits, parse
+from uav_tui.flight.commands import VEHICLE_COMMANDS, Command, check_limits, parse, unknown_command
 from uav_tui.hosting.child_link import ProcessorRaised
 from uav_tui.hosting.host import Answer
 from uav_tui.hosting.operator_calls import ProcessorCalls
@@ -36,14 +38,14 @@ if TYPE_CHECKING:
 HANDED_OVER = {"land": "LAND", "precland": "LAND", "rtl": "RETURN_TO_LAUNCH"}
 """Commands that hand the vehicle to the autopilot's own mode (MAVSDK's name): exit leaves it there."""
 
-PLAIN_VEHICLE_CALLS: dict[str, tuple[str, str]] = {
-    "arm": ("arm", "armed"),
-    "disarm": ("disarm", "disarmed"),
-    "land": ("land", "landing"),
-    "rtl": ("return_to_home", "returning to launch"),
-    "hold": ("hold", "holding"),
+PLAIN_VEHICLE_CALLS: dict[str, tuple[Callable[[FlightController], Awaitable[None]], str]] = {
+    "arm": (lambda fc: fc.arm(), "armed"),
+    "disarm": (lambda fc: fc.disarm(), "disarmed"),
+    "land": (lambda fc: fc.land(), "landing"),
+    "rtl": (lambda fc: fc.return_to_home(), "returning to launch"),
+    "hold": (lambda fc: fc.hold(), "holding"),
 }
-"""Commands that are one FlightController call without arguments: word -> (method, what to report)."""
+"""Commands that are one FlightController call without arguments: word -> (the call, what to report)."""
 
 AUTONOMY_OUTPUTS = ("getPreparedVector", "getLandingTarget", "getGimbalPointing")
 """What autonomy flies on; a processor with none of them is refused autonomy."""
@@ -56,6 +58,10 @@ class Outcome(NamedTuple):
     t_mono_ns: int | None = None
     """When it took effect (monotonic ns); None: when it returned. A processor call took effect when the
     processor began it: the frames it started after that saw it (a replay gives it before the same frame)."""
+
+
+Handler = Callable[..., Awaitable[Outcome | str]]
+"""One command's coroutine: called with the command's arguments and ``origin=``; returns what happened."""
 
 
 class CameraOpener(Protocol):
@@ -130,6 +136,13 @@ class Operations:
     def __init__(self, core: OperatedCore) -> None:
         self.core = core
         self._processor_calls = ProcessorCalls()
+        self.handlers: dict[str, Handler] = {
+            **{word: functools.partial(self._plain, call, done) for word, (call, done) in PLAIN_VEHICLE_CALLS.items()},
+            "takeoff": self._takeoff, "orbit": self._orbit, "precland": self._precland, "vector": self._vector,
+            "autonomy": self._autonomy, "f": self._f, "roi": self._roi, "snapshot": self._snapshot,
+            "reload": self._reload, "source": self._source, "wait": self._wait, "quit": self._quit,
+        }
+        """Each command word's coroutine (every word of :data:`~uav_tui.flight.commands.COMMANDS`)."""
 
     async def execute(self, command: Command | str, origin: str) -> str:
         """Run one operator command; returns what happened, raises UavError saying why it could not.
@@ -164,17 +177,18 @@ class Operations:
 
     async def run(self, command: Command, origin: str) -> Outcome:
         """Do what ``command`` says, unlogged (:meth:`execute` logs)."""
+        handler = self.handlers.get(command.word)
+        if handler is None:
+            raise unknown_command(command.word)
         check_limits(command, self.core.config.safety)
-        plain = PLAIN_VEHICLE_CALLS.get(command.word)
-        if plain is not None:
-            method, done = plain
-            await getattr(self._vehicle(), method)()
-            outcome: Outcome | str = done
-        else:
-            outcome = await getattr(self, f"_{command.word}")(*command.args, origin=origin)
+        outcome = await handler(*command.args, origin=origin)
         if command.word in VEHICLE_COMMANDS:
             self.core.hand_over(HANDED_OVER.get(command.word))
         return outcome if isinstance(outcome, Outcome) else Outcome(outcome)
+
+    async def _plain(self, call: Callable[[FlightController], Awaitable[None]], done: str, *, origin: str) -> str:
+        await call(self._vehicle())
+        return done
 
     async def _takeoff(self, altitude: float | None = None, *, origin: str) -> str:
         altitude = altitude or self.core.config.safety.takeoff_alt

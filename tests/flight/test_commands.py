@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 from pathlib import Path
+from typing import cast
 
 import pytest
 
@@ -12,6 +13,7 @@ from uav_tui.core import UavCore
 from uav_tui.errors import CommandError, ConfigError
 from uav_tui.flight.commands import COMMANDS, Command, check_limits, parse
 from uav_tui.headless import load_script
+from uav_tui.operations import OperatedCore, Operations
 
 
 @pytest.mark.parametrize(("line", "expected"), [
@@ -57,6 +59,18 @@ def test_errors_show_the_usage(line: str, message: str) -> None:
 def test_every_command_has_usage_and_help() -> None:
     for word, spec in COMMANDS.items():
         assert spec.usage.split()[0] == word and spec.help
+
+
+def test_every_command_word_has_its_handler() -> None:
+    assert set(Operations(cast(OperatedCore, None)).handlers) == set(COMMANDS)
+
+
+async def test_an_unknown_word_is_refused_by_the_commands_as_parse_refuses_it() -> None:
+    with pytest.raises(CommandError) as refused:
+        await Operations(cast(OperatedCore, None)).run(Command("takof"), "test")
+    with pytest.raises(CommandError) as parsed:
+        parse("takof")
+    assert str(refused.value) == str(parsed.value) and "did you mean 'takeoff'?" in str(refused.value)
 
 
 def test_script_is_checked_whole_before_running(tmp_path: Path) -> None:

@@ -165,9 +165,7 @@ def parse(line: str) -> Command | None:
     word = word.lower()
     spec = COMMANDS.get(word)
     if spec is None:
-        close = difflib.get_close_matches(word, COMMANDS, n=1)
-        hint = f"did you mean {close[0]!r}? " if close else ""
-        raise CommandError(f"unknown command {describe(word)}; {hint}commands: {', '.join(COMMANDS)}", key="command")
+        raise unknown_command(word)
     try:
         words = [rest.strip()] if spec.rest and rest.strip() else shlex.split(rest)
     except ValueError as exc:
@@ -182,6 +180,13 @@ def parse(line: str) -> Command | None:
             raise CommandError(f"{describe(text)}: bad argument {name} = {describe(value)}: {exc}; usage: "
                                f"{spec.usage}", key="command") from None
     return Command(word, tuple(args))
+
+
+def unknown_command(word: str) -> CommandError:
+    """The error for a word that is no command: the closest one as a hint, and every command."""
+    close = difflib.get_close_matches(word, COMMANDS, n=1)
+    hint = f"did you mean {close[0]!r}? " if close else ""
+    return CommandError(f"unknown command {describe(word)}; {hint}commands: {', '.join(COMMANDS)}", key="command")
 
 
 def check_limits(command: Command, safety: SafetyConfig) -> None:
