@@ -8,6 +8,7 @@ from pathlib import Path
 import pytest
 
 from tests.core.flight_helpers import flying_core, wait_until
+from uav_tui.camera.active import CameraKind
 from uav_tui.errors import SourceError
 
 
@@ -37,3 +38,10 @@ async def test_a_source_that_fails_to_open_leaves_the_old_one_running(tmp_path: 
         processed = core.worker.stats.frames_processed
         await asyncio.sleep(0.5)
         assert core.worker.stats.frames_processed > processed
+
+
+@pytest.mark.parametrize(("uri", "kind"), [("sim:?width=320", CameraKind.SIM), (" SIM:", CameraKind.SIM),
+                                           ("run:runs/2026-01-01", CameraKind.RUN), ("file:sim.mp4", CameraKind.PLAIN),
+                                           ("rtsp://run:secret@cam/sim", CameraKind.PLAIN)])
+def test_a_cameras_kind_is_read_from_its_uris_scheme(uri: str, kind: CameraKind) -> None:
+    assert CameraKind.of(uri) is kind

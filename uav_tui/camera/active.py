@@ -8,12 +8,14 @@ from __future__ import annotations
 import asyncio
 import functools
 from collections.abc import Callable, Coroutine
+from enum import StrEnum
 from typing import TYPE_CHECKING, Any
 
 from controllers.base import PoseFeed
 from sources import CameraSource, open_source, warm_up_source
 from sources.base import KnowsCameraModel
 from sources.pose import PoseTrack
+from sources.uri import SourceUri
 from uav_tui.camera import pose_feed
 from uav_tui.errors import SourceError
 
@@ -23,6 +25,20 @@ if TYPE_CHECKING:
     from sources.camera_model import CameraModel
     from uav_tui.config import CameraConfig
     from uav_tui.events import EventLog
+
+
+class CameraKind(StrEnum):
+    """What a camera URI asks of the platform besides opening it."""
+
+    SIM = "sim"  # drawn from the vehicle's telemetry: it needs the vehicle's pose
+    RUN = "run"  # a recorded run's frames: on the replay's clock when the vehicle is replayed too
+    PLAIN = "plain"  # anything else: a camera, a file, a stream
+
+    @classmethod
+    def of(cls, uri: str) -> CameraKind:
+        """The kind of ``uri``, from its scheme (:class:`~sources.uri.SourceUri`; SourceUriError without one)."""
+        scheme = SourceUri.parse(uri).scheme
+        return cls(scheme) if scheme in (cls.SIM, cls.RUN) else cls.PLAIN
 
 
 class ActiveCamera:
@@ -57,9 +73,10 @@ class ActiveCamera:
     async def open(self, uri: str) -> CameraSource:
         """Open the camera ``uri`` names (in a thread: opening can block), with the vehicle's pose for sim:."""
         context: dict[str, Any] = {}
-        if uri.startswith("sim:"):
+        kind = CameraKind.of(uri)
+        if kind is CameraKind.SIM:
             context["pose_provider"] = await self._vehicle_pose()
-        if uri.startswith("run:") and self.replay is not None:
+        if kind is CameraKind.RUN and self.replay is not None:
             context["timeline"] = self.replay
         return await asyncio.get_running_loop().run_in_executor(None, functools.partial(open_source, uri, **context))
 
