@@ -255,7 +255,8 @@ async def test_vector_moves_along_the_heading_then_holds(
     assert abs(after["d"] - before["d"]) < 0.2
     records = (await airborne.request(cmd="setpoints", since_mono_ns=since))["records"]
     moving = [r for r in records if (r["vx"], r["vy"]) == (vx, vy)]
-    assert len(moving) >= 20 * 2.0 * 0.9  # 20 Hz for the 2 s (a stalled loop may lose a few)
+    # Streamed for the whole 2 s (the 20 Hz rate is a real-time bound: tests/core/test_safety.py, run alone).
+    assert (moving[-1]["t_mono_ns"] - moving[0]["t_mono_ns"]) / 1e9 > 2.0 - 0.2
     assert (records[-1]["vx"], records[-1]["vy"]) == (0.0, 0.0)  # zero is the last word, then HOLD
 
 

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import asyncio
 from pathlib import Path
 
 import pytest
@@ -21,7 +20,7 @@ async def test_switching_sources_keeps_processor_and_link(tmp_path: Path) -> Non
             processed = core.worker.stats.frames_processed
             message = await core.execute(f"source {uri}")
             assert uri in message
-            await wait_until(lambda p=processed: core.worker.stats.frames_processed > p + 10, 5, f"frames from {uri}")
+            await wait_until(lambda p=processed: core.worker.stats.frames_processed > p + 10, 30, f"frames from {uri}")
             assert core.status().source_uri == uri
             assert core.worker.last.frame.image.shape[:2] == tuple(reversed(core.source.get_frame_size()))
         assert core.worker.state().pid == pid and core.worker.last.vector == (0.6, 0.0, 2.0)  # still in "fly" mode
@@ -36,8 +35,7 @@ async def test_a_source_that_fails_to_open_leaves_the_old_one_running(tmp_path: 
             await core.execute(f"source file:{tmp_path / 'missing.mp4'}")
         assert core.source is old
         processed = core.worker.stats.frames_processed
-        await asyncio.sleep(0.5)
-        assert core.worker.stats.frames_processed > processed
+        await wait_until(lambda: core.worker.stats.frames_processed > processed, 30, "frames from the old source")
 
 
 @pytest.mark.parametrize(("uri", "kind"), [("sim:?width=320", CameraKind.SIM), (" SIM:", CameraKind.SIM),

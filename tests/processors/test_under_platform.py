@@ -56,8 +56,6 @@ def test_runs_under_platform_with_file_source(processor: str, script: str, args:
         "uav_tui",
         "--no-ui",
         "--json",
-        "--duration",
-        "2",
         "--no-record",
         "--source",
         f"file:{video}",
@@ -67,7 +65,7 @@ def test_runs_under_platform_with_file_source(processor: str, script: str, args:
         str(tmp_path / "script.txt"),
         *args,
     ]
-    env = {**os.environ, "PYTHONPATH": str(REPO)}
+    env = {**os.environ, "PYTHONPATH": str(REPO)}  # the script's end ends the run: 3 s of frames after the load
     done = subprocess.run(cmd, cwd=tmp_path, env=env, capture_output=True, text=True, timeout=60)
     lines = [line for line in done.stdout.splitlines() if line.startswith('{"t":')]
     assert lines, done.stderr[-2000:]
