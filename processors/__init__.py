@@ -10,9 +10,9 @@ from __future__ import annotations
 from typing import Any
 
 from processors.base import OPTIONAL_METHODS, FrameProcessor, ProcessorInfo, validate_processor
-from processors.gimbal import GimbalPointing
-from processors.landing_target import LandingTarget
 from processors.loading import ENTRY_POINT_GROUP, LoadedProcessor, load
+from uav_values.gimbal import GimbalPointing
+from uav_values.landing_target import LandingTarget
 
 BUILTINS: dict[str, str] = {
     "template": "processors.template:MeanBrightnessProcessor",
@@ -23,6 +23,8 @@ BUILTINS: dict[str, str] = {
     "precision_land": "processors.precision_land:PrecisionLand",
 }
 """Short names of the built-in processors."""
+
+# LandingTarget and GimbalPointing live in uav_values; the manual gives them as ``from processors import ...``.
 
 __all__ = [
     "BUILTINS", "ENTRY_POINT_GROUP", "OPTIONAL_METHODS", "FrameProcessor", "GimbalPointing", "LandingTarget",

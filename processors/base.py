@@ -7,11 +7,12 @@ import inspect
 import math
 import re
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Protocol, TypeVar, runtime_checkable
+from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 import numpy as np
 
 from processors.errors import ProcessorLoadError
+from uav_values.box import PixelBox
 
 if TYPE_CHECKING:
     from processors.frame_telemetry import FrameTelemetry
@@ -24,12 +25,6 @@ OPTIONAL_METHODS = ("catch_cmd", "customize_processing", "getPreparedVector", "g
 _SIGNATURES = ("catch_cmd(self, roi)", "customize_processing(self, id)", "getPreparedVector(self)",
                "getLandingTarget(self)", "getGimbalPointing(self)")
 
-T = TypeVar("T")
-
-Box = tuple[int, int, int, int]
-"""``(x, y, w, h)`` in frame pixels, (x, y) the top-left corner."""
-
-
 @runtime_checkable
 class FrameProcessor(Protocol):
     """What a researcher writes. No base class is needed; this Protocol is for type checkers.
@@ -41,9 +36,9 @@ class FrameProcessor(Protocol):
         customize_processing(id)  operator pressed F1..F4 (id 1..4)
         getPreparedVector()       (vx, vy, t): body-frame m/s, vx forward, vy right, t seconds; or None
         getLandingTarget()        the landing pad seen in the frame just processed, a
-                                  :class:`~processors.landing_target.LandingTarget`; or None
+                                  :class:`~uav_values.landing_target.LandingTarget`; or None
         getGimbalPointing()       where the camera should turn after the frame just processed, a
-                                  :class:`~processors.gimbal.GimbalPointing` (rates or angles); or None
+                                  :class:`~uav_values.gimbal.GimbalPointing` (rates or angles); or None
 
     ``tmMgr`` is set by the platform after construction (a :class:`~processors.frame_telemetry.FrameTelemetry`:
     ``snapshot()``, the telemetry at the frame's capture with its ``frame_seq`` and ``frame_t_ns``, the clock
@@ -148,19 +143,7 @@ def _require_arity(method: Any, count: int, where: str, path: str | None, class_
         pass
 
 
-def read_output(value: object, kind: type[T], method: str, hint: str) -> T | None:
-    """What an output method (``method``) returned, checked: a ``kind`` or None.
-
-    Raises:
-        TypeError: anything else, saying what was returned and ``hint`` (what to return instead); it is reported
-            as the processor's error and nothing is sent.
-    """
-    if value is None or isinstance(value, kind):
-        return value
-    raise TypeError(f"{method} returned {type(value).__name__} {value!r:.80}: return {hint}")
-
-
-def read_box(instance: object) -> Box | None:
+def read_box(instance: object) -> PixelBox | None:
     """The processor's ``box`` attribute as whole frame pixels, or None when absent, None or malformed.
 
     A box is 4 finite numbers with positive width and height; anything else reads as None, so a

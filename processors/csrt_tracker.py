@@ -12,7 +12,8 @@ import numpy as np
 
 from processors import sift_match, target_search
 from processors.follow import FOLLOW_GAIN, TargetFollower
-from processors.steering import Box, as_box
+from processors.steering import as_box
+from uav_values.box import Box
 
 logger = logging.getLogger(__name__)
 

@@ -16,12 +16,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from processors.base import Box
+from uav_values.box import PixelBox
+from uav_values.detections import Detected
 
 MAX_DETECTIONS = 32
 """At most this many detections a frame: more is the processor's error (report the most confident first and cut,
@@ -32,18 +32,6 @@ MAX_TRACK_ID = 1_000_000
 
 MAX_LABEL_CHARS = 64
 """A longer label is the processor's error: a label is a class name, not a description."""
-
-
-@dataclass(frozen=True, slots=True)
-class Detected:
-    """One checked detection: whole frame pixels, a label, a score in [0, 1], and the track it belongs to."""
-
-    box: Box
-    label: str
-    score: float
-    track_id: int | None = field(default=None, kw_only=True)
-    """The same number on every frame for the same object (the processor's, or the platform's tracker's); None
-    while the tracker has not made it a track (a first low-score sighting)."""
 
 
 def read_detections(instance: object) -> tuple[Detected, ...] | None:
@@ -103,7 +91,7 @@ def _track_id(where: str, track: Any) -> int | None:
     return int(track)
 
 
-def _box(where: str, box: Any) -> Box:
+def _box(where: str, box: Any) -> PixelBox:
     try:
         x, y, w, h = (float(v) for v in box)
     except (TypeError, ValueError, OverflowError):

@@ -14,9 +14,10 @@ import cv2
 import numpy as np
 
 from processors.frame_telemetry import FrameTelemetry, frame_time_s
-from processors.gimbal import GimbalPointing
 from processors.gimbal_steering import GimbalSteering
-from processors.steering import Box, Ramp, Steering, Vector, as_box, draw_target
+from processors.steering import Ramp, Steering, Vector, as_box, draw_target
+from uav_values.box import Box
+from uav_values.gimbal import GimbalPointing
 
 logger = logging.getLogger(__name__)
 

@@ -15,7 +15,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from processors.gimbal import MAX_RATE_DEG_S, GimbalPointing
+from uav_values.gimbal import MAX_RATE_DEG_S, GimbalPointing
 
 DEFAULT_HFOV_DEG = 62.0
 """The field of view assumed without a camera model."""

@@ -10,7 +10,7 @@ import cv2
 import numpy as np
 
 from processors.models import nanotrack_files
-from processors.steering import Box
+from uav_values.box import Box
 
 _EXEMPLAR, _INSTANCE, _STRIDE = 127, 255, 16
 """Template and search window sides (network pixels) and the map's stride."""

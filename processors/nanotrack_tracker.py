@@ -14,7 +14,8 @@ import numpy as np
 from processors import target_search
 from processors.follow import FOLLOW_GAIN, TargetFollower
 from processors.nanotrack_net import HOLD_SHARPNESS, RIVAL_LEVEL, NanoTrackNet
-from processors.steering import Box, as_box
+from processors.steering import as_box
+from uav_values.box import Box
 
 logger = logging.getLogger(__name__)
 

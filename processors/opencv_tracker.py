@@ -9,7 +9,8 @@ import cv2
 import numpy as np
 
 from processors.models import nanotrack_files
-from processors.steering import Box, as_box
+from processors.steering import as_box
+from uav_values.box import Box
 
 logger = logging.getLogger(__name__)
 

@@ -6,10 +6,12 @@ from __future__ import annotations
 
 from collections.abc import Callable, Collection
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, TypeVar
 
-from processors.gimbal import GimbalPointing, read_gimbal_pointing
-from processors.landing_target import LandingTarget, read_landing_target
+from uav_values.gimbal import GimbalPointing
+from uav_values.landing_target import LandingTarget
+
+T = TypeVar("T")
 
 
 @dataclass(frozen=True, slots=True)
@@ -21,6 +23,29 @@ class FrameOutputs:
     landing_status: str = ""
     """A processor with ``getLandingTarget`` that gave no target: its ``status`` attribute, the reason it gives
     (``2 markers with id 7: which is the pad? no target``), one line of at most :data:`STATUS_CHARS` characters."""
+
+
+def read_output(value: object, kind: type[T], method: str, hint: str) -> T | None:
+    """What an output method (``method``) returned, checked: a ``kind`` or None.
+
+    Raises:
+        TypeError: anything else, saying what was returned and ``hint`` (what to return instead); it is reported
+            as the processor's error and nothing is sent.
+    """
+    if value is None or isinstance(value, kind):
+        return value
+    raise TypeError(f"{method} returned {type(value).__name__} {value!r:.80}: return {hint}")
+
+
+def read_landing_target(value: object) -> LandingTarget | None:
+    """What ``getLandingTarget()`` returned, checked: a :class:`LandingTarget` or None."""
+    return read_output(value, LandingTarget, "getLandingTarget()", "a processors.LandingTarget or None")
+
+
+def read_gimbal_pointing(value: object) -> GimbalPointing | None:
+    """What ``getGimbalPointing()`` returned, checked: a :class:`GimbalPointing` or None."""
+    return read_output(value, GimbalPointing, "getGimbalPointing()",
+                       "processors.GimbalPointing.rates(pitch, yaw) or .angles(pitch, yaw), or None")
 
 
 READERS: dict[str, tuple[str, Callable[[object], Any]]] = {

@@ -11,7 +11,7 @@ import cv2
 import numpy as np
 
 from processors import markers
-from processors.landing_target import LandingTarget
+from uav_values.landing_target import LandingTarget
 
 if TYPE_CHECKING:
     from processors.frame_telemetry import FrameTelemetry

@@ -20,13 +20,13 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from uav_values.box import Box
+
 logger = logging.getLogger(__name__)
 
 CAMERA_ORIENTATIONS = ("down", "forward")
 """Accepted values of ``camera``."""
 
-Box = tuple[float, float, float, float]
-"""(x, y, w, h) in frame pixels."""
 
 
 def as_box(values: Iterable[float]) -> Box:

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-Box = tuple[float, float, float, float]
+from uav_values.box import Box
 
 
 def _tint(gray: np.ndarray, bgr: tuple[float, float, float]) -> np.ndarray:

@@ -13,8 +13,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-Box = tuple[float, float, float, float]
-"""(x, y, w, h) in the pixels of the image searched."""
+from uav_values.box import Box
 
 MAX_SIDE = 32
 """The target's longer side is resampled to at most this many pixels for matching."""

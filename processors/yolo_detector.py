@@ -10,11 +10,13 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from processors.detection import Detection, DetectorConfig, load_backend
+from processors.detection import DetectorConfig, load_backend
 from processors.detection.flow import shift_boxes
 from processors.detections import MAX_DETECTIONS
 from processors.frame_telemetry import frame_time_s
-from processors.steering import Box, Steering, Vector, as_box, draw_target
+from processors.steering import Steering, Vector, as_box, draw_target
+from uav_values.box import Box
+from uav_values.detections import Detection
 
 logger = logging.getLogger(__name__)
 

@@ -53,12 +53,13 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from processors import load_processor  # noqa: E402
-from processors.base import Box, read_box  # noqa: E402
+from processors.base import read_box  # noqa: E402
 from sources.synthetic import SyntheticScene  # noqa: E402
 from uav_tui.errors import ConfigError  # noqa: E402
 from uav_tui.evaluation import find_sequences  # noqa: E402
 from uav_tui.evaluation.sequences import aerial_tracking_set  # noqa: E402
 from uav_tui.evaluation.throughput import Replayed, latency_percentiles, platform_run  # noqa: E402
+from uav_values.box import PixelBox  # noqa: E402
 
 PROCESSORS = ("template", "csrt", "position_hold", "yolo")
 RESOLUTIONS = ((640, 480), (1280, 720))
@@ -108,7 +109,8 @@ def target_roi(width: int, height: int) -> tuple[int, int, int, int]:
     return width // 2 - width // 16, height // 2 - height // 16, width // 8, height // 8
 
 
-def bare_loop(path: Path, processor: str, replayed: Replayed, roi: Box | None, fps: float | None) -> dict[str, Any]:
+def bare_loop(path: Path, processor: str, replayed: Replayed, roi: PixelBox | None,
+              fps: float | None) -> dict[str, Any]:
     """The frames ``replayed`` says: untimed from the selection (or :data:`BARE_WARM_UP_FRAMES` frames before the
     measured ones), then the measured ones as fast as it goes, or paced at ``fps`` like a camera (then with
     read-to-result latency)."""
@@ -122,7 +124,7 @@ def bare_loop(path: Path, processor: str, replayed: Replayed, roi: Box | None, f
     for _ in range(start, replayed.first):
         algorithm.photo_processing(_read_looping(cap))
     frames = replayed.last - replayed.first + 1
-    boxes: list[Box | None] = []
+    boxes: list[PixelBox | None] = []
     latencies: list[float] = []
     wall0, cpu0 = time.perf_counter(), time.process_time()
     for index in range(frames):
@@ -183,7 +185,7 @@ def in_fresh_interpreter(function: Callable[..., dict[str, Any]], *args: Any) ->
         return fresh_interpreter.submit(function, *args).result()
 
 
-def _first_difference(bare: list[Box | None], platform: Replayed) -> int | None:
+def _first_difference(bare: list[PixelBox | None], platform: Replayed) -> int | None:
     """The first frame the platform processed (its sequence number) on which the bare loop, which processed every
     measured frame, did not track what the platform did (the same box within a pixel, or nothing in both); None
     when it did on every one."""

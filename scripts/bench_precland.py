@@ -46,10 +46,10 @@ from controllers.autopilots import Autopilot  # noqa: E402
 from controllers.sim.geo import parse_wind  # noqa: E402
 from controllers.sim.launcher import SimVehicle  # noqa: E402
 from controllers.sim.truth import TruthClient  # noqa: E402
-from processors.gimbal import GimbalPointing  # noqa: E402
 from tests.core.flight_helpers import flying_core, wait_until  # noqa: E402
 from uav_tui.flight.plausibility import LandingCheck, judge_gimbal  # noqa: E402
 from uav_tui.hosting.host import ProcessedFrame  # noqa: E402
+from uav_values.gimbal import GimbalPointing  # noqa: E402
 
 MARKER_ID = 7
 MARKER_SIZE_M = 0.5

@@ -29,7 +29,6 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from processors.detection import DetectorConfig, load_backend  # noqa: E402
-from processors.detections import Detected  # noqa: E402
 from sources.ground import default_ground  # noqa: E402
 from sources.sim_camera import SimCameraSource  # noqa: E402
 from sources.sim_geometry import Pose  # noqa: E402
@@ -37,6 +36,7 @@ from sources.sim_render import SimRenderer  # noqa: E402
 from sources.uri import SourceUri  # noqa: E402
 from tests.hosting.sim_cars import track_ids  # noqa: E402
 from uav_tui.hosting import tracks  # noqa: E402
+from uav_values.detections import Detected  # noqa: E402
 
 FRAMES = 2000
 GOAL_SHARE = 0.10

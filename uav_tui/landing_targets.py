@@ -25,13 +25,13 @@ from uav_tui.flight.relay import SEND_TIMEOUT_S, OneAtATime, not_now
 
 if TYPE_CHECKING:
     from controllers.base import FlightController, LandingTargets, Telemetry
-    from processors.landing_target import LandingTarget
     from sources.camera_model import CameraModel
     from uav_tui.config import Config
     from uav_tui.events import EventLog
     from uav_tui.flight.autonomy import AutonomyGate
     from uav_tui.flight.telemetry import TelemetryManager
     from uav_tui.hosting.host import ProcessedFrame, ProcessorHost
+    from uav_values.landing_target import LandingTarget
 
 FRESH_TARGET_S = 1.0
 """``precland`` needs a landing target seen this recently (ArduPilot drops a target older than a second)."""

@@ -18,21 +18,15 @@ from typing import Protocol
 import numpy as np
 
 from processors.models import YOLO_FASTEST
+from uav_values.detections import Detection
+
+__all__ = ["DATA_DIR_ENV", "Backend", "Detection", "DetectorConfig", "find_data_dir", "load_backend"]
+"""``Detection`` lives in :mod:`uav_values.detections`; the manual names it ``processors.detection.Detection``."""
 
 logger = logging.getLogger(__name__)
 
 DATA_DIR_ENV = "UAV_TUI_DATA_DIR"
 """Environment variable naming the shared data folder (the one holding ``aerial-tracking/``)."""
-
-
-@dataclass(frozen=True)
-class Detection:
-    """One detected object: box (x, y, w, h) in frame pixels, confidence 0..1, class id and name."""
-
-    box: tuple[float, float, float, float]
-    score: float
-    class_id: int
-    label: str
 
 
 @dataclass(frozen=True)

@@ -9,8 +9,9 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from processors.detection import Detection, DetectorConfig
+from processors.detection import DetectorConfig
 from processors.detection.postprocess import COCO_NAMES, select
+from uav_values.detections import Detection
 
 logger = logging.getLogger(__name__)
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-Box = tuple[float, float, float, float]
+from uav_values.box import Box
 
 
 def shift_boxes(prev_gray: np.ndarray, gray: np.ndarray, boxes: list[Box]) -> list[Box | None]:

@@ -10,8 +10,9 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from processors.detection import Detection, DetectorConfig
+from processors.detection import DetectorConfig
 from processors.detection.postprocess import COCO_NAMES, letterbox, select
+from uav_values.detections import Detection
 
 logger = logging.getLogger(__name__)
 

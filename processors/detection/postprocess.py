@@ -7,7 +7,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from processors.detection import Detection, DetectorConfig
+from processors.detection import DetectorConfig
+from uav_values.detections import Detection
 
 COCO_NAMES = [
     "person",

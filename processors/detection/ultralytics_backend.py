@@ -9,7 +9,8 @@ from typing import Any
 
 import numpy as np
 
-from processors.detection import Detection, DetectorConfig
+from processors.detection import DetectorConfig
+from uav_values.detections import Detection
 
 logger = logging.getLogger(__name__)
 

@@ -20,7 +20,7 @@ from uav_tui.headless import format_status
 from uav_tui.landing_targets import LandingTargetFeed
 
 PAD_PROCESSOR = '''
-from processors.landing_target import LandingTarget
+from uav_values.landing_target import LandingTarget
 
 
 class Pad:

@@ -27,7 +27,7 @@ MARKER = f"sim:?marker=7&marker_size=1.0&marker_at={PAD_NE[0]:g},{PAD_NE[1]:g}"
 
 HOSTILE = '''
 import math
-from processors.landing_target import LandingTarget
+from uav_values.landing_target import LandingTarget
 from processors.precision_land import PrecisionLand
 
 

@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 from skimage import data
 
-from processors.detection import Detection
-from processors.detections import MAX_DETECTIONS, Detected, read_detections
+from processors.detections import MAX_DETECTIONS, read_detections
 from processors.yolo_detector import YoloDetector
 from uav_tui.hosting.frame_call import call_frame
+from uav_values.detections import Detected, Detection
 
 
 def _with(detections: object) -> SimpleNamespace:

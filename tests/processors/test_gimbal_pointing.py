@@ -8,8 +8,8 @@ import pytest
 
 from processors import GimbalPointing
 from processors.base import validate_processor
-from processors.gimbal import MAX_RATE_DEG_S
 from uav_tui.hosting.frame_call import call_frame
+from uav_values.gimbal import MAX_RATE_DEG_S
 
 
 def test_rates_and_angles_keep_their_values_as_floats() -> None:

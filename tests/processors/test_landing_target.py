@@ -6,9 +6,9 @@ import math
 
 import pytest
 
-from processors.landing_target import CAMERA_FRAME, LandingTarget
 from processors.outputs import STATUS_CHARS
 from uav_tui.hosting.frame_call import call_frame
+from uav_values.landing_target import CAMERA_FRAME, LandingTarget
 
 
 def test_direction_is_normalised_and_angles_follow_it() -> None:

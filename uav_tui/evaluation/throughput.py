@@ -14,11 +14,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from processors.base import Box
 from uav_tui.config import load_config
 from uav_tui.core import UavCore
 from uav_tui.errors import UavError
 from uav_tui.hosting.host import ProcessedFrame
+from uav_values.box import PixelBox
 
 WARM_UP_S = 3.5
 """Before measuring: decoder and caches warm, and the file source has chosen its decoder thread count (a window
@@ -41,7 +41,7 @@ class Replayed:
     seqs: list[int]
     """The measured frames it processed: all from ``first`` to ``last`` unless it skipped some (a late reader
     skips frames, as the camera's newest frame wins)."""
-    boxes: list[Box | None]
+    boxes: list[PixelBox | None]
     """What the processor tracked after each frame of ``seqs`` (its ``box``)."""
 
 
@@ -58,14 +58,14 @@ def cpu_s(pid: int | None) -> float:
     return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
-async def platform_run(source: str, processor: str, isolation: str, seconds: float, roi: Box | None, *,
+async def platform_run(source: str, processor: str, isolation: str, seconds: float, roi: PixelBox | None, *,
                        warm_up_s: float = WARM_UP_S) -> tuple[dict[str, float], Replayed]:
     """The measures of one run (``fps``, ``cpu_s_per_frame``, ``frames``, hand-off and capture-to-result
     latency p50/p95 in ms), and which frames it processed."""
     core = UavCore(load_config(None, {"source": source, "processor": processor, "fc": "none", "record": False,
                                       "isolation": isolation, "processor_call_timeout": 30.0}))
     results: list[tuple[int, int, int, int]] = []  # (seq, captured, started, ready): never keep the images
-    boxes: list[Box | None] = []
+    boxes: list[PixelBox | None] = []
     selected: list[int] = []
 
     def record(r: ProcessedFrame) -> None:

@@ -6,9 +6,9 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from processors.detections import Detected
 from uav_tui.flight.geolocate import GeoFix, locate_row, range_and_bearing
 from uav_tui.output.text import safe
+from uav_values.detections import Detected
 
 if TYPE_CHECKING:
     from sources.camera_model import CameraModel

@@ -1,6 +1,6 @@
 """The processor's gimbal pointing on its way to the autopilot, with the same gate as vectors.
 
-A frame's :class:`~processors.gimbal.GimbalPointing` is sent (the controller takes control of the gimbal on the
+A frame's :class:`~uav_values.gimbal.GimbalPointing` is sent (the controller takes control of the gimbal on the
 first, then streams setpoints) only while the operator has autonomy on, the link is alive and the frame is fresh;
 the vehicle does not have to fly (a gimbal follows a target while the vehicle holds). Whenever autonomy stops (an
 operator command such as ``land`` or ``hold``, a processor fault, the watchdog, the platform's exit) the gimbal is
@@ -19,9 +19,9 @@ from typing import TYPE_CHECKING, cast
 
 from controllers.base import GimbalControl
 from controllers.errors import ControllerError
-from processors.gimbal import RATE, GimbalPointing
 from uav_tui.flight.plausibility import RefusalRun, judge_gimbal
 from uav_tui.flight.relay import OneAtATime, not_now
+from uav_values.gimbal import RATE, GimbalPointing
 
 if TYPE_CHECKING:
     from controllers.base import FlightController

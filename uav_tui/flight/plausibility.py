@@ -1,6 +1,6 @@
 """Whether an output the processor gave can be true, checked at its relay just before it is sent.
 
-The value types check themselves when they are built (:mod:`processors.landing_target`, :mod:`processors.gimbal`),
+The value types check themselves when they are built (:mod:`uav_values.landing_target`, :mod:`uav_values.gimbal`),
 but a processor in the platform's process (``isolation = "thread"``) can change the object afterwards
 (``object.__setattr__``; from its own process the wire rebuilds it with the check), and a target that type-checks
 can still be impossible. So each frame, the relay asks here:
@@ -23,8 +23,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from processors.gimbal import GimbalPointing
-from processors.landing_target import LandingTarget
+from uav_values.gimbal import GimbalPointing
+from uav_values.landing_target import LandingTarget
 
 if TYPE_CHECKING:
     from controllers.base import Telemetry

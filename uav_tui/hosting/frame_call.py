@@ -18,10 +18,12 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from processors.base import Box, read_box
-from processors.detections import Detected, read_detections
+from processors.base import read_box
+from processors.detections import read_detections
 from processors.outputs import NO_OUTPUTS, FrameOutputs, read_outputs
 from uav_tui.hosting.tracks import DetectionTracks
+from uav_values.box import PixelBox
+from uav_values.detections import Detected
 
 
 @dataclass(slots=True)
@@ -37,7 +39,7 @@ class FrameOutcome:
     """What ``getPreparedVector`` returned, unchecked."""
     outputs: FrameOutputs = NO_OUTPUTS
     """What the output methods returned, checked (None each when not called or nothing this frame)."""
-    box: Box | None = None
+    box: PixelBox | None = None
     detections: tuple[Detected, ...] | None = None
     """The processor's ``detections`` attribute, checked (None without one)."""
     error: str | None = None

@@ -8,10 +8,10 @@ from dataclasses import dataclass, field
 from enum import StrEnum
 from typing import TYPE_CHECKING, Any, Protocol
 
-from processors.base import Box
-from processors.detections import Detected
 from processors.outputs import NO_OUTPUTS, FrameOutputs
 from sources.buffer import Frame
+from uav_values.box import PixelBox
+from uav_values.detections import Detected
 
 if TYPE_CHECKING:
     from processors import LoadedProcessor
@@ -49,7 +49,7 @@ class ProcessedFrame:
     """Fields the processor stored with ``tmMgr.save(frame, **extra)`` for this frame."""
     saved: bool = False
     """True when the processor saved this frame's image."""
-    box: Box | None = None
+    box: PixelBox | None = None
     """The processor's ``box`` attribute after this frame (what it tracks), or None."""
     detections: tuple[Detected, ...] | None = None
     """The processor's ``detections`` after this frame, checked; None without the attribute (or on an error)."""

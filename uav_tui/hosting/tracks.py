@@ -23,7 +23,8 @@ from dataclasses import replace
 import numpy as np
 from edgefirst.tracker import ByteTrack
 
-from processors.detections import MAX_TRACK_ID, Detected
+from processors.detections import MAX_TRACK_ID
+from uav_values.detections import Detected
 
 NEW_TRACK_SCORE = 0.25
 """A detection at least this confident may start a track; a less confident one only continues one (ByteTrack's

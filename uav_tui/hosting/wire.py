@@ -22,9 +22,10 @@ from typing import Any
 import msgspec
 import numpy as np
 
-from processors.base import Box, ProcessorInfo
-from processors.detections import Detected
+from processors.base import ProcessorInfo
 from processors.outputs import FrameOutputs
+from uav_values.box import PixelBox
+from uav_values.detections import Detected
 
 Value = tuple[Any, ...] | dict[Any, Any] | str | bool | int | float | None
 """A value a processor returned (a vector, a call's answer), as plain data: a sequence arrives as a tuple (inside it,
@@ -138,7 +139,7 @@ class Result(_Record, frozen=True, tag=6):
     """What ``getPreparedVector`` returned, as plain data (the gate checks it)."""
     outputs: FrameOutputs | None
     """What the output methods returned, checked (:mod:`processors.outputs`); None when none gave anything."""
-    box: Box | None
+    box: PixelBox | None
     detections: tuple[Detected, ...] | None
     """The processor's ``detections``, checked (None without the attribute)."""
     error: str | None

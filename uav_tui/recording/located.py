@@ -6,8 +6,8 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
-from processors.detections import Detected
 from uav_tui.flight.geolocate import GeoFix, locate_row
+from uav_values.detections import Detected
 
 if TYPE_CHECKING:
     from sources.camera_model import CameraModel

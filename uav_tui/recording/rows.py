@@ -22,8 +22,8 @@ from uav_tui.recording.located import DETECTION_COLUMNS, GEO_COLUMNS, detection_
 from uav_tui.recording.writer import Row
 
 if TYPE_CHECKING:
-    from processors.detections import Detected
     from sources.camera_model import CameraModel
+    from uav_values.detections import Detected
 
 TELEMETRY_COLUMNS: tuple[str, ...] = TELEMETRY_FIELDS
 """telemetry.csv: one row per telemetry update; ``t_mono_ns``/``t_wall_ns`` are when it was received."""

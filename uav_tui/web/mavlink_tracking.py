@@ -39,7 +39,6 @@ from typing import TYPE_CHECKING, Any
 
 from pymavlink.dialects.v20 import common as mavlink
 
-from processors.base import Box
 from uav_tui.errors import KNOWN_ERRORS, CommandError, ConfigError, UavError
 from uav_tui.flight.commands import Command
 from uav_tui.flight.geolocate import HEIGHT_SIGMAS, NO_BOX, OK, GeoFix, locate_row
@@ -49,6 +48,7 @@ from uav_tui.output.text import describe
 from uav_tui.web.failures import HandlerFailures
 from uav_tui.web.roi import point_to_roi, rect_to_roi
 from uav_tui.web.view import ServedCore
+from uav_values.box import PixelBox
 
 if TYPE_CHECKING:
     from uav_tui.web.ground_video import GroundVideo
@@ -130,7 +130,7 @@ class CameraTracking:
         """CAMERA_TRACKING_MODE_* of the last accepted track command."""
         self.reporting = True
         """False after MAV_CMD_CAMERA_STOP_TRACKING until the next track command: the status says idle."""
-        self.tracked: tuple[Box | None, tuple[int, int], bool] = (None, (0, 0), False)
+        self.tracked: tuple[PixelBox | None, tuple[int, int], bool] = (None, (0, 0), False)
         """The newest processed frame's box, its frame size and whether the processor raised on it."""
         self.located = NOT_LOCATED
         """Where that box is on the ground (seen with the telemetry at the frame's capture)."""
@@ -318,7 +318,7 @@ class CameraTracking:
         self._send_image_status()
         self._send_geo_status()
 
-    def _reported(self) -> tuple[int, Box | None]:
+    def _reported(self) -> tuple[int, PixelBox | None]:
         """(CAMERA_TRACKING_STATUS_FLAGS_*, the box to report): the box only while the flag is active."""
         box, (width, height), failed = self.tracked
         if failed:

@@ -14,8 +14,6 @@ from dataclasses import dataclass
 from numbers import Real
 from typing import Literal
 
-from processors.base import read_output
-
 RATE: Literal["rate"] = "rate"
 ANGLE: Literal["angle"] = "angle"
 
@@ -75,13 +73,3 @@ class GimbalPointing:
         """``rates pitch -4.0 yaw 12.5 deg/s`` or ``angles pitch -45.0 yaw 0.0 deg``."""
         unit = "deg/s" if self.mode == RATE else "deg"
         return f"{self.mode}s pitch {self.pitch:.1f} yaw {self.yaw:.1f} {unit}"
-
-
-def read_gimbal_pointing(value: object) -> GimbalPointing | None:
-    """What ``getGimbalPointing()`` returned, checked: a :class:`GimbalPointing` or None.
-
-    Raises:
-        TypeError: anything else (reported as the processor's error; nothing is sent).
-    """
-    return read_output(value, GimbalPointing, "getGimbalPointing()",
-                       "processors.GimbalPointing.rates(pitch, yaw) or .angles(pitch, yaw), or None")

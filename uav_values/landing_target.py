@@ -12,8 +12,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from processors.base import read_output
-
 CAMERA_FRAME = "camera"
 """The one coordinate frame a :class:`LandingTarget` is given in: x right, y down (image), z ahead (optical axis)."""
 
@@ -86,13 +84,3 @@ class LandingTarget:
             return None
         x, y, z = self.direction
         return x * self.distance_m, y * self.distance_m, z * self.distance_m
-
-
-
-def read_landing_target(value: object) -> LandingTarget | None:
-    """What ``getLandingTarget()`` returned, checked: a :class:`LandingTarget` or None.
-
-    Raises:
-        TypeError: anything else (reported as the processor's error; nothing is sent).
-    """
-    return read_output(value, LandingTarget, "getLandingTarget()", "a processors.LandingTarget or None")
