@@ -54,6 +54,41 @@ class FrameProcessor(Protocol):
     def photo_processing(self, frame: np.ndarray) -> Any: ...
 
 
+@runtime_checkable
+class GivesLandingTarget(Protocol):
+    """A processor with the optional ``getLandingTarget()``; its optional ``status`` says why there is no target."""
+
+    def getLandingTarget(self) -> object: ...
+
+
+@runtime_checkable
+class GivesGimbalPointing(Protocol):
+    """A processor with the optional ``getGimbalPointing()``."""
+
+    def getGimbalPointing(self) -> object: ...
+
+
+@runtime_checkable
+class HasBox(Protocol):
+    """A processor with the optional ``box`` attribute (what it tracks now; checked by :func:`read_box`)."""
+
+    box: object
+
+
+@runtime_checkable
+class HasDetections(Protocol):
+    """A processor with the optional ``detections`` attribute (checked by :mod:`processors.detections`)."""
+
+    detections: object
+
+
+@runtime_checkable
+class HasStatus(Protocol):
+    """A processor with the optional ``status`` attribute: why ``getLandingTarget()`` gave no target."""
+
+    status: object
+
+
 @dataclass(frozen=True)
 class ProcessorInfo:
     """What the platform learned about a processor class when it loaded it."""
@@ -149,7 +184,7 @@ def read_box(instance: object) -> PixelBox | None:
     A box is 4 finite numbers with positive width and height; anything else reads as None, so a
     researcher's half-finished attribute can never break the frame it belongs to.
     """
-    value = getattr(instance, "box", None)
+    value: Any = instance.box if isinstance(instance, HasBox) else None
     if value is None:
         return None
     try:

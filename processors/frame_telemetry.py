@@ -21,7 +21,7 @@ from __future__ import annotations
 import logging
 import time
 from collections.abc import Callable, Mapping
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -43,6 +43,13 @@ _FIELDS = frozenset(TELEMETRY_FIELDS) - {"heartbeat_age_s"}
 Store = Callable[[np.ndarray, dict[str, Any]], None]
 """``store(image, extra)``: what the host does with one save; it copies the pixels it keeps (the processor may
 draw on the array after the call)."""
+
+
+@runtime_checkable
+class _HasImage(Protocol):
+    """A frame object that carries its pixels (``sources.buffer.Frame``), saved as its ``image``."""
+
+    image: object
 
 
 class FrameTelemetry:
@@ -94,7 +101,7 @@ class FrameTelemetry:
 
     def save(self, frame: Any, **extra: Any) -> None:
         """Store ``frame`` with the telemetry of its capture and ``extra`` columns (dropped above ``save_max_hz``)."""
-        image = getattr(frame, "image", frame)
+        image = frame.image if isinstance(frame, _HasImage) else frame
         if not isinstance(image, np.ndarray) or image.ndim not in (2, 3):
             raise TypeError(f"tmMgr.save(frame, **extra): frame must be an image array, got {type(image).__name__}")
         if not self._take_token(image):

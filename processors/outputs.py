@@ -1,13 +1,14 @@
 """The checked outputs a processor may give after each frame besides its vector: ``getLandingTarget`` and
-``getGimbalPointing``. One table says which method gives which output and how it is checked, so every host (the
-thread, the processor's process) calls them the same way."""
+``getGimbalPointing``. :func:`read_outputs` calls them and checks what they returned, so every host (the thread,
+the processor's process) calls them the same way."""
 
 from __future__ import annotations
 
-from collections.abc import Callable, Collection
+from collections.abc import Collection
 from dataclasses import dataclass
-from typing import Any, TypeVar
+from typing import TypeVar
 
+from processors.base import GivesGimbalPointing, GivesLandingTarget, HasStatus
 from uav_values.gimbal import GimbalPointing
 from uav_values.landing_target import LandingTarget
 
@@ -48,11 +49,8 @@ def read_gimbal_pointing(value: object) -> GimbalPointing | None:
                        "processors.GimbalPointing.rates(pitch, yaw) or .angles(pitch, yaw), or None")
 
 
-READERS: dict[str, tuple[str, Callable[[object], Any]]] = {
-    "getLandingTarget": ("landing_target", read_landing_target),
-    "getGimbalPointing": ("gimbal", read_gimbal_pointing),
-}
-"""Output method -> (:class:`FrameOutputs` field, the check of what it returned: raises TypeError on a wrong type)."""
+OUTPUT_METHODS = ("getLandingTarget", "getGimbalPointing")
+"""The output methods, in the order they are called after a frame."""
 
 NO_OUTPUTS = FrameOutputs()
 
@@ -61,31 +59,32 @@ STATUS_CHARS = 160
 
 
 def output_methods(capabilities: Collection[str]) -> tuple[str, ...]:
-    """The output methods among a processor's ``capabilities`` (detected at load time), in :data:`READERS` order."""
-    return tuple(name for name in READERS if name in capabilities)
+    """The output methods among a processor's ``capabilities`` (detected at load time), in call order."""
+    return tuple(name for name in OUTPUT_METHODS if name in capabilities)
 
 
-def read_outputs(instance: Any, methods: Collection[str], frame_seq: int | None = None) -> FrameOutputs:
+def read_outputs(instance: object, methods: Collection[str], frame_seq: int | None = None) -> FrameOutputs:
     """Call each of ``methods`` (output methods) on ``instance`` and check what it returned.
 
-    A landing target without a ``frame_seq`` is stamped, in place, with ``frame_seq`` (the frame just processed):
-    the same object returned after a later frame then says it was seen in this one, and is not sent for that one.
+    A landing target without a ``frame_seq`` is stamped with ``frame_seq`` (the frame just processed,
+    :meth:`~uav_values.landing_target.LandingTarget.stamp`): the same object returned after a later frame then
+    says it was seen in this one, and is not sent for that one.
 
     Raises:
         TypeError: a method returned a value of the wrong type; whatever a method raised propagates.
     """
     if not methods:
         return NO_OUTPUTS
-    values = {}
-    for name in methods:
-        field, read = READERS[name]
-        values[field] = read(getattr(instance, name)())
-    target = values.get("landing_target")
-    if target is not None and target.frame_seq is None and frame_seq is not None:
-        object.__setattr__(target, "frame_seq", frame_seq)
-    if "getLandingTarget" in methods and target is None:
-        values["landing_status"] = _one_line(getattr(instance, "status", None))
-    return FrameOutputs(**values)
+    target = gimbal = None
+    landing = "getLandingTarget" in methods
+    if landing and isinstance(instance, GivesLandingTarget):
+        target = read_landing_target(instance.getLandingTarget())
+    if "getGimbalPointing" in methods and isinstance(instance, GivesGimbalPointing):
+        gimbal = read_gimbal_pointing(instance.getGimbalPointing())
+    if target is not None and frame_seq is not None:
+        target.stamp(frame_seq)
+    status = _one_line(instance.status if landing and target is None and isinstance(instance, HasStatus) else None)
+    return FrameOutputs(target, gimbal, status)
 
 
 def _one_line(status: object) -> str:

@@ -71,6 +71,13 @@ class LandingTarget:
                                  "the optical axis, in radians (not degrees)")
         return cls((math.tan(angle_x), math.tan(angle_y), 1.0), distance_m, frame_seq)
 
+    def stamp(self, frame_seq: int) -> None:
+        """The platform's, after the frame ``frame_seq`` this target was returned for: sets :attr:`frame_seq` when
+        it is None, in place and once, so this same object returned after a later frame still says it was seen in
+        that first frame (and is not sent as the later frame's)."""
+        if self.frame_seq is None:
+            object.__setattr__(self, "frame_seq", frame_seq)
+
     @property
     def angles(self) -> tuple[float, float]:
         """(right, down) angles in radians off the optical axis (``CameraModel.angles`` of the pad's pixel)."""

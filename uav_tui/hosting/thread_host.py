@@ -60,6 +60,8 @@ class ThreadHost(DeliversResults):
         """Where the count of the processor's log records left out is said (None: logged)."""
         self.save_max_hz = save_max_hz
         self.telemetry: TelemetryManager | None = None
+        self.tm: FrameTelemetry | None = None
+        """The processor's ``tmMgr`` once :meth:`bind_telemetry` made it (a reload hands it to the new instance)."""
         self._fields: tuple[Telemetry | None, dict[str, Any]] = (None, {})
         """The telemetry last given to the processor and its fields as a dict (telemetry changes slower than frames)."""
         self.stats = RollingStats()
@@ -85,14 +87,13 @@ class ThreadHost(DeliversResults):
     def bind_telemetry(self, telemetry: TelemetryManager) -> None:
         """Give the processor its ``tmMgr``: the telemetry at each frame's capture; ``telemetry`` stores saves."""
         self.telemetry = telemetry
-        self.processor.instance.tmMgr = FrameTelemetry(lambda image, extra: telemetry.save(image, **extra),
-                                                       save_max_hz=self.save_max_hz)
+        self.tm = FrameTelemetry(lambda image, extra: telemetry.save(image, **extra), save_max_hz=self.save_max_hz)
+        self.processor.instance.tmMgr = self.tm
 
     def attach(self, buffer: FrameBuffer, camera: CameraModel | None = None) -> None:
         """Take frames from ``buffer`` from now on (a new source, with ``camera`` its model for ``tmMgr.camera()``)."""
-        tm = getattr(self.processor.instance, "tmMgr", None)
-        if isinstance(tm, FrameTelemetry):
-            tm.camera_model = camera
+        if self.tm is not None:
+            self.tm.camera_model = camera
         with self._wake:
             if self._buffer is not None:
                 self._buffer.remove_listener(self._on_frame)
@@ -149,7 +150,7 @@ class ThreadHost(DeliversResults):
         current = self.processor
         fresh = await asyncio.get_running_loop().run_in_executor(None, functools.partial(
             load_processor, current.spec, current.kwargs, fresh=True))
-        fresh.instance.tmMgr = current.instance.tmMgr
+        fresh.instance.tmMgr = self.tm
         await self.replace(fresh)
         return fresh.info
 
@@ -163,8 +164,7 @@ class ThreadHost(DeliversResults):
     @property
     def saves_throttled(self) -> int:
         """``tmMgr.save`` calls its ``tmMgr`` dropped above ``save_max_hz``."""
-        tm = getattr(self.processor.instance, "tmMgr", None)
-        return tm.saves_throttled if isinstance(tm, FrameTelemetry) else 0
+        return self.tm.saves_throttled if self.tm is not None else 0
 
     @property
     def busy_s(self) -> float:
@@ -238,7 +238,7 @@ class ThreadHost(DeliversResults):
         self._busy_since_ns = time.monotonic_ns()
         result = ProcessedFrame(frame=frame, t_start_ns=self._busy_since_ns)
         self.current = result
-        self._begin(instance, frame)
+        self._begin(frame)
         try:
             capabilities = self.processor.info.capabilities
             outcome = call_frame(instance, frame.image, vector="getPreparedVector" in capabilities,
@@ -258,10 +258,10 @@ class ThreadHost(DeliversResults):
             self.consecutive_errors += 1
         return result
 
-    def _begin(self, instance: Any, frame: Frame) -> None:
+    def _begin(self, frame: Frame) -> None:
         """Tell the processor's ``tmMgr`` which frame it is processing and the telemetry at its capture."""
-        tm = getattr(instance, "tmMgr", None)
-        if self.telemetry is None or not isinstance(tm, FrameTelemetry):
+        tm = self.tm
+        if self.telemetry is None or tm is None:
             return
         telemetry, heartbeat_age = self.telemetry.at(frame.t_mono_ns)
         if telemetry is not self._fields[0]:
