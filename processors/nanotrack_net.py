@@ -192,4 +192,5 @@ def _extent(w: np.ndarray | float, h: np.ndarray | float) -> np.ndarray:
 
 def _reciprocal_max(ratio: np.ndarray) -> np.ndarray:
     """How far a ratio is from 1, either way (r or 1/r, whichever is larger)."""
-    return np.maximum(ratio, 1.0 / ratio)
+    larger: np.ndarray = np.maximum(ratio, 1.0 / ratio)
+    return larger

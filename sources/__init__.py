@@ -44,7 +44,8 @@ def create_source(uri: str, **context: Any) -> CameraSource:
         raise SourceUriError(f"unknown camera scheme {parsed.scheme!r} in {uri!r}; known: {known}", key="source")
     module_name, class_name = target.split(":")
     cls = getattr(importlib.import_module(module_name), class_name)
-    return cls.from_uri(parsed, **context)
+    source: CameraSource = cls.from_uri(parsed, **context)
+    return source
 
 
 def warm_up_source(uri: str) -> None:

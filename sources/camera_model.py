@@ -213,7 +213,8 @@ class CameraModel:
         points = np.asarray(pixels, float).reshape(-1, 2)
         xy = (points - (self.cx, self.cy)) / (self.fx, self.fy) if self._d is None else self._undistort(points)
         rays = np.column_stack([xy, np.ones(len(xy))])
-        return rays / np.linalg.norm(rays, axis=1, keepdims=True)
+        unit: np.ndarray = rays / np.linalg.norm(rays, axis=1, keepdims=True)
+        return unit
 
     def ray_to_pixel(self, ray: np.ndarray) -> tuple[float, float] | None:
         """The pixel (distorted, as the camera shows it) a camera-frame ray falls on; None behind the camera."""
@@ -229,7 +230,8 @@ class CameraModel:
         """Pixels (N x 2) for camera-frame rays (N x 3) in front of the camera (z > 0)."""
         rays = np.asarray(rays, float).reshape(-1, 3)
         if self._d is None:
-            return rays[:, :2] / rays[:, 2:] * (self.fx, self.fy) + (self.cx, self.cy)
+            pinhole: np.ndarray = rays[:, :2] / rays[:, 2:] * (self.fx, self.fy) + (self.cx, self.cy)
+            return pinhole
         import cv2
 
         pixels, _ = cv2.projectPoints(rays, np.zeros(3), np.zeros(3), self._k, self._d)
@@ -242,11 +244,13 @@ class CameraModel:
 
     def ray_in_body(self, ray: np.ndarray) -> np.ndarray:
         """A camera-frame ray in the body frame (FRD)."""
-        return self._r @ np.asarray(ray, float)
+        body: np.ndarray = self._r @ np.asarray(ray, float)
+        return body
 
     def _undistort(self, points: np.ndarray) -> np.ndarray:
         import cv2
 
         # R and P may be None (identity: normalised coordinates out); the stub types them as required arrays.
-        return cv2.undistortPointsIter(points.reshape(-1, 1, 2), self._k, self.distortion_array, None, None,  # type: ignore[call-overload]
-                                       _UNDISTORT_CRITERIA).reshape(-1, 2)
+        normalised: np.ndarray = cv2.undistortPointsIter(  # type: ignore[call-overload]
+            points.reshape(-1, 1, 2), self._k, self.distortion_array, None, None, _UNDISTORT_CRITERIA)
+        return normalised.reshape(-1, 2)

@@ -111,7 +111,8 @@ class PicamSource(CaptureSource):
         # (and a reopen by the capture base) instead of a thread blocked forever.
         job = self._camera.capture_array("main", wait=False)
         try:
-            return self._camera.wait(job, timeout=self._frame_timeout_s)
+            frame: np.ndarray | None = self._camera.wait(job, timeout=self._frame_timeout_s)
+            return frame
         except TimeoutError:
             return None
 

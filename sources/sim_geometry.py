@@ -67,7 +67,8 @@ def rotation_world_body(roll_deg: float, pitch_deg: float, yaw_deg: float) -> np
     rz = np.array([[cy, -sy, 0.0], [sy, cy, 0.0], [0.0, 0.0, 1.0]])
     ry = np.array([[cp, 0.0, sp], [0.0, 1.0, 0.0], [-sp, 0.0, cp]])
     rx = np.array([[1.0, 0.0, 0.0], [0.0, cr, -sr], [0.0, sr, cr]])
-    return rz @ ry @ rx
+    rotation: np.ndarray = rz @ ry @ rx
+    return rotation
 
 
 def rotation_body_camera(tilt_deg: float) -> np.ndarray:
@@ -80,7 +81,8 @@ def rotation_body_camera(tilt_deg: float) -> np.ndarray:
 
 def rotation_world_camera(pose: Pose, camera: PinholeCamera) -> np.ndarray:
     """Camera axes expressed in NED."""
-    return rotation_world_body(pose.roll, pose.pitch, pose.yaw) @ rotation_body_camera(camera.tilt_deg)
+    rotation: np.ndarray = rotation_world_body(pose.roll, pose.pitch, pose.yaw) @ rotation_body_camera(camera.tilt_deg)
+    return rotation
 
 
 def camera_centre(pose: Pose) -> np.ndarray:
@@ -92,7 +94,8 @@ def ground_to_image(pose: Pose, camera: PinholeCamera) -> np.ndarray:
     """The homography taking a ground point ``(n, e, 1)`` to homogeneous image pixels."""
     r_cw = rotation_world_camera(pose, camera).T
     t = -r_cw @ camera_centre(pose)
-    return camera.intrinsics @ np.column_stack([r_cw[:, 0], r_cw[:, 1], t])
+    homography: np.ndarray = camera.intrinsics @ np.column_stack([r_cw[:, 0], r_cw[:, 1], t])
+    return homography
 
 
 def project_ground_point(n: float, e: float, pose: Pose, camera: PinholeCamera) -> tuple[float, float] | None:
@@ -111,7 +114,8 @@ def ray_down_coefficients(pose: Pose, camera: PinholeCamera) -> np.ndarray:
 
     Where this is <= 0 the pixel sees the sky, not the ground.
     """
-    return rotation_world_camera(pose, camera)[2] @ np.linalg.inv(camera.intrinsics)
+    coefficients: np.ndarray = rotation_world_camera(pose, camera)[2] @ np.linalg.inv(camera.intrinsics)
+    return coefficients
 
 
 def ground_sample_distance(pose: Pose, camera: PinholeCamera, pixel: tuple[float, float]) -> float | None:
@@ -119,5 +123,5 @@ def ground_sample_distance(pose: Pose, camera: PinholeCamera, pixel: tuple[float
     direction = rotation_world_camera(pose, camera) @ np.linalg.inv(camera.intrinsics) @ np.array([*pixel, 1.0])
     if direction[2] <= 1e-9:
         return None
-    distance = -camera_centre(pose)[2] / direction[2] * float(np.linalg.norm(direction))
+    distance = -float(camera_centre(pose)[2] / direction[2]) * float(np.linalg.norm(direction))
     return distance / camera.focal_px

@@ -50,7 +50,7 @@ class GroundMarker:
     @property
     def modules(self) -> int:
         """Modules across the black square (the marker's bits and its black border)."""
-        return self._bits.shape[0] - 2
+        return int(self._bits.shape[0]) - 2
 
     def patch_corners(self) -> np.ndarray:
         """Ground (n, e) of the patch's corners, quiet zone included: north-west, north-east, south-east, south-west."""

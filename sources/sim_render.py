@@ -64,7 +64,8 @@ def _target_patch(seed: int) -> np.ndarray:
     patch[88:112, 8:56] = (30, 30, 30)
     patch[::16, :] = (255, 255, 255)
     noise = rng.integers(-25, 26, size=patch.shape, dtype=np.int16)
-    return np.clip(patch.astype(np.int16) + noise, 0, 255).astype(np.uint8)
+    roof: np.ndarray = np.clip(patch.astype(np.int16) + noise, 0, 255).astype(np.uint8)
+    return roof
 
 
 class SimRenderer:
@@ -134,7 +135,8 @@ class SimRenderer:
         projected = homogeneous @ ground_to_image(pose, self.camera).T
         if np.any(projected[:, 2] <= 1e-6):
             return None
-        return projected[:, :2] / projected[:, 2:]
+        pixels: np.ndarray = projected[:, :2] / projected[:, 2:]
+        return pixels
 
     def _paste(self, image: np.ndarray, pose: Pose, patch: np.ndarray, ground_corners: np.ndarray,
                quad: np.ndarray | None = None) -> None:

@@ -21,7 +21,8 @@ def _texture(rng: np.random.Generator, height: int, width: int, cell: int) -> np
     coarse = rng.integers(0, 256, size=(max(2, height // cell), max(2, width // cell), 3), dtype=np.uint8)
     smooth = cv2.resize(coarse, (width, height), interpolation=cv2.INTER_CUBIC)
     grain = rng.integers(-40, 41, size=(height, width, 1), dtype=np.int16)
-    return np.clip(smooth.astype(np.int16) + grain, 0, 255).astype(np.uint8)
+    texture: np.ndarray = np.clip(smooth.astype(np.int16) + grain, 0, 255).astype(np.uint8)
+    return texture
 
 
 class SyntheticScene:
