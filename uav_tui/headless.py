@@ -14,7 +14,7 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any, TextIO
 
-from uav_tui.config import Config, SafetyConfig
+from uav_tui.config import Config, Isolation, SafetyConfig
 from uav_tui.core import UavCore
 from uav_tui.errors import KNOWN_ERRORS, CommandError, error_line
 from uav_tui.events import Event
@@ -175,7 +175,7 @@ class HeadlessRunner:
     def _printed(self, output: TerminalOutput) -> TerminalOutput | BudgetedText:
         """Where ``print()`` goes: ``output``; with thread isolation, where the processor prints in this process,
         within a line budget (with process isolation its output has one already: ``SubprocessHost``)."""
-        if self.core.config.isolation != "thread":
+        if self.core.config.isolation != Isolation.THREAD:
             return output
         return BudgetedText(output, lambda line: output.write(shorten(safe(line), PRINTED_CHARS) + "\n"),
                             self._left_out)

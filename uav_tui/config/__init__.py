@@ -21,6 +21,7 @@ from uav_tui.config.settings import (
     CameraConfig,
     Config,
     EnvelopeConfig,
+    Isolation,
     RecordingConfig,
     SafetyConfig,
     SimConfig,
@@ -29,6 +30,7 @@ from uav_tui.config.settings import (
 
 __all__ = [
     "ISOLATION_MODES",
+    "Isolation",
     "SECTIONS",
     "CameraConfig",
     "Config",

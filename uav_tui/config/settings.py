@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import MISSING, dataclass, field
+from enum import StrEnum
 from typing import TYPE_CHECKING, Any
 
 from controllers.sim.geo import Home, parse_wind
@@ -268,7 +269,14 @@ class Config:
     camera: CameraConfig = field(default_factory=CameraConfig)
 
 
-ISOLATION_MODES = ("process", "thread")
+class Isolation(StrEnum):
+    """Where the processor runs (``isolation``): its own process, or a thread of the platform's."""
+
+    PROCESS = "process"
+    THREAD = "thread"
+
+
+ISOLATION_MODES = tuple(Isolation)
 """Values of ``isolation``."""
 
 SECTIONS = {"safety": SafetyConfig, "envelope": EnvelopeConfig, "recording": RecordingConfig, "web": WebConfig,

@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 
 from processors.outputs import NO_OUTPUTS, FrameOutputs
 from sources.buffer import Frame
+from uav_tui.config import Isolation
 from uav_values.box import PixelBox
 from uav_values.detections import Detected
 
@@ -95,8 +96,7 @@ class HostPhase:
 class ProcessorState:
     """How the processor's host is doing, for the status line, the TUI and the web page."""
 
-    isolation: str
-    """``process`` (its own process) or ``thread`` (a thread of the platform)."""
+    isolation: Isolation
     phase: HostPhase
     """Starting, running, restarting (and which restart) or crashed (and why it stays off)."""
     pid: int | None
@@ -105,7 +105,7 @@ class ProcessorState:
 
     def summary(self) -> str:
         """``running, pid 4242, 38 MB``; ``restarting 2``; ``crashed: reason``; ``in a platform thread``."""
-        if self.isolation == "thread":
+        if self.isolation is Isolation.THREAD:
             return "in a platform thread"
         parts = [str(self.phase)]
         if self.pid is not None:
@@ -137,8 +137,7 @@ class ProcessorHost(Protocol):
     """Runs one processor on the newest frame of a buffer: :class:`~uav_tui.hosting.thread_host.ThreadHost`
     (``isolation = "thread"``) and :class:`~uav_tui.hosting.process_host.SubprocessHost` (``"process"``)."""
 
-    isolation: str
-    """``thread`` or ``process``."""
+    isolation: Isolation
     stats: RollingStats
     stage_clock: Callable[[ProcessedFrame], None] | None
     """Set in a replay: moves a result's stage times onto the replay's clock (before they are counted)."""

@@ -20,6 +20,7 @@ from processors.base import ProcessorInfo
 from processors.frame_telemetry import DEFAULT_SAVE_MAX_HZ
 from processors.outputs import NO_OUTPUTS
 from sources.buffer import FrameBuffer
+from uav_tui.config import Isolation
 from uav_tui.errors import UavError
 from uav_tui.events import EventLog
 from uav_tui.flight.telemetry import TelemetryManager
@@ -54,7 +55,7 @@ class SubprocessHost(DeliversResults):
         first_backoff_s: the wait before the first restart; it doubles with each one.
     """
 
-    isolation = "process"
+    isolation = Isolation.PROCESS
 
     def __init__(self, spec: str, kwargs: dict[str, Any], on_result: Callable[[ProcessedFrame], None], *,
                  events: EventLog, on_fault: Callable[[str], None], timeout_s: float = 5.0,

@@ -7,7 +7,7 @@ import time
 from collections.abc import Callable
 
 from processors.base import ProcessorInfo
-from uav_tui.config import Config
+from uav_tui.config import Config, Isolation
 from uav_tui.events import EventLog
 from uav_tui.hosting.host import ProcessedFrame, ProcessorHost
 from uav_tui.hosting.process_host import SubprocessHost
@@ -25,7 +25,7 @@ async def start_host(config: Config, on_result: Callable[[ProcessedFrame], None]
     notices = asyncio.create_task(_say_loading(config, events), name="loading notices")
     host: ProcessorHost
     try:
-        if config.isolation == "thread":
+        if config.isolation == Isolation.THREAD:
             processor = await load_in_thread(config.processor, config.processor_args)
             host = ThreadHost(processor, on_result, save_max_hz=config.recording.save_max_hz, events=events)
         else:
@@ -47,7 +47,7 @@ def say_load_warnings(info: ProcessorInfo, events: EventLog) -> None:
 
 async def _say_loading(config: Config, events: EventLog) -> None:
     started = time.monotonic()
-    limit = f"; given up at {LOAD_TIMEOUT_S:g} s" if config.isolation == "process" else ""
+    limit = f"; given up at {LOAD_TIMEOUT_S:g} s" if config.isolation == Isolation.PROCESS else ""
     while True:
         await asyncio.sleep(LOADING_NOTICE_S)
         events.emit("info", "processor", f"loading processor {config.processor} ... "

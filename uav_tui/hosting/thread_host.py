@@ -21,6 +21,7 @@ from processors.base import ProcessorInfo
 from processors.frame_telemetry import DEFAULT_SAVE_MAX_HZ, FrameTelemetry
 from processors.outputs import output_methods
 from sources.buffer import Frame, FrameBuffer
+from uav_tui.config import Isolation
 from uav_tui.events import EventLog
 from uav_tui.flight.telemetry import TelemetryManager
 from uav_tui.hosting.frame_call import call_frame
@@ -51,7 +52,7 @@ class ThreadHost(DeliversResults):
     the GIL, hangs or crashes takes the platform with it (see :class:`~uav_tui.hosting.process_host.SubprocessHost`).
     """
 
-    isolation = "thread"
+    isolation = Isolation.THREAD
 
     def __init__(self, processor: LoadedProcessor, on_result: Callable[[ProcessedFrame], None], *,
                  save_max_hz: float = DEFAULT_SAVE_MAX_HZ, events: EventLog | None = None) -> None:
