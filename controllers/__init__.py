@@ -6,7 +6,7 @@ address                              controller
 ``none``                             no vehicle (returns None)
 ``sim``                              the built-in simulated vehicle, started and stopped with it
 ``replay:RUN[?speed=S|max]``         the recorded vehicle of a run folder (:mod:`controllers.replay`)
-anything else                        :class:`controllers.mavsdk_controller.MavsdkController`
+anything else                        :class:`controllers.mavsdk.controller.MavsdkController`
 ==================================  ==========================================================
 
 Implementations are imported on first use, so ``--fc none`` never loads MAVSDK.
@@ -58,7 +58,7 @@ async def connect_controller(address: str, *, heartbeat_timeout: float = 10.0,
         from controllers.replay import ReplayController
 
         return ReplayController.open(address)
-    from controllers.mavsdk_controller import MavsdkController
+    from controllers.mavsdk.controller import MavsdkController
 
     controller = MavsdkController()
     await controller.connect(address, heartbeat_timeout=heartbeat_timeout)

@@ -6,7 +6,7 @@ import asyncio
 import logging
 from typing import Any
 
-from controllers.mavsdk_controller import MavsdkController
+from controllers.mavsdk.controller import MavsdkController
 from controllers.sim.launcher import SimVehicle
 
 logger = logging.getLogger(__name__)

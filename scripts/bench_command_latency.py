@@ -32,7 +32,7 @@ from typing import Any
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from controllers.mavsdk_controller import MavsdkController  # noqa: E402
+from controllers.mavsdk.controller import MavsdkController  # noqa: E402
 from controllers.sim.launcher import SimVehicle  # noqa: E402
 from controllers.sim.truth import TruthClient  # noqa: E402
 from uav_tui.errors import CommandDenied  # noqa: E402

@@ -46,7 +46,7 @@ class Telemetry:
     """A downward rangefinder's reading (along the vehicle's down axis), None without one or out of its range."""
     terrain_height_m: float | None = None
     """The autopilot's height above the terrain (PX4's ALTITUDE ``bottom_clearance``, ArduPilot's TERRAIN_REPORT
-    ``current_height``; see :mod:`controllers.mavsdk_terrain`), None when it reports none."""
+    ``current_height``; see :mod:`controllers.mavsdk.terrain`), None when it reports none."""
     rangefinder_t_ns: int | None = None
     """When the last ``rangefinder_m`` reading was received (monotonic ns; set by the platform)."""
     terrain_t_ns: int | None = None

@@ -15,9 +15,9 @@ from collections.abc import AsyncIterator
 import pytest
 import pytest_asyncio
 
-from controllers import ardupilot
 from controllers.autopilots import Autopilot
-from controllers.mavsdk_controller import MavsdkController
+from controllers.mavsdk import ardupilot
+from controllers.mavsdk.controller import MavsdkController
 from controllers.sim.launcher import free_udp_port
 from controllers.vector_end import VectorEnd, VectorEndKind
 from tests.controllers.fake_autopilot import FakeAutopilot, UdpLink, mavlink

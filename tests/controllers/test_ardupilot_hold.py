@@ -18,7 +18,7 @@ import pytest_asyncio
 
 from controllers.autopilots import Autopilot
 from controllers.errors import ControllerError
-from controllers.mavsdk_controller import MavsdkController
+from controllers.mavsdk.controller import MavsdkController
 from controllers.sim.launcher import SimVehicle
 from controllers.sim.truth import TruthClient
 from controllers.vector_end import VectorEnd, VectorEndKind

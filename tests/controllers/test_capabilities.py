@@ -16,7 +16,7 @@ from controllers.base import (
     RecordedVehicle,
     SimulatorOwner,
 )
-from controllers.mavsdk_controller import MavsdkController
+from controllers.mavsdk.controller import MavsdkController
 from controllers.replay import ReplayController
 from controllers.sim.launcher import SimVehicle
 from controllers.sim_controller import SimController

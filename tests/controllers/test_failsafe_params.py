@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import pytest
 
-from controllers.mavsdk_controller import MavsdkController
+from controllers.mavsdk.controller import MavsdkController
 from controllers.sim.launcher import SimVehicle, free_udp_port
 from tests.controllers.fake_autopilot import FakeAutopilot, UdpLink, mavlink
 

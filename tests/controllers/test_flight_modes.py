@@ -15,8 +15,8 @@ from mavsdk.asyncio.plugins.telemetry import FlightMode
 from pymavlink import mavutil
 
 from controllers.flight_modes import MAVSDK_NAMES, decode
-from controllers.mavsdk_calls import Subscriptions
-from controllers.mavsdk_link import LinkMonitor
+from controllers.mavsdk.calls import Subscriptions
+from controllers.mavsdk.link import LinkMonitor
 
 PX4, ARDUPILOT = 12, 3
 QUADROTOR, FIXED_WING = 2, 1

@@ -8,8 +8,8 @@ from typing import Any
 
 import pytest
 
-from controllers.height_hold import MAX_AGE_S, MAX_CORRECTION_MS
-from controllers.mavsdk_controller import MavsdkController
+from controllers.mavsdk.controller import MavsdkController
+from controllers.mavsdk.height_hold import MAX_AGE_S, MAX_CORRECTION_MS
 from controllers.sim.launcher import SimVehicle
 from tests.controllers.test_mavsdk_controller import arm_when_ready
 from tests.core.flight_helpers import wait_until

@@ -23,7 +23,7 @@ from controllers.landing_target import (
     px4_fields,
     rotation_ned_body,
 )
-from controllers.mavsdk_controller import MavsdkController
+from controllers.mavsdk.controller import MavsdkController
 from controllers.sim.launcher import SimVehicle
 from controllers.sim.precland import PadEstimate
 from processors.frame_telemetry import FrameTelemetry

@@ -8,8 +8,8 @@ import math
 import pytest
 from mavsdk.asyncio.plugins.mavlink_direct import MavlinkMessage
 
-from controllers import ardupilot
-from controllers.mavlink_commands import ack_result, px4_set_mode, velocity_body_setpoint
+from controllers.mavsdk import ardupilot
+from controllers.mavsdk.mavlink_commands import ack_result, px4_set_mode, velocity_body_setpoint
 
 
 def fields(msg: MavlinkMessage) -> dict[str, float]:

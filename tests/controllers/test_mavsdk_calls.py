@@ -11,13 +11,13 @@ from pathlib import Path
 import pytest
 
 from controllers.errors import CommandDenied, LinkLost
-from controllers.mavsdk_calls import bounded
+from controllers.mavsdk.calls import bounded
 
 ROOT = Path(__file__).resolve().parents[2]
 
 STUCK_CALL = textwrap.dedent("""
     import asyncio, threading
-    from controllers.mavsdk_calls import bounded, use_abandoning_executor
+    from controllers.mavsdk.calls import bounded, use_abandoning_executor
 
     async def main():
         executor = use_abandoning_executor()

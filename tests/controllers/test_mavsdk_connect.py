@@ -10,7 +10,7 @@ import time
 import pytest
 
 from controllers import FlightController, connect_controller
-from controllers.mavsdk_controller import MavsdkController
+from controllers.mavsdk.controller import MavsdkController
 from controllers.sim.launcher import SimVehicle, free_udp_port
 from controllers.sim_controller import SimController
 from uav_tui.errors import ConnectError

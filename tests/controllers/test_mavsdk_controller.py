@@ -18,9 +18,9 @@ from typing import Any
 import pytest
 import pytest_asyncio
 
-from controllers import mavsdk_calls, mavsdk_controller
 from controllers.autopilots import Autopilot
-from controllers.mavsdk_controller import MavsdkController
+from controllers.mavsdk import calls, controller
+from controllers.mavsdk.controller import MavsdkController
 from controllers.sim.launcher import SimVehicle
 from controllers.sim.truth import TruthClient
 from controllers.vector_end import VectorEnd, VectorEndKind
@@ -168,9 +168,9 @@ async def test_close_unsubscribes_everything_before_mavsdk_is_destroyed(
 
     async def release(*args: Any) -> None:  # the real one, after a look at what is still subscribed
         open_at_release.append(open_mavsdk_subscriptions())
-        await mavsdk_calls.release(*args)
+        await calls.release(*args)
 
-    monkeypatch.setattr(mavsdk_controller, "release", release)
+    monkeypatch.setattr(controller, "release", release)
     flight = await start_flight(sim_vehicle)
     for stream in (flight.fc.telemetry(), flight.fc.pose_samples()):
         count = 0

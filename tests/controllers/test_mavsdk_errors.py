@@ -6,7 +6,7 @@ import pytest
 from mavsdk.asyncio.plugins.action import ActionError, ActionResult
 from mavsdk.asyncio.plugins.offboard import OffboardError, OffboardResult
 
-from controllers.mavsdk_errors import map_mavsdk_errors
+from controllers.mavsdk.errors import map_mavsdk_errors
 from uav_tui.errors import CommandDenied, ControllerError, LinkLost, NotSupported
 
 

@@ -9,8 +9,8 @@ import time
 import pytest
 from mavsdk.asyncio.plugins.mavlink_direct import MavlinkMessage
 
-from controllers.mavsdk_controller import MavsdkController
-from controllers.mavsdk_pose import (
+from controllers.mavsdk.controller import MavsdkController
+from controllers.mavsdk.pose import (
     CLOCK_WINDOW_S,
     BootClock,
     message_interval_command,

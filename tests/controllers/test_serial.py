@@ -7,7 +7,7 @@ import time
 import pytest
 
 from controllers import connect_controller
-from controllers.mavsdk_controller import MavsdkController
+from controllers.mavsdk.controller import MavsdkController
 from tests.controllers.fake_autopilot import FakeAutopilot, PtyLink, mavlink
 from uav_tui.errors import ConnectError
 

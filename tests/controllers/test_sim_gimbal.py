@@ -11,9 +11,9 @@ from typing import Any
 import pytest
 from pymavlink.dialects.v20 import common as mavlink
 
-from controllers import mavsdk_gimbal
 from controllers.errors import NotSupported
-from controllers.mavsdk_controller import MavsdkController
+from controllers.mavsdk import gimbal as mavsdk_gimbal
+from controllers.mavsdk.controller import MavsdkController
 from controllers.quaternion import euler, quaternion
 from controllers.sim.gimbal import MAX_RATE_DEG_S, NEUTRAL_PITCH_DEG, PITCH_LIMITS_DEG, SimGimbal
 from controllers.sim.launcher import SimVehicle, free_udp_port

@@ -16,7 +16,7 @@ import pytest
 from pymavlink.dialects.v20 import common as mavlink
 
 from controllers.landing_target import LandingTargetError, LandingTargetFix, rotation_ned_body
-from controllers.mavsdk_controller import MavsdkController
+from controllers.mavsdk.controller import MavsdkController
 from controllers.precland import PrecisionLandingError
 from controllers.sim import px4_modes
 from controllers.sim.guidance import Mode

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from controllers.mavsdk_controller import MavsdkController
+from controllers.mavsdk.controller import MavsdkController
 from tests.sitl import arducopter, px4_sih
 
 pytestmark = pytest.mark.sitl

@@ -18,7 +18,7 @@ from typing import Any
 import pytest
 from mavsdk.asyncio.plugins.gimbal import ControlMode
 
-from controllers.mavsdk_controller import MavsdkController
+from controllers.mavsdk.controller import MavsdkController
 from tests.sitl import Sitl, arducopter, px4_sih
 
 pytestmark = pytest.mark.sitl

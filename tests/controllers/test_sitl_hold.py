@@ -18,7 +18,7 @@ import pytest
 from pymavlink import mavutil
 
 from controllers.errors import ControllerError
-from controllers.mavsdk_controller import MavsdkController
+from controllers.mavsdk.controller import MavsdkController
 from controllers.vector_end import VectorEnd, VectorEndKind
 from tests.controllers.test_ardupilot_hold import ALLOWED_DRIFT_M, HOLD_WINDOW_S, altitude_band, wait_until
 from tests.sitl import arducopter

@@ -8,8 +8,8 @@ from __future__ import annotations
 
 import asyncio
 
+from controllers.mavsdk.vector_stream import VectorStream
 from controllers.vector_end import VectorEnd, VectorEndKind
-from controllers.vector_stream import VectorStream
 
 SLOW_HOLD_S = 0.3
 

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from controllers.mavsdk_controller import MavsdkController
+from controllers.mavsdk.controller import MavsdkController
 from tests.core.flight_helpers import start_steering_flight
 from tests.sitl import arducopter, px4_sih
 

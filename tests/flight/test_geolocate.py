@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from controllers.base import Telemetry
-from controllers.mavsdk_telemetry import from_distance_sensor, from_position
+from controllers.mavsdk.telemetry import from_distance_sensor, from_position
 from sources.camera_model import CameraModel, Mount
 from tests.flight.geo_helpers import HOME, car_views
 from uav_tui.flight import geolocate

@@ -9,7 +9,7 @@ from types import SimpleNamespace
 import pytest
 
 from controllers.base import Telemetry
-from controllers.mavsdk_terrain import from_altitude, from_terrain_report
+from controllers.mavsdk.terrain import from_altitude, from_terrain_report
 from sources.camera_model import CameraModel
 from uav_tui.flight import geolocate
 from uav_tui.flight.telemetry import TelemetryManager

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from controllers.base import TELEMETRY_FIELDS, Telemetry
-from controllers.mavsdk_controller import MavsdkController
+from controllers.mavsdk.controller import MavsdkController
 from controllers.sim.launcher import SimVehicle
 from uav_tui.flight.telemetry import TelemetryManager
 

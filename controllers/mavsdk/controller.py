@@ -14,7 +14,6 @@ from mavsdk.asyncio.plugins.mavlink_direct import MavlinkDirectAsync
 from mavsdk.asyncio.plugins.param import ParamAsync
 from mavsdk.asyncio.plugins.telemetry import TelemetryAsync
 
-from controllers import ardupilot
 from controllers.autopilots import Autopilot
 from controllers.base import PoseSample
 from controllers.connection import Connection, check_serial_device, parse_connection
@@ -22,19 +21,20 @@ from controllers.errors import ControllerError
 from controllers.failsafe import STALE_MARGIN_S, FailsafeReport, ParamAccess, check_failsafe
 from controllers.fence import ReadsFence
 from controllers.landing_target import LandingTargetFix
-from controllers.mavsdk_attach import SETUP_TIMEOUT_S, ask_for_telemetry, reach_autopilot
-from controllers.mavsdk_calls import AbandoningExecutor, Subscriptions, bounded, release, use_abandoning_executor
-from controllers.mavsdk_gimbal import MavsdkGimbal
-from controllers.mavsdk_landing import MavsdkLanding
-from controllers.mavsdk_link import LinkMonitor
-from controllers.mavsdk_log import route_mavsdk_log
-from controllers.mavsdk_offboard import MavsdkOffboard
-from controllers.mavsdk_pose import POSE_RATE_HZ, pose_samples, request_pose_rate
-from controllers.mavsdk_telemetry import merged_updates
-from controllers.mavsdk_terrain import terrain_reports
+from controllers.mavsdk import ardupilot
+from controllers.mavsdk.attach import SETUP_TIMEOUT_S, ask_for_telemetry, reach_autopilot
+from controllers.mavsdk.calls import AbandoningExecutor, Subscriptions, bounded, release, use_abandoning_executor
+from controllers.mavsdk.gimbal import MavsdkGimbal
+from controllers.mavsdk.landing import MavsdkLanding
+from controllers.mavsdk.link import LinkMonitor
+from controllers.mavsdk.log import route_mavsdk_log
+from controllers.mavsdk.offboard import MavsdkOffboard
+from controllers.mavsdk.pose import POSE_RATE_HZ, pose_samples, request_pose_rate
+from controllers.mavsdk.telemetry import merged_updates
+from controllers.mavsdk.terrain import terrain_reports
+from controllers.mavsdk.vector_stream import DEFAULT_RATE_HZ, VectorStream
 from controllers.precland import LANDING_MODES
 from controllers.vector_end import VectorEnd
-from controllers.vector_stream import DEFAULT_RATE_HZ, VectorStream
 
 logger = logging.getLogger(__name__)
 
@@ -255,13 +255,13 @@ class MavsdkController(ReadsFence):
                                                                       here.longitude_deg, math.nan))
 
     async def set_fly_vector(self, vx: float, vy: float, t: float, *, yield_to_others: bool = False) -> None:
-        """Fly body-frame (vx forward, vy right) m/s for t s, yaw and height held (:mod:`~controllers.height_hold`).
+        """Fly body-frame (vx forward, vy right) m/s for t s, yaw and height held.
 
         ``yield_to_others`` (autonomy's vectors, not an operator's command): refused when the vehicle reports, right
         before the switch to offboard, a mode that is not the platform's own (a pilot switched as it was sent).
 
         Returns once the first setpoint is out and offboard is engaged; then zero + hold at the end. A new vector
-        replaces a running one without leaving offboard.
+        replaces a running one without leaving offboard. The height is held by :mod:`~controllers.mavsdk.height_hold`.
 
         Raises:
             ValueError: non-finite speeds or t <= 0 (the autonomy gate rejects those first).
@@ -287,12 +287,12 @@ class MavsdkController(ReadsFence):
 
     async def send_landing_target(self, fix: LandingTargetFix) -> dict[str, Any]:
         """Send LANDING_TARGET for a target seen in the frame captured at ``fix.capture_mono_ns``; returns the fields
-        sent (see :meth:`MavsdkLanding.send <controllers.mavsdk_landing.MavsdkLanding.send>`)."""
+        sent (see :meth:`MavsdkLanding.send <controllers.mavsdk.landing.MavsdkLanding.send>`)."""
         return await self._connected_landing("landing_target").send(fix)
 
     async def precision_land(self) -> str:
         """Land on the landing target sent with :meth:`send_landing_target`; returns what was done (see
-        :meth:`MavsdkLanding.precision_land <controllers.mavsdk_landing.MavsdkLanding.precision_land>`)."""
+        :meth:`MavsdkLanding.precision_land <controllers.mavsdk.landing.MavsdkLanding.precision_land>`)."""
         return await self._connected_landing("precland").precision_land(self.land, self._vectors.stop_and_hold)
 
     @property
@@ -305,7 +305,7 @@ class MavsdkController(ReadsFence):
             raise ControllerError(f"{name}: not connected (call connect() first)")
         return self._landing
 
-    # ---- gimbal (controllers.mavsdk_gimbal) -------------------------------------------------------
+    # ---- gimbal (controllers.mavsdk.gimbal) -------------------------------------------------------
 
     async def point_gimbal(self, mode: str, pitch: float, yaw: float) -> None:
         """Take control of the gimbal if not held, then stream the setpoint (:meth:`MavsdkGimbal.point`)."""
@@ -341,7 +341,7 @@ class MavsdkController(ReadsFence):
             yield update
 
     async def pose_samples(self, rate_hz: float = POSE_RATE_HZ) -> AsyncIterator[PoseSample]:
-        """Position and attitude samples, each stamped with when it was valid (see :mod:`controllers.mavsdk_pose`).
+        """Position and attitude samples, each stamped with when it was valid (see :mod:`controllers.mavsdk.pose`).
 
         Asks the autopilot for LOCAL_POSITION_NED and ATTITUDE at ``rate_hz`` first; ends when the
         controller closes. What the ``sim:`` camera is drawn from, for every autopilot.

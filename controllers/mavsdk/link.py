@@ -18,7 +18,7 @@ from mavsdk.asyncio.plugins.mavlink_direct import MavlinkDirectAsync, MavlinkMes
 from mavsdk.asyncio.plugins.telemetry import FlightMode, TelemetryAsync
 
 from controllers.flight_modes import MAVSDK_NAMES, decode
-from controllers.mavsdk_calls import Subscriptions
+from controllers.mavsdk.calls import Subscriptions
 
 MAV_AUTOPILOT_INVALID = 8
 """HEARTBEAT.autopilot of ground stations and other non-autopilot components."""

@@ -25,8 +25,8 @@ from typing import Any
 
 from mavsdk.asyncio.plugins.telemetry import TelemetryAsync
 
-from controllers.mavsdk_calls import Subscriptions
-from controllers.mavsdk_terrain import from_altitude
+from controllers.mavsdk.calls import Subscriptions
+from controllers.mavsdk.terrain import from_altitude
 
 logger = logging.getLogger(__name__)
 

@@ -22,8 +22,8 @@ from typing import Literal
 from mavsdk.asyncio.plugins.mavlink_direct import MavlinkDirectAsync, MavlinkMessage
 
 from controllers.base import PoseSample
-from controllers.mavlink_commands import command_long, send_command
-from controllers.mavsdk_calls import Subscriptions
+from controllers.mavsdk.calls import Subscriptions
+from controllers.mavsdk.mavlink_commands import command_long, send_command
 from controllers.quaternion import euler
 
 logger = logging.getLogger(__name__)

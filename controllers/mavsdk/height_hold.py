@@ -16,8 +16,8 @@ import time
 
 from mavsdk.asyncio.plugins.mavlink_direct import MavlinkDirectAsync, MavlinkMessage
 
-from controllers.mavsdk_calls import Subscriptions
-from controllers.mavsdk_pose import parse_pose_message
+from controllers.mavsdk.calls import Subscriptions
+from controllers.mavsdk.pose import parse_pose_message
 
 logger = logging.getLogger(__name__)
 

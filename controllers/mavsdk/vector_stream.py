@@ -32,7 +32,7 @@ _REFUSED = VectorEnd(VectorEndKind.FAILED, "offboard refused")
 
 
 class OffboardPort(Protocol):
-    """What a VectorStream needs from the autopilot side (:class:`~controllers.mavsdk_offboard.MavsdkOffboard`)."""
+    """What a VectorStream needs from the autopilot side (:class:`~controllers.mavsdk.offboard.MavsdkOffboard`)."""
 
     async def send_velocity_body(self, forward_ms: float, right_ms: float) -> None:
         """Send one body-frame velocity setpoint (altitude and yaw held)."""

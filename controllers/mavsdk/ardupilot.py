@@ -12,7 +12,7 @@ import math
 from mavsdk.asyncio.plugins.mavlink_direct import MavlinkDirectAsync, MavlinkMessage
 from mavsdk.asyncio.plugins.param import ParamAsync
 
-from controllers.mavlink_commands import (
+from controllers.mavsdk.mavlink_commands import (
     MAV_CMD_DO_SET_MODE,
     MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
     CommandAckError,

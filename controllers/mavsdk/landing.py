@@ -13,10 +13,10 @@ from mavsdk.asyncio.plugins.mavlink_direct import MavlinkMessage
 
 from controllers.autopilots import Autopilot
 from controllers.landing_target import LandingTargetError, LandingTargetFix, landing_target_fields
-from controllers.mavlink_commands import landing_target, px4_set_mode, send_command
-from controllers.mavsdk_attach import ReachedAutopilot
-from controllers.mavsdk_calls import Command
-from controllers.mavsdk_pose import BootClock
+from controllers.mavsdk.attach import ReachedAutopilot
+from controllers.mavsdk.calls import Command
+from controllers.mavsdk.mavlink_commands import landing_target, px4_set_mode, send_command
+from controllers.mavsdk.pose import BootClock
 from controllers.precland import PrecisionLandingError, check_ardupilot_params
 
 

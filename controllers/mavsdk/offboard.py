@@ -1,4 +1,4 @@
-"""Velocity control through MAVSDK, the autopilot side of :class:`~controllers.vector_stream.VectorStream`: each
+"""Velocity control through MAVSDK, the autopilot side of :class:`~controllers.mavsdk.vector_stream.VectorStream`: each
 setpoint, and the switches into and out of the velocity-control mode on PX4 and ArduCopter."""
 
 from __future__ import annotations
@@ -6,13 +6,13 @@ from __future__ import annotations
 import math
 from typing import Protocol
 
-from controllers import ardupilot
 from controllers.autopilots import Autopilot
 from controllers.errors import ControllerError
-from controllers.height_hold import HeightHold
-from controllers.mavlink_commands import px4_set_mode, send_command, velocity_body_setpoint
-from controllers.mavsdk_attach import ReachedAutopilot
-from controllers.mavsdk_calls import Command, Subscriptions
+from controllers.mavsdk import ardupilot
+from controllers.mavsdk.attach import ReachedAutopilot
+from controllers.mavsdk.calls import Command, Subscriptions
+from controllers.mavsdk.height_hold import HeightHold
+from controllers.mavsdk.mavlink_commands import px4_set_mode, send_command, velocity_body_setpoint
 
 
 class ModeWatch(Protocol):
@@ -25,7 +25,7 @@ class ModeWatch(Protocol):
 
 
 class MavsdkOffboard:
-    """The :class:`~controllers.vector_stream.OffboardPort` of a MAVSDK controller, once :attr:`reached` is set.
+    """The :class:`~controllers.mavsdk.vector_stream.OffboardPort` of a MAVSDK controller, once :attr:`reached` is set.
 
     Args:
         modes: the controller: the mode the vehicle reports, and the modes its vectors and holds leave it in.

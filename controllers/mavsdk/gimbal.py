@@ -21,7 +21,7 @@ from mavsdk.asyncio import System
 from mavsdk.asyncio.plugins.gimbal import ControlMode, GimbalAsync, GimbalMode, SendMode
 
 from controllers.errors import NotSupported
-from controllers.mavsdk_calls import Subscriptions
+from controllers.mavsdk.calls import Subscriptions
 
 logger = logging.getLogger(__name__)
 

@@ -16,11 +16,11 @@ from mavsdk.asyncio.plugins.mavlink_direct import MavlinkDirectAsync
 from mavsdk.asyncio.plugins.param import ParamAsync
 from mavsdk.asyncio.plugins.telemetry import TelemetryAsync
 
-from controllers import ardupilot
 from controllers.autopilots import Autopilot
 from controllers.connection import Connection, connection_failed, no_heartbeat_error
-from controllers.mavsdk_calls import bounded
-from controllers.mavsdk_telemetry import set_rates
+from controllers.mavsdk import ardupilot
+from controllers.mavsdk.calls import bounded
+from controllers.mavsdk.telemetry import set_rates
 
 logger = logging.getLogger(__name__)
 

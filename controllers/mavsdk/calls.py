@@ -27,7 +27,7 @@ from concurrent.futures import Future, ThreadPoolExecutor
 from typing import Any, Protocol, TypeVar
 
 from controllers.errors import FailureKinds
-from controllers.mavsdk_errors import map_mavsdk_errors
+from controllers.mavsdk.errors import map_mavsdk_errors
 
 logger = logging.getLogger(__name__)
 
