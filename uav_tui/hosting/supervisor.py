@@ -102,7 +102,7 @@ class ChildSupervisor:
         try:
             child = await asyncio.shield(spawning)
         except asyncio.CancelledError:  # the spawn goes on in its thread: kill what it starts
-            spawning.add_done_callback(_abandon_spawned)
+            spawning.add_done_callback(functools.partial(self._abandon_spawned, loop))
             raise
         self.children.append(child)
         child.watch_exit(functools.partial(_call_soon, loop, self._ended, child))
@@ -119,6 +119,16 @@ class ChildSupervisor:
             _abandon(child)
             raise
         return child
+
+    def _abandon_spawned(self, loop: asyncio.AbstractEventLoop, spawning: asyncio.Future[ChildProcess]) -> None:
+        """A child spawned for a start that was cancelled meanwhile: watched like any other, then killed (reaped,
+        its pipe closed by its end)."""
+        if spawning.cancelled() or spawning.exception() is not None:
+            return
+        child = spawning.result()
+        self.children.append(child)
+        child.watch_exit(functools.partial(_call_soon, loop, self._ended, child))
+        _abandon(child)
 
     def adopt(self, child: ChildProcess) -> None:
         """Make ``child`` (loaded) the current one: it gets the frames from now on."""
@@ -285,11 +295,6 @@ def _abandon(child: ChildProcess) -> None:
         child.ready.cancel()
     elif not child.ready.cancelled():
         child.ready.exception()  # retrieved: what it says is reported by whoever started it, if anyone
-
-
-def _abandon_spawned(spawning: asyncio.Future[ChildProcess]) -> None:
-    if spawning.exception() is None:
-        _abandon(spawning.result())
 
 
 def _call_soon(loop: asyncio.AbstractEventLoop, callback: Callable[..., None], *args: Any) -> None:
