@@ -74,7 +74,7 @@ class UavCore:
         self.landing_sender: LandingTargetSender | None = None
         """Sends the landing targets (None without a controller that takes them)."""
         self.relays: dict[str, OutputRelay] = {}
-        """The output relays the controller can serve (:func:`~uav_tui.relays.registry.build_relays`), by field."""
+        """The output relays by field, each for this controller (:func:`~uav_tui.relays.registry.build_relays`)."""
         self.controller: FlightController | None = None
         self.active_camera = ActiveCamera(config.camera, self.events, self._spawn)
         """The source frames come from and its camera model (``source`` and ``camera`` read it)."""
@@ -139,7 +139,7 @@ class UavCore:
             self.active_camera.controller, self.active_camera.replay = self.controller, self.replay
             if isinstance(self.controller, LandingTargets):
                 self.landing_sender = LandingTargetSender(self.controller, self.events)
-            self.relays = build_relays(self.controller, self.gate, self.config.safety, self.events)
+            self.relays = build_relays(self)
             await self.gate.check_autopilot_failsafe()
             worker.bind_telemetry(self.telemetry)
             await camera_ready

@@ -19,7 +19,7 @@ from controllers.sim.gimbal import MAX_RATE_DEG_S, NEUTRAL_PITCH_DEG, PITCH_LIMI
 from controllers.sim.launcher import SimVehicle, free_udp_port
 from tests.controllers.fake_autopilot import FakeAutopilot, UdpLink
 from tests.controllers.test_sim_mavsdk import wait_truth
-from uav_tui.flight.gimbal_relay import SEND_TIMEOUT_S
+from uav_tui.relays.gimbal import SEND_TIMEOUT_S
 
 ME, OTHER = (245, 190), (1, 42)
 

@@ -17,10 +17,10 @@ from sources.buffer import Frame
 from uav_tui.config import SafetyConfig
 from uav_tui.events import EventLog
 from uav_tui.flight.autonomy import AutonomyGate
-from uav_tui.flight.gimbal_relay import GimbalRelay, consider_gimbal
 from uav_tui.flight.plausibility import REFUSALS_TO_STOP
 from uav_tui.flight.telemetry import TelemetryManager
 from uav_tui.hosting.host import ProcessedFrame
+from uav_tui.relays.gimbal import GimbalRelay, say_no_gimbal
 
 
 @dataclass
@@ -126,10 +126,10 @@ async def test_a_stop_before_the_send_starts_drops_it() -> None:
 
 async def test_without_gimbal_control_the_frame_says_so() -> None:
     result = _result(TURN)
-    consider_gimbal(None, result)
+    say_no_gimbal(result)
     assert result.gimbal == "not sent: the flight controller has no gimbal control"
     nothing = _result(None)
-    consider_gimbal(None, nothing)
+    say_no_gimbal(nothing)
     assert nothing.gimbal == ""
 
 

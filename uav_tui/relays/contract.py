@@ -2,10 +2,15 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import dataclasses
+from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Protocol
 
 if TYPE_CHECKING:
+    from controllers.base import FlightController
+    from uav_tui.config import Config
+    from uav_tui.events import EventLog
+    from uav_tui.flight.autonomy import AutonomyGate
     from uav_tui.hosting.host import ProcessedFrame
 
 
@@ -27,3 +32,32 @@ class OutputRelay(Protocol):
     @property
     def counts(self) -> Mapping[str, int]:
         """What it did so far (``sent``, ``failed``)."""
+
+
+class RelayCore(Protocol):
+    """What a relay's build may read of the core (:class:`~uav_tui.core.UavCore`), once the vehicle is connected."""
+
+    config: Config
+    events: EventLog
+    gate: AutonomyGate
+
+    @property
+    def controller(self) -> FlightController | None: ...
+
+
+@dataclasses.dataclass(slots=True)
+class Unserved:
+    """The relay of an output the controller cannot serve: ``say`` tells each frame so, nothing is ever sent."""
+
+    field: str
+    say: Callable[[ProcessedFrame], None]
+    counts: Mapping[str, int] = dataclasses.field(default_factory=dict)
+
+    def consider(self, result: ProcessedFrame) -> None:
+        self.say(result)
+
+    def stop(self, reason: str) -> None:
+        """Nothing to stop."""
+
+    async def close(self) -> None:
+        """Nothing under way."""

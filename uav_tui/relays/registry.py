@@ -7,45 +7,48 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from controllers.base import GimbalControl
-from uav_tui.flight.gimbal_relay import GimbalRelay, consider_gimbal
+from uav_tui.relays.contract import Unserved
+from uav_tui.relays.gimbal import GimbalRelay, say_no_gimbal
 
 if TYPE_CHECKING:
-    from controllers.base import FlightController
-    from uav_tui.config import SafetyConfig
-    from uav_tui.events import EventLog
-    from uav_tui.flight.autonomy import AutonomyGate
     from uav_tui.hosting.host import ProcessedFrame
-    from uav_tui.relays.contract import OutputRelay
+    from uav_tui.relays.contract import OutputRelay, RelayCore
 
 
 @dataclass(frozen=True, slots=True)
 class RelayEntry:
-    """One output: its field, the capability (a runtime-checkable Protocol) its controller needs, and the build."""
+    """One output: its field, the capability (a runtime-checkable Protocol) its controller needs, the relay's build,
+    and the relay used instead when the controller lacks the capability (or there is none)."""
 
     field: str
     capability: type
-    build: Callable[[FlightController, AutonomyGate, SafetyConfig, EventLog], OutputRelay]
+    build: Callable[[RelayCore], OutputRelay]
+    absent: Callable[[RelayCore], OutputRelay]
+
+
+def _gimbal(core: RelayCore) -> GimbalRelay:
+    assert core.controller is not None
+    return GimbalRelay(core.controller, core.gate, core.config.safety, core.events)
 
 
 REGISTRY: list[RelayEntry] = [
-    RelayEntry("gimbal", GimbalControl, GimbalRelay),
+    RelayEntry("gimbal", GimbalControl, _gimbal, lambda core: Unserved("gimbal", say_no_gimbal)),
 ]
 """Every output relay, in the order the core calls them each frame (after the autonomy gate)."""
 
 
-def build_relays(controller: FlightController | None, gate: AutonomyGate, safety: SafetyConfig,
-                 events: EventLog) -> dict[str, OutputRelay]:
-    """The relays ``controller`` can serve (field -> relay); an entry whose capability it lacks gets none."""
-    return {entry.field: entry.build(controller, gate, safety, events) for entry in REGISTRY
-            if controller is not None and isinstance(controller, entry.capability)}
+def build_relays(core: RelayCore) -> dict[str, OutputRelay]:
+    """The run's relays (field -> relay): each entry's build if ``core.controller`` has its capability, else its
+    ``absent``."""
+    controller = core.controller
+    return {entry.field: entry.build(core) if controller is not None and isinstance(controller, entry.capability)
+            else entry.absent(core) for entry in REGISTRY}
 
 
 def consider_all(relays: dict[str, OutputRelay], result: ProcessedFrame) -> None:
-    """Each relay acts on ``result``; a gimbal pointing without a gimbal's relay is said not sent."""
+    """Each relay acts on ``result``, in the registry's order."""
     for relay in relays.values():
         relay.consider(result)
-    if "gimbal" not in relays:
-        consider_gimbal(None, result)
 
 
 def gimbal_relay(relays: dict[str, OutputRelay]) -> GimbalRelay | None:

@@ -161,9 +161,7 @@ class GimbalRelay:
         await self.sender.close()
 
 
-def consider_gimbal(relay: GimbalRelay | None, result: ProcessedFrame) -> None:
-    """Relay ``result``'s gimbal pointing (``relay`` None: the flight controller has no gimbal control)."""
-    if relay is not None:
-        relay.consider(result)
-    elif result.outputs.gimbal is not None:
+def say_no_gimbal(result: ProcessedFrame) -> None:
+    """The flight controller has no gimbal control: ``result``'s pointing, if any, is said not sent."""
+    if result.outputs.gimbal is not None:
         result.gimbal = "not sent: the flight controller has no gimbal control"
