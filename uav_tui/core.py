@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, Any
 
 import psutil
 
-from controllers.base import BlockingCalls, FlightController, LandingTargets, RecordedVehicle
+from controllers.base import BlockingCalls, FlightController, RecordedVehicle
 from controllers.replay_timeline import ReplayTimeline
 from sources import CameraSource
 from sources.camera_model import CameraModel
@@ -31,18 +31,13 @@ from uav_tui.flight.telemetry import TelemetryManager
 from uav_tui.hosting.exception_reports import ProcessorErrors
 from uav_tui.hosting.host import ProcessedFrame, ProcessorHost
 from uav_tui.hosting.malloc_tuning import tune_this_process
-from uav_tui.landing_targets import (
-    LandingTargetFeed,
-    LandingTargetSender,
-    consider_landing_target,
-    say_precland_end,
-    watch_precland,
-)
 from uav_tui.operations import Operations
 from uav_tui.output.text import last_line, shorten
 from uav_tui.recording import NotRecording, Recorder, describe
 from uav_tui.relays.contract import OutputRelay
-from uav_tui.relays.registry import build_relays, consider_all
+from uav_tui.relays.landing_target import watch_precland
+from uav_tui.relays.precland import LandingTargetFeed, say_precland_end
+from uav_tui.relays.registry import build_relays, consider_all, landing_target_relay
 from uav_tui.replay.gate import ReplayGate, stage_clock
 from uav_tui.replay.operator import CommandReplay, recorded_commands
 from uav_tui.start_parts import load_and_connect
@@ -71,8 +66,6 @@ class UavCore:
         self.gate = AutonomyGate(config.safety, self.telemetry, self.events)
         self.landing = LandingTargetFeed()
         """The processor's landing targets and the operator's ``precland`` switch."""
-        self.landing_sender: LandingTargetSender | None = None
-        """Sends the landing targets (None without a controller that takes them)."""
         self.relays: dict[str, OutputRelay] = {}
         """The output relays by field, each for this controller (:func:`~uav_tui.relays.registry.build_relays`)."""
         self.controller: FlightController | None = None
@@ -137,8 +130,6 @@ class UavCore:
                 replay.before_show = CommandReplay(self, loop, commands).before_show
             self.gate.bind(self.telemetry, self.controller, self.config)
             self.active_camera.controller, self.active_camera.replay = self.controller, self.replay
-            if isinstance(self.controller, LandingTargets):
-                self.landing_sender = LandingTargetSender(self.controller, self.events)
             self.relays = build_relays(self)
             await self.gate.check_autopilot_failsafe()
             worker.bind_telemetry(self.telemetry)
@@ -213,8 +204,6 @@ class UavCore:
         self.state = CoreState.STOPPED
 
     async def _cancel_tasks(self) -> None:
-        if self.landing_sender is not None:
-            await self.landing_sender.close()
         for relay in self.relays.values():
             await relay.close()
         for task in self._tasks:
@@ -286,7 +275,9 @@ class UavCore:
     def stop_precland(self, reason: str, *, landed: bool = False) -> None:
         """Stop sending landing targets (a fault, another command; ``landed``: the normal end); said when it was on."""
         if self.landing.release(reason):
-            say_precland_end(self.events, reason, self.landing_sender.sent if landed and self.landing_sender else None)
+            relay = landing_target_relay(self.relays)
+            landed_with = relay.sender.sent if landed and relay is not None and relay.sender is not None else None
+            say_precland_end(self.events, reason, landed_with)
 
     def clear_processor_error(self) -> None:
         """The processor was reloaded: its last error is history."""
@@ -335,7 +326,6 @@ class UavCore:
             self._processor_errors.report(result.error, exception, result.frame.seq)
             self.processor_error = exception
         self.gate.consider(result)
-        consider_landing_target(self, result)
         consider_all(self.relays, result)
         for listener in tuple(self._frame_listeners):
             listener(result)

@@ -32,8 +32,8 @@ if TYPE_CHECKING:
     from uav_tui.events import EventLog
     from uav_tui.flight.autonomy import AutonomyGate
     from uav_tui.hosting.host import Answer
-    from uav_tui.landing_targets import LandingTargetFeed
     from uav_tui.recording import Recorder
+    from uav_tui.relays.precland import LandingTargetFeed
 
 HANDED_OVER = {"land": "LAND", "precland": "LAND", "rtl": "RETURN_TO_LAUNCH"}
 """Commands that hand the vehicle to the autopilot's own mode (MAVSDK's name): exit leaves it there."""

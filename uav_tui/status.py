@@ -12,7 +12,7 @@ from uav_tui.flight.geo_detections import LocatedDetection, count_tracks, descri
 from uav_tui.flight.geolocate import GeoFix, describe, locate_row
 from uav_tui.hosting.host import ProcessorState
 from uav_tui.output.text import safe
-from uav_tui.relays.registry import gimbal_relay
+from uav_tui.relays.registry import gimbal_relay, landing_target_relay
 from uav_tui.stats import PipelineStats
 
 if TYPE_CHECKING:
@@ -24,8 +24,8 @@ if TYPE_CHECKING:
     from uav_tui.flight.link import LinkWatch
     from uav_tui.flight.telemetry import TelemetryManager
     from uav_tui.hosting.host import ProcessorHost
-    from uav_tui.landing_targets import LandingTargetFeed, LandingTargetSender
     from uav_tui.relays.contract import OutputRelay
+    from uav_tui.relays.precland import LandingTargetFeed
 
 
 class CoreState(enum.Enum):
@@ -169,7 +169,6 @@ class ObservedCore(Protocol):
     processor_error: str | None
     startup_s: float | None
     landing: LandingTargetFeed
-    landing_sender: LandingTargetSender | None
     relays: dict[str, OutputRelay]
 
     @property
@@ -194,7 +193,7 @@ class ObservedCore(Protocol):
 def core_status(core: ObservedCore) -> CoreStatus:
     """Everything an interface shows of a running core, as one immutable snapshot."""
     worker, source, controller, gate, link = core.worker, core.source, core.controller, core.gate, core.link
-    gimbal = gimbal_relay(core.relays)
+    gimbal, landing = gimbal_relay(core.relays), landing_target_relay(core.relays)
     assert worker is not None and source is not None
     last = worker.last
     box = last.box if last is not None else None
@@ -219,8 +218,8 @@ def core_status(core: ObservedCore) -> CoreStatus:
         autonomy_stop_reason=gate.stop_reason,
         precland=core.landing.engaged,
         precland_stop_reason=core.landing.stop_reason,
-        landing_targets_sent=core.landing_sender.sent if core.landing_sender is not None else 0,
-        landing_targets_failed=core.landing_sender.failed if core.landing_sender is not None else 0,
+        landing_targets_sent=landing.sent if landing is not None else 0,
+        landing_targets_failed=landing.failed if landing is not None else 0,
         landing_targets_refused=core.landing.refusals.refused,
         landing_none_reason=core.landing.why_none,
         gimbal_sent=gimbal.sent if gimbal is not None else 0,

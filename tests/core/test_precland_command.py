@@ -17,7 +17,7 @@ from tests.core.flight_helpers import flying_core, steering_config, wait_until
 from uav_tui.core import UavCore
 from uav_tui.errors import UavError
 from uav_tui.headless import format_status
-from uav_tui.landing_targets import LandingTargetFeed
+from uav_tui.relays.precland import LandingTargetFeed
 
 PAD_PROCESSOR = '''
 from uav_values.landing_target import LandingTarget

@@ -18,7 +18,8 @@ from uav_tui.errors import UavError
 from uav_tui.flight.plausibility import REFUSALS_TO_STOP
 from uav_tui.flight.telemetry import TelemetryManager
 from uav_tui.hosting.host import ProcessedFrame
-from uav_tui.landing_targets import LandingTargetFeed, consider_landing_target
+from uav_tui.relays.landing_target import LandingTargetRelay
+from uav_tui.relays.precland import LandingTargetFeed
 
 
 class _Core:
@@ -47,19 +48,19 @@ def _too_far(seq: int) -> LandingTarget:
 
 def test_a_refused_target_is_not_seen_and_precland_says_why() -> None:
     core = _Core()
-    consider_landing_target(core, result := _frame(1, _too_far(1)))  # type: ignore[arg-type]
+    LandingTargetRelay(core, None).consider(result := _frame(1, _too_far(1)))  # type: ignore[arg-type]
     assert result.landing == "refused: distance 5000.0 m puts the pad 5000.0 m below the camera, but the vehicle is " \
                              "10.0 m above home"
     assert core.landing.last_seen_ns is None and core.landing.refusals.refused == 1
     with pytest.raises(UavError, match=r"has not seen a landing target yet \(refused: distance 5000.0 m"):
         core.landing.check_fresh()
-    consider_landing_target(core, _frame(2, None, "marker 7 not in view"))  # type: ignore[arg-type]
+    LandingTargetRelay(core, None).consider(_frame(2, None, "marker 7 not in view"))  # type: ignore[arg-type]
     assert core.landing.why_none == "the processor says: marker 7 not in view"  # the newest reason
 
 
 def test_the_processors_own_reason_for_no_target_is_what_precland_says() -> None:
     core = _Core()
-    consider_landing_target(core, _frame(1, None, "2 markers with id 7: which is the pad? no target"))  # type: ignore[arg-type]
+    LandingTargetRelay(core, None).consider(_frame(1, None, "2 markers with id 7: which is the pad? no target"))  # type: ignore[arg-type]
     assert core.landing.why_none == "the processor says: 2 markers with id 7: which is the pad? no target"
     with pytest.raises(UavError, match=r"yet \(the processor says: 2 markers with id 7: which is the pad\? no"):
         core.landing.check_fresh()
@@ -69,11 +70,11 @@ def test_a_run_of_refusals_turns_precland_off_and_says_the_autopilot_lands_on_it
     core = _Core()
     core.landing.engage()
     for seq in range(1, REFUSALS_TO_STOP):
-        consider_landing_target(core, _frame(seq, _too_far(seq)))  # type: ignore[arg-type]
+        LandingTargetRelay(core, None).consider(_frame(seq, _too_far(seq)))  # type: ignore[arg-type]
     assert core.landing.engaged and not core.stopped
     behind = LandingTarget((0.0, 0.0, 1.0), 10.0, REFUSALS_TO_STOP)
     object.__setattr__(behind, "direction", (0.0, 0.0, -1.0))
-    consider_landing_target(core, _frame(REFUSALS_TO_STOP, behind))  # type: ignore[arg-type]
+    LandingTargetRelay(core, None).consider(_frame(REFUSALS_TO_STOP, behind))  # type: ignore[arg-type]
     assert not core.landing.engaged
     assert core.stopped == [f"{REFUSALS_TO_STOP} landing targets in a row refused, the last: landing target direction "
                             "(0.0, 0.0, -1.0) must be 3 finite numbers with z > 0 (camera frame: x right, y down, "
@@ -83,6 +84,6 @@ def test_a_run_of_refusals_turns_precland_off_and_says_the_autopilot_lands_on_it
 def test_a_vehicle_position_of_inf_reaches_no_consumer() -> None:
     core = _Core()
     core.telemetry.apply({"rel_alt_m": math.inf, "north_m": math.inf, "t_mono_ns": 2})
-    consider_landing_target(core, result := _frame(1, LandingTarget((0.0, 0.0, 1.0), 10.0, 1)))  # type: ignore[arg-type]
+    LandingTargetRelay(core, None).consider(result := _frame(1, LandingTarget((0.0, 0.0, 1.0), 10.0, 1)))  # type: ignore[arg-type]
     assert result.landing == "refused: no height at the capture to check the distance against"
     assert core.telemetry.snapshot().north_m is None

@@ -8,10 +8,13 @@ from typing import TYPE_CHECKING, Protocol
 
 if TYPE_CHECKING:
     from controllers.base import FlightController
+    from sources.camera_model import CameraModel
     from uav_tui.config import Config
     from uav_tui.events import EventLog
     from uav_tui.flight.autonomy import AutonomyGate
+    from uav_tui.flight.telemetry import TelemetryManager
     from uav_tui.hosting.host import ProcessedFrame
+    from uav_tui.relays.precland import LandingTargetFeed
 
 
 class OutputRelay(Protocol):
@@ -40,9 +43,16 @@ class RelayCore(Protocol):
     config: Config
     events: EventLog
     gate: AutonomyGate
+    telemetry: TelemetryManager
+    landing: LandingTargetFeed
 
     @property
     def controller(self) -> FlightController | None: ...
+
+    @property
+    def camera(self) -> CameraModel | None: ...
+
+    def stop_precland(self, reason: str) -> None: ...
 
 
 @dataclasses.dataclass(slots=True)

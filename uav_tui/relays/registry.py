@@ -6,9 +6,10 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-from controllers.base import GimbalControl
+from controllers.base import GimbalControl, LandingTargets
 from uav_tui.relays.contract import Unserved
 from uav_tui.relays.gimbal import GimbalRelay, say_no_gimbal
+from uav_tui.relays.landing_target import LandingTargetRelay, LandingTargetSender
 
 if TYPE_CHECKING:
     from uav_tui.hosting.host import ProcessedFrame
@@ -31,7 +32,13 @@ def _gimbal(core: RelayCore) -> GimbalRelay:
     return GimbalRelay(core.controller, core.gate, core.config.safety, core.events)
 
 
+def _landing_target(core: RelayCore) -> LandingTargetRelay:
+    assert isinstance(core.controller, LandingTargets)
+    return LandingTargetRelay(core, LandingTargetSender(core.controller, core.events))
+
+
 REGISTRY: list[RelayEntry] = [
+    RelayEntry("landing_target", LandingTargets, _landing_target, lambda core: LandingTargetRelay(core, None)),
     RelayEntry("gimbal", GimbalControl, _gimbal, lambda core: Unserved("gimbal", say_no_gimbal)),
 ]
 """Every output relay, in the order the core calls them each frame (after the autonomy gate)."""
@@ -55,3 +62,9 @@ def gimbal_relay(relays: dict[str, OutputRelay]) -> GimbalRelay | None:
     """The gimbal's relay among ``relays`` (None without a controller that points a gimbal)."""
     relay = relays.get("gimbal")
     return relay if isinstance(relay, GimbalRelay) else None
+
+
+def landing_target_relay(relays: dict[str, OutputRelay]) -> LandingTargetRelay | None:
+    """The landing targets' relay among ``relays`` (None before the core built them)."""
+    relay = relays.get("landing_target")
+    return relay if isinstance(relay, LandingTargetRelay) else None
