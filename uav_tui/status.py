@@ -12,7 +12,7 @@ from uav_tui.flight.geo_detections import LocatedDetection, count_tracks, descri
 from uav_tui.flight.geolocate import GeoFix, describe, locate_row
 from uav_tui.hosting.host import ProcessorState
 from uav_tui.output.text import safe
-from uav_tui.relays.registry import gimbal_relay, landing_target_relay
+from uav_tui.relays.registry import gimbal_relay
 from uav_tui.stats import PipelineStats
 
 if TYPE_CHECKING:
@@ -98,6 +98,9 @@ class CoreStatus:
     """``precland`` is on: the processor's landing targets are sent to the autopilot."""
     precland_stop_reason: str = ""
     """Why ``precland`` was turned off last ("" while on or never on)."""
+    relayed: dict[str, dict[str, int]] = field(default_factory=dict)
+    """What each output relay did so far (its ``counts``: ``sent``, ``failed``), by the output it relays
+    (:data:`~uav_tui.relays.registry.REGISTRY`): ``{"gimbal": {"sent": 210, "failed": 0}, ...}``."""
     landing_targets_sent: int = 0
     """LANDING_TARGET messages sent to the autopilot."""
     landing_targets_failed: int = 0
@@ -193,7 +196,9 @@ class ObservedCore(Protocol):
 def core_status(core: ObservedCore) -> CoreStatus:
     """Everything an interface shows of a running core, as one immutable snapshot."""
     worker, source, controller, gate, link = core.worker, core.source, core.controller, core.gate, core.link
-    gimbal, landing = gimbal_relay(core.relays), landing_target_relay(core.relays)
+    gimbal = gimbal_relay(core.relays)
+    relayed = {name: dict(relay.counts) for name, relay in core.relays.items()}
+    landing, pointing = relayed.get("landing_target", {}), relayed.get("gimbal", {})
     assert worker is not None and source is not None
     last = worker.last
     box = last.box if last is not None else None
@@ -218,12 +223,13 @@ def core_status(core: ObservedCore) -> CoreStatus:
         autonomy_stop_reason=gate.stop_reason,
         precland=core.landing.engaged,
         precland_stop_reason=core.landing.stop_reason,
-        landing_targets_sent=landing.sent if landing is not None else 0,
-        landing_targets_failed=landing.failed if landing is not None else 0,
+        relayed=relayed,
+        landing_targets_sent=landing.get("sent", 0),
+        landing_targets_failed=landing.get("failed", 0),
         landing_targets_refused=core.landing.refusals.refused,
         landing_none_reason=core.landing.why_none,
-        gimbal_sent=gimbal.sent if gimbal is not None else 0,
-        gimbal_failed=gimbal.failed if gimbal is not None else 0,
+        gimbal_sent=pointing.get("sent", 0),
+        gimbal_failed=pointing.get("failed", 0),
         gimbal_controlled=gimbal is not None and gimbal.controller.gimbal_controlled,
         last_vector=gate.last_vector,
         last_decision=gate.last_decision,
