@@ -1,12 +1,13 @@
 """The checked outputs a processor may give after each frame besides its vector: ``getLandingTarget`` and
-``getGimbalPointing``. :func:`read_outputs` calls them and checks what they returned, so every host (the thread,
-the processor's process) calls them the same way."""
+``getGimbalPointing``. One table (:data:`READERS`) says which method gives which output, how it is called and how
+it is checked, so every host (the thread, the processor's process) calls them the same way; an output entered there
+without a field of its own in :class:`FrameOutputs` is kept in :attr:`FrameOutputs.more`."""
 
 from __future__ import annotations
 
-from collections.abc import Collection
-from dataclasses import dataclass
-from typing import TypeVar
+from collections.abc import Callable, Collection
+from dataclasses import dataclass, field, fields
+from typing import Any, TypeVar
 
 from processors.base import GivesGimbalPointing, GivesLandingTarget, HasStatus
 from uav_values.gimbal import GimbalPointing
@@ -24,6 +25,14 @@ class FrameOutputs:
     landing_status: str = ""
     """A processor with ``getLandingTarget`` that gave no target: its ``status`` attribute, the reason it gives
     (``2 markers with id 7: which is the pad? no target``), one line of at most :data:`STATUS_CHARS` characters."""
+    more: dict[str, Any] = field(default_factory=dict)
+    """The outputs of :data:`READERS` without a field above, by their field name (from the processor's process, as
+    plain data: a field of their own carries their type across)."""
+
+    def get(self, name: str) -> Any:
+        """The output named ``name`` in :data:`READERS` (its own field first, else its entry in :attr:`more`), None
+        without it."""
+        return getattr(self, name) if name in _FIELDS else self.more.get(name)
 
 
 def read_output(value: object, kind: type[T], method: str, hint: str) -> T | None:
@@ -49,18 +58,42 @@ def read_gimbal_pointing(value: object) -> GimbalPointing | None:
                        "processors.GimbalPointing.rates(pitch, yaw) or .angles(pitch, yaw), or None")
 
 
-OUTPUT_METHODS = ("getLandingTarget", "getGimbalPointing")
-"""The output methods, in the order they are called after a frame."""
+@dataclass(frozen=True, slots=True)
+class Reader:
+    """One output method: the :class:`FrameOutputs` field (or :attr:`~FrameOutputs.more` key) it fills, the call of
+    the method on a processor that has it (through its Protocol: None from one that has not), and the check of what
+    it returned (raises TypeError on a wrong type)."""
+
+    output: str
+    call: Callable[[object], object]
+    check: Callable[[object], Any]
+
+
+def _landing_target(instance: object) -> object:
+    return instance.getLandingTarget() if isinstance(instance, GivesLandingTarget) else None
+
+
+def _gimbal_pointing(instance: object) -> object:
+    return instance.getGimbalPointing() if isinstance(instance, GivesGimbalPointing) else None
+
+
+READERS: dict[str, Reader] = {
+    "getLandingTarget": Reader("landing_target", _landing_target, read_landing_target),
+    "getGimbalPointing": Reader("gimbal", _gimbal_pointing, read_gimbal_pointing),
+}
+"""Output method -> its :class:`Reader`, in the order they are called after a frame."""
 
 NO_OUTPUTS = FrameOutputs()
+
+_FIELDS = frozenset(f.name for f in fields(FrameOutputs)) - {"more"}
 
 STATUS_CHARS = 160
 """The longest ``landing_status`` kept (it is shown in an 80-column status line)."""
 
 
 def output_methods(capabilities: Collection[str]) -> tuple[str, ...]:
-    """The output methods among a processor's ``capabilities`` (detected at load time), in call order."""
-    return tuple(name for name in OUTPUT_METHODS if name in capabilities)
+    """The output methods among a processor's ``capabilities`` (detected at load time), in :data:`READERS` order."""
+    return tuple(name for name in READERS if name in capabilities)
 
 
 def read_outputs(instance: object, methods: Collection[str], frame_seq: int | None = None) -> FrameOutputs:
@@ -75,16 +108,17 @@ def read_outputs(instance: object, methods: Collection[str], frame_seq: int | No
     """
     if not methods:
         return NO_OUTPUTS
-    target = gimbal = None
-    landing = "getLandingTarget" in methods
-    if landing and isinstance(instance, GivesLandingTarget):
-        target = read_landing_target(instance.getLandingTarget())
-    if "getGimbalPointing" in methods and isinstance(instance, GivesGimbalPointing):
-        gimbal = read_gimbal_pointing(instance.getGimbalPointing())
+    values: dict[str, Any] = {}
+    more: dict[str, Any] = {}
+    for name in methods:
+        reader = READERS[name]
+        (values if reader.output in _FIELDS else more)[reader.output] = reader.check(reader.call(instance))
+    target = values.get("landing_target")
     if target is not None and frame_seq is not None:
         target.stamp(frame_seq)
-    status = _one_line(instance.status if landing and target is None and isinstance(instance, HasStatus) else None)
-    return FrameOutputs(target, gimbal, status)
+    if "getLandingTarget" in methods and target is None:
+        values["landing_status"] = _one_line(instance.status if isinstance(instance, HasStatus) else None)
+    return FrameOutputs(**values, more=more)
 
 
 def _one_line(status: object) -> str:

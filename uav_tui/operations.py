@@ -12,6 +12,7 @@ from collections.abc import Awaitable, Callable
 from typing import TYPE_CHECKING, Any, NamedTuple, Protocol
 
 from controllers.base import PrecisionLanding
+from processors.outputs import READERS
 from uav_tui.errors import KNOWN_ERRORS, CommandError, NoVehicle, ProcessorLoadError, SourceError, UavError
 from uav_tui.flight.autonomy import check_vector
 from uav_tui.flight.commands import VEHICLE_COMMANDS, Command, check_limits, parse, unknown_command
@@ -46,9 +47,6 @@ PLAIN_VEHICLE_CALLS: dict[str, tuple[Callable[[FlightController], Awaitable[None
     "hold": (lambda fc: fc.hold(), "holding"),
 }
 """Commands that are one FlightController call without arguments: word -> (the call, what to report)."""
-
-AUTONOMY_OUTPUTS = ("getPreparedVector", "getLandingTarget", "getGimbalPointing")
-"""What autonomy flies on; a processor with none of them is refused autonomy."""
 
 
 class Outcome(NamedTuple):
@@ -239,10 +237,10 @@ class Operations:
         return ""
 
     def _check_gives_outputs(self) -> None:
-        """Refuse autonomy for a processor that has nothing it could fly on (no vector, landing target or gimbal
-        pointing): switched on, it would look armed for a flight that never comes."""
+        """Refuse autonomy for a processor that has nothing it could fly on (no vector nor any output of
+        :data:`~processors.outputs.READERS`): switched on, it would look armed for a flight that never comes."""
         worker = self.core.worker
-        if worker is None or set(AUTONOMY_OUTPUTS) & worker.processor.info.capabilities:
+        if worker is None or {"getPreparedVector", *READERS} & worker.processor.info.capabilities:
             return
         info = worker.processor.info
         close = "; ".join(info.warnings)  # a misspelt getPreparedVector, most likely

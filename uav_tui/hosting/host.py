@@ -37,7 +37,7 @@ class ProcessedFrame:
     """What getPreparedVector returned, unchecked (the autonomy gate validates it)."""
     outputs: FrameOutputs = NO_OUTPUTS
     """What the output methods returned: ``outputs.landing_target`` (getLandingTarget), ``outputs.gimbal``
-    (getGimbalPointing); None each without the method, or nothing in this frame."""
+    (getGimbalPointing), ``outputs.get(field)`` for any; None each without the method, or nothing in this frame."""
     error: str | None = None
     """Traceback text if the processor raised."""
     decision: str = ""
@@ -46,6 +46,8 @@ class ProcessedFrame:
     """What the platform did with the landing target: ``sent`` or why not ("" without one)."""
     gimbal: str = ""
     """What the platform did with the gimbal pointing: ``sent`` or why not ("" without one)."""
+    relayed: dict[str, str] = field(default_factory=dict)
+    """What the platform did with each further output (:data:`~uav_tui.relays.registry.REGISTRY`), by its field."""
     extra: dict[str, Any] = field(default_factory=dict)
     """Fields the processor stored with ``tmMgr.save(frame, **extra)`` for this frame."""
     saved: bool = False

@@ -35,16 +35,17 @@ or error row reports on; ``autonomy`` is True or False where autonomy was switch
 
 FRAME_OWN_COLUMNS: tuple[str, ...] = (
     "frame_id", "seq", "t_wall_ns", "t_mono_ns", "t_start_ns", "t_end_ns", "t_vector_ns", "vx", "vy", "vt",
-    "box_x", "box_y", "box_w", "box_h", "decision", "landing", "gimbal", "error", "saved", "image", "extra",
+    "box_x", "box_y", "box_w", "box_h", "decision", "landing", "gimbal", "relayed", "error", "saved", "image", "extra",
     "telemetry", "extrapolated_ms",
 )
 """frames.csv, the frame's own part: ids, capture times (wall + monotonic ns), processing stage times
 (monotonic ns), the vector, the processor's ``box`` (frame pixels, empty when None), the autonomy
 decision, what was done with the processor's landing target and with its gimbal pointing (each ``sent`` or
-``not sent: why``; empty without one), the last line of an exception, whether and where the image was saved,
-the ``tmMgr.save`` extras as JSON, how the telemetry columns were obtained (``interpolated``, ``held``, ``before``,
-``none``; see :meth:`TelemetryHistory.at`) and, when ``held`` or ``before``, how far past the telemetry the row
-reaches (:meth:`TelemetryHistory.extrapolated_ns`, in ms: the row was written without the sample after it)."""
+``not sent: why``; empty without one) and with any further output (``relayed``: JSON, its field -> what was done;
+empty without), the last line of an exception, whether and where the image was saved, the ``tmMgr.save`` extras
+as JSON, how the telemetry columns were obtained (``interpolated``, ``held``, ``before``, ``none``; see
+:meth:`TelemetryHistory.at`) and, when ``held`` or ``before``, how far past the telemetry the row reaches
+(:meth:`TelemetryHistory.extrapolated_ns`, in ms: the row was written without the sample after it)."""
 
 FRAME_COLUMNS: tuple[str, ...] = FRAME_OWN_COLUMNS + FIELDS + GEO_COLUMNS
 """frames.csv: the frame's own columns, the telemetry interpolated to the capture time, where the centre of ``box``
@@ -109,7 +110,8 @@ def frame_record(result: ProcessedFrame, frame_id: int, image: str, extra_json: 
     error = shorten(last_line(result.error), MAX_ERROR_CHARS) if result.error else ""
     box = result.box or (None, None, None, None)
     values = [frame_id, frame.seq, frame.t_wall_ns, frame.t_mono_ns, result.t_start_ns, result.t_end_ns,
-              result.t_vector_ns or None, vx, vy, vt, *box, result.decision, result.landing, result.gimbal, error,
+              result.t_vector_ns or None, vx, vy, vt, *box, result.decision, result.landing, result.gimbal,
+              json.dumps(result.relayed) if result.relayed else "", error,
               bool(image), image, extra_json]
     return FrameRecord(values, frame.t_mono_ns, camera, result.detections or ())
 
