@@ -73,3 +73,8 @@ def test_without_the_capability_the_entry_s_stand_in_says_so() -> None:
     result = ProcessedFrame(frame, 0, outputs=FrameOutputs(more={"mark": Mark(2, 2)}))
     stand_in.consider(result)
     assert result.relayed == {"mark": "not sent: the flight controller has no heartbeat"} and stand_in.counts == {}
+
+
+def test_a_registered_output_never_shadows_a_built_in_one() -> None:
+    outputs = FrameOutputs(more={"gimbal": {"mode": "rate"}, "mark": Mark(1, 1)})  # as a hostile process could send
+    assert outputs.get("gimbal") is None and outputs.get("mark") == Mark(1, 1) and outputs.get("other") is None
