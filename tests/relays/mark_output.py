@@ -11,8 +11,7 @@ from typing import TYPE_CHECKING, Protocol, runtime_checkable
 import pytest
 
 import processors.base
-from processors.base import read_output
-from processors.outputs import READERS, Reader
+from processors.outputs import READERS, Reader, read_output
 from uav_tui.relays import registry
 from uav_tui.relays.contract import RelayCore, Unserved
 from uav_tui.relays.registry import RelayEntry
