@@ -30,7 +30,9 @@ LONG = (
     "tests/core/test_failsafe_hold.py", "tests/core/test_shutdown_safety.py", "tests/core/test_envelope_flight.py",
     "tests/core/test_precland_hostile.py", "tests/hosting/test_processor_hardening.py",
     "tests/controllers/test_sim_precland.py", "tests/core/test_cli.py", "tests/flight/test_geolocate_flight.py",
-    "tests/web/test_page_target_browser.py",
+    "tests/web/test_page_target_browser.py", "tests/test_fresh_clone.py", "tests/test_readme_quickstart.py",
+    "tests/replay/test_replay_clock.py", "tests/core/test_first_hour_runs.py", "tests/recorded/test_report.py",
+    "tests/tui/test_outside_text.py",
 )
 """Modules of over 40 s (CI's list of its slowest tests says which), longest first: collected first, so that
 .ci/run's workers (``--dist loadfile`` hands out modules in collection order) start them before the many short
