@@ -169,8 +169,9 @@ def test_error_lines_point_at_the_fix(tmp_path: Path) -> None:
         flags = ("--no-ui", "--no-record", "--duration", "5") if args[:1] not in (("replay",), ("sim",)) else ()
         result = uav(*args, *flags, cwd=tmp_path)
         assert result.returncode == 2, (args, result.stdout)
-        (line,) = result.stderr.splitlines()  # one line, no usage
-        assert line.startswith(expected), (args, line)
+        lines = result.stderr.splitlines()
+        assert len(lines) == 1, (args, result.stderr)  # one line, no usage
+        assert lines[0].startswith(expected), (args, lines[0])
 
 
 def test_the_demo_counts_its_start_up_from_uav_tuis_start_not_from_its_setup(tmp_path: Path) -> None:

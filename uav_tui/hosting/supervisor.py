@@ -101,8 +101,8 @@ class ChildSupervisor:
         spawning = loop.run_in_executor(self._spawner, spawn, loop.create_future(), self._output.lines)
         try:
             child = await asyncio.shield(spawning)
-        except asyncio.CancelledError:  # the spawn goes on in its thread: kill what it starts
-            spawning.add_done_callback(functools.partial(self._abandon_spawned, loop))
+        except asyncio.CancelledError:  # the spawn goes on in its thread: wait for it, then undo what it started
+            await _discard(spawning)
             raise
         self.children.append(child)
         child.watch_exit(functools.partial(_call_soon, loop, self._ended, child))
@@ -119,16 +119,6 @@ class ChildSupervisor:
             _abandon(child)
             raise
         return child
-
-    def _abandon_spawned(self, loop: asyncio.AbstractEventLoop, spawning: asyncio.Future[ChildProcess]) -> None:
-        """A child spawned for a start that was cancelled meanwhile: watched like any other, then killed (reaped,
-        its pipe closed by its end)."""
-        if spawning.cancelled() or spawning.exception() is not None:
-            return
-        child = spawning.result()
-        self.children.append(child)
-        child.watch_exit(functools.partial(_call_soon, loop, self._ended, child))
-        _abandon(child)
 
     def adopt(self, child: ChildProcess) -> None:
         """Make ``child`` (loaded) the current one: it gets the frames from now on."""
@@ -295,6 +285,20 @@ def _abandon(child: ChildProcess) -> None:
         child.ready.cancel()
     elif not child.ready.cancelled():
         child.ready.exception()  # retrieved: what it says is reported by whoever started it, if anyone
+
+
+async def _discard(spawning: asyncio.Future[ChildProcess]) -> None:
+    """The child of a start that was cancelled while it spawned: killed, reaped, its pipe and mailbox closed (no
+    shared memory left behind), before the cancellation goes on."""
+    try:
+        child = await spawning
+    except Exception:  # noqa: BLE001 - the spawn failed: nothing was started
+        return
+    child.kill("the start was cancelled")
+    child.inbox.close()
+    child.conn.close()
+    child.mailbox.close()
+    await asyncio.to_thread(child.proc.wait)
 
 
 def _call_soon(loop: asyncio.AbstractEventLoop, callback: Callable[..., None], *args: Any) -> None:
