@@ -66,7 +66,12 @@ async def test_a_recorded_flight_locates_the_car_it_sees(tmp_path, altitude, hei
         "the flight must include hovering, fast and tilted frames to mean anything"
     assert math.isclose(located["rel_alt_m"].median(), altitude, abs_tol=1.0)
     low, high = located["rel_alt_m"] < 39.0, located["rel_alt_m"] > 41.0  # the rangefinder's 40 m, either side
-    assert (located.loc[low, "target_height_from"] == "rangefinder").all()
+    # Below 40 m the rangefinder, unless its reading was too old at the capture (a loaded machine's late loop): then
+    # the frame says so, and which reading it used instead.
+    ranged_or_said = (located["target_height_from"] == "rangefinder") | \
+        located["target_height_note"].fillna("").str.contains(r"rangefinder \d+\.\d s old")
+    assert ranged_or_said[low].all(), located.loc[low & ~ranged_or_said, ["target_height_from", "target_height_note"]]
+    assert (located.loc[low, "target_height_from"] == "rangefinder").mean() >= 0.5  # most, under any load
     assert (located.loc[high, "target_height_from"] == "terrain").all()
     assert (located.loc[hovering | fast, "target_height_from"] == height_from).all()
     # Along the tilted body axis: never shorter than the height. Not while climbing: the range and the altitude are
