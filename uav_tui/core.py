@@ -28,6 +28,8 @@ from uav_tui.flight.commands import Command
 from uav_tui.flight.exit_hold import hold_before_exit, mode_left_at_exit
 from uav_tui.flight.link import LinkWatch
 from uav_tui.flight.telemetry import TelemetryManager
+from uav_tui.flight.track_lock import TrackLock
+from uav_tui.flight.track_overlay import draw_tracks
 from uav_tui.hosting.exception_reports import ProcessorErrors
 from uav_tui.hosting.host import ProcessedFrame, ProcessorHost
 from uav_tui.hosting.malloc_tuning import tune_this_process
@@ -64,6 +66,8 @@ class UavCore:
         self.events = EventLog()
         self.telemetry = TelemetryManager(None)
         self.gate = AutonomyGate(config.safety, self.telemetry, self.events)
+        self.lock = TrackLock(self.events, lambda: self.gate.envelope.config.lost_after_s)
+        """The operator's lock on a track: while on, its vector is the frame's (``lock ID``, ``unlock``)."""
         self.landing = LandingTargetFeed()
         """The processor's landing targets and the operator's ``precland`` switch."""
         self.relays: dict[str, OutputRelay] = {}
@@ -325,6 +329,9 @@ class UavCore:
             exception = shorten(last_line(result.error), 500)
             self._processor_errors.report(result.error, exception, result.frame.seq)
             self.processor_error = exception
+        self.lock.steer(result)
+        if result.frame.image.flags.writeable:
+            draw_tracks(result.frame.image, result.detections, self.lock.status(), result.vector)
         self.gate.consider(result)
         consider_all(self.relays, result)
         for listener in tuple(self._frame_listeners):

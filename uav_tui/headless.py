@@ -91,6 +91,8 @@ def format_status(status: CoreStatus, elapsed_s: float) -> str:
         line += f" | target {where}"
     if detected := describe_shown(status.detections, status.detections_total, status.tracks_total):
         line += f" | {detected}"
+    if status.lock:
+        line += f" | lock: {status.lock}"
     if status.saves_dropped:
         line += f" | {saves_dropped_text(status.saves_dropped)}"
     line += f" | auto {'ON' if status.autonomy else 'OFF'}"

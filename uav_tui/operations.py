@@ -32,6 +32,7 @@ if TYPE_CHECKING:
     from uav_tui.config import Config
     from uav_tui.events import EventLog
     from uav_tui.flight.autonomy import AutonomyGate
+    from uav_tui.flight.track_lock import TrackLock
     from uav_tui.hosting.host import Answer
     from uav_tui.recording import Recorder
     from uav_tui.relays.precland import LandingTargetFeed
@@ -115,6 +116,9 @@ class OperatedCore(Protocol):
     def worker(self) -> CommandedHost | None: ...
 
     @property
+    def lock(self) -> TrackLock: ...
+
+    @property
     def active_camera(self) -> CameraOpener: ...
 
     def switch_source(self, source: CameraSource, camera: CameraModel | None) -> CameraSource | None: ...
@@ -137,7 +141,8 @@ class Operations:
         self.handlers: dict[str, Handler] = {
             **{word: functools.partial(self._plain, call, done) for word, (call, done) in PLAIN_VEHICLE_CALLS.items()},
             "takeoff": self._takeoff, "orbit": self._orbit, "precland": self._precland, "vector": self._vector,
-            "autonomy": self._autonomy, "f": self._f, "roi": self._roi, "snapshot": self._snapshot,
+            "autonomy": self._autonomy, "f": self._f, "roi": self._roi, "lock": self._lock, "unlock": self._unlock,
+            "snapshot": self._snapshot,
             "reload": self._reload, "source": self._source, "wait": self._wait, "quit": self._quit,
         }
         """Each command word's coroutine (every word of :data:`~uav_tui.flight.commands.COMMANDS`)."""
@@ -164,6 +169,7 @@ class Operations:
                     await core.gate.disable(origin, f"pre-empted by operator command '{parsed}'", hold=False)
                 if parsed.word != "precland":  # and a precision landing
                     core.stop_precland(f"pre-empted by operator command '{parsed}'")
+                core.lock.release(f"pre-empted by operator command '{parsed}'", origin)  # and the lock
             outcome = await self.run(parsed, origin)
         except KNOWN_ERRORS as exc:
             core.events.emit("error", "command", f"{parsed}: {exc}", origin, command=str(parsed))
@@ -264,6 +270,12 @@ class Operations:
             raise CommandError(f"roi ({x}, {y}, {w}, {h}) is not inside the {width}x{height} frame", key="roi")
         answer = await self._call_processor("catch_cmd", (x, y, w, h))
         return Outcome(f"target region ({x}, {y}, {w}, {h}) sent to the processor", answer.t_taken_ns)
+
+    async def _lock(self, track_id: int, *, origin: str) -> str:
+        return self.core.lock.lock(track_id, self.core.camera, origin)
+
+    async def _unlock(self, *, origin: str) -> str:
+        return "" if self.core.lock.release("operator", origin) else "nothing was locked"
 
     async def _snapshot(self, *, origin: str) -> str:
         if self.core.recorder is None:

@@ -10,6 +10,7 @@ from controllers.base import Telemetry
 from uav_tui.flight.autonomy import Verdict
 from uav_tui.flight.geo_detections import LocatedDetection, count_tracks, describe_shown, locate_shown
 from uav_tui.flight.geolocate import GeoFix, describe, locate_row
+from uav_tui.flight.track_lock import LockState
 from uav_tui.hosting.host import ProcessorState
 from uav_tui.output.text import safe
 from uav_tui.relays.registry import gimbal_relay
@@ -23,6 +24,7 @@ if TYPE_CHECKING:
     from uav_tui.flight.autonomy import AutonomyGate
     from uav_tui.flight.link import LinkWatch
     from uav_tui.flight.telemetry import TelemetryManager
+    from uav_tui.flight.track_lock import TrackLock
     from uav_tui.hosting.host import ProcessorHost
     from uav_tui.relays.contract import OutputRelay
     from uav_tui.relays.precland import LandingTargetFeed
@@ -89,6 +91,9 @@ class CoreStatus:
     """How many detections that frame had."""
     tracks_total: int = 0
     """How many tracks those detections are of (each detection's ``track_id``: :mod:`uav_tui.hosting.tracks`)."""
+    lock: str = ""
+    """The operator's lock on a track (:mod:`uav_tui.flight.track_lock`): ``locked on #3 car``, ``#3 car lost 1.2 s``;
+    "" when nothing is locked."""
     last_verdict: Verdict | None = None
     """What ``last_decision`` decided (None before the first vector)."""
     saves_dropped: dict[str, int] = field(default_factory=dict)
@@ -173,6 +178,7 @@ class ObservedCore(Protocol):
     startup_s: float | None
     landing: LandingTargetFeed
     relays: dict[str, OutputRelay]
+    lock: TrackLock
 
     @property
     def camera(self) -> CameraModel | None: ...
@@ -245,6 +251,7 @@ def core_status(core: ObservedCore) -> CoreStatus:
         detections=locate_shown(found, core.camera, seen, at_ns),
         detections_total=len(found),
         tracks_total=count_tracks(found),
+        lock="" if core.lock.state is LockState.OFF else str(core.lock.status()),
         saves_dropped=_saves_dropped(core),
     )
 

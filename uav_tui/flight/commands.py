@@ -12,6 +12,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+from processors.detections import MAX_TRACK_ID
 from uav_tui.config import SafetyConfig
 from uav_tui.errors import CommandError
 from uav_tui.output.text import describe
@@ -89,6 +90,12 @@ def _orbit_speed(text: str) -> float:
     return value
 
 
+def _track(text: str) -> int:
+    if not (text.isascii() and text.isdigit()) or int(text) >= MAX_TRACK_ID:
+        raise ValueError(f"not a track number (0 to {MAX_TRACK_ID - 1})")
+    return int(text)
+
+
 def _switch(text: str) -> str:
     if text not in ("on", "off", "toggle"):
         raise ValueError("not on/off/toggle")
@@ -132,6 +139,9 @@ COMMANDS: dict[str, CommandSpec] = {
     "f": CommandSpec("f N", "press F1..F4: customize_processing(N)", (_button,)),
     "roi": CommandSpec("roi X Y W H", "select a region in frame pixels: catch_cmd((X, Y, W, H))",
                        (_pixels, _pixels, _pixels, _pixels)),
+    "lock": CommandSpec("lock ID", "lock on track ID (its #number on the video): it steers the vehicle under autonomy",
+                        (_track,)),
+    "unlock": CommandSpec("unlock", "release the lock on a track"),
     "snapshot": CommandSpec("snapshot", "save the current frame into the run"),
     "reload": CommandSpec("reload", "reload the processor from its file, keeping the old one on error"),
     "source": CommandSpec("source URI", "switch the camera to URI without stopping anything else", (str,),

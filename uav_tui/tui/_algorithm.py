@@ -31,6 +31,8 @@ class AlgorithmPanel(StatusPanel):
             box += f" @ {where}"
         if detected := describe_shown(status.detections, status.detections_total, status.tracks_total):
             box += f"; {detected}"  # one row, cut at the panel's edge
+        if status.lock:
+            box = f"lock {status.lock}; {box}"
         auto = Text(f"{status.vectors_executed} flown, {status.vectors_rejected} rejected")
         if status.autonomy_stop_reason and not status.autonomy:
             auto.append(" ").append(self.styled(f"stopped: {status.autonomy_stop_reason}", "bad"))

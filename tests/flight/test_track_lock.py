@@ -1,0 +1,178 @@
+"""The operator's lock on a track (issue 50): its states, the vector it makes, taking the locked object back under a
+new number by its look, and its releases. Flown on the built-in vehicle: tests/flight/test_lock_flight.py."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from skimage import data
+
+from processors.steering import Steering
+from processors.yolo_detector import YoloDetector
+from sources.buffer import Frame
+from sources.camera_model import CameraModel, Mount
+from uav_tui.errors import CommandError
+from uav_tui.events import EventLog
+from uav_tui.flight.appearance import likeness, look
+from uav_tui.flight.track_lock import SAME_LOOK, LockState, TrackLock
+from uav_tui.flight.track_overlay import LOCK_COLOUR, NUMBER_COLOUR, draw_tracks
+from uav_tui.hosting.frame_call import call_frame
+from uav_tui.hosting.host import ProcessedFrame
+from uav_tui.hosting.tracks import DetectionTracks
+from uav_values.detections import Detected
+
+RED, BLUE, DIM_RED = (40, 40, 200), (200, 60, 30), (30, 30, 150)
+"""BGR cars: a red one, a blue one, the red one in a shadow."""
+FPS = 10
+
+
+def frame(n: int, cars: dict[int, tuple[tuple[int, int, int, int], tuple[int, int, int]]],
+          vector: object = (0.3, 0.0, 1.0)) -> ProcessedFrame:
+    """Frame ``n`` (at 10 fps) of a grey 320 x 240 picture with ``cars`` (track id -> box, colour) on it, each
+    detected as a ``car``; its processor's own vector ``vector``."""
+    image = np.full((240, 320, 3), 110, np.uint8)
+    for (x, y, w, h), colour in cars.values():
+        image[y:y + h, x:x + w] = colour
+        image[y + h // 2, x:x + w] = 255  # a white stripe across the roof
+    found = tuple(Detected(box, "car", 0.9, track_id=i) for i, (box, _) in cars.items())
+    return ProcessedFrame(Frame(image, n, round(n * 1e9 / FPS), 0), 0, vector=vector, detections=found)
+
+
+def locked(lost_after_s: float = 1.0) -> tuple[TrackLock, EventLog]:
+    events = EventLog()
+    lock = TrackLock(events, lambda: lost_after_s)
+    first = frame(0, {3: ((200, 60, 40, 30), RED), 5: ((40, 150, 30, 40), BLUE)})
+    lock.steer(first)
+    assert lock.lock(3, None) == "locked on track #3 (car)"
+    return lock, events
+
+
+def test_the_locked_track_makes_the_vector_and_the_box_instead_of_the_processor() -> None:
+    lock, _ = locked()
+    seen = [frame(n, {3: ((200 + min(n, 11), 60, 40, 30), RED), 5: ((40, 150, 30, 40), BLUE)}) for n in range(1, 25)]
+    for result in seen:
+        lock.steer(result)
+    last = seen[-1]
+    assert last.box == (211, 60, 40, 30) and lock.state is LockState.LOCKED
+    # The trackers' steering towards the box (right of and above the centre of a down camera), eased in.
+    vx, vy, t = Steering("down", 2.0).vector(last.box, (320, 240))
+    assert last.vector == pytest.approx((vx, vy, t)) and vx > 0 and vy > 0
+    assert seen[0].vector[:2] == (0.0, 0.0) and 0 < seen[1].vector[1] < seen[3].vector[1] < vy  # eased in
+    assert str(lock.status()) == "locked on #3 car"
+
+
+def test_a_forward_camera_steers_to_keep_the_lock_time_size() -> None:
+    lock = TrackLock(EventLog(), lambda: 0.0)
+    lock.steer(frame(0, {1: ((140, 105, 40, 30), RED)}))
+    lock.lock(1, CameraModel.from_hfov(320, 240, 60.0, Mount(tilt_deg=20.0)))
+    for n in range(1, 30):  # it moves away: smaller
+        result = frame(n, {1: ((150, 110, 20, 15), RED)})
+        lock.steer(result)
+    assert result.vector[0] == pytest.approx(1.0)  # forward at max speed (2 x half the height lost)
+
+
+def test_only_a_track_on_the_newest_frame_can_be_locked() -> None:
+    lock, _ = locked()
+    with pytest.raises(CommandError, match=r"lock 9: no track 9 on the newest frame \(its tracks: #3, #5\)"):
+        lock.lock(9, None)
+    lock.steer(frame(1, {}))
+    with pytest.raises(CommandError, match="it has no tracks"):
+        TrackLock(EventLog(), lambda: 0.0).lock(0, None)
+
+
+def test_a_lost_lock_takes_back_a_new_track_that_looks_alike_not_another_car() -> None:
+    lock, events = locked()
+    for n in range(1, 4):
+        lock.steer(frame(n, {3: ((200, 60, 40, 30), RED), 5: ((40, 150, 30, 40), BLUE)}))
+    hidden = frame(4, {5: ((40, 150, 30, 40), BLUE)})
+    lock.steer(hidden)
+    assert lock.state is LockState.LOST and hidden.vector is None and hidden.box is None
+    blue = frame(5, {5: ((40, 150, 30, 40), BLUE), 8: ((100, 100, 30, 40), BLUE)})  # a new blue car: not it
+    lock.steer(blue)
+    assert lock.state is LockState.LOST and blue.vector is None
+    back = frame(6, {5: ((40, 150, 30, 40), BLUE), 8: ((100, 100, 30, 40), BLUE), 9: ((230, 70, 44, 33), DIM_RED)})
+    lock.steer(back)
+    assert lock.state is LockState.LOCKED and lock.track_id == 9 and back.box == (230, 70, 44, 33)
+    assert back.vector is not None and lock.status().renumbered == 1
+    assert any("lock: #3 car is now #9" in e.message for e in events.recent)
+
+
+def test_a_track_seen_beside_the_locked_one_is_never_taken_for_it() -> None:
+    lock, _ = locked()
+    lock.steer(frame(1, {3: ((200, 60, 40, 30), RED), 5: ((40, 150, 30, 40), RED)}))  # two red cars
+    lock.steer(frame(2, {5: ((40, 150, 30, 40), RED)}))
+    assert lock.state is LockState.LOST
+
+
+def test_a_lock_lost_longer_than_lost_after_s_is_released() -> None:
+    lock, events = locked(lost_after_s=1.0)
+    lock.steer(frame(1, {3: ((200, 60, 40, 30), RED)}))
+    for n in range(2, 12):
+        lock.steer(frame(n, {}))
+    assert lock.state is LockState.LOST and str(lock.status()) == "#3 car lost 1.0 s"
+    lock.steer(frame(12, {}))
+    assert lock.state is LockState.OFF and lock.track_id is None
+    assert any("lock on #3 car released: not seen for 1 s (lost_after_s)" in e.message for e in events.recent)
+    after = frame(13, {3: ((200, 60, 40, 30), RED)})
+    lock.steer(after)
+    assert after.vector == (0.3, 0.0, 1.0) and after.box is None  # the processor's own again
+
+
+def test_without_lost_after_s_a_lost_lock_waits() -> None:
+    lock, _ = locked(lost_after_s=0.0)
+    lock.steer(frame(1, {3: ((200, 60, 40, 30), RED)}))
+    for n in range(2, 200):
+        lock.steer(frame(n, {}))
+    assert lock.state is LockState.LOST
+
+
+def test_release() -> None:
+    lock, events = locked()
+    assert lock.release("operator", "test") and lock.state is LockState.OFF
+    assert not lock.release("operator", "test")
+    assert events.recent[-1].message == "lock on #3 car released: operator" and events.recent[-1].origin == "test"
+
+
+def test_a_point_picks_the_smallest_track_box_that_holds_it() -> None:
+    lock = TrackLock(EventLog(), lambda: 0.0)
+    lock.steer(frame(0, {1: ((0, 0, 200, 200), RED), 2: ((50, 50, 20, 20), BLUE)}))
+    assert lock.track_at(55, 60) == 2 and lock.track_at(150, 150) == 1 and lock.track_at(250, 10) is None
+
+
+def test_looks_tell_the_same_car_from_another() -> None:
+    red = frame(0, {1: ((10, 10, 60, 30), RED), 2: ((100, 10, 60, 30), DIM_RED), 3: ((200, 10, 60, 30), BLUE)})
+    image = red.frame.image
+    a, b, c = (look(image, box) for box in ((10, 10, 60, 30), (100, 10, 60, 30), (200, 10, 60, 30)))
+    assert a is not None and b is not None and c is not None
+    assert likeness(a, b) >= SAME_LOOK > likeness(a, c)
+    assert look(image, (318, 238, 2, 2)) is None or look(image, (330, 10, 5, 5)) is None
+
+
+def test_the_overlay_numbers_each_track_and_marks_the_lock() -> None:
+    lock, _ = locked()
+    result = frame(1, {3: ((200, 60, 40, 30), RED), 5: ((40, 150, 30, 40), BLUE)})
+    lock.steer(result)
+    image = result.frame.image
+    draw_tracks(image, result.detections, lock.status(), result.vector)
+    below_blue = image[190:205, 40:70]
+    assert (below_blue == NUMBER_COLOUR).all(axis=2).sum() > 10  # "#5" under its box
+    assert (image[58:62, 200:240] == LOCK_COLOUR).all(axis=2).sum() > 40  # the locked box's top edge
+
+
+def test_the_shipped_yolos_frame_shows_the_numbers_the_platform_gave() -> None:
+    """The bug this overlay fixes: ``yolo`` draws its boxes while it processes a frame, before the platform numbers
+    them; the number is drawn after, under the box, on the frame the interfaces show."""
+    photo = np.ascontiguousarray(data.astronaut()[..., ::-1])
+    detector, tracks, lock = YoloDetector(), DetectionTracks(), TrackLock(EventLog(), lambda: 0.0)
+    for n in range(3):
+        image = np.roll(photo, 4 * n, axis=1)
+        outcome = call_frame(detector, image, vector=False, tracks=tracks, seen_ns=n * 100_000_000)
+        result = ProcessedFrame(Frame(image, n + 1, n * 100_000_000, 0), 0, detections=outcome.detections)
+        lock.steer(result)
+        before = image.copy()
+        draw_tracks(image, result.detections, lock.status(), result.vector)
+    person = next(found for found in result.detections or () if found.label == "person")
+    x, y, w, h = person.box
+    below = image[y + h:y + h + 14, x:x + 40] != before[y + h:y + h + 14, x:x + 40]
+    assert person.track_id is not None and below.any(axis=2).sum() > 20  # "#0" under her box
+    assert lock.lock(person.track_id, None) == f"locked on track #{person.track_id} (person)"

@@ -1,0 +1,188 @@
+"""The operator's lock on one track: the locked track drives the vehicle, whichever processor detects it.
+
+``lock ID`` (a script line, the web page's click inside a track's box, a ground station's CAMERA_TRACK_POINT inside
+one) locks the track numbered ``ID`` on the newest frame. From the next frame on, :meth:`TrackLock.steer` (on the
+loop, before the autonomy gate) makes that frame's vector and box the locked track's: the trackers' steering
+(:class:`~processors.steering.Steering` at :data:`~processors.follow.FOLLOW_GAIN`, eased in by
+:class:`~processors.steering.Ramp`) towards its box, or None while it is not seen. The processor's own vector is
+not used meanwhile. The gate then judges the vector as any processor's (autonomy, the vehicle's mode, the frame's
+age, the envelope), and the envelope's ``lost_after_s`` sees the lock's box as the processor's.
+
+The lock lives on the platform's side, with the tracks (:mod:`uav_tui.hosting.tracks`), so a researcher's detector
+gets it without a line of code; on the loop, because the operator's commands, the gate and the envelope are there
+(the processor's process only sees frames). Its cost there is one look a frame (:mod:`uav_tui.flight.appearance`:
+20-30 us), and one a new track while the locked one is missing.
+
+When the locked track's number is missing from a frame, the track is lost; a track that was not there while the
+locked one was seen, of the same label and with a look at least :data:`SAME_LOOK` alike the kept one (the tracker
+gave the locked object a new number: it was hidden longer than the tracker keeps a track, or crossed another), is
+taken as the locked one, under its new number. The lock is released by ``unlock``, by any vehicle command, and by a
+loss longer than the envelope's ``lost_after_s`` (without one, a lost lock waits for its track).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from enum import StrEnum
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from processors.follow import FOLLOW_GAIN
+from processors.steering import Ramp, Steering, Vector
+from uav_tui.errors import CommandError
+from uav_tui.flight.appearance import Look, blend, likeness, look
+from uav_values.detections import Detected
+
+if TYPE_CHECKING:
+    from sources.camera_model import CameraModel
+    from uav_tui.events import EventLog
+    from uav_tui.hosting.host import ProcessedFrame
+
+SAME_LOOK = 0.6
+"""The least likeness (:func:`~uav_tui.flight.appearance.likeness`) a new track needs to be taken as the lost one:
+the same car under another light scores 0.8-0.9, a car of another colour below 0.3 (tests/flight/test_track_lock.py)."""
+
+LOOK_WEIGHT = 0.2
+"""How far each frame the locked track is seen moves its kept look (the look follows a slow change of light)."""
+
+DOWN_TILT_DEG = 60.0
+"""A camera tilted at least this far below the nose steers as a down camera; less, as a forward one."""
+
+
+class LockState(StrEnum):
+    """Where the lock is."""
+
+    OFF = "off"
+    LOCKED = "locked"  # the locked track is on the newest frame
+    LOST = "lost"  # it is not; a new track that looks like it is taken
+
+
+@dataclass(frozen=True, slots=True)
+class LockStatus:
+    """The lock as the interfaces show it."""
+
+    state: LockState = LockState.OFF
+    track_id: int | None = None
+    label: str = ""
+    lost_s: float = 0.0
+    """Seconds (on the frames' clock) since the locked track was last seen, while lost."""
+    renumbered: int = 0
+    """How often the locked object was taken back under a new number."""
+
+    def __str__(self) -> str:
+        """``locked on #3 car``, ``#3 car lost 1.2 s``, ``off``."""
+        if self.state is LockState.LOCKED:
+            return f"locked on #{self.track_id} {self.label}"
+        if self.state is LockState.LOST:
+            return f"#{self.track_id} {self.label} lost {self.lost_s:.1f} s"
+        return "off"
+
+
+class TrackLock:
+    """One lock at a time: :meth:`lock`, :meth:`release`, and :meth:`steer` on every processed frame.
+
+    Args:
+        events: where a lock, its loss, a new number and a release are said.
+        lost_after_s: the envelope's ``lost_after_s`` now (0: no release for a loss).
+    """
+
+    def __init__(self, events: EventLog, lost_after_s: Callable[[], float]) -> None:
+        self.events = events
+        self.lost_after_s = lost_after_s
+        self.state = LockState.OFF
+        self.track_id: int | None = None
+        self.label = ""
+        self.renumbered = 0
+        self.newest: tuple[Detected, ...] = ()
+        """The newest processed frame's detections (what ``lock`` and :meth:`track_at` choose from)."""
+        self._look: Look | None = None
+        self._seen_s = 0.0
+        """The frame time (s) the locked track was last seen."""
+        self._now_s = 0.0
+        self._present: frozenset[int] = frozenset()
+        """The other tracks on the frame the locked one was last seen on: none of them can be it."""
+        self._steering = Steering()
+        self._ramp = Ramp()
+        self._ref_height = 0.0
+
+    def status(self) -> LockStatus:
+        lost = self._now_s - self._seen_s if self.state is LockState.LOST else 0.0
+        return LockStatus(self.state, self.track_id, self.label, lost, self.renumbered)
+
+    def track_at(self, x: float, y: float) -> int | None:
+        """The track whose box on the newest frame holds the pixel (x, y) (the smallest, where boxes overlap)."""
+        inside = [d for d in self.newest if d.track_id is not None
+                  and d.box[0] <= x < d.box[0] + d.box[2] and d.box[1] <= y < d.box[1] + d.box[3]]
+        return min(inside, key=lambda d: d.box[2] * d.box[3]).track_id if inside else None
+
+    def lock(self, track_id: int, camera: CameraModel | None, origin: str = "platform") -> str:
+        """Lock on the track ``track_id`` of the newest frame; CommandError when it has none of that number."""
+        found = next((d for d in self.newest if d.track_id == track_id), None)
+        if found is None:
+            ids = sorted(d.track_id for d in self.newest if d.track_id is not None)
+            raise CommandError(f"lock {track_id}: no track {track_id} on the newest frame (" + (
+                f"its tracks: {', '.join(f'#{i}' for i in ids)})" if ids else "it has no tracks)"), key="lock")
+        if self.state is not LockState.OFF:
+            self.release(f"locked on #{track_id} instead", origin)
+        tilt = 90.0 if camera is None else camera.mount.tilt_deg
+        self._steering = Steering("down" if camera is None or camera.mount.gimbal or tilt >= DOWN_TILT_DEG
+                                  else "forward", FOLLOW_GAIN)
+        self._ramp, self._ref_height = Ramp(), float(found.box[3])
+        self.state, self.track_id, self.label, self.renumbered = LockState.LOCKED, track_id, found.label, 0
+        self._look, self._seen_s = None, self._now_s
+        self._present = frozenset(d.track_id for d in self.newest if d.track_id not in (None, track_id))
+        return f"locked on track #{track_id} ({found.label})"
+
+    def release(self, reason: str, origin: str = "platform") -> bool:
+        """Release the lock (True) saying why; False when there was none."""
+        if self.state is LockState.OFF:
+            return False
+        self.events.emit("info", "autonomy", f"lock on #{self.track_id} {self.label} released: {reason}", origin)
+        self.state, self.track_id, self._look = LockState.OFF, None, None
+        return True
+
+    def steer(self, result: ProcessedFrame) -> None:
+        """Note ``result``'s detections; while locked, make its vector and box the locked track's (None each while
+        it is not seen)."""
+        self.newest = result.detections or ()
+        self._now_s = result.frame.t_mono_ns / 1e9
+        if self.state is LockState.OFF:
+            return
+        image = result.frame.image
+        found = next((d for d in self.newest if d.track_id == self.track_id), None) or self._taken_back(image)
+        vector: Vector | None = None
+        if found is not None:
+            self.state, self._seen_s = LockState.LOCKED, self._now_s
+            self._look = blend(self._look, look(image, found.box), LOOK_WEIGHT)
+            self._present = frozenset(d.track_id for d in self.newest if d.track_id not in (None, self.track_id))
+            vector = self._steering.vector(found.box, (image.shape[1], image.shape[0]), self._ref_height)
+        elif self.state is LockState.LOCKED:
+            self.state = LockState.LOST
+            self.events.emit("warning", "autonomy", f"lock: #{self.track_id} {self.label} lost")
+        result.vector = self._ramp(vector, self._now_s)
+        result.box = None if found is None else found.box
+        limit = self.lost_after_s()
+        if self.state is LockState.LOST and limit and self._now_s - self._seen_s > limit:
+            self.release(f"not seen for {limit:g} s (lost_after_s)")
+
+    def _taken_back(self, image: np.ndarray) -> Detected | None:
+        """The new track most like the lost one, if it is alike enough (its number is then the lock's)."""
+        if self._look is None:
+            return None
+        best, best_likeness = None, -math.inf
+        for found in self.newest:
+            if found.track_id is None or found.track_id in self._present or found.label != self.label:
+                continue
+            seen = look(image, found.box)
+            alike = -math.inf if seen is None else likeness(self._look, seen)
+            if alike > best_likeness:
+                best, best_likeness = found, alike
+        if best is None or best_likeness < SAME_LOOK:
+            return None
+        self.events.emit("info", "autonomy", f"lock: #{self.track_id} {self.label} is now #{best.track_id} "
+                         f"(look {best_likeness:.2f} alike)")
+        self.track_id, self.renumbered = best.track_id, self.renumbered + 1
+        return best
