@@ -2,11 +2,12 @@
 
 A ground station sends MAV_CMD_CAMERA_TRACK_RECTANGLE or MAV_CMD_CAMERA_TRACK_POINT with normalized
 image coordinates; they become the same ``roi X Y W H`` command (frame pixels) as a drag on the web
-page, run through ``core.execute(..., origin="mavlink:SYS/COMP")``. Every command gets a COMMAND_ACK,
-and CAMERA_TRACKING_IMAGE_STATUS reports what the processor tracks (its ``box`` on the newest processed
-frame, normalised): active with the rectangle, idle when it tracks nothing (or after
-MAV_CMD_CAMERA_STOP_TRACKING), error when its last frame raised; once after each command, then once a
-second. Beside it, CAMERA_TRACKING_GEO_STATUS says where the box's centre is on the ground
+page, run through ``core.execute(..., origin="mavlink:SYS/COMP")``; a point inside a track's box on the newest frame
+becomes ``lock ID`` instead (:func:`~uav_tui.web.roi.lock_or_roi`), and MAV_CMD_CAMERA_STOP_TRACKING releases the
+lock. Every command gets a COMMAND_ACK, and CAMERA_TRACKING_IMAGE_STATUS reports what the processor tracks (its
+``box`` on the newest processed frame, normalised; the locked track's while one is): active with the rectangle, idle
+when it tracks nothing (or after MAV_CMD_CAMERA_STOP_TRACKING), error when its last frame raised; once after each
+command, then once a second. Beside it, CAMERA_TRACKING_GEO_STATUS says where the box's centre is on the ground
 (:mod:`uav_tui.flight.geolocate`, from the telemetry at the frame's capture): active with latitude, longitude,
 altitude AMSL, ``h_acc`` (the 1-sigma uncertainty), ``v_acc`` and ``dist`` (straight-line range from the
 vehicle); idle with latitude and longitude 0 and the rest NaN whenever there is no ground position (nothing
@@ -46,7 +47,7 @@ from uav_tui.flight.target_motion import TargetMotion
 from uav_tui.output.line_budget import LineBudget
 from uav_tui.output.text import describe
 from uav_tui.web.failures import HandlerFailures
-from uav_tui.web.roi import point_to_roi, rect_to_roi
+from uav_tui.web.roi import lock_or_roi, point_to_roi, rect_to_roi
 from uav_tui.web.view import ServedCore
 from uav_values.box import PixelBox
 
@@ -261,6 +262,7 @@ class CameraTracking:
             self.reporting = False
             self.core.events.emit("info", "command", "ground station stopped tracking (the processor keeps its "
                                   "target until the next selection)", origin)
+            self.core.lock.release("the ground station stopped tracking", origin)
             return mavlink.MAV_RESULT_ACCEPTED, self._send_status
         requested = None
         if command == mavlink.MAV_CMD_REQUEST_MESSAGE:
@@ -289,14 +291,15 @@ class CameraTracking:
         size = source.get_frame_size() if source is not None else (0, 0)
         try:
             if mode == mavlink.CAMERA_TRACKING_MODE_RECTANGLE:
-                roi = rect_to_roi(*params, size)
+                command = Command("roi", rect_to_roi(*params, size))
             else:
                 roi = point_to_roi(params[0], params[1], size, radius=params[2])
+                command = lock_or_roi(roi, (params[0], params[1]), size, self.core.lock)
         except CommandError as exc:
             self.core.events.emit("warning", "command", f"camera track command rejected: {exc}", origin)
             return mavlink.MAV_RESULT_DENIED
         try:
-            await self.core.execute(Command("roi", roi), origin=origin)
+            await self.core.execute(command, origin=origin)
         except KNOWN_ERRORS:  # logged as an event by the core
             return mavlink.MAV_RESULT_FAILED
         self.mode, self.reporting = mode, True

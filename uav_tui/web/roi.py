@@ -1,16 +1,19 @@
-"""Target selection in normalized image coordinates -> a region in frame pixels.
+"""Target selection in normalized image coordinates -> a region in frame pixels, or a track to lock.
 
 The web page and a MAVLink ground station both describe a selection in the picture they show,
 normalized to 0..1 (MAV_CMD_CAMERA_TRACK_RECTANGLE / _POINT use the same convention), so one
-conversion serves both: the frame size is the platform's, never the viewer's.
+conversion serves both: the frame size is the platform's, never the viewer's. A click (a point) inside a track's
+box on the newest frame locks that track (:func:`lock_or_roi`); anywhere else, and a dragged rectangle, selects a
+region for the processor.
 """
 
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, Protocol
 
 from uav_tui.errors import CommandError
+from uav_tui.flight.commands import Command
 from uav_tui.output.text import describe
 
 POINT_BOX_FRACTION = 0.1
@@ -54,6 +57,22 @@ def point_to_roi(x: float, y: float, frame_size: tuple[int, int], radius: float 
     side = round(2 * radius * width) if radius > 0 else round(POINT_BOX_FRACTION * min(width, height))
     side = max(MIN_BOX_PX, side)
     return _fit(round(x * width - side / 2), round(y * height - side / 2), side, side, width, height)
+
+
+class TracksAt(Protocol):
+    """Which track a pixel of the newest frame is in (:meth:`uav_tui.flight.track_lock.TrackLock.track_at`)."""
+
+    def track_at(self, x: float, y: float) -> int | None: ...
+
+
+def lock_or_roi(roi: tuple[int, int, int, int], point: tuple[float, float] | None, frame_size: tuple[int, int],
+                tracks: TracksAt) -> Command:
+    """``lock ID`` when the normalized ``point`` clicked (already checked) is inside a track's box, else ``roi``."""
+    if point is not None:
+        track = tracks.track_at(point[0] * frame_size[0], point[1] * frame_size[1])
+        if track is not None:
+            return Command("lock", (track,))
+    return Command("roi", roi)
 
 
 def roi_from_message(message: Any, frame_size: tuple[int, int]) -> tuple[int, int, int, int]:

@@ -5,7 +5,8 @@ Routes (every one needs the token or the page's session, else 401 and nothing el
 - ``GET /?token=T``: the page (it also sets an HttpOnly session cookie, so ``/static/*`` loads);
 - ``POST /offer``: the browser's SDP offer -> the answer with the processed video track;
 - ``GET /ws?token=T``: a websocket the server pushes status (twice a second) and events into;
-- ``POST /api/roi``: ``{"rect": [x0, y0, x1, y1]}`` or ``{"point": [x, y]}``, normalized -> ``roi``;
+- ``POST /api/roi``: ``{"rect": [x0, y0, x1, y1]}`` or ``{"point": [x, y]}``, normalized -> ``roi`` (a point inside
+  a track's box: ``lock ID``);
 - ``POST /api/command``: ``{"command": "f 2"}``, one of WEB_COMMANDS.
 
 Every field of a request is checked before use; a handler that still raises (a bug) answers that request
@@ -50,7 +51,7 @@ from uav_tui.web.connections import (
 )
 from uav_tui.web.failures import HandlerFailures
 from uav_tui.web.mdns import adopt_mdns_resolver
-from uav_tui.web.roi import roi_from_message
+from uav_tui.web.roi import lock_or_roi, roi_from_message
 from uav_tui.web.tracks import VideoHub
 from uav_tui.web.view import ServedCore
 from uav_tui.web.viewers import Viewers, ViewersFull
@@ -59,7 +60,7 @@ logger = logging.getLogger(__name__)
 
 STATIC = Path(__file__).with_name("static")
 STATUS_PERIOD_S = 0.5
-WEB_COMMANDS = frozenset({"f", "roi", "hold", "land", "precland", "rtl", "autonomy off"})
+WEB_COMMANDS = frozenset({"f", "roi", "unlock", "hold", "land", "precland", "rtl", "autonomy off"})
 """What the page may send: the buttons, target selection, the ways to stop and to land. Arming, takeoff and
 switching autonomy on stay with the operator's terminal."""
 
@@ -226,11 +227,13 @@ class WebServer:
         origin = _origin(request)
         body = await self._json(request, origin, "roi")
         source = self.core.source
+        size = source.get_frame_size() if source else (0, 0)
         try:
-            x, y, w, h = roi_from_message(body, source.get_frame_size() if source else (0, 0))
+            roi = roi_from_message(body, size)
         except CommandError as exc:
             raise self._bad_request(origin, f"roi rejected: {exc}") from None
-        return await self._run(Command("roi", (x, y, w, h)), origin)
+        point = body.get("point") if body.get("rect") is None else None  # a click, checked as the roi's
+        return await self._run(lock_or_roi(roi, point, size, self.core.lock), origin)
 
     async def _command(self, request: web.Request) -> web.Response:
         origin = _origin(request)

@@ -11,6 +11,7 @@ if TYPE_CHECKING:
     from uav_tui.events import EventLog
     from uav_tui.flight.commands import Command
     from uav_tui.flight.telemetry import TelemetryManager
+    from uav_tui.flight.track_lock import TrackLock
     from uav_tui.hosting.host import ProcessedFrame
     from uav_tui.status import CoreState, CoreStatus
 
@@ -42,6 +43,11 @@ class ServedCore(FrameFeed, Protocol):
 
     @property
     def source(self) -> CameraSource | None: ...
+
+    @property
+    def lock(self) -> TrackLock:
+        """The operator's lock on a track (a click inside a track's box locks it)."""
+        ...
 
     def status(self) -> CoreStatus: ...
 

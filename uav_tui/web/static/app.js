@@ -161,6 +161,7 @@ function showStatus(message) {
   showTracked(s.box, message.frame);
   showTarget(s.target);
   showDetections(s.detections || [], s.detections_total || 0, s.tracks_total || 0);
+  if (s.lock) line += ` | lock: ${s.lock}`;
   if (s.last_decision) line += ` | ${s.last_decision}`;
   if (s.gimbal) line += ` | ${s.gimbal}`;
   const host = s.processor_state;
