@@ -16,6 +16,7 @@ from processors.outputs import READERS
 from uav_tui.errors import KNOWN_ERRORS, CommandError, NoVehicle, ProcessorLoadError, SourceError, UavError
 from uav_tui.flight.autonomy import check_vector
 from uav_tui.flight.commands import VEHICLE_COMMANDS, Command, check_limits, parse, unknown_command
+from uav_tui.flight.track_lock import LockState
 from uav_tui.hosting.child_link import ProcessorRaised
 from uav_tui.hosting.host import Answer
 from uav_tui.hosting.operator_calls import ProcessorCalls
@@ -244,14 +245,16 @@ class Operations:
 
     def _check_gives_outputs(self) -> None:
         """Refuse autonomy for a processor that has nothing it could fly on (no vector nor any output of
-        :data:`~processors.outputs.READERS`): switched on, it would look armed for a flight that never comes."""
+        :data:`~processors.outputs.READERS`) while no track is locked: switched on, it would look armed for a flight
+        that never comes."""
         worker = self.core.worker
-        if worker is None or {"getPreparedVector", *READERS} & worker.processor.info.capabilities:
+        if worker is None or self.core.lock.state is not LockState.OFF or \
+                {"getPreparedVector", *READERS} & worker.processor.info.capabilities:
             return
         info = worker.processor.info
         close = "; ".join(info.warnings)  # a misspelt getPreparedVector, most likely
         raise UavError(f"autonomy refused: processor {info.name} has no getPreparedVector() (nor getLandingTarget() "
-                       "or getGimbalPointing()), so it gives the vehicle nothing to fly"
+                       "or getGimbalPointing()), so it gives the vehicle nothing to fly (lock a track to fly after it)"
                        + (f"; {close}" if close else ""))
 
     async def _f(self, button: int, *, origin: str) -> Outcome:
