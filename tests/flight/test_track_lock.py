@@ -14,7 +14,7 @@ from sources.camera_model import CameraModel, Mount
 from uav_tui.errors import CommandError
 from uav_tui.events import EventLog
 from uav_tui.flight.appearance import likeness, look
-from uav_tui.flight.track_lock import SAME_LOOK, LockState, TrackLock
+from uav_tui.flight.track_lock import NEAREST, SAME_LOOK, LockState, TrackLock
 from uav_tui.flight.track_overlay import LOCK_COLOUR, NUMBER_COLOUR, draw_tracks
 from uav_tui.hosting.frame_call import call_frame
 from uav_tui.hosting.host import ProcessedFrame
@@ -176,3 +176,14 @@ def test_the_shipped_yolos_frame_shows_the_numbers_the_platform_gave() -> None:
     below = image[y + h:y + h + 14, x:x + 40] != before[y + h:y + h + 14, x:x + 40]
     assert person.track_id is not None and below.any(axis=2).sum() > 20  # "#0" under her box
     assert lock.lock(person.track_id, None) == f"locked on track #{person.track_id} (person)"
+
+
+def test_a_lost_lock_compares_only_the_new_tracks_nearest_where_it_went() -> None:
+    lock, _ = locked()
+    lock.steer(frame(1, {3: ((200, 60, 40, 30), RED)}))
+    near_blues = {10 + i: ((150 + 30 * (i % 2), 100 + 45 * (i // 2), 25, 35), BLUE) for i in range(NEAREST)}
+    far_red = frame(2, {**near_blues, 20: ((10, 200, 40, 30), RED)})  # alike, but the farthest of five
+    lock.steer(far_red)
+    assert lock.state is LockState.LOST
+    lock.steer(frame(3, {**near_blues, 21: ((205, 62, 40, 30), RED)}))  # alike and where it went
+    assert lock.state is LockState.LOCKED and lock.track_id == 21
