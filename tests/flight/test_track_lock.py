@@ -3,6 +3,7 @@ new number by its look, and its releases. Flown on the built-in vehicle: tests/f
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 import pytest
 from skimage import data
@@ -11,6 +12,9 @@ from processors.steering import Steering
 from processors.yolo_detector import YoloDetector
 from sources.buffer import Frame
 from sources.camera_model import CameraModel, Mount
+from sources.ground import default_ground
+from sources.sim_geometry import PinholeCamera, Pose, project_ground_point
+from sources.sim_render import SimRenderer, default_targets
 from uav_tui.errors import CommandError
 from uav_tui.events import EventLog
 from uav_tui.flight.appearance import likeness, look
@@ -187,3 +191,28 @@ def test_a_lost_lock_compares_only_the_new_tracks_nearest_where_it_went() -> Non
     assert lock.state is LockState.LOST
     lock.steer(frame(3, {**near_blues, 21: ((205, 62, 40, 30), RED)}))  # alike and where it went
     assert lock.state is LockState.LOCKED and lock.track_id == 21
+
+
+def test_the_lock_gets_its_sim_car_back_under_a_new_number_after_the_tracker_dropped_it() -> None:
+    """The ``sim:`` camera's frames, 30 m up near home looking down, three cars at 1 m/s; the detector (the cars' true
+    boxes) sees nothing for 2.5 s, longer than the tracker keeps a track: every car comes back with a new number, and
+    the lock takes its car back by its look and where it went, not the others (which look alike: the same roof)."""
+    camera, pose = PinholeCamera(640, 480, 62.0), Pose(n=-2.0, e=-3.0, d=-30.0)
+    renderer = SimRenderer(camera, default_ground(0), default_targets(3, 1.0), 2.0, 0)
+    tracks, lock = DetectionTracks(), TrackLock(EventLog(), lambda: 0.0)
+    numbers: dict[int, set[int]] = {0: set(), 1: set(), 2: set()}
+    for n, t in enumerate(np.arange(4.0, 11.0, 0.1)):
+        image = renderer.render(pose, float(t), n % 4)
+        cars = [] if 6.0 <= t < 8.5 else [
+            (car, cv2.boundingRect(np.array([project_ground_point(p, q, pose, camera) for p, q in target.corners(t)],
+                                            np.float32))) for car, target in enumerate(renderer.targets)]
+        cars = [(car, box) for car, box in cars if box[0] > 0 and box[1] > 0 and box[0] + box[2] < 640
+                and box[1] + box[3] < 480]
+        found = tracks.assign(tuple(Detected(box, "car", 0.9) for _, box in cars), round(t * 1e9))
+        for (car, _), seen in zip(cars, found or (), strict=True):
+            numbers[car].add(seen.track_id)
+        lock.steer(ProcessedFrame(Frame(image, n + 1, round(t * 1e9), 0), 0, detections=found))
+        if n == 5:
+            lock.lock(next(d.track_id for (car, _), d in zip(cars, found or (), strict=True) if car == 0), None)
+    assert len(numbers[0]) == len(numbers[1]) == 2, numbers  # both in view renumbered by the gap (the third left)
+    assert lock.state is LockState.LOCKED and lock.renumbered == 1 and lock.track_id == max(numbers[0])

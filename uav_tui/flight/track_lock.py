@@ -13,12 +13,13 @@ gets it without a line of code; on the loop, because the operator's commands, th
 (the processor's process only sees frames). Its cost there (scripts/bench_lock.py): 25 us a frame while locked (one
 look, :mod:`uav_tui.flight.appearance`), up to ~110 us while lost (a look of each of the :data:`NEAREST` new tracks).
 
-When the locked track's number is missing from a frame, the track is lost; a track that was not there while the
-locked one was seen, of the same label, among the :data:`NEAREST` to where it went, and with a look at least
-:data:`SAME_LOOK` alike the kept one (the tracker gave the locked object a new number: it was hidden longer than the
-tracker keeps a track, or crossed another), is taken as the locked one, under its new number. The lock is released
-by ``unlock``, by any vehicle command, and by a loss longer than the envelope's ``lost_after_s`` (without one, a lost
-lock waits for its track).
+When the locked track's number is missing from a frame, the track is lost. The new tracks (not there while the
+locked one was seen) of its label are then compared, nearest to where it went first (at most :data:`NEAREST`); the
+first with a look at least :data:`SAME_LOOK` alike the kept one is taken as the locked object under its new number
+(the tracker numbered it anew: it was hidden longer than the tracker keeps a track, or crossed another). Where it
+went comes first because look-alikes are common (the ``sim:`` camera's cars share one roof), and the look keeps a
+nearer object of another colour from being taken. The lock is released by ``unlock``, by any vehicle command, and by
+a loss longer than the envelope's ``lost_after_s`` (without one, a lost lock waits for its track).
 """
 
 from __future__ import annotations
@@ -178,23 +179,20 @@ class TrackLock:
             self.release(f"not seen for {limit:g} s (lost_after_s)")
 
     def _taken_back(self, image: np.ndarray) -> Detected | None:
-        """The new track most like the lost one, if it is alike enough (its number is then the lock's)."""
+        """The new track nearest where the lost one went that looks alike enough (its number is then the lock's)."""
         if self._look is None:
             return None
         new = [d for d in self.newest if d.track_id is not None and d.track_id not in self._present
                and d.label == self.label]
-        best, best_likeness = None, -math.inf
         for found in sorted(new, key=self._away)[:NEAREST]:
             seen = look(image, found.box)
-            alike = -math.inf if seen is None else likeness(self._look, seen)
-            if alike > best_likeness:
-                best, best_likeness = found, alike
-        if best is None or best_likeness < SAME_LOOK:
-            return None
-        self.events.emit("info", "autonomy", f"lock: #{self.track_id} {self.label} is now #{best.track_id} "
-                         f"(look {best_likeness:.2f} alike)")
-        self.track_id, self.renumbered = best.track_id, self.renumbered + 1
-        return best
+            alike = 0.0 if seen is None else likeness(self._look, seen)
+            if alike >= SAME_LOOK:
+                self.events.emit("info", "autonomy", f"lock: #{self.track_id} {self.label} is now #{found.track_id} "
+                                 f"(look {alike:.2f} alike)")
+                self.track_id, self.renumbered = found.track_id, self.renumbered + 1
+                return found
+        return None
 
     def _away(self, found: Detected) -> float:
         """Pixels from the centre of where the locked track was last seen to ``found``'s."""
