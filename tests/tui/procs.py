@@ -23,6 +23,14 @@ class RecordingProcessor:
         self.buttons.append(id)
 
 
+class DetectingProcessor(RecordingProcessor):
+    """A RecordingProcessor that detects one car in the frame's top-left quarter on every frame."""
+
+    def __init__(self):
+        super().__init__()
+        self.detections = [((0, 0, 320, 240), "car", 0.9)]
+
+
 class SteeringProcessor(RecordingProcessor):
     """A RecordingProcessor with a vector method (never a vector): autonomy may go on."""
 

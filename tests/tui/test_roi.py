@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import pytest
 
-from .conftest import started, wait_for
+from uav_tui.flight.track_lock import LockState
+
+from .conftest import HERE, started, wait_for
 
 FRAME_W, FRAME_H = 640, 480
 
@@ -48,6 +50,22 @@ async def test_a_click_is_not_a_region(make_app):
         await pilot.click(preview, offset=(x0 + 3, y0 + 3))
         await pilot.pause(0.3)
         assert app.core.worker.processor.instance.rois == []
+
+
+async def test_a_click_inside_a_tracks_box_locks_it(make_app):
+    app = make_app(processor=f"{HERE / 'procs.py'}:DetectingProcessor")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await started(pilot)
+        preview = app.query_one("#preview")
+        await wait_for(pilot, lambda: preview.frames_drawn and app.core.lock.newest, what="the preview and a track")
+        x0, y0, width, height = image_area(*preview.content_size)
+        await pilot.click(preview, offset=(x0 + width * 3 // 4, y0 + height * 3 // 4))  # outside the car's box
+        await pilot.pause(0.3)
+        assert app.core.lock.state is LockState.OFF
+        await pilot.click(preview, offset=(x0 + 3, y0 + 3))
+        await wait_for(pilot, lambda: app.core.lock.state is LockState.LOCKED, what="the lock")
+        assert app.core.lock.track_id == app.core.lock.newest[0].track_id
+        assert app.core.worker.processor.instance.rois == []  # a click is no region
 
 
 async def test_keyboard_box_moves_resizes_and_sends(make_app):

@@ -3,8 +3,8 @@
 The processor draws its own overlay while it processes a frame, before the platform numbers its detections
 (:mod:`uav_tui.hosting.tracks`); this is drawn after, on the loop, once the lock has steered and before the frame
 reaches the web page, the TUI and the saved images (the frame listeners). The numbers go below the boxes (a
-detector's label is above them). Measured: 3 us a number (OpenCV's plain Hershey text, no anti-aliasing), 40 us
-for the locked track's box, centre and vector (scripts/bench_lock.py).
+detector's label is above them), in OpenCV's plain Hershey text without anti-aliasing (3 us a number; 12-33 us with
+it). Measured (scripts/bench_lock.py): 20-40 us for three numbers and the locked box, 100-125 us for 32.
 """
 
 from __future__ import annotations

@@ -85,6 +85,13 @@ class FramePreview(Widget, can_focus=True):
             super().__init__()
             self.roi = roi
 
+    class PointClicked(Message):
+        """The operator clicked (no drag) at ``x``, ``y`` in frame pixels."""
+
+        def __init__(self, x: float, y: float) -> None:
+            super().__init__()
+            self.x, self.y = x, y
+
     def __init__(self, frames: FrameProvider, *, fps: float | None = None, id: str | None = None) -> None:
         super().__init__(id=id)
         self._frames = frames
@@ -181,8 +188,11 @@ class FramePreview(Widget, can_focus=True):
         start, self._drag_start = self._drag_start, None
         end = self._layout.clamp_cell(event.x, event.y)
         self.selection = None
-        if end != start:  # a plain click is not a region
+        if end != start:
             self.post_message(self.RoiSelected(self._layout.to_roi((*start, *end))))
+        else:  # a plain click is not a region: it may lock the track under it
+            x, y, w, h = self._layout.to_roi((*end, *end))
+            self.post_message(self.PointClicked(x + w / 2, y + h / 2))
 
     # -- keyboard ROI ----------------------------------------------------------------------------
 

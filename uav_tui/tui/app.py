@@ -287,6 +287,11 @@ class UavApp(App[None]):
     def on_frame_preview_roi_selected(self, message: FramePreview.RoiSelected) -> None:
         self.send("roi {} {} {} {}".format(*message.roi))
 
+    def on_frame_preview_point_clicked(self, message: FramePreview.PointClicked) -> None:
+        """A click inside a track's box on the newest frame locks that track."""
+        if (track := self.core.lock.track_at(message.x, message.y)) is not None:
+            self.send(f"lock {track}")
+
     def action_prompt(self) -> None:
         """Type any command, as in a ``--script`` file."""
         self.push_screen(CommandPrompt(), lambda text: self.action_send(text) if text else None)
