@@ -26,6 +26,8 @@ from uav_tui.operations import OperatedCore, Operations
     ("autonomy on", Command("autonomy", ("on",))),
     ("f 2", Command("f", (2,))),
     ("roi 100 80 60 40", Command("roi", (100, 80, 60, 40))),
+    ("lock 3", Command("lock", (3,))),
+    ("unlock", Command("unlock")),
     ("wait 10", Command("wait", (10.0,))),
     ("source file:my flight.mp4", Command("source", ("file:my flight.mp4",))),
     ("hold # stop here", Command("hold")),
@@ -49,6 +51,10 @@ def test_blank_lines_and_comments(line: str) -> None:
     ("roi 1 2 3", "wrong number of arguments"),
     ("roi -1 2 3 4", "usage: roi"),
     ("autonomy maybe", "usage: autonomy"),
+    ("lock -1", "ID = .-1.: not a track number"),
+    ("lock 1.5", "usage: lock ID"),
+    ("lock 1000000", "not a track number"),
+    ("lock", "wrong number of arguments"),
     ("arm now", "wrong number of arguments"),
 ], ids=lambda v: v)
 def test_errors_show_the_usage(line: str, message: str) -> None:
