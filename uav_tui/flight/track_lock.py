@@ -121,6 +121,7 @@ class TrackLock:
         """Where the locked track was last seen."""
 
     def status(self) -> LockStatus:
+        """The lock now, as the interfaces show it."""
         lost = self._now_s - self._seen_s if self.state is LockState.LOST else 0.0
         return LockStatus(self.state, self.track_id, self.label, lost, self.renumbered)
 
