@@ -3,6 +3,8 @@ new number by its look, and its releases. Flown on the built-in vehicle: tests/f
 
 from __future__ import annotations
 
+import math
+
 import cv2
 import numpy as np
 import pytest
@@ -63,6 +65,22 @@ def test_the_locked_track_makes_the_vector_and_the_box_instead_of_the_processor(
     assert last.vector == pytest.approx((vx, vy, t)) and vx > 0 and vy > 0
     assert seen[0].vector[:2] == (0.0, 0.0) and 0 < seen[1].vector[1] < seen[3].vector[1] < vy  # eased in
     assert str(lock.status()) == "locked on #3 car"
+
+
+def test_a_detector_missing_a_frame_neither_says_the_lock_lost_nor_eases_in_again() -> None:
+    lock, events = locked()
+    vectors = []
+    for n in range(1, 13):  # the car missed on every third frame
+        result = frame(n, {} if n % 3 == 0 else {3: ((250, 20, 40, 30), RED)})
+        lock.steer(result)
+        vectors.append(result.vector)
+    assert [v is None for v in vectors] == [n % 3 == 0 for n in range(1, 13)]
+    speeds = [math.hypot(v[0], v[1]) for v in vectors if v is not None]
+    assert speeds == sorted(speeds) and speeds[-1] > 0.6  # eased in all along: 0.1 m/s a frame at 10 fps
+    assert not any("lost" in e.message for e in events.recent)
+    for n in range(13, 19):
+        lock.steer(frame(n, {}))
+    assert [e.message for e in events.recent if "lost" in e.message] == ["lock: #3 car lost"]  # once, after 0.5 s
 
 
 def test_a_forward_camera_steers_to_keep_the_lock_time_size() -> None:

@@ -34,7 +34,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from processors.follow import FOLLOW_GAIN
-from processors.steering import Ramp, Steering, Vector
+from processors.steering import Ramp, Steering
 from uav_tui.errors import CommandError
 from uav_tui.flight.appearance import Look, blend, likeness, look
 from uav_values.box import PixelBox
@@ -54,6 +54,10 @@ NEAREST = 4
 """While lost, only the new tracks this near (in number) to where the locked one was last seen are compared: a
 hidden object comes back near where it went, and the loop's cost stays under 0.1 ms a frame whatever the detections
 (0.7 ms with 31 new tracks compared, measured)."""
+
+BRIEF_LOSS_S = 0.5
+"""A loss shorter than this (a detector's missed frame) is not said, and the next vector goes on from the speed
+reached instead of easing in again from standstill (the last vector, ``t`` = 0.5 s, is still flying meanwhile)."""
 
 LOOK_WEIGHT = 0.2
 """How far each frame the locked track is seen moves its kept look (the look follows a slow change of light)."""
@@ -119,6 +123,7 @@ class TrackLock:
         self._ref_height = 0.0
         self._box: PixelBox = (0, 0, 1, 1)
         """Where the locked track was last seen."""
+        self._said_lost = False
 
     def status(self) -> LockStatus:
         """The lock now, as the interfaces show it."""
@@ -166,19 +171,21 @@ class TrackLock:
             return
         image = result.frame.image
         found = next((d for d in self.newest if d.track_id == self.track_id), None) or self._taken_back(image)
-        vector: Vector | None = None
+        result.box = None if found is None else found.box
         if found is not None:
-            self.state, self._seen_s, self._box = LockState.LOCKED, self._now_s, found.box
+            self.state, self._seen_s, self._box, self._said_lost = LockState.LOCKED, self._now_s, found.box, False
             self._look = blend(self._look, look(image, found.box), LOOK_WEIGHT)
             self._present = frozenset(d.track_id for d in self.newest if d.track_id not in (None, self.track_id))
             vector = self._steering.vector(found.box, (image.shape[1], image.shape[0]), self._ref_height)
-        elif self.state is LockState.LOCKED:
-            self.state = LockState.LOST
+            result.vector = self._ramp(vector, self._now_s)
+            return
+        self.state, lost_s = LockState.LOST, self._now_s - self._seen_s
+        result.vector = None if lost_s < BRIEF_LOSS_S else self._ramp(None, self._now_s)
+        if lost_s >= BRIEF_LOSS_S and not self._said_lost:
+            self._said_lost = True
             self.events.emit("warning", "autonomy", f"lock: #{self.track_id} {self.label} lost")
-        result.vector = self._ramp(vector, self._now_s)
-        result.box = None if found is None else found.box
         limit = self.lost_after_s()
-        if self.state is LockState.LOST and limit and self._now_s - self._seen_s > limit:
+        if limit and lost_s > limit:
             self.release(f"not seen for {limit:g} s (lost_after_s)")
 
     def _taken_back(self, image: np.ndarray) -> Detected | None:
