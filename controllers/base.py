@@ -16,7 +16,7 @@ from uav_values.telemetry import Telemetry as Telemetry
 if TYPE_CHECKING:
     from controllers.failsafe import FailsafeReport
     from controllers.fence import FenceReport
-    from controllers.landing_target import LandingTargetFix
+    from controllers.landing_target_message import LandingTargetFix
     from controllers.replay_timeline import ReplayTimeline
 
 

@@ -20,7 +20,7 @@ from controllers.connection import Connection, check_serial_device, parse_connec
 from controllers.errors import ControllerError
 from controllers.failsafe import STALE_MARGIN_S, FailsafeReport, ParamAccess, check_failsafe
 from controllers.fence import ReadsFence
-from controllers.landing_target import LandingTargetFix
+from controllers.landing_target_message import LandingTargetFix
 from controllers.mavsdk import ardupilot
 from controllers.mavsdk.attach import SETUP_TIMEOUT_S, ask_for_telemetry, reach_autopilot
 from controllers.mavsdk.calls import AbandoningExecutor, Subscriptions, bounded, release, use_abandoning_executor
@@ -33,7 +33,7 @@ from controllers.mavsdk.pose import POSE_RATE_HZ, pose_samples, request_pose_rat
 from controllers.mavsdk.telemetry import merged_updates
 from controllers.mavsdk.terrain import terrain_reports
 from controllers.mavsdk.vector_stream import DEFAULT_RATE_HZ, VectorStream
-from controllers.precland import LANDING_MODES
+from controllers.precland_requirements import LANDING_MODES
 from controllers.vector_end import VectorEnd
 
 logger = logging.getLogger(__name__)

@@ -1,5 +1,5 @@
 """Landing on the companion's target through MAVSDK: LANDING_TARGET stamped on the autopilot's clock, and the
-precision landing that uses it (what each autopilot needs: :mod:`controllers.precland`)."""
+precision landing that uses it (what each autopilot needs: :mod:`controllers.precland_requirements`)."""
 
 from __future__ import annotations
 
@@ -12,12 +12,12 @@ from typing import Any
 from mavsdk.asyncio.plugins.mavlink_direct import MavlinkMessage
 
 from controllers.autopilots import Autopilot
-from controllers.landing_target import LandingTargetError, LandingTargetFix, landing_target_fields
+from controllers.landing_target_message import LandingTargetError, LandingTargetFix, landing_target_fields
 from controllers.mavsdk.attach import ReachedAutopilot
 from controllers.mavsdk.calls import Command
 from controllers.mavsdk.mavlink_commands import landing_target, px4_set_mode, send_command
 from controllers.mavsdk.pose import BootClock
-from controllers.precland import PrecisionLandingError, check_ardupilot_params
+from controllers.precland_requirements import PrecisionLandingError, check_ardupilot_params
 
 
 class MavsdkLanding:
@@ -45,7 +45,7 @@ class MavsdkLanding:
     async def send(self, fix: LandingTargetFix) -> dict[str, Any]:
         """Send LANDING_TARGET for a target seen in the frame captured at ``fix.capture_mono_ns``.
 
-        Converted for this autopilot (:mod:`controllers.landing_target`: ArduPilot angles in BODY_FRD, PX4 the
+        Converted for this autopilot (:mod:`controllers.landing_target_message`: ArduPilot angles in BODY_FRD, PX4 the
         local NED position), ``time_usec`` the capture on the autopilot's clock (µs since its boot, mapped from
         its ATTITUDE messages). Returns the fields sent.
 

@@ -88,7 +88,7 @@ def velocity_body_setpoint(target_system: int, forward_ms: float, right_ms: floa
 
 
 def landing_target(target_system: int, fields: dict[str, Any]) -> MavlinkMessage:
-    """LANDING_TARGET with ``fields`` (see :mod:`controllers.landing_target`); a broadcast, it has no target fields."""
+    """LANDING_TARGET with ``fields`` (:mod:`controllers.landing_target_message`); a broadcast: no target fields."""
     return MavlinkMessage(message_name="LANDING_TARGET", target_system_id=target_system, target_component_id=1,
                           fields_json=json.dumps(fields))
 

@@ -124,7 +124,8 @@ class Guidance:
         self.hold_mode = Mode.HOLD
         """What a finished takeoff holds in: PX4 switches to HOLD, ArduCopter stays in GUIDED."""
         self.pad: Callable[[], np.ndarray | None] | None = None
-        """The landing pad's (north, east) from precision landing now, or None (see :mod:`controllers.sim.precland`)."""
+        """The landing pad's (north, east) from precision landing now, or None
+        (:mod:`controllers.sim.landing_target_reader`)."""
         self.precision_modes = frozenset({Mode.PRECLAND})
         """The modes that land on :attr:`pad`: PX4's Precision Land; ArduCopter's LAND (with PLND_ENABLED)."""
 

@@ -20,9 +20,9 @@ from controllers.sim.dialect import DIALECTS
 from controllers.sim.geo import Home
 from controllers.sim.gimbal import SimGimbal
 from controllers.sim.guidance import OFFBOARD_LOSS_ACTIONS, Mode, OffboardSetpoint, ThrottleStick
+from controllers.sim.landing_target_reader import PadEstimate
 from controllers.sim.link import MavlinkLink
 from controllers.sim.physics import Multicopter, PhysicsConfig
-from controllers.sim.precland import PadEstimate
 from controllers.sim.setpoints import SetpointRecord, parse_local_ned
 from controllers.sim.streams import TelemetryStreams
 from controllers.sim.truth_server import TruthServer

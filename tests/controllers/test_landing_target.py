@@ -13,7 +13,7 @@ import pytest_asyncio
 from pymavlink.dialects.v20 import common as mavlink
 
 from controllers.autopilots import Autopilot
-from controllers.landing_target import (
+from controllers.landing_target_message import (
     MAV_FRAME_BODY_FRD,
     MAV_FRAME_LOCAL_NED,
     LandingTargetError,
@@ -24,8 +24,8 @@ from controllers.landing_target import (
     rotation_ned_body,
 )
 from controllers.mavsdk.controller import MavsdkController
+from controllers.sim.landing_target_reader import PadEstimate
 from controllers.sim.launcher import SimVehicle
-from controllers.sim.precland import PadEstimate
 from processors.frame_telemetry import FrameTelemetry
 from processors.precision_land import PrecisionLand
 from sources import create_source

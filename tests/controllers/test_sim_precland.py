@@ -15,14 +15,14 @@ import numpy as np
 import pytest
 from pymavlink.dialects.v20 import common as mavlink
 
-from controllers.landing_target import LandingTargetError, LandingTargetFix, rotation_ned_body
+from controllers.landing_target_message import LandingTargetError, LandingTargetFix, rotation_ned_body
 from controllers.mavsdk.controller import MavsdkController
-from controllers.precland import PrecisionLandingError
+from controllers.precland_requirements import PrecisionLandingError
 from controllers.sim import px4_modes
 from controllers.sim.guidance import Mode
+from controllers.sim.landing_target_reader import PadEstimate
 from controllers.sim.launcher import SimVehicle
 from controllers.sim.physics import Multicopter
-from controllers.sim.precland import PadEstimate
 from controllers.sim.truth import TruthClient
 from tests.controllers.test_landing_target import NADIR
 from tests.controllers.test_mavsdk_controller import arm_when_ready

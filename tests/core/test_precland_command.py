@@ -11,7 +11,7 @@ from typing import Any
 
 import pytest
 
-from controllers.precland import PrecisionLandingError
+from controllers.precland_requirements import PrecisionLandingError
 from controllers.sim.launcher import SimVehicle
 from tests.core.flight_helpers import flying_core, steering_config, wait_until
 from uav_tui.core import UavCore

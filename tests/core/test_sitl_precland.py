@@ -9,10 +9,10 @@ estimate goes on wandering, by 0.7-1.2 m in 8 s once landed). The sim: camera's 
 origin, so the landing error is that position's distance from (3, 0).
 
 - ArduCopter SITL, ``PLND_ENABLED=1``, ``PLND_TYPE=1`` (set at boot): LAND with the companion's angles and distance.
-- PX4 SIH: the platform switches to PX4's Precision Land mode (see :mod:`controllers.precland`). ``PLD_FAPPR_ALT``
-  1.5 m: below about 1.2 m the 0.5 m marker leaves the 62-degree camera's view once the vehicle is 0.2 m off it; with
-  the default 0.1 m PX4 takes the lost target for a lost pad once PLD_BTOUT (5 s) passes before touchdown, climbs back
-  to search and starts over (seen once: no touchdown within 180 s).
+- PX4 SIH: the platform switches to PX4's Precision Land mode (:mod:`controllers.precland_requirements`).
+  ``PLD_FAPPR_ALT`` 1.5 m: below about 1.2 m the 0.5 m marker leaves the 62-degree camera's view once the vehicle is 0.2
+  m off it; with the default 0.1 m PX4 takes the lost target for a lost pad once PLD_BTOUT (5 s) passes before
+  touchdown, climbs back to search and starts over (seen once: no touchdown within 180 s).
 """
 
 from __future__ import annotations

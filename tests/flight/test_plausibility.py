@@ -8,7 +8,7 @@ import math
 import pytest
 
 from controllers.base import Telemetry
-from controllers.landing_target import rotation_ned_body
+from controllers.landing_target_message import rotation_ned_body
 from processors import GimbalPointing, LandingTarget
 from sources.camera_model import CameraModel
 from uav_tui.flight.plausibility import REFUSALS_TO_STOP, LandingCheck, RefusalRun, _ned, judge_gimbal

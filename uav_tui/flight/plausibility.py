@@ -171,7 +171,7 @@ def _outside_view(direction: Vector3, limits: tuple[float, float, float, float])
 
 
 def _ned(body: Vector3, roll_deg: float, pitch_deg: float, yaw_deg: float) -> Vector3:
-    """A body-frame (FRD) vector in NED: :func:`~controllers.landing_target.rotation_ned_body` applied to one
+    """A body-frame (FRD) vector in NED: :func:`~controllers.landing_target_message.rotation_ned_body` applied to one
     vector, in scalar math (NumPy's calls alone would be most of a frame's budget for the checks)."""
     r, p, y = math.radians(roll_deg), math.radians(pitch_deg), math.radians(yaw_deg)
     cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)

@@ -9,7 +9,7 @@ import asyncio
 from typing import TYPE_CHECKING, Protocol
 
 from controllers.base import PrecisionLanding
-from controllers.landing_target import LandingTargetFix
+from controllers.landing_target_message import LandingTargetFix
 from uav_tui.flight.autonomy import WATCHDOG_PERIOD_S
 from uav_tui.flight.relay import SEND_TIMEOUT_S, OneAtATime, not_now
 from uav_tui.relays.contract import RelayCore

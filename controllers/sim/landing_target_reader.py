@@ -21,7 +21,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from pymavlink.dialects.v20 import common as mavlink
 
-from controllers.landing_target import rotation_ned_body
+from controllers.landing_target_message import rotation_ned_body
 
 logger = logging.getLogger(__name__)
 
