@@ -65,7 +65,13 @@ def _eval_in_a_process(data: Path, out: Path, hold: Path, log: Path, *more: str)
          f'hold="{hold}"', "--processor-arg", f'log="{log}"', "--processor-arg", "first_x=30", "--workers", "1",
          "--out", str(out), *more],
         cwd=ROOT, env={**os.environ, "PYTHONPATH": str(ROOT)}, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-        text=True)
+        text=True, preexec_fn=_ctrl_c_as_at_a_terminal)
+
+
+def _ctrl_c_as_at_a_terminal() -> None:
+    """SIGINT's default action in the eval: a suite started in the background (``cmd &`` in a script) has it
+    ignored, and an ignored signal stays ignored in every process started from there, Python's too."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
 
 
 def test_a_killed_eval_keeps_the_finished_jobs_and_resume_runs_the_rest(tmp_path: Path,
