@@ -168,6 +168,7 @@ class Operations:
                                     "MAVLink connection string")
                 if core.gate.enabled:  # any operator command pre-empts autonomy at once
                     await core.gate.disable(origin, f"pre-empted by operator command '{parsed}'", hold=False)
+                core.gate.stop_flying_back()  # and its flight back to where the target was last seen
                 if parsed.word != "precland":  # and a precision landing
                     core.stop_precland(f"pre-empted by operator command '{parsed}'")
                 core.lock.release(f"pre-empted by operator command '{parsed}'", origin)  # and the lock

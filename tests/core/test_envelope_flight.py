@@ -170,3 +170,26 @@ async def test_outside_the_height_band_autonomy_is_refused_and_the_battery_floor
         assert not core.gate.enabled and core.gate.executed > 0
         assert re.fullmatch(r"battery 1\d % below the floor 20 %: RTL", core.gate.stop_reason)
         await wait_until(lambda: core.truth.latest()["mode"] == "RTL", 5, "the return home")
+
+
+async def test_a_lost_target_with_last_seen_flies_back_to_where_it_was_last_seen_and_holds(tmp_path: Path) -> None:
+    async with flying_core(tmp_path, processor=pushing(tmp_path), lost_after_s=1.0, lost_action="last_seen") as core:
+        seen: list[tuple[float, float]] = []  # the truth at each frame that reported the target
+        core.add_frame_listener(
+            lambda r: seen.append((core.truth.latest()["n"], core.truth.latest()["e"]))
+            if (r.box, r.vector) != (None, None) else None)
+        await core.execute("f 3")  # right (east), a box in view
+        await core.execute("autonomy on")
+        await wait_until(lambda: core.truth.latest()["e"] > 1.0, 10, "the vehicle flying east")
+        await core.execute("f 4")  # lost: the running vector carries it on, then it holds
+        await wait_until(lambda: not core.gate.enabled, 5, "autonomy to end with the target lost")
+        last_seen = seen[-1]
+        assert core.gate.stop_reason.startswith("target lost for 1 s, back to where it was last seen (")
+        away = math.dist(last_seen, (core.truth.latest()["n"], core.truth.latest()["e"]))
+        assert away > 0.5, f"the vehicle was only {away:.2f} m from where it saw the target: nothing to fly back"
+        await wait_until(lambda: any(e.message.startswith("back at where the target was last seen")
+                                     for e in core.events.recent), 10, "the flight back")
+        await wait_until(lambda: speed(core.truth.latest()) < 0.05, 5, "the hold")
+        state = core.truth.latest()
+        assert math.dist(last_seen, (state["n"], state["e"])) < 0.5
+        assert state["mode"] == "HOLD" and not core.controller.vector_active

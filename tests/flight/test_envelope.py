@@ -13,7 +13,7 @@ from controllers.sim.geo import Home
 from uav_tui.config import EnvelopeConfig, load_config
 from uav_tui.errors import ConfigError
 from uav_tui.events import EventLog
-from uav_tui.flight.envelope import Envelope, configured_envelope
+from uav_tui.flight.envelope import Breach, Envelope, configured_envelope
 from uav_tui.flight.envelope_shape import EARTH_RADIUS_M
 
 HOME = Home()
@@ -151,3 +151,20 @@ def test_the_height_band_the_time_and_the_battery_end_autonomy_with_their_action
     clock[0] = 61.0
     late = fence.breach(at(0, 0))
     assert late is not None and (late.action, late.reason) == ("hold", "autonomy ran its longest engagement, 60 s")
+
+
+def test_a_target_lost_with_last_seen_goes_back_to_its_last_position_or_holds_without_one() -> None:
+    clock = [0.0]
+    lost = Envelope(EnvelopeConfig(lost_after_s=2.0, lost_action="last_seen"), EventLog(), clock=lambda: clock[0])
+    lost.engage()
+    lost.saw(True, Telemetry())  # seen where no position was known
+    clock[0] = 2.5
+    assert lost.breach(at(0, 0)) == Breach("hold", "target lost for 2 s (no position when it was last seen: hold "
+                                                   "instead of last_seen)")
+    lost.saw(True, at(4.0, -1.0))
+    lost.saw(False, at(9.0, 9.0))
+    clock[0] = 4.6
+    assert lost.breach(at(9, 9)) == Breach("last_seen", "target lost for 2 s, back to where it was last seen "
+                                                        "(4.0 m N, -1.0 m E)", (4.0, -1.0))
+    with pytest.raises(ConfigError, match="must be one of hold, rtl, land, last_seen"):
+        load_config(None, {"lost_action": "circle"})

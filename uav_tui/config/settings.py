@@ -63,9 +63,18 @@ ENVELOPE_ACTIONS = ("hold", "rtl", "land")
 """What a breach of the envelope makes the vehicle do (``*_action`` keys)."""
 
 
-def _action(text: str) -> None:
-    if text not in ENVELOPE_ACTIONS:
-        raise ValueError(f"must be one of {', '.join(ENVELOPE_ACTIONS)}, got {text!r}")
+LOST_ACTIONS = (*ENVELOPE_ACTIONS, "last_seen")
+"""``lost_action`` may also fly back to where the target was last seen."""
+
+
+def _one_of(choices: tuple[str, ...]) -> Callable[[str], None]:
+    def check(text: str) -> None:
+        if text not in choices:
+            raise ValueError(f"must be one of {', '.join(choices)}, got {text!r}")
+    return check
+
+
+_action = _one_of(ENVELOPE_ACTIONS)
 
 
 def _polygon_file(path: str) -> None:
@@ -110,8 +119,9 @@ class EnvelopeConfig:
                                parse=_action, metavar="hold|rtl|land")
     lost_after_s: float = _key("the processor's target gone this long (no box and no vector after either) ends "
                                "autonomy, s (0 = off)", minimum=0, maximum=600, default=0.0)
-    lost_action: str = _key("what the vehicle does when the target is lost: hold, rtl or land", default="hold",
-                            parse=_action, metavar="hold|rtl|land")
+    lost_action: str = _key("what the vehicle does when the target is lost: hold, rtl, land or last_seen (fly back "
+                            "to where the vehicle was when the target was last reported, and hold)", default="hold",
+                            parse=_one_of(LOST_ACTIONS), metavar="hold|rtl|land|last_seen")
     require_autopilot_fence: bool = _key("refuse autonomy unless the autopilot's own geofence is set up to act "
                                          "(ArduPilot FENCE_*, PX4 GF_*; read at connect)", default=False)
 

@@ -23,6 +23,7 @@ from uav_tui.config import Config, EnvelopeConfig, SafetyConfig
 from uav_tui.errors import KNOWN_ERRORS, UavError
 from uav_tui.events import EventLog, Level, Repeats
 from uav_tui.flight.envelope import Breach, Envelope, carry_out, configured_envelope
+from uav_tui.flight.fly_back import fly_back
 from uav_tui.flight.telemetry import TelemetryManager
 from uav_tui.hosting.host import ProcessedFrame
 from uav_tui.output.text import describe
@@ -145,6 +146,8 @@ class AutonomyGate:
         self._wake = asyncio.Event()
         self._flown = False
         """A vector was sent since autonomy was last switched on."""
+        self._flying_back: asyncio.Task[None] | None = None
+        """``lost_action = "last_seen"`` flying the vehicle back (:mod:`.fly_back`), until it holds."""
         self.clock: Callable[[], int] = time.monotonic_ns
         """Monotonic ns that frame ages are measured against (a replay's recorded clock in a replay)."""
         self.stop_listeners: list[Callable[[str], None]] = []
@@ -183,6 +186,7 @@ class AutonomyGate:
 
     def enable(self, origin: str) -> None:
         self.check_can_enable()
+        self.stop_flying_back()
         self.envelope.engage()
         if (breach := self._breach()) is not None:
             raise UavError(f"autonomy refused: {breach.reason}")
@@ -195,6 +199,7 @@ class AutonomyGate:
         ``reason`` is why it stops by itself (shown as :attr:`stop_reason`); None: the operator switched it off.
         """
         was_enabled, self.enabled, self._pending = self.enabled, False, None
+        self.stop_flying_back()
         if reason is not None:
             self.stop_reason = reason
         for listener in self.stop_listeners:
@@ -211,7 +216,7 @@ class AutonomyGate:
     def consider(self, result: ProcessedFrame) -> None:
         """Decide on ``result``'s vector (on the loop, right after processing); sets ``result.decision``."""
         if self.enabled:
-            self.envelope.saw(result.box is not None or result.vector is not None)
+            self.envelope.saw(result.box is not None or result.vector is not None, self.telemetry.snapshot())
         if result.vector is None:
             result.decision = Decision(Verdict.ERROR, "error") if result.error else Decision(Verdict.NO_VECTOR,
                                                                                              "no vector")
@@ -309,12 +314,22 @@ class AutonomyGate:
     async def _breached(self, breach: Breach) -> None:
         """A limit of the envelope is past: autonomy off, then the limit's action (hold, RTL, land)."""
         await self.disable("envelope", f"{breach.reason}: {breach.action.upper()}", hold=breach.action == "hold")
-        if breach.action != "hold" and self.controller is not None:
+        if breach.action == "last_seen" and breach.point is not None and self.controller is not None:
+            self._flying_back = asyncio.create_task(fly_back(
+                self.controller, self.telemetry, self.envelope, self.events, breach.point,
+                max_speed=self.safety.max_speed, modes=own_modes(self.controller)), name="fly back")
+        elif breach.action != "hold" and self.controller is not None:
             try:
                 await carry_out(self.controller, breach.action)
             except KNOWN_ERRORS as exc:
                 self.events.emit("error", "autonomy", f"{breach.action.upper()} at the envelope failed: {exc}; "
                                  "take over with the remote", "envelope")
+
+    def stop_flying_back(self) -> None:
+        """Stop flying back to where the target was last seen (autonomy on again, an operator's command)."""
+        if self._flying_back is not None:
+            self._flying_back.cancel()
+            self._flying_back = None
 
     def fault(self, frame_age: float | None, busy_s: float, errors: int) -> str:
         """Why whatever the processor drives must stop now (processor stalled or failing, camera stalled, link lost),

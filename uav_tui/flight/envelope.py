@@ -6,7 +6,8 @@ on the boundary, or refused when nothing of it is left; within ``boundary_band_m
 component is removed first (it slides along the boundary, never through it); a vehicle outside (the envelope was
 set in flight, wind) is flown only back in. Its watchdog asks :meth:`Envelope.breach`: a vehicle outside the
 height band, an engagement longer than ``max_autonomy_s``, a battery below its floor or a target the processor
-stopped reporting for ``lost_after_s`` ends autonomy with the configured action (:func:`carry_out`).
+stopped reporting for ``lost_after_s`` ends autonomy with the configured action (:func:`carry_out`; ``last_seen``
+flies back to where the vehicle was when the target was last reported, :mod:`uav_tui.flight.fly_back`).
 """
 
 from __future__ import annotations
@@ -48,10 +49,12 @@ class Confined:
 
 @dataclass(frozen=True, slots=True)
 class Breach:
-    """A limit the vehicle is past: what to do (``hold``, ``rtl``, ``land``) and why."""
+    """A limit the vehicle is past: what to do (``hold``, ``rtl``, ``land``, ``last_seen``) and why; ``point``
+    (north, east) is where ``last_seen`` flies to."""
 
     action: str
     reason: str
+    point: Point | None = None
 
 
 class Envelope:
@@ -77,6 +80,8 @@ class Envelope:
         self._engaged_at: float | None = None
         self._seen_at: float | None = None
         """When the processor last reported its target (a box or a vector) in this engagement."""
+        self._seen_where: Point | None = None
+        """Where the vehicle was then (north, east), if its position was known."""
 
     def describe(self) -> str:
         """The limits in force, in one line (said at start)."""
@@ -125,12 +130,15 @@ class Envelope:
 
     def engage(self) -> None:
         """Autonomy was switched on: the engagement's clock starts."""
-        self._engaged_at, self._seen_at = self.clock(), None
+        self._engaged_at, self._seen_at, self._seen_where = self.clock(), None, None
 
-    def saw(self, target: bool) -> None:
-        """A frame under autonomy: whether the processor reported its target on it (a box or a vector)."""
+    def saw(self, target: bool, t: Telemetry) -> None:
+        """A frame under autonomy: whether the processor reported its target on it (a box or a vector), ``t`` the
+        telemetry then."""
         if target:
             self._seen_at = self.clock()
+            if t.north_m is not None and t.east_m is not None:
+                self._seen_where = (t.north_m, t.east_m)
 
     def breach(self, t: Telemetry, *, strict: bool = False) -> Breach | None:
         """The first limit the vehicle is past (height, engagement time, battery), or None; with ``strict`` also a
@@ -152,24 +160,44 @@ class Envelope:
         if c.max_autonomy_s and self._engaged_at is not None and self.clock() - self._engaged_at > c.max_autonomy_s:
             return Breach(c.time_action, f"autonomy ran its longest engagement, {c.max_autonomy_s:g} s")
         if c.lost_after_s and self._seen_at is not None and self.clock() - self._seen_at > c.lost_after_s:
-            return Breach(c.lost_action, f"target lost for {c.lost_after_s:g} s")
+            return self._lost()
         if c.battery_floor_pct and t.battery_pct is not None and t.battery_pct < c.battery_floor_pct:
             return Breach(c.battery_action, f"battery {t.battery_pct:.0f} % below the floor {c.battery_floor_pct:g} %")
         if c.battery_floor_v and t.battery_v is not None and t.battery_v < c.battery_floor_v:
             return Breach(c.battery_action, f"battery {t.battery_v:.2f} V below the floor {c.battery_floor_v:g} V")
         return None
 
+    def _lost(self) -> Breach:
+        reason = f"target lost for {self.config.lost_after_s:g} s"
+        if self.config.lost_action != "last_seen":
+            return Breach(self.config.lost_action, reason)
+        if self._seen_where is None:
+            return Breach("hold", f"{reason} (no position when it was last seen: hold instead of last_seen)")
+        north, east = self._seen_where
+        return Breach("last_seen", f"{reason}, back to where it was last seen ({north:.1f} m N, {east:.1f} m E)",
+                      self._seen_where)
+
     def confine(self, vector: tuple[float, float, float], t: Telemetry) -> Confined:
-        """``vector`` (vx forward, vy right, duration) as the envelope lets it fly from where the vehicle is."""
+        """``vector`` (vx forward, vy right, duration) as the envelope lets it fly from where the vehicle is: the
+        limits of :meth:`breach`, then :meth:`keep_inside`; cuts and refusals counted."""
         breach = self.breach(t, strict=True)
         if breach is not None:
             return self._refuse(f"refused: {breach.reason}", "envelope breach")
+        confined = self.keep_inside(vector, t)
+        if confined.vector is None:
+            return self._refuse(confined.note, confined.key)
+        if confined.note:
+            self.cut += 1
+        return confined
+
+    def keep_inside(self, vector: tuple[float, float, float], t: Telemetry) -> Confined:
+        """``vector`` as the radius and the polygon let it fly from where the vehicle is (uncounted)."""
         if not self.horizontal:
             return Confined(vector)
         if self._vertices is not None:
-            return self._refuse("refused: home is not known yet, so the polygon cannot be placed", "no home")
+            return Confined(None, "refused: home is not known yet, so the polygon cannot be placed", "no home")
         if None in (t.north_m, t.east_m, t.yaw_deg):
-            return self._refuse("refused: no position or heading: the envelope cannot be checked", "no position")
+            return Confined(None, "refused: no position or heading: the envelope cannot be checked", "no position")
         yaw = math.radians(t.yaw_deg)  # type: ignore[arg-type]
         forward, right = (math.cos(yaw), math.sin(yaw)), (-math.sin(yaw), math.cos(yaw))
         vx, vy, duration = vector
@@ -177,10 +205,8 @@ class Envelope:
         moving = None if t.vn_ms is None or t.ve_ms is None else (t.vn_ms, t.ve_ms)
         confined = self._confine_ned((t.north_m, t.east_m), v, duration, moving)  # type: ignore[arg-type]
         if confined.vector is None:
-            return self._refuse(confined.note, confined.key)
+            return confined
         (vn, ve, duration) = confined.vector
-        if confined.note:
-            self.cut += 1
         return Confined((vn * forward[0] + ve * forward[1], vn * right[0] + ve * right[1], duration), confined.note)
 
     def _confine_ned(self, p: Point, v: Point, duration: float, moving: Point | None) -> Confined:
