@@ -75,13 +75,20 @@ class Telemetry:
     """The gimbal's attitude where there is one (gimbal protocol v2): roll and pitch from the horizon (pitch
     positive up), yaw from north; the camera on it looks along its forward axis."""
     gimbal_yaw_deg: float | None = None
+    link_quality_pct: float | None = None
+    """The weakest link signal reported within the last seconds, 0-100 %: the RC receiver's (RC_CHANNELS ``rssi``)
+    or a telemetry radio's (RADIO_STATUS), on the device's own scale; None where nothing reports one
+    (:mod:`controllers.mavsdk.link_quality`)."""
+    link_quality_t_ns: int | None = None
+    """When the last ``link_quality_pct`` was received (monotonic ns; set by the platform)."""
 
 
 TELEMETRY_FIELDS: tuple[str, ...] = tuple(f.name for f in fields(Telemetry))
 """Column order of ``Telemetry`` (and of telemetry.csv)."""
-RECEIVE_STAMPS = {"rangefinder_m": "rangefinder_t_ns", "terrain_height_m": "terrain_t_ns"}
-"""Readings whose receive time the platform keeps (their age decides whether geo-location uses them): field -> the
-field of its receive time."""
+RECEIVE_STAMPS = {"rangefinder_m": "rangefinder_t_ns", "terrain_height_m": "terrain_t_ns",
+                  "link_quality_pct": "link_quality_t_ns"}
+"""Readings whose receive time the platform keeps (their age decides whether geo-location uses them, and whether the
+envelope's link floor may act): field -> the field of its receive time."""
 
 
 @dataclass(frozen=True, slots=True)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import functools
 import logging
 import math
 from collections.abc import AsyncIterator, Awaitable, Callable
@@ -27,6 +28,7 @@ from controllers.mavsdk.calls import AbandoningExecutor, Subscriptions, bounded,
 from controllers.mavsdk.gimbal import MavsdkGimbal
 from controllers.mavsdk.landing import MavsdkLanding
 from controllers.mavsdk.link import LinkMonitor
+from controllers.mavsdk.link_quality import link_readers
 from controllers.mavsdk.log import route_mavsdk_log
 from controllers.mavsdk.offboard import MavsdkOffboard
 from controllers.mavsdk.pose import POSE_RATE_HZ, pose_samples, request_pose_rate
@@ -336,6 +338,8 @@ class MavsdkController(ReadsFence):
             more.append(lambda put: gimbal.read_attitude(self._subscriptions, put))
         more.append(lambda put: self._subscriptions.read(  # ArduPilot's height above the terrain
             terrain_reports(self._direct, self._sysid), put, "telemetry-terrain-report"))
+        for name, reader in link_readers(self._direct, self._sysid).items():  # RC and radio signal
+            more.append(functools.partial(self._subscriptions.read, reader, name=name))
         async for update in merged_updates(self._telemetry, self.heartbeat_age_s, self._stop, self._subscriptions,
                                            more):
             yield update

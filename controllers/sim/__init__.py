@@ -15,6 +15,7 @@ Requests (the simulator replies to the sender with one JSON object; an "id" in t
     {"cmd": "teleport", "n": N, "e": E, "d": D, "yaw": DEG}   -> {"ok": true, "state": TRUTH}
     {"cmd": "rc_mode", "mode": M}  -> {"ok": true, "state": TRUTH}; M in POSCTL, HOLD, RTL, LAND, LOITER, as an RC pilot
     {"cmd": "rc_throttle", "pwm": P}  -> {"ok": true, "state": TRUTH}; the RC throttle (ardupilot dialect), 800..2200
+    {"cmd": "link_quality", "pct": P}  -> {"ok": true}; the RC signal in RC_CHANNELS, percent; null: no receiver
     {"cmd": "stream", "msg_id": ID, "interval_us": US} -> {"ok": true}; a stream (a sensor) stops (-1), or comes back
                                          (0: its default rate), as SET_MESSAGE_INTERVAL
     {"cmd": "setpoints", "since_mono_ns": T}  -> {"ok": true, "records": [REC, ...], "more": bool}
@@ -32,6 +33,7 @@ TRUTH (streamed datagrams carry no "id" and no "ok"):
     lat, lon, alt             degrees, degrees, metres AMSL
     battery, wind_n, wind_e   remaining fraction 0..1, steady wind m/s
     rc_throttle               the RC throttle input in the ardupilot dialect (default 1000, SITL's), else null
+    link_quality              the RC signal RC_CHANNELS reports, percent (``--link-quality``), null: unknown
 
 REC (one per SET_POSITION_TARGET_LOCAL_NED received, oldest first, at most 400 per reply):
     t_mono_ns                 time.monotonic_ns() when the simulator read the datagram

@@ -64,6 +64,8 @@ def build_parser(parser_class: type[argparse.ArgumentParser] = argparse.Argument
     )
     p.add_argument("--radio", action="store_true",
                    help="PX4: a radio is connected (SYS_STATUS shows the RC receiver; Position mode is held)")
+    p.add_argument("--link-quality", type=float, default=None, metavar="PCT",
+                   help="the RC receiver's signal RC_CHANNELS reports, 0-100 percent (default: no receiver, unknown)")
     p.add_argument("--climb-drift", type=float, default=0.0, metavar="M_S",
                    help="velocity setpoints drift upwards this fast (PX4 SIH: about 0.2); position holds correct it")
     p.add_argument(
@@ -116,6 +118,7 @@ def config_from_args(args: argparse.Namespace) -> ServerConfig:
         offboard_loss_action=args.offboard_loss_action,
         failsafe_land_after_s=args.failsafe_land_after,
         radio=args.radio,
+        link_quality_pct=args.link_quality,
         parent_pid=args.parent_pid,
         gps_clock_offset_s=args.gps_clock_offset,
         precland_enabled=args.plnd_enabled,

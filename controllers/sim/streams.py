@@ -37,6 +37,7 @@ DEFAULT_RATES_HZ: dict[int, float] = {
     M.MAVLINK_MSG_ID_GIMBAL_MANAGER_STATUS: 5.0,
     M.MAVLINK_MSG_ID_ALTITUDE: 10.0,
     M.MAVLINK_MSG_ID_TERRAIN_REPORT: 10.0,
+    M.MAVLINK_MSG_ID_RC_CHANNELS: 5.0,
 }
 """Streamed at boot, in Hz."""
 RANGEFINDER_CM = (5, 4000)
@@ -87,6 +88,8 @@ class TelemetryStreams:
         self.gps_clock_offset_s = gps_clock_offset_s
         """How far the UTC time in SYSTEM_TIME is from this computer's clock (a ground computer's clock is wrong)."""
         self._boot_ns = time.monotonic_ns()
+        self.link_quality_pct: float | None = None
+        """The RC receiver's signal RC_CHANNELS reports, percent; None: no receiver (chancount 0, rssi unknown)."""
         self.gimbal = gimbal or SimGimbal()
         self._builders: dict[int, Callable[[], mavlink.MAVLink_message]] = {
             M.MAVLINK_MSG_ID_HEARTBEAT: self.heartbeat,
@@ -104,6 +107,7 @@ class TelemetryStreams:
             M.MAVLINK_MSG_ID_DISTANCE_SENSOR: self.distance_sensor,
             M.MAVLINK_MSG_ID_ALTITUDE: self.altitude,
             M.MAVLINK_MSG_ID_TERRAIN_REPORT: self.terrain_report,
+            M.MAVLINK_MSG_ID_RC_CHANNELS: self.rc_channels,
             M.MAVLINK_MSG_ID_AUTOPILOT_VERSION: self.autopilot_version,
         }
         g = self.gimbal
@@ -252,6 +256,14 @@ class TelemetryStreams:
         lat, lon, _ = self.home.to_global(*pos)
         return self.enc.terrain_report_encode(int(round(lat * 1e7)), int(round(lon * 1e7)), 100, self.home.alt_m,
                                               -float(pos[2]), 0, 16)
+
+    def rc_channels(self) -> mavlink.MAVLink_message:
+        """RC_CHANNELS: eight centred channels and ``link_quality_pct`` as rssi 0-254; without it no channels and
+        rssi 255 (unknown)."""
+        pct = self.link_quality_pct
+        count, rssi = (0, 255) if pct is None else (8, int(round(max(0.0, min(100.0, pct)) * 2.54)))
+        channels = [1500 if i < count else 65535 for i in range(18)]
+        return self.enc.rc_channels_encode(self.boot_ms(), count, *channels, rssi)
 
     def gps_raw_int(self) -> mavlink.MAVLink_message:
         v = self.v

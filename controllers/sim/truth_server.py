@@ -52,6 +52,7 @@ def truth_dict(v: Multicopter, server: SimVehicleServer) -> dict[str, Any]:
         "wind_n": float(v.wind[0]),
         "wind_e": float(v.wind[1]),
         "rc_throttle": v.guidance.stick.pwm if v.guidance.stick is not None else None,
+        "link_quality": server.streams.link_quality_pct,
         **server.gimbal.truth(),
     }
 
@@ -174,6 +175,10 @@ class TruthServer:
                     return {"ok": False, "error": f"rc_throttle: pwm {pwm} outside 800..2200"}
                 v.guidance.stick.pwm = pwm
                 return {"ok": True, "cmd": "rc_throttle", "state": self.snapshot()}
+            if cmd == "link_quality":  # the RC signal fades (a percentage) or its receiver goes (null: unknown)
+                pct = req.get("pct")
+                s.streams.link_quality_pct = None if pct is None else float(pct)
+                return {"ok": True, "cmd": "link_quality"}
             if cmd == "stream":  # a sensor or a stream stops (interval_us -1) or comes back (0: its default rate)
                 known = s.streams.set_interval(int(req.get("msg_id", -1)), float(req.get("interval_us", 0)))
                 return {"ok": known, "cmd": "stream"} if known else {"ok": False, "error": "stream: unknown msg_id"}

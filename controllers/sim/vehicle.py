@@ -52,6 +52,9 @@ class ServerConfig:
     target does not)."""
     radio: bool = False
     """PX4 dialect: a radio connected and read (SYS_STATUS shows the RC receiver present; POSCTL is held)."""
+    link_quality_pct: float | None = None
+    """The RC receiver's signal in RC_CHANNELS, percent (None: no receiver, rssi unknown); the truth channel's
+    ``link_quality`` changes it."""
     rc_throttle_pwm: int = 1000
     """ArduCopter dialect: the RC throttle input (SITL's default, the stick's minimum); LOITER follows it."""
     parent_pid: int | None = None
@@ -86,6 +89,7 @@ class SimVehicleServer:
         self.streams = TelemetryStreams(self.link.encoder, self.vehicle, config.home,
                                         gps_clock_offset_s=config.gps_clock_offset_s, dialect=self.dialect,
                                         gimbal=self.gimbal)
+        self.streams.link_quality_pct = config.link_quality_pct
         self.commands = CommandHandler(self)
         self.truth = TruthServer(self, config.truth_port)
         self.setpoint: OffboardSetpoint | None = None

@@ -13,7 +13,7 @@ from controllers.sim.geo import Home
 from uav_tui.config import EnvelopeConfig, load_config
 from uav_tui.errors import ConfigError
 from uav_tui.events import EventLog
-from uav_tui.flight.envelope import Breach, Envelope, configured_envelope
+from uav_tui.flight.envelope import LINK_FRESH_S, Breach, Envelope, configured_envelope
 from uav_tui.flight.envelope_shape import EARTH_RADIUS_M
 
 HOME = Home()
@@ -168,3 +168,25 @@ def test_a_target_lost_with_last_seen_goes_back_to_its_last_position_or_holds_wi
                                                         "(4.0 m N, -1.0 m E)", (4.0, -1.0))
     with pytest.raises(ConfigError, match="must be one of hold, rtl, land, last_seen"):
         load_config(None, {"lost_action": "circle"})
+
+
+def test_a_link_quality_below_its_floor_for_link_floor_s_ends_autonomy_and_an_unknown_or_stale_one_never() -> None:
+    clock = [0.0]
+    link = Envelope(EnvelopeConfig(link_floor_pct=40.0, link_floor_s=2.0, battery_floor_pct=0.0), EventLog(),
+                    clock=lambda: clock[0])
+
+    def received(pct: float | None, *, at_s: float, age_s: float = 0.0) -> Telemetry:
+        clock[0] = at_s
+        t = Telemetry(t_mono_ns=int(at_s * 1e9), link_quality_pct=pct, link_quality_t_ns=int((at_s - age_s) * 1e9))
+        link.on_telemetry(t)
+        return t
+
+    assert link.breach(received(30.0, at_s=1.0)) is None  # below, not yet for 2 s
+    assert link.breach(received(30.0, at_s=2.9)) is None
+    assert link.breach(received(30.0, at_s=3.0)) == Breach("rtl", "link quality 30 % below the floor 40 % for 2 s")
+    assert link.breach(received(60.0, at_s=3.1)) is None  # back above: the time starts again
+    assert link.breach(received(30.0, at_s=4.0)) is None
+    assert link.breach(received(None, at_s=6.5)) is None  # unknown
+    assert link.breach(received(30.0, at_s=7.0)) is None
+    assert link.breach(received(30.0, at_s=20.0, age_s=LINK_FRESH_S + 1)) is None  # nothing new for long: unknown
+    assert "link quality above 40 % (for 2 s, rtl)" in link.describe()

@@ -117,6 +117,13 @@ class EnvelopeConfig:
                                   default=0.0)
     battery_action: str = _key("what the vehicle does at the battery floor: hold, rtl or land", default="rtl",
                                parse=_action, metavar="hold|rtl|land")
+    link_floor_pct: float = _key("link quality (the RC receiver's or a telemetry radio's signal, where the "
+                                 "autopilot reports it) below which autonomy ends, percent (0 = off; unknown never "
+                                 "ends it)", minimum=0, maximum=100, default=0.0)
+    link_floor_s: float = _key("how long the link quality stays below link_floor_pct before autonomy ends, s",
+                               minimum=0, maximum=60, default=2.0)
+    link_action: str = _key("what the vehicle does at the link-quality floor: hold, rtl or land", default="rtl",
+                            parse=_action, metavar="hold|rtl|land")
     lost_after_s: float = _key("the processor's target gone this long (no box and no vector after either) ends "
                                "autonomy, s (0 = off)", minimum=0, maximum=600, default=0.0)
     lost_action: str = _key("what the vehicle does when the target is lost: hold, rtl, land or last_seen (fly back "

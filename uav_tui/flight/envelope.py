@@ -5,9 +5,10 @@ point (position + velocity x (duration + ``response_lag_s``)) leaves the radius 
 on the boundary, or refused when nothing of it is left; within ``boundary_band_m`` of the boundary its outward
 component is removed first (it slides along the boundary, never through it); a vehicle outside (the envelope was
 set in flight, wind) is flown only back in. Its watchdog asks :meth:`Envelope.breach`: a vehicle outside the
-height band, an engagement longer than ``max_autonomy_s``, a battery below its floor or a target the processor
-stopped reporting for ``lost_after_s`` ends autonomy with the configured action (:func:`carry_out`; ``last_seen``
-flies back to where the vehicle was when the target was last reported, :mod:`uav_tui.flight.fly_back`).
+height band, an engagement longer than ``max_autonomy_s``, a battery below its floor, a link quality below its
+floor for ``link_floor_s`` (a quality nothing reports, or none for :data:`LINK_FRESH_S`, never acts) or a target
+the processor stopped reporting for ``lost_after_s`` ends autonomy with the configured action (:func:`carry_out`;
+``last_seen`` flies back to where the vehicle was when the target was last reported, :mod:`.fly_back`).
 """
 
 from __future__ import annotations
@@ -32,6 +33,10 @@ MIN_VECTOR_S = 0.05
 
 MIN_DRIFT_MS = 0.05
 """Outward speed below this, in the boundary band, is not braked (a vehicle holding still, sensor noise)."""
+
+LINK_FRESH_S = 5.0
+"""A link quality received longer ago than this is not known (its source went quiet: the heartbeat judges the link
+then)."""
 
 _GROUND_FIELDS = ("roll_deg", "pitch_deg", "rangefinder_m", "terrain_height_m", "rangefinder_t_ns", "terrain_t_ns",
                   "rel_alt_m")
@@ -82,6 +87,8 @@ class Envelope:
         """When the processor last reported its target (a box or a vector) in this engagement."""
         self._seen_where: Point | None = None
         """Where the vehicle was then (north, east), if its position was known."""
+        self._link_low_since: float | None = None
+        """Since when the link quality has been below its floor (None: it is not, or is not known)."""
 
     def describe(self) -> str:
         """The limits in force, in one line (said at start)."""
@@ -96,6 +103,8 @@ class Envelope:
         limits += [f"{c.max_autonomy_s:g} s an engagement ({c.time_action})"] if c.max_autonomy_s else []
         floors = " or ".join(f"{v:g} {unit}" for v, unit in ((c.battery_floor_pct, "%"), (c.battery_floor_v, "V")) if v)
         limits += [f"battery above {floors} ({c.battery_action})"] if floors else []
+        limits += [f"link quality above {c.link_floor_pct:g} % (for {c.link_floor_s:g} s, {c.link_action})"
+                   ] if c.link_floor_pct else []
         limits += [f"target lost {c.lost_after_s:g} s ({c.lost_action})"] if c.lost_after_s else []
         return "envelope: " + ("; ".join(limits) or "none")
 
@@ -119,8 +128,14 @@ class Envelope:
             raise ConfigError(self.refusal, key="polygon")
 
     def on_telemetry(self, telemetry: Telemetry) -> None:
-        """A telemetry listener: places the polygon at the first position that gives home."""
+        """A telemetry listener: times the link quality below its floor; places the polygon at the first position
+        that gives home."""
         t = telemetry
+        quality = self._link_quality(t)
+        if quality is None or quality >= self.config.link_floor_pct:
+            self._link_low_since = None
+        elif self._link_low_since is None:
+            self._link_low_since = self.clock()
         if self._vertices is None or None in (t.lat_deg, t.lon_deg, t.north_m, t.east_m):
             return
         try:
@@ -161,11 +176,21 @@ class Envelope:
             return Breach(c.time_action, f"autonomy ran its longest engagement, {c.max_autonomy_s:g} s")
         if c.lost_after_s and self._seen_at is not None and self.clock() - self._seen_at > c.lost_after_s:
             return self._lost()
+        if self._link_low_since is not None and self.clock() - self._link_low_since >= c.link_floor_s and (
+                quality := self._link_quality(t)) is not None and quality < c.link_floor_pct:
+            return Breach(c.link_action, f"link quality {quality:.0f} % below the floor {c.link_floor_pct:g} % for "
+                                         f"{c.link_floor_s:g} s")
         if c.battery_floor_pct and t.battery_pct is not None and t.battery_pct < c.battery_floor_pct:
             return Breach(c.battery_action, f"battery {t.battery_pct:.0f} % below the floor {c.battery_floor_pct:g} %")
         if c.battery_floor_v and t.battery_v is not None and t.battery_v < c.battery_floor_v:
             return Breach(c.battery_action, f"battery {t.battery_v:.2f} V below the floor {c.battery_floor_v:g} V")
         return None
+
+    def _link_quality(self, t: Telemetry) -> float | None:
+        """The link quality when the floor is on and it is known and fresh, else None."""
+        if not self.config.link_floor_pct or t.link_quality_pct is None or t.link_quality_t_ns is None:
+            return None
+        return t.link_quality_pct if t.t_mono_ns - t.link_quality_t_ns <= LINK_FRESH_S * 1e9 else None
 
     def _lost(self) -> Breach:
         reason = f"target lost for {self.config.lost_after_s:g} s"
