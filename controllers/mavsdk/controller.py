@@ -11,6 +11,7 @@ from typing import Any, TypeVar
 
 from mavsdk.asyncio import ComponentType, Configuration, Mavsdk, System
 from mavsdk.asyncio.plugins.action import ActionAsync, OrbitYawBehavior
+from mavsdk.asyncio.plugins.geofence import FenceType, GeofenceAsync
 from mavsdk.asyncio.plugins.mavlink_direct import MavlinkDirectAsync
 from mavsdk.asyncio.plugins.param import ParamAsync
 from mavsdk.asyncio.plugins.telemetry import TelemetryAsync
@@ -20,7 +21,7 @@ from controllers.base import PoseSample
 from controllers.connection import Connection, check_serial_device, parse_connection
 from controllers.errors import ControllerError
 from controllers.failsafe import STALE_MARGIN_S, FailsafeReport, ParamAccess, check_failsafe
-from controllers.fence import ReadsFence
+from controllers.fence import FencePlan, ReadsFence
 from controllers.landing_target_message import LandingTargetFix
 from controllers.mavsdk import ardupilot
 from controllers.mavsdk.attach import SETUP_TIMEOUT_S, ask_for_telemetry, reach_autopilot
@@ -85,6 +86,7 @@ class MavsdkController(ReadsFence):
         self._telemetry: TelemetryAsync
         self._param: ParamAsync
         self._direct: MavlinkDirectAsync
+        self._geofence: GeofenceAsync
         self._link: LinkMonitor | None = None
         self._executor: AbandoningExecutor | None = None
         self._stop = asyncio.Event()
@@ -132,6 +134,7 @@ class MavsdkController(ReadsFence):
         self._system, self._sysid, self.autopilot = reached.system, reached.sysid, reached.autopilot
         self._action, self._telemetry, self._param, self._direct = (reached.action, reached.telemetry, reached.param,
                                                                     reached.direct)
+        self._geofence = GeofenceAsync(reached.system)
         self._link = LinkMonitor(self._direct, self._telemetry, self._sysid, self._subscriptions)
         self._link.start()
         self._landing = MavsdkLanding(reached, self._command)
@@ -198,6 +201,12 @@ class MavsdkController(ReadsFence):
 
     def _params(self) -> ParamAccess:
         return ParamAccess(self._param, lambda name, call: bounded(name, call, PARAM_TIMEOUT_S, self.heartbeat_age_s))
+
+    async def _fence_plan(self) -> FencePlan:
+        data = await self._command("download_geofence", self._geofence.download_geofence)
+        kinds = [area.fence_type for area in (*data.polygons, *data.circles)]
+        return FencePlan(sum(kind == FenceType.INCLUSION for kind in kinds),
+                         sum(kind == FenceType.EXCLUSION for kind in kinds))
 
     # ---- commands --------------------------------------------------------------------------------
 

@@ -22,6 +22,7 @@ from controllers.sim.gimbal import SimGimbal
 from controllers.sim.guidance import OFFBOARD_LOSS_ACTIONS, Mode, OffboardSetpoint, ThrottleStick
 from controllers.sim.landing_target_reader import PadEstimate
 from controllers.sim.link import MavlinkLink
+from controllers.sim.missions import MissionStore
 from controllers.sim.physics import Multicopter, PhysicsConfig
 from controllers.sim.setpoints import SetpointRecord, parse_local_ned
 from controllers.sim.streams import TelemetryStreams
@@ -91,6 +92,7 @@ class SimVehicleServer:
                                         gimbal=self.gimbal)
         self.streams.link_quality_pct = config.link_quality_pct
         self.commands = CommandHandler(self)
+        self.missions = MissionStore(self.link.encoder)
         self.truth = TruthServer(self, config.truth_port)
         self.setpoint: OffboardSetpoint | None = None
         self.setpoint_ns = 0
@@ -152,6 +154,9 @@ class SimVehicleServer:
             self.commands.on_command(msg)
         elif kind in ("PARAM_REQUEST_READ", "PARAM_REQUEST_LIST", "PARAM_SET"):
             self.commands.on_param(msg)
+        elif kind in MissionStore.KINDS and getattr(msg, "target_system", 1) in (0, 1):
+            for answer in self.missions.on_message(msg):
+                self.link.send(answer)
         elif kind == "HEARTBEAT" and (msg.get_srcSystem(), msg.get_srcComponent()) not in self._peers:
             # greet a new ground station at once instead of making it wait up to a second
             self._peers.add((msg.get_srcSystem(), msg.get_srcComponent()))
