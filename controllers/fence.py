@@ -70,7 +70,8 @@ async def _px4(params: ParamAccess, plan: PlanReader | None) -> FenceReport:
     unread = "" if plan is not None else "; its geofence plan cannot be read here"
     if plan is not None:
         try:
-            limits += filter(None, [(await plan()).describe()])
+            described = (await plan()).describe()
+            limits += [described] if described else []
         except ControllerError as exc:
             unread = f"; its geofence plan could not be read ({exc})"
     if not limits:

@@ -184,7 +184,8 @@ async def test_a_lost_target_with_last_seen_flies_back_to_where_it_was_last_seen
         await core.execute("f 4")  # lost: the running vector carries it on, then it holds
         await wait_until(lambda: not core.gate.enabled, 5, "autonomy to end with the target lost")
         last_seen = seen[-1]
-        assert core.gate.stop_reason.startswith("target lost for 1 s, back to where it was last seen (")
+        assert re.fullmatch(r"target lost for 1 s \(last seen at -?\d+\.\d m N, -?\d+\.\d m E\): LAST_SEEN",
+                            core.gate.stop_reason), core.gate.stop_reason
         away = math.dist(last_seen, (core.truth.latest()["n"], core.truth.latest()["e"]))
         assert away > 0.5, f"the vehicle was only {away:.2f} m from where it saw the target: nothing to fly back"
         await wait_until(lambda: any(e.message.startswith("back at where the target was last seen")

@@ -164,8 +164,8 @@ def test_a_target_lost_with_last_seen_goes_back_to_its_last_position_or_holds_wi
     lost.saw(True, at(4.0, -1.0))
     lost.saw(False, at(9.0, 9.0))
     clock[0] = 4.6
-    assert lost.breach(at(9, 9)) == Breach("last_seen", "target lost for 2 s, back to where it was last seen "
-                                                        "(4.0 m N, -1.0 m E)", (4.0, -1.0))
+    assert lost.breach(at(9, 9)) == Breach("last_seen", "target lost for 2 s (last seen at 4.0 m N, -1.0 m E)",
+                                           (4.0, -1.0))
     with pytest.raises(ConfigError, match="must be one of hold, rtl, land, last_seen"):
         load_config(None, {"lost_action": "circle"})
 

@@ -199,8 +199,7 @@ class Envelope:
         if self._seen_where is None:
             return Breach("hold", f"{reason} (no position when it was last seen: hold instead of last_seen)")
         north, east = self._seen_where
-        return Breach("last_seen", f"{reason}, back to where it was last seen ({north:.1f} m N, {east:.1f} m E)",
-                      self._seen_where)
+        return Breach("last_seen", f"{reason} (last seen at {north:.1f} m N, {east:.1f} m E)", self._seen_where)
 
     def confine(self, vector: tuple[float, float, float], t: Telemetry) -> Confined:
         """``vector`` (vx forward, vy right, duration) as the envelope lets it fly from where the vehicle is: the

@@ -60,10 +60,10 @@ async def fly_back(controller: FlightController, telemetry: TelemetryManager, en
         if time.monotonic() > deadline:
             note = f"{distance:.1f} m short of {where} when its time ran out"
             break
-        speed = min(max_speed, GAIN_PER_S * distance) / distance
+        scale = min(max_speed, GAIN_PER_S * distance) / distance  # m/s per metre of the offset
         yaw = math.radians(t.yaw_deg)
-        forward = (dn * math.cos(yaw) + de * math.sin(yaw)) * speed
-        right = (-dn * math.sin(yaw) + de * math.cos(yaw)) * speed
+        forward = (dn * math.cos(yaw) + de * math.sin(yaw)) * scale
+        right = (-dn * math.sin(yaw) + de * math.cos(yaw)) * scale
         confined = envelope.keep_inside((forward, right, VECTOR_S), t)
         if confined.vector is None:
             note = f"{distance:.1f} m short of {where}: {confined.note}"
