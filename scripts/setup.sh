@@ -18,6 +18,14 @@ rm -f .venv/.setup-run .venv/.setup-dev
 # on two busy cores): pip only fetches uv itself.
 .venv/bin/python -m pip install -q --disable-pip-version-check uv
 .venv/bin/uv pip install -q --python .venv/bin/python -e ".${extras:+[$extras]}"
+# The RTSP stream (video_rtsp_port) is GStreamer's RTSP server through PyGObject, which comes from Debian
+# (python3-gi, gir1.2-gst-rtsp-server-1.0; .ci/run installs them): PyPI's PyGObject builds from source only (a
+# compiler, GLib's and cairo's headers). Where Debian's is there and loads in this Python, the venv sees it alone.
+site="$(.venv/bin/python -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')"
+if [ -d "$site" ] && [ -d /usr/lib/python3/dist-packages/gi ] && [ ! -e "$site/gi" ]; then
+    ln -s /usr/lib/python3/dist-packages/gi "$site/gi"
+    .venv/bin/python -c 'import gi' 2>/dev/null || rm "$site/gi"
+fi
 # Exactly one package may provide cv2, and it must be the contrib build (CSRT, Darknet loader).
 .venv/bin/python scripts/check_opencv.py
 echo "$inputs" > ".venv/.setup-${extras:-run}"

@@ -3,6 +3,7 @@ parser (read by :mod:`~uav_tui.config.loading` and :mod:`~uav_tui.config.flags`)
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable
 from dataclasses import MISSING, dataclass, field
 from enum import StrEnum
@@ -167,6 +168,12 @@ def _video_out(uri: str) -> None:
         Destination.parse(uri)
 
 
+def _rtsp_path(path: str) -> None:
+    if not re.fullmatch(r"(/[A-Za-z0-9._~-]+)+", path):
+        raise ValueError(f"video_rtsp_path {path!r} must be a path such as /video: '/' then letters, digits "
+                         "and - . _ ~ (more parts after another '/')")
+
+
 @dataclass(frozen=True)
 class WebConfig:
     """The optional WebRTC side page."""
@@ -189,6 +196,11 @@ class WebConfig:
     video_out_fps: float = _key("frame rate of the ground-station video", minimum=1, maximum=60, default=15)
     video_out_kbps: int = _key("bit rate of the ground-station video, kbit/s (a telemetry-grade radio carries "
                                "about 1000)", minimum=50, maximum=20000, default=1000)
+    video_rtsp_port: int = _key("the processed video as an RTSP stream: the TCP port its server listens on, "
+                                "e.g. 8554 (0 = off); same size, rate and bit rate as video_out",
+                                minimum=0, maximum=65535, default=0)
+    video_rtsp_path: str = _key("the RTSP stream's path: rtsp://DRONE:PORT/PATH", default="/video",
+                                parse=_rtsp_path, metavar="/PATH")
 
 
 def _home(text: str) -> Home | None:

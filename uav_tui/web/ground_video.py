@@ -1,13 +1,16 @@
-"""The processed video for a ground station: H.264 over RTP/UDP to ``video_out`` (QGroundControl listens on 5600).
+"""The processed video for a ground station: H.264 over RTP/UDP to ``video_out`` (QGroundControl listens on 5600) and
+as an RTSP stream (``video_rtsp_port``, :mod:`uav_tui.web.rtsp`).
 
 :class:`GroundVideo` is a frame listener of the core like the web page's track: on the loop it only keeps the
 newest processed frame (the processor's overlay in it). A thread of its own, ``ground-video``, takes the newest
 at each of its ``fps`` slots, scales and converts it once (:func:`~uav_tui.web.tracks.to_video_frame`), encodes it
 (FFmpeg through PyAV: the Pi 4's hardware encoder ``h264_v4l2m2m`` where the Pi has one, else ``libx264`` tuned
-for latency) and sends it. Nothing waits for it: a slow encoder or network misses slots (``dropped``, counted),
-never a frame of the processor. A send that fails (no route, the network gone) is counted and said once; the
-stream goes on with the next frame. Each second has a key frame and the stream parameters in band, so a
-receiver that joins late (or QGC started after the drone) shows the video within a second.
+for latency) and hands it to its :class:`Target` (RTP, or the RTSP server). Nothing waits for it: a slow encoder or
+network misses slots (``dropped``, counted), never a frame of the processor; a frame the target takes no one to
+(an RTSP stream without a client, or one whose queue is full) is counted in ``unsent``. A send that fails (no
+route, the network gone) is counted and said once; the stream goes on with the next frame. Each second has a key
+frame and the stream parameters in band, so a receiver that joins late (or QGC started after the drone) shows the
+video within a second.
 """
 
 from __future__ import annotations
@@ -18,17 +21,18 @@ import logging
 import threading
 import time
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 import av
 
-from uav_tui.web.rtp import Destination
+from uav_tui.web.rtp import RTP_UDP
 from uav_tui.web.tracks import to_video_frame
 
 if TYPE_CHECKING:
     import numpy as np
 
     from uav_tui.hosting.host import ProcessedFrame
+    from uav_tui.web.rtp import Destination
     from uav_tui.web.view import FrameFeed
 
 logger = logging.getLogger(__name__)
@@ -46,28 +50,87 @@ def choose_encoder() -> str:
     return "libx264"
 
 
+def configure_encoder(context: Any, encoder: str, width: int, height: int, fps: float, kbps: int) -> None:
+    """Set up an H.264 encoder's codec context for a live stream: a key frame and the parameters each second."""
+    context.width, context.height, context.pix_fmt = width, height, "yuv420p"
+    context.framerate = fractions.Fraction(round(fps))
+    context.bit_rate = kbps * 1000
+    context.time_base = TIME_BASE
+    context.gop_size = max(1, round(fps))
+    if encoder == "libx264":
+        context.options = {"preset": "ultrafast", "tune": "zerolatency",
+                           "x264-params": f"keyint={max(1, round(fps))}:repeat-headers=1"}
+
+
+def stamp(frame: Any, started: float) -> None:
+    """Give ``frame`` its presentation time on the 90 kHz clock, counted from ``started`` (monotonic s)."""
+    frame.pts = round((time.monotonic() - started) / TIME_BASE)
+    frame.time_base = TIME_BASE
+
+
+class Output(Protocol):
+    """One encoding session of a target, opened at the stream's frame size."""
+
+    def send(self, frame: Any) -> bool:
+        """Encode ``frame`` and send it; False when it went to no one (counted in ``unsent``)."""
+        ...
+
+    def close(self) -> None: ...
+
+
+class Target(Protocol):
+    """Where a :class:`GroundVideo` sends: RTP to a ground station, or an RTSP server its clients play from."""
+
+    @property
+    def kind(self) -> str:
+        """:data:`~uav_tui.web.rtp.RTP_UDP` or :data:`~uav_tui.web.rtp.RTSP`."""
+        ...
+
+    @property
+    def uri(self) -> str:
+        """Where it goes, as logs and the status say it."""
+        ...
+
+    @property
+    def watched(self) -> bool:
+        """Whether a frame now reaches anyone (RTP cannot tell: always True); when not, none is even converted."""
+        ...
+
+    def receiver_uri(self, host: str) -> str:
+        """The stream as a ground station that reaches this machine at ``host`` opens it."""
+        ...
+
+    def open(self, encoder: str, width: int, height: int, fps: float, kbps: int) -> Output: ...
+
+    def close(self) -> None:
+        """Release what the target holds (after its last frame)."""
+        ...
+
+
 class GroundVideo:
     """Streams the newest processed frame to a ground station, at most ``fps`` a second.
 
     Args:
         core: the processed frames.
-        destination: where to send.
+        target: where to send (:class:`RtpTarget`, :class:`~uav_tui.web.rtsp.RtspServer`).
         width: the stream's width in pixels (never scaled up; height keeps the aspect).
         fps: frames a second.
         kbps: the encoder's target bit rate (a telemetry-grade radio carries about 1000).
         encoder: the FFmpeg encoder (default :func:`choose_encoder`).
     """
 
-    def __init__(self, core: FrameFeed, destination: Destination, *, width: int, fps: float, kbps: int,
+    def __init__(self, core: FrameFeed, target: Target, *, width: int, fps: float, kbps: int,
                  encoder: str | None = None) -> None:
         self.core = core
-        self.destination = destination
+        self.target = target
         self.width, self.fps, self.kbps = width, fps, kbps
         self.encoder = encoder or choose_encoder()
         self.sent = 0
         """Frames encoded and sent."""
         self.dropped = 0
         """Send slots missed because encoding or sending the frame before took longer than a slot."""
+        self.unsent = 0
+        """Frames that went to no one: an RTSP stream without a client, or a client too slow to take them."""
         self.errors = 0
         """Frames whose encoding or sending failed."""
         self.size: tuple[int, int] = (0, 0)
@@ -83,7 +146,7 @@ class GroundVideo:
         self.core.add_frame_listener(self.offer)
         self._thread = threading.Thread(target=self._run, name="ground-video", daemon=True)
         self._thread.start()
-        logger.info("GroundVideo(%s): %s, %d px, %g fps, %d kbit/s", self.destination.uri, self.encoder, self.width,
+        logger.info("GroundVideo(%s): %s, %d px, %g fps, %d kbit/s", self.target.uri, self.encoder, self.width,
                     self.fps, self.kbps)
 
     def offer(self, result: ProcessedFrame) -> None:
@@ -99,23 +162,19 @@ class GroundVideo:
         self._fresh.set()
 
     def join(self, timeout_s: float = 2.0) -> None:
-        """Wait for the thread to end (off the loop: a frame being encoded finishes first)."""
+        """Wait for the thread to end (off the loop: a frame being encoded finishes first), then close the target."""
         if self._thread is not None:
             self._thread.join(timeout=timeout_s)
             self._thread = None
-
-    @property
-    def receiver_uri(self) -> str:
-        """The stream as a ground station that receives it names it (QGC: ``udp://0.0.0.0:PORT``, RTP H.264)."""
-        return f"udp://0.0.0.0:{self.destination.port}"
+            self.target.close()
 
     def status(self) -> dict[str, Any]:
-        return {"uri": self.destination.uri, "encoder": self.encoder, "sent": self.sent, "dropped": self.dropped,
-                "errors": self.errors}
+        return {"uri": self.target.uri, "encoder": self.encoder, "sent": self.sent, "dropped": self.dropped,
+                "unsent": self.unsent, "errors": self.errors}
 
     def _run(self) -> None:
         interval = 1.0 / self.fps
-        output: _Output | None = None
+        output: Output | None = None
         taken: ProcessedFrame | None = None
         next_slot = 0.0
         try:
@@ -128,6 +187,9 @@ class GroundVideo:
                 if result is None or result is taken:
                     continue
                 taken = result
+                if not self.target.watched:
+                    self.unsent += 1
+                    continue
                 began = time.monotonic()
                 output = self._send(output, result.frame.image)
                 self.dropped += int((time.monotonic() - began) / interval)  # slots this frame's send took
@@ -136,20 +198,23 @@ class GroundVideo:
             if output is not None:
                 output.close()
 
-    def _send(self, output: _Output | None, image: np.ndarray) -> _Output | None:
+    def _send(self, output: Output | None, image: np.ndarray) -> Output | None:
         try:
             frame = to_video_frame(image, self.width)
             if output is None:
-                output = _Output(self.destination, self.encoder, frame.width, frame.height, self.fps, self.kbps)
+                output = self.target.open(self.encoder, frame.width, frame.height, self.fps, self.kbps)
                 self.size = (frame.width, frame.height)
-            output.send(frame)
+            delivered = output.send(frame)
         except (av.FFmpegError, OSError, ValueError) as exc:
             self.errors += 1
             self._say_once(f"{type(exc).__name__}: {exc}")
             if output is not None:
                 output.close()
             return None
-        self.sent += 1
+        if delivered:
+            self.sent += 1
+        else:
+            self.unsent += 1
         return output
 
     def _say_once(self, text: str) -> None:
@@ -157,35 +222,49 @@ class GroundVideo:
         if kind not in self._said and len(self._said) < 16:
             self._said.add(kind)
             logger.warning("GroundVideo(%s): a frame was not sent (%s); the stream goes on, counted in errors",
-                           self.destination.uri, text)
+                           self.target.uri, text)
 
 
-class _Output:
+class RtpTarget:
+    """H.264 over RTP to one ground station (``video_out``)."""
+
+    kind = RTP_UDP
+    watched = True
+
+    def __init__(self, destination: Destination) -> None:
+        self.destination = destination
+        self.uri = destination.uri
+
+    def receiver_uri(self, host: str) -> str:
+        """As QGC names a stream it listens for: ``udp://0.0.0.0:PORT`` (RTP H.264), whatever ``host``."""
+        return f"udp://0.0.0.0:{self.destination.port}"
+
+    def open(self, encoder: str, width: int, height: int, fps: float, kbps: int) -> Output:
+        return _RtpOutput(self.destination, encoder, width, height, fps, kbps)
+
+    def close(self) -> None:
+        """Nothing held between sessions."""
+
+
+class _RtpOutput:
     """One RTP session: FFmpeg's H.264 encoder and RTP muxer on a UDP socket."""
 
     def __init__(self, destination: Destination, encoder: str, width: int, height: int, fps: float,
                  kbps: int) -> None:
         self._container: Any = av.open(f"{destination.uri}?pkt_size=1200", "w", format="rtp")
         try:
-            stream: Any = self._container.add_stream(encoder, rate=round(fps))
-            stream.width, stream.height, stream.pix_fmt = width, height, "yuv420p"
-            stream.bit_rate = kbps * 1000
-            stream.codec_context.time_base = TIME_BASE
-            stream.codec_context.gop_size = max(1, round(fps))  # a key frame each second
-            if encoder == "libx264":
-                stream.options = {"preset": "ultrafast", "tune": "zerolatency",
-                                  "x264-params": f"keyint={max(1, round(fps))}:repeat-headers=1"}
-            self._stream = stream
+            self._stream: Any = self._container.add_stream(encoder, rate=round(fps))
+            configure_encoder(self._stream.codec_context, encoder, width, height, fps, kbps)
             self._started = time.monotonic()
         except BaseException:
             self._container.close()
             raise
 
-    def send(self, frame: Any) -> None:
-        frame.pts = round((time.monotonic() - self._started) / TIME_BASE)
-        frame.time_base = TIME_BASE
+    def send(self, frame: Any) -> bool:
+        stamp(frame, self._started)
         for packet in self._stream.encode(frame):
             self._container.mux(packet)
+        return True
 
     def close(self) -> None:
         with contextlib.suppress(av.FFmpegError, OSError, ValueError):

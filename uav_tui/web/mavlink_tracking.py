@@ -15,7 +15,7 @@ tracked, no camera model, no GPS, a box at the horizon), error as above. Velocit
 and the heading are the target's from its positions on the frame clock (:mod:`uav_tui.flight.target_motion`), NaN
 without enough of them; the down velocity is NaN (the ground is taken as flat). The component sends HEARTBEAT
 (MAV_TYPE_CAMERA) and answers CAMERA_INFORMATION requests with the tracking capability flags, so a ground
-station discovers it.
+station discovers it, and the video-stream requests for the ground-station videos (:mod:`uav_tui.web.video_streams`).
 
 Endpoint (config ``camera_mavlink``): ``udpin:HOST:PORT`` listens and answers whoever spoke last;
 ``udpout:HOST:PORT`` (or ``udp:``) sends to a ground station / MAVLink router. All of it runs on the
@@ -33,7 +33,7 @@ import asyncio
 import logging
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import asdict
 from functools import partial
 from typing import TYPE_CHECKING, Any
@@ -48,6 +48,7 @@ from uav_tui.output.line_budget import LineBudget
 from uav_tui.output.text import describe
 from uav_tui.web.failures import HandlerFailures
 from uav_tui.web.roi import lock_or_roi, point_to_roi, rect_to_roi
+from uav_tui.web.video_streams import VideoStreams, address_toward
 from uav_tui.web.view import ServedCore
 from uav_values.box import PixelBox
 
@@ -114,17 +115,18 @@ class CameraTracking:
         address: ``udpin:HOST:PORT`` or ``udpout:HOST:PORT``.
         system_id: MAVLink system id (the vehicle's, so the ground station groups the camera with it).
         component_id: MAVLink component id (MAV_COMP_ID_CAMERA).
+        videos: the ground-station videos it announces (:mod:`uav_tui.web.video_streams`).
     """
 
     def __init__(self, core: ServedCore, address: str, *, system_id: int = 1,
-                 component_id: int = mavlink.MAV_COMP_ID_CAMERA, video: GroundVideo | None = None) -> None:
+                 component_id: int = mavlink.MAV_COMP_ID_CAMERA, videos: Sequence[GroundVideo] = ()) -> None:
         self.core = core
-        self.video = video
-        """The ground-station video this component announces (VIDEO_STREAM_INFORMATION), None without one."""
         self.address = address
         self.scheme, self.host, self.port = parse_endpoint(address)
         self.mav = mavlink.MAVLink(_Writer(self), srcSystem=system_id, srcComponent=component_id)
         self.mav.robust_parsing = True
+        self.streams = VideoStreams(self.mav, core, videos, self._local_address)
+        """The ground-station videos this component announces (VIDEO_STREAM_INFORMATION), stream ids 1, 2, ..."""
         self.transport: asyncio.DatagramTransport | None = None
         self.peer: tuple[str, int] | None = None if self.scheme == "udpin" else (self.host, self.port)
         self.mode = mavlink.CAMERA_TRACKING_MODE_RECTANGLE
@@ -274,12 +276,8 @@ class CameraTracking:
         if command == mavlink.MAV_CMD_REQUEST_CAMERA_INFORMATION or \
                 requested == mavlink.MAVLINK_MSG_ID_CAMERA_INFORMATION:
             return mavlink.MAV_RESULT_ACCEPTED, self._send_information
-        if self.video is not None and (command == mavlink.MAV_CMD_REQUEST_VIDEO_STREAM_INFORMATION
-                                       or requested == mavlink.MAVLINK_MSG_ID_VIDEO_STREAM_INFORMATION):
-            return mavlink.MAV_RESULT_ACCEPTED, self._send_video_information
-        if self.video is not None and (command == mavlink.MAV_CMD_REQUEST_VIDEO_STREAM_STATUS
-                                       or requested == mavlink.MAVLINK_MSG_ID_VIDEO_STREAM_STATUS):
-            return mavlink.MAV_RESULT_ACCEPTED, self._send_video_status
+        if (answer := self.streams.answer(message, requested, origin)) is not None:
+            return answer
         if requested == mavlink.MAVLINK_MSG_ID_CAMERA_TRACKING_IMAGE_STATUS:
             return mavlink.MAV_RESULT_ACCEPTED, self._send_image_status
         if requested == mavlink.MAVLINK_MSG_ID_CAMERA_TRACKING_GEO_STATUS:
@@ -364,24 +362,11 @@ class CameraTracking:
             size[0], size[1], 0,
             mavlink.CAMERA_CAP_FLAGS_HAS_TRACKING_POINT | mavlink.CAMERA_CAP_FLAGS_HAS_TRACKING_RECTANGLE
             | mavlink.CAMERA_CAP_FLAGS_HAS_TRACKING_GEO_STATUS
-            | (mavlink.CAMERA_CAP_FLAGS_HAS_VIDEO_STREAM if self.video is not None else 0), 0, b"")
+            | (mavlink.CAMERA_CAP_FLAGS_HAS_VIDEO_STREAM if self.streams.videos else 0), 0, b"")
 
-    def _video_fields(self) -> tuple[float, int, int, int, int, int]:
-        """(framerate, width, height, bit rate, rotation, horizontal field of view) of the announced stream."""
-        assert self.video is not None
-        width, height = self.video.size
-        camera = self.core.camera
-        hfov = round(math.degrees(2 * math.atan(camera.width / (2 * camera.fx)))) if camera is not None else 0
-        return self.video.fps, width, height, self.video.kbps * 1000, 0, hfov
-
-    def _send_video_information(self) -> None:
-        assert self.video is not None
-        self.mav.video_stream_information_send(
-            1, 1, mavlink.VIDEO_STREAM_TYPE_RTPUDP, mavlink.VIDEO_STREAM_STATUS_FLAGS_RUNNING, *self._video_fields(),
-            b"uav-tui processed", self.video.receiver_uri.encode(), mavlink.VIDEO_STREAM_ENCODING_H264)
-
-    def _send_video_status(self) -> None:
-        self.mav.video_stream_status_send(1, mavlink.VIDEO_STREAM_STATUS_FLAGS_RUNNING, *self._video_fields())
+    def _local_address(self) -> str:
+        bound = self.transport.get_extra_info("sockname")[0] if self.transport is not None else self.host
+        return address_toward(str(bound), self.peer)
 
 
 def _or_nan(value: float | None) -> float:

@@ -8,6 +8,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from urllib.parse import urlsplit
 
+RTP_UDP, RTSP = "rtp-udp", "rtsp"
+"""The kinds of ground-station stream (a target's ``kind``), as the MAVLink camera component announces them."""
 PAYLOAD_TYPE = 96
 """The RTP payload type of the H.264 stream (FFmpeg's first dynamic one; QGC's and GStreamer's default)."""
 
