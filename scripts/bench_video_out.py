@@ -1,11 +1,12 @@
-"""The ground-station video (``video_out``): latency to a decoding receiver, the CPU it adds, FPS with it on vs off.
+"""The ground-station video: latency to a decoding receiver, the CPU it adds, FPS with it on vs off.
 
 The platform runs a 30 FPS synthetic camera at 640x480 through a processor that draws each frame's capture number
 into it as 24 black or white blocks (its overlay: what the ground station sees); the stream goes at 30 FPS and
-1.5 Mbit/s (``libx264``) to FFmpeg's command-line tool on loopback, which decodes it to raw frames. Each decoded
-frame's number is read back from the blocks: capture (the frame's own stamp) to decoded at the receiver, p50/p95.
-CPU: the platform's process (and the processor's) over the same seconds with the stream on and off, as a share of
-one core; processed FPS on / off. Needs ``ffmpeg`` (Debian's). Prints one JSON object.
+1.5 Mbit/s (``libx264``) to FFmpeg's command-line tool on loopback, which decodes it to raw frames: over RTP/UDP
+(``video_out``), or with ``--rtsp`` from the RTSP server (``video_rtsp_port``, played over TCP as QGC does). Each
+decoded frame's number is read back from the blocks: capture (the frame's own stamp) to decoded at the receiver,
+p50/p95. CPU: the platform's process (and the processor's) over the same seconds with the stream on and off, as a
+share of one core; processed FPS on / off. Needs ``ffmpeg`` (Debian's). Prints one JSON object.
 """
 
 from __future__ import annotations
@@ -66,14 +67,13 @@ def free_udp_port() -> int:
         return int(sock.getsockname()[1])
 
 
-def receiver(port: int, folder: Path, decoded: dict[int, int], stop: threading.Event) -> subprocess.Popen[bytes]:
-    """FFmpeg decoding the stream; a thread stamps each decoded frame's number at its arrival here."""
-    sdp = folder / "stream.sdp"
-    sdp.write_text(Destination("127.0.0.1", port).sdp())
+def receiver(source: list[str], decoded: dict[int, int], stop: threading.Event) -> subprocess.Popen[bytes]:
+    """FFmpeg decoding the stream from ``source`` (its input options); a thread stamps each decoded frame's number
+    at its arrival here."""
     process = subprocess.Popen(["ffmpeg", "-hide_banner", "-loglevel", "error", "-fflags", "nobuffer", "-flags",
-                                "low_delay", "-reorder_queue_size", "0", "-protocol_whitelist", "file,udp,rtp",
-                                "-i", str(sdp), "-f", "rawvideo", "-pix_fmt", "bgr24", "-"],
-                               stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL)
+                                "low_delay", "-reorder_queue_size", "0", *source, "-f", "rawvideo", "-pix_fmt",
+                                "bgr24", "-"], stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+                               stderr=subprocess.DEVNULL)
 
     def read() -> None:
         size = WIDTH * HEIGHT * 3
@@ -86,19 +86,31 @@ def receiver(port: int, folder: Path, decoded: dict[int, int], stop: threading.E
     return process
 
 
-async def run(seconds: float, stream: bool, folder: Path) -> dict[str, Any]:
-    port = free_udp_port()
+def free_tcp_port() -> int:
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return int(sock.getsockname()[1])
+
+
+async def run(seconds: float, stream: bool, rtsp: bool, folder: Path) -> dict[str, Any]:
+    port = free_tcp_port() if rtsp else free_udp_port()
     settings: dict[str, Any] = {"source": f"synthetic:?width={WIDTH}&height={HEIGHT}&fps={FPS}", "fc": "none",
                                 "processor": f"{folder / 'numbered.py'}:Numbered", "record": False}
     if stream:
-        settings |= {"video_out": f"rtp://127.0.0.1:{port}", "video_out_width": WIDTH, "video_out_fps": FPS,
-                     "video_out_kbps": KBPS}
+        settings |= {"video_rtsp_port": port} if rtsp else {"video_out": f"rtp://127.0.0.1:{port}"}
+        settings |= {"video_out_width": WIDTH, "video_out_fps": FPS, "video_out_kbps": KBPS}
     captured: dict[int, int] = {}
     decoded: dict[int, int] = {}
     stop = threading.Event()
-    listening = receiver(port, folder, decoded, stop) if stream else None
+    listening = None
+    if stream and not rtsp:  # RTP: listening before the first packet
+        sdp = folder / "stream.sdp"
+        sdp.write_text(Destination("127.0.0.1", port).sdp())
+        listening = receiver(["-protocol_whitelist", "file,udp,rtp", "-i", str(sdp)], decoded, stop)
     core = UavCore(load_config(None, settings))
     await core.start()
+    if stream and rtsp:  # RTSP: the client connects to the platform's server
+        listening = receiver(["-rtsp_transport", "tcp", "-i", f"rtsp://127.0.0.1:{port}/video"], decoded, stop)
 
     def seen(result: ProcessedFrame) -> None:
         captured[result.frame.seq] = result.frame.t_mono_ns
@@ -114,7 +126,8 @@ async def run(seconds: float, stream: bool, folder: Path) -> dict[str, Any]:
         wall = time.monotonic() - wall0
         cpu = sum(sum(p.cpu_times()[:2]) for p in (me, child) if p) - cpu0
         last = max(captured, default=0)
-        video = core.side_channels.video.status() if core.side_channels.video else None
+        sending = core.side_channels.rtsp if rtsp else core.side_channels.video
+        video = sending.status() if sending else None
     finally:
         await core.stop("benchmark done")
         stop.set()
@@ -136,18 +149,21 @@ async def run(seconds: float, stream: bool, folder: Path) -> dict[str, Any]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seconds", type=float, default=10.0)
+    parser.add_argument("--rtsp", action="store_true", help="the RTSP stream (video_rtsp_port), not RTP/UDP")
     args = parser.parse_args()
     if shutil.which("ffmpeg") is None:
         parser.error("needs Debian's ffmpeg as the receiver: apt-get install ffmpeg")
     with tempfile.TemporaryDirectory() as folder:
         (Path(folder) / "numbered.py").write_text(NUMBERED)
-        off = asyncio.run(run(args.seconds, False, Path(folder)))
-        on = asyncio.run(run(args.seconds, True, Path(folder)))
+        off = asyncio.run(run(args.seconds, False, args.rtsp, Path(folder)))
+        on = asyncio.run(run(args.seconds, True, args.rtsp, Path(folder)))
     latency = on["latency_ms"]["p95"] if on.get("latency_ms") else None
     extra = round(on["core_share"] - off["core_share"], 3)
     ratio = round(on["processed_fps"] / off["processed_fps"], 3)
     print(json.dumps({
-        "benchmark": "video_out", "size": f"{WIDTH}x{HEIGHT}", "fps": FPS, "kbps": KBPS, "cpus": os.cpu_count(),
+        "benchmark": "video_out_rtsp" if args.rtsp else "video_out",
+        "transport": "RTSP, played over TCP" if args.rtsp else "RTP/UDP", "size": f"{WIDTH}x{HEIGHT}",
+        "fps": FPS, "kbps": KBPS, "cpus": os.cpu_count(),
         "load_average_1min_at_end": round(os.getloadavg()[0], 2), "off": off, "on": on,
         "goals": {"capture to decoded p95 (ms)": {"goal": f"<= {GOALS['latency_p95_ms']:g}", "value": latency,
                                                   "pass": latency is not None and latency <= GOALS["latency_p95_ms"]},

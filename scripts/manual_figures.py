@@ -5,6 +5,7 @@
     .venv/bin/python scripts/bench_geolocation.py > scripts/results/geolocation.json
     .venv/bin/uav-tui bench --out scripts/results/bench.json
     .venv/bin/python scripts/bench_video_out.py > scripts/results/video_out.json
+    .venv/bin/python scripts/bench_video_out.py --rtsp > scripts/results/video_out_rtsp.json
     .venv/bin/python scripts/manual_figures.py           # rewrites the marked blocks of docs/benchmarks.md
     .venv/bin/python scripts/manual_figures.py --check   # exit 1 when docs/benchmarks.md differs from the JSON
 
@@ -159,7 +160,8 @@ def bench(result: dict[str, Any]) -> str:
 
 
 def video_out(result: dict[str, Any]) -> str:
-    """``bench_video_out.py``: latency to a decoding receiver, the CPU the stream adds, FPS on / off."""
+    """``bench_video_out.py`` (RTP/UDP, or ``--rtsp``): latency to a decoding receiver, the CPU the stream adds, FPS
+    on / off."""
     on, off, latency = result["on"], result["off"], result["on"]["latency_ms"]
     rows = ["| measure | value |", "| --- | --- |",
             f"| capture to decoded at the receiver, p50 / p95 / max | {latency['p50']} / {latency['p95']} / "
@@ -169,16 +171,19 @@ def video_out(result: dict[str, Any]) -> str:
             f"| processed FPS, stream off / on | {off['processed_fps']} / {on['processed_fps']} |",
             f"| frames sent / slots missed / errors | {on['video']['sent']} / {on['video']['dropped']} / "
             f"{on['video']['errors']} |"]
-    notes = [f"{result['size']} at {result['fps']} FPS, {result['kbps']} kbit/s, `{on['video']['encoder']}`, "
-             f"{on['decoded_frames']} frames decoded by FFmpeg on loopback; load average "
-             f"{result['load_average_1min_at_end']:g} on {result['cpus']} cores at the end.", "",
+    if "unsent" in on["video"]:
+        rows.append(f"| frames to no client (before the receiver played, or its queue full) | "
+                    f"{on['video']['unsent']} |")
+    notes = [f"{result.get('transport', 'RTP/UDP')}: {result['size']} at {result['fps']} FPS, {result['kbps']} "
+             f"kbit/s, `{on['video']['encoder']}`, {on['decoded_frames']} frames decoded by FFmpeg on loopback; "
+             f"load average {result['load_average_1min_at_end']:g} on {result['cpus']} cores at the end.", "",
              *(f"- {line}" for line in _verdicts(result))]
     return "\n".join([*rows, "", *notes]) + "\n"
 
 
 RENDERERS: dict[str, Callable[[dict[str, Any]], str]] = {"tracking": tracking, "precland": precland,
                                                          "geolocation": geolocation, "bench": bench,
-                                                         "video_out": video_out}
+                                                         "video_out": video_out, "video_out_rtsp": video_out}
 """Block name -> how its JSON (``scripts/results/NAME.json``) is written into the page."""
 
 

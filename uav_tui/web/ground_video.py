@@ -50,8 +50,12 @@ def choose_encoder() -> str:
     return "libx264"
 
 
-def configure_encoder(context: Any, encoder: str, width: int, height: int, fps: float, kbps: int) -> None:
-    """Set up an H.264 encoder's codec context for a live stream: a key frame and the parameters each second."""
+def configure_encoder(context: Any, encoder: str, width: int, height: int, fps: float, kbps: int, *,
+                      one_slice: bool = False) -> None:
+    """Set up an H.264 encoder's codec context for a live stream: a key frame and the parameters each second.
+
+    ``one_slice``: ``libx264`` on one thread, each frame one slice (else one slice a thread, for latency).
+    """
     context.width, context.height, context.pix_fmt = width, height, "yuv420p"
     context.framerate = fractions.Fraction(round(fps))
     context.bit_rate = kbps * 1000
@@ -59,7 +63,8 @@ def configure_encoder(context: Any, encoder: str, width: int, height: int, fps: 
     context.gop_size = max(1, round(fps))
     if encoder == "libx264":
         context.options = {"preset": "ultrafast", "tune": "zerolatency",
-                           "x264-params": f"keyint={max(1, round(fps))}:repeat-headers=1"}
+                           "x264-params": f"keyint={max(1, round(fps))}:repeat-headers=1"
+                                          + (":threads=1" if one_slice else "")}
 
 
 def stamp(frame: Any, started: float) -> None:

@@ -164,7 +164,9 @@ class _RtspOutput:
 
         self._server = server
         self._codec: Any = av.CodecContext.create(encoder, "w")
-        configure_encoder(self._codec, encoder, width, height, fps, kbps)
+        # One slice a frame: FFmpeg's RTSP client decoded the first of x264's two slices of each P-frame from this
+        # server's payloader as grey (measured at 640x480); on one thread p95 stays at 106 ms, CPU the same.
+        configure_encoder(self._codec, encoder, width, height, fps, kbps, one_slice=True)
         self._key = av.video.frame.PictureType.I
         self._started = time.monotonic()
 
