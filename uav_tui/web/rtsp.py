@@ -2,24 +2,25 @@
 
 :class:`RtspServer` is a :class:`~uav_tui.web.ground_video.Target`: the platform's own encoder (PyAV, as for RTP)
 makes the H.264; the server only packs it into RTP and serves it to each client that asks for
-``rtsp://HOST:PORT/PATH`` (over TCP or UDP, as the client chooses; QGC and VLC ask the same way). Its pipeline
+``rtsp://HOST:PORT/PATH`` (over TCP or UDP, as the client chooses). Its pipeline
 is ``appsrc ! rtph264pay``, one for all clients (shared), made when the first client plays and dropped when the
 last one leaves. The server runs its own GLib main loop in the ``rtsp-server`` thread; the encoding thread only
-hands it finished frames, never waiting: with no client nothing is encoded, and a frame that finds the server's
-queue full (a client slower than the stream) goes to no one, counted by the :class:`GroundVideo`. A client that
+hands it finished frames, never waiting: with no client nothing is encoded, and a frame that finds the pipeline's
+queue full goes to no one, counted by the :class:`GroundVideo`. A client slower than the stream over TCP loses
+packets from the server's own backlog instead (gst-rtsp-server's ``drop-backlog``, its default; not measured
+here): its picture is damaged until the next key frame, within a second. A client that
 joins gets a key frame next. A connection that closes without a TEARDOWN (a receiver killed) ends its session
 at once (0.1 s after the kill here, over TCP and UDP alike): the server stops sending to it.
 
 Why GStreamer's server: FFmpeg's RTSP muxer is a client (ANNOUNCE / RECORD to a server); its ``listen`` flag is
-its demuxer's only (the muxer still connects out: "Connection refused"). A server package from PyPI would be a
-young one; gst-rtsp-server is the one Rpanion-server and most drone video stacks use, from Debian's packages.
+its demuxer's only (the muxer still connects out: "Connection refused"). The RTSP server packages on PyPI are
+young; gst-rtsp-server is GStreamer's own, maintained with it, in Debian's packages.
 PyGObject comes from Debian (``python3-gi``): PyPI's builds from source only (a compiler, GLib's and cairo's
 headers). ``scripts/setup.sh`` links it into the venv.
 """
 
 from __future__ import annotations
 
-import logging
 import threading
 import time
 import warnings
@@ -28,8 +29,6 @@ from typing import Any
 from uav_tui.errors import ConfigError
 from uav_tui.web.ground_video import configure_encoder, stamp
 from uav_tui.web.rtp import RTSP
-
-logger = logging.getLogger(__name__)
 
 QUEUE_FRAMES = 3
 """Frames the server's queue holds for its clients; a frame that finds it full goes to no one."""
