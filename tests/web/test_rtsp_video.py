@@ -10,6 +10,7 @@ import asyncio
 import shutil
 import socket
 import subprocess
+from itertools import pairwise
 from typing import Any
 
 import numpy as np
@@ -18,7 +19,7 @@ from pymavlink.dialects.v20 import common as mavlink
 
 from tests.web.conftest import free_port, make_core
 from tests.web.test_camera_tracking import GroundStation
-from tests.web.test_ground_video import MARK, SIZE
+from tests.web.test_ground_video import MARK, SIZE, Marks
 from uav_tui.config import load_config
 from uav_tui.errors import ConfigError
 from uav_tui.web.ground_video import GroundVideo
@@ -37,6 +38,30 @@ def _rtsp_server_missing() -> str | None:
 
 
 pytestmark = pytest.mark.skipif(bool(_rtsp_server_missing()), reason=str(_rtsp_server_missing()))
+
+
+BITS, BLOCK = 8, 20
+"""The frame's number, drawn as 8 black or white 20 px blocks along the top."""
+
+
+class Counts(Marks):
+    """The red square, and each frame's number along the top: a picture that changes in every slice of every frame
+    (a decoder that lost part of a frame shows the part before)."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.frames = 0
+
+    def photo_processing(self, frame: Any) -> None:
+        super().photo_processing(frame)
+        self.frames += 1
+        for bit in range(BITS):
+            frame[:BLOCK, bit * BLOCK:(bit + 1) * BLOCK] = 255 if self.frames >> bit & 1 else 0
+
+
+def number(frame: np.ndarray) -> int:
+    means = frame[4:BLOCK - 4, :BITS * BLOCK].reshape(BLOCK - 8, BITS, BLOCK, 3)[:, :, 4:BLOCK - 4].mean(axis=(0, 2, 3))
+    return sum(1 << bit for bit in range(BITS) if means[bit] > 128)
 
 
 def play(uri: str, frames: int | None) -> subprocess.Popen[bytes]:
@@ -58,6 +83,8 @@ def assert_marked(frames: np.ndarray) -> None:
         inside = frame[MARK].reshape(-1, 3).mean(axis=0)
         assert inside[2] > 200 and inside[:2].max() < 60, inside
         assert frame[MARK[0].start - 20, MARK[1].start - 20, 2] < 200
+    numbers = [number(frame) for frame in frames]  # each a newer frame, within a second (the camera makes 30)
+    assert all(0 < (b - a) % 2**BITS < 30 for a, b in pairwise(numbers)), numbers
 
 
 async def until(check: Any, timeout_s: float = 10.0) -> None:
@@ -69,7 +96,7 @@ async def until(check: Any, timeout_s: float = 10.0) -> None:
 async def test_a_ground_station_plays_the_announced_rtsp_stream_and_a_killed_one_costs_nothing() -> None:
     mavlink_port, video_port, rtsp_port = free_port(socket.SOCK_DGRAM), free_port(socket.SOCK_DGRAM), free_port()
     core = make_core(web=False, source=f"synthetic:?width={SIZE[0]}&height={SIZE[1]}&fps=30",
-                     processor="tests.web.test_ground_video:Marks", camera_mavlink=f"udpin:127.0.0.1:{mavlink_port}",
+                     processor="tests.web.test_rtsp_video:Counts", camera_mavlink=f"udpin:127.0.0.1:{mavlink_port}",
                      video_out=f"rtp://127.0.0.1:{video_port}", video_rtsp_port=rtsp_port, video_rtsp_path="/live/uav",
                      video_out_width=SIZE[0], video_out_fps=10)
     await core.start()
