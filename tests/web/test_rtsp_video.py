@@ -142,6 +142,17 @@ async def test_a_ground_station_plays_the_announced_rtsp_stream_and_a_killed_one
     assert core.side_channels.rtsp is None
 
 
+def test_a_closed_server_frees_its_port_for_the_next_start() -> None:
+    from uav_tui.web.rtsp import RtspServer
+
+    first = RtspServer(0, "/video", "127.0.0.1")
+    first.close()
+    again = RtspServer(first.port, "/video", "127.0.0.1")  # a core restarted in the same process (the TUI)
+    assert again.port == first.port
+    again.close()
+    again.close()  # idempotent
+
+
 @pytest.mark.parametrize("path", ["video", "/", "/a b", "/x/"], ids=["no slash", "empty", "space", "trailing"])
 def test_an_rtsp_path_that_is_no_path_is_refused_at_start(path: str) -> None:
     with pytest.raises(ConfigError, match="video_rtsp_path .* must be a path such as /video"):

@@ -89,7 +89,9 @@ class RtspServer:
         self._server.get_mount_points().add_factory(path, factory)
         self._context = glib.MainContext.new()
         self._loop = glib.MainLoop.new(self._context, False)
-        if self._server.attach(self._context) == 0:
+        self._listening = self._server.attach(self._context)
+        """The id of the server's listening socket's source in the context (0: it could not listen)."""
+        if self._listening == 0:
             raise ConfigError(f"video_rtsp_port {port}: the RTSP server cannot listen on {host}:{port} (in use, "
                               "or below 1024 without the right)", key="video_rtsp_port")
         if port == 0:
@@ -126,14 +128,15 @@ class RtspServer:
         return joined
 
     def close(self) -> None:
-        """Stop serving: the clients' connections close. Idempotent."""
-        if self._loop.is_running():
+        """Stop serving: the clients' connections close, and the port is free again. Idempotent."""
+        if self._thread.is_alive():
             self._context.invoke_full(0, self._quit)
-        self._thread.join(timeout=2.0)
+            self._thread.join(timeout=2.0)
 
     def _quit(self) -> bool:
         for client in self._server.client_filter(None):
             client.close()
+        self._context.find_source_by_id(self._listening).destroy()  # closes the listening socket
         self._loop.quit()
         return False
 
@@ -141,12 +144,14 @@ class RtspServer:
 
     def _configure(self, _factory: Any, media: Any) -> None:
         """The first client of a new shared pipeline: its appsrc takes the frames from now on."""
-        media.connect("unprepared", self._unprepared)
-        self._source = media.get_element().get_by_name("src")
+        source = media.get_element().get_by_name("src")
+        media.connect("unprepared", self._unprepared, source)
+        self._source = source
         self._joined = True
 
-    def _unprepared(self, _media: Any) -> None:
-        self._source = None
+    def _unprepared(self, _media: Any, source: Any) -> None:
+        if self._source is source:  # not a newer pipeline's, made before this one was undone
+            self._source = None
 
     def _connected(self, _server: Any, client: Any) -> None:
         client.connect("play-request", self._playing)
