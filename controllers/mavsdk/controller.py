@@ -11,7 +11,6 @@ from typing import Any, TypeVar
 
 from mavsdk.asyncio import ComponentType, Configuration, Mavsdk, System
 from mavsdk.asyncio.plugins.action import ActionAsync, OrbitYawBehavior
-from mavsdk.asyncio.plugins.geofence import FenceType, GeofenceAsync
 from mavsdk.asyncio.plugins.mavlink_direct import MavlinkDirectAsync
 from mavsdk.asyncio.plugins.param import ParamAsync
 from mavsdk.asyncio.plugins.telemetry import TelemetryAsync
@@ -26,15 +25,14 @@ from controllers.landing_target_message import LandingTargetFix
 from controllers.mavsdk import ardupilot
 from controllers.mavsdk.attach import SETUP_TIMEOUT_S, ask_for_telemetry, reach_autopilot
 from controllers.mavsdk.calls import AbandoningExecutor, Subscriptions, bounded, release, use_abandoning_executor
+from controllers.mavsdk.geofence import download_plan
 from controllers.mavsdk.gimbal import MavsdkGimbal
 from controllers.mavsdk.landing import MavsdkLanding
 from controllers.mavsdk.link import LinkMonitor
-from controllers.mavsdk.link_quality import link_readers
 from controllers.mavsdk.log import route_mavsdk_log
 from controllers.mavsdk.offboard import MavsdkOffboard
 from controllers.mavsdk.pose import POSE_RATE_HZ, pose_samples, request_pose_rate
-from controllers.mavsdk.telemetry import merged_updates
-from controllers.mavsdk.terrain import terrain_reports
+from controllers.mavsdk.telemetry import merged_updates, message_readers
 from controllers.mavsdk.vector_stream import DEFAULT_RATE_HZ, VectorStream
 from controllers.precland_requirements import LANDING_MODES
 from controllers.vector_end import VectorEnd
@@ -86,7 +84,6 @@ class MavsdkController(ReadsFence):
         self._telemetry: TelemetryAsync
         self._param: ParamAsync
         self._direct: MavlinkDirectAsync
-        self._geofence: GeofenceAsync
         self._link: LinkMonitor | None = None
         self._executor: AbandoningExecutor | None = None
         self._stop = asyncio.Event()
@@ -134,7 +131,6 @@ class MavsdkController(ReadsFence):
         self._system, self._sysid, self.autopilot = reached.system, reached.sysid, reached.autopilot
         self._action, self._telemetry, self._param, self._direct = (reached.action, reached.telemetry, reached.param,
                                                                     reached.direct)
-        self._geofence = GeofenceAsync(reached.system)
         self._link = LinkMonitor(self._direct, self._telemetry, self._sysid, self._subscriptions)
         self._link.start()
         self._landing = MavsdkLanding(reached, self._command)
@@ -203,10 +199,8 @@ class MavsdkController(ReadsFence):
         return ParamAccess(self._param, lambda name, call: bounded(name, call, PARAM_TIMEOUT_S, self.heartbeat_age_s))
 
     async def _fence_plan(self) -> FencePlan:
-        data = await self._command("download_geofence", self._geofence.download_geofence)
-        kinds = [area.fence_type for area in (*data.polygons, *data.circles)]
-        return FencePlan(sum(kind == FenceType.INCLUSION for kind in kinds),
-                         sum(kind == FenceType.EXCLUSION for kind in kinds))
+        assert self._system is not None  # read after connect()
+        return await self._command("download_geofence", functools.partial(download_plan, self._system))
 
     # ---- commands --------------------------------------------------------------------------------
 
@@ -297,13 +291,11 @@ class MavsdkController(ReadsFence):
     # ---- landing target -------------------------------------------------------------------------
 
     async def send_landing_target(self, fix: LandingTargetFix) -> dict[str, Any]:
-        """Send LANDING_TARGET for a target seen in the frame captured at ``fix.capture_mono_ns``; returns the fields
-        sent (see :meth:`MavsdkLanding.send <controllers.mavsdk.landing.MavsdkLanding.send>`)."""
+        """LANDING_TARGET for ``fix``'s target; the fields sent (:meth:`.MavsdkLanding.send`)."""
         return await self._connected_landing("landing_target").send(fix)
 
     async def precision_land(self) -> str:
-        """Land on the landing target sent with :meth:`send_landing_target`; returns what was done (see
-        :meth:`MavsdkLanding.precision_land <controllers.mavsdk.landing.MavsdkLanding.precision_land>`)."""
+        """Land on the target sent last; what was done (:meth:`.MavsdkLanding.precision_land`)."""
         return await self._connected_landing("precland").precision_land(self.land, self._vectors.stop_and_hold)
 
     @property
@@ -345,10 +337,8 @@ class MavsdkController(ReadsFence):
             more.append(link.follow_modes)  # MAVSDK's names, and HEARTBEAT's where MAVSDK has none
         if gimbal is not None:
             more.append(lambda put: gimbal.read_attitude(self._subscriptions, put))
-        more.append(lambda put: self._subscriptions.read(  # ArduPilot's height above the terrain
-            terrain_reports(self._direct, self._sysid), put, "telemetry-terrain-report"))
-        for name, reader in link_readers(self._direct, self._sysid).items():  # RC and radio signal
-            more.append(functools.partial(self._subscriptions.read, reader, name=name))
+        more += [functools.partial(self._subscriptions.read, reader, name=name)
+                 for name, reader in message_readers(self._direct, self._sysid).items()]
         async for update in merged_updates(self._telemetry, self.heartbeat_age_s, self._stop, self._subscriptions,
                                            more):
             yield update

@@ -20,13 +20,15 @@ import asyncio
 import logging
 import math
 import time
-from collections.abc import AsyncIterator, Callable, Sequence
+from collections.abc import AsyncGenerator, AsyncIterator, Callable, Sequence
 from typing import Any
 
+from mavsdk.asyncio.plugins.mavlink_direct import MavlinkDirectAsync
 from mavsdk.asyncio.plugins.telemetry import TelemetryAsync
 
 from controllers.mavsdk.calls import Subscriptions
-from controllers.mavsdk.terrain import from_altitude
+from controllers.mavsdk.link_quality import link_readers
+from controllers.mavsdk.terrain import from_altitude, terrain_reports
 
 logger = logging.getLogger(__name__)
 
@@ -158,6 +160,12 @@ async def set_rates(telemetry: TelemetryAsync, rates: dict[str, float] = RATES_H
     if failed:
         logger.info("telemetry rates not accepted by the autopilot: %s", failed)
     return failed
+
+
+def message_readers(direct: MavlinkDirectAsync, system_id: int) -> dict[str, AsyncGenerator[Update, None]]:
+    """Telemetry MAVSDK has no stream for, read from the autopilot's (``system_id``'s) raw messages (task name ->
+    updates): ArduPilot's height above the terrain, the RC receiver's and the telemetry radio's signal."""
+    return {"telemetry-terrain-report": terrain_reports(direct, system_id), **link_readers(direct, system_id)}
 
 
 async def merged_updates(

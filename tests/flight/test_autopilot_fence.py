@@ -6,6 +6,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from mavsdk.asyncio.plugins.geofence import GeofenceAsync
 from mavsdk.plugins.geofence import Circle, FenceType, GeofenceData, Point, Polygon
 
 from controllers.autopilots import Autopilot
@@ -80,7 +81,7 @@ async def test_a_px4_geofence_plan_counts_as_a_fence_where_gf_action_acts_on_it(
         assert core.events.recent[-2].message == ("autopilot fence: none (GF_MAX_HOR_DIST and GF_MAX_VER_DIST are 0, "
                                                   "no geofence plan)")
         corners = [Point(47.3975, 8.5455), Point(47.3985, 8.5455), Point(47.3985, 8.5465), Point(47.3975, 8.5465)]
-        await controller._geofence.upload_geofence(GeofenceData(  # type: ignore[union-attr]
+        await GeofenceAsync(controller._system).upload_geofence(GeofenceData(  # type: ignore[union-attr]
             polygons=[Polygon(corners, FenceType.INCLUSION)],
             circles=[Circle(Point(47.3979, 8.5461), 5.0, FenceType.EXCLUSION)]))
         await core.gate.check_autopilot_failsafe()  # as at the next connect
