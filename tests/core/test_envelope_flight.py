@@ -7,14 +7,16 @@ from __future__ import annotations
 
 import asyncio
 import math
+import os
 import re
+import signal
 import time
 from pathlib import Path
 from typing import Any
 
 import pytest
 
-from tests.core.flight_helpers import flying_core, speed, wait_until
+from tests.core.flight_helpers import flying_core, moving, setpoints_since, speed, wait_until
 from tests.flight.test_envelope import polygon_file
 from uav_tui.errors import UavError
 from uav_tui.flight.envelope_shape import Polygon
@@ -196,3 +198,26 @@ async def test_a_lost_target_with_last_seen_flies_back_to_where_it_was_last_seen
         state = core.truth.latest()
         assert math.dist(last_seen, (state["n"], state["e"])) < 0.5
         assert state["mode"] == "HOLD" and not core.controller.vector_active
+
+
+async def test_flying_back_stops_when_the_link_goes_quiet(tmp_path: Path) -> None:
+    """No vector is flown on a position older than ``link_timeout``: frozen mid-way back (SIGSTOP: the link is up,
+    nothing answers), the flight back ends saying why, and sends nothing more once the simulator runs again."""
+    async with flying_core(tmp_path, processor=pushing(tmp_path), lost_after_s=1.0, lost_action="last_seen",
+                           link_timeout=1.0) as core:
+        await core.execute("f 3")
+        await core.execute("autonomy on")
+        await wait_until(lambda: core.truth.latest()["e"] > 1.5, 10, "the vehicle flying east")
+        await core.execute("f 4")
+        await wait_until(lambda: not core.gate.enabled, 5, "autonomy to end with the target lost")
+        sim = core.controller.sim  # type: ignore[union-attr]
+        os.kill(sim.pid, signal.SIGSTOP)
+        try:
+            await wait_until(lambda: any("stopped: the link is quiet" in e.message for e in core.events.recent), 10,
+                             "the flight back to stop")
+        finally:
+            os.kill(sim.pid, signal.SIGCONT)
+        resumed_ns = time.monotonic_ns()
+        await asyncio.sleep(1.5)
+        assert not any(e.message.startswith("back at where") for e in core.events.recent)
+        assert not moving(await setpoints_since(core.truth, resumed_ns + 600_000_000))  # the last vector's 0.5 s

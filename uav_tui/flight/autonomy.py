@@ -317,7 +317,8 @@ class AutonomyGate:
         if breach.action == "last_seen" and breach.point is not None and self.controller is not None:
             self._flying_back = asyncio.create_task(fly_back(
                 self.controller, self.telemetry, self.envelope, self.events, breach.point,
-                max_speed=self.safety.max_speed, modes=own_modes(self.controller)), name="fly back")
+                max_speed=self.safety.max_speed, link_timeout=self.safety.link_timeout,
+                modes=own_modes(self.controller)), name="fly back")
         elif breach.action != "hold" and self.controller is not None:
             try:
                 await carry_out(self.controller, breach.action)

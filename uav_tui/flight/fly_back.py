@@ -3,8 +3,10 @@
 The controller contract has no go-to (:class:`controllers.base.FlightController`), so the vehicle is flown back
 with its own vectors: a short body-frame vector towards the point every :data:`STEP_S`, recomputed from the newest
 telemetry, slowing over the last metres, kept inside the envelope's radius and polygon; then it holds. It lets go
-without a hold when the flight mode leaves the platform's own (a pilot, a mission or a failsafe has the vehicle),
-and holds where it is when the position is lost, the envelope refuses the way or the time it allows runs out.
+without a hold when the flight mode leaves the platform's own (a pilot, a mission or a failsafe has the vehicle) or
+the link goes quiet (the heartbeat older than ``link_timeout``: no vector is flown on a position that old; the last
+one ends within :data:`VECTOR_S` and the autopilot's own link-loss action follows), and holds where it is when the
+position is lost, the envelope refuses the way or the time it allows runs out.
 """
 
 from __future__ import annotations
@@ -37,7 +39,8 @@ SPARE_S = 10.0
 
 
 async def fly_back(controller: FlightController, telemetry: TelemetryManager, envelope: Envelope,
-                   events: EventLog, point: Point, *, max_speed: float, modes: frozenset[str]) -> None:
+                   events: EventLog, point: Point, *, max_speed: float, link_timeout: float,
+                   modes: frozenset[str]) -> None:
     """Fly to ``point`` (north, east from home) at up to ``max_speed`` and hold there; see the module docstring."""
     north, east = point
     where = f"where the target was last seen ({north:.1f} m N, {east:.1f} m E)"
@@ -47,6 +50,11 @@ async def fly_back(controller: FlightController, telemetry: TelemetryManager, en
         if t.flight_mode not in modes:
             events.emit("warning", "autonomy", f"flying back to {where} stopped: the vehicle is in {t.flight_mode} "
                         "mode (the pilot, a mission or a failsafe has it)", "envelope")
+            return
+        if (age := t.heartbeat_age_s) is None or age >= link_timeout:
+            events.emit("warning", "autonomy", f"flying back to {where} stopped: the link is quiet (heartbeat "
+                        f"{'never heard' if age is None else f'{age:.1f} s old'}); the autopilot's link-loss action "
+                        "has the vehicle", "envelope")
             return
         if t.north_m is None or t.east_m is None or t.yaw_deg is None:
             note = "no position or heading"
