@@ -22,12 +22,15 @@ import shutil
 import signal
 import socket
 import subprocess
+import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import pytest
+from pymavlink import mavutil
 
 SITL_DIR = Path(os.environ.get("SITL_DIR", Path.home() / "sitl")).expanduser()
 PX4_BIN = Path(os.environ.get("PX4_SITL_BIN", SITL_DIR / "px4/build/px4_sitl_default/bin/px4")).expanduser()
@@ -140,3 +143,43 @@ def wait_listening(sitl: Sitl, port: int, timeout_s: float = 30.0) -> None:
             return
         time.sleep(0.2)
     raise RuntimeError(f"{sitl.name} SITL not listening on TCP {port} after {timeout_s:g} s:\n{sitl.log_tail()}")
+
+
+class SecondLink:
+    """A second MAVLink client of the autopilot (system 1, component 1) on its own link, as an independent judge.
+
+    Every second it sends a heartbeat (PX4 answers the last sender on its GCS port) and asks for ``stream`` at
+    ``rate_hz`` (ArduCopter streams nothing until asked); each message of ``kinds`` from the autopilot goes to
+    ``on_message``, on the link's own thread, until :meth:`close`.
+    """
+
+    def __init__(self, url: str, source_system: int, stream: str, kinds: list[str],
+                 on_message: Callable[[Any], None], name: str, rate_hz: float = 10.0) -> None:
+        self.link = mavutil.mavlink_connection(url, source_system=source_system)
+        self._stream = getattr(mavutil.mavlink, f"MAVLINK_MSG_ID_{stream}")
+        self._interval_us = round(1e6 / rate_hz)
+        self._kinds, self._on_message = kinds, on_message
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._read, name=name, daemon=True)
+        self._thread.start()
+
+    def _ask(self) -> None:
+        mav = self.link.mav
+        mav.heartbeat_send(mavutil.mavlink.MAV_TYPE_GCS, mavutil.mavlink.MAV_AUTOPILOT_INVALID, 0, 0, 0)
+        mav.command_long_send(1, 1, mavutil.mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, 0, self._stream, self._interval_us,
+                              0, 0, 0, 0, 0)
+
+    def _read(self) -> None:
+        asked = 0.0
+        while not self._stop.is_set():
+            if time.monotonic() - asked > 1.0:
+                self._ask()
+                asked = time.monotonic()
+            msg = self.link.recv_match(type=self._kinds, blocking=True, timeout=0.2)
+            if msg is not None and msg.get_srcSystem() == 1 and msg.get_srcComponent() == 1:
+                self._on_message(msg)
+
+    def close(self) -> None:
+        self._stop.set()
+        self._thread.join(timeout=2)
+        self.link.close()

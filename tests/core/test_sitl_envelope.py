@@ -14,11 +14,11 @@ import os
 import signal
 import subprocess
 import sys
-import threading
 import time
 from collections.abc import Callable
 from contextlib import AbstractContextManager
 from pathlib import Path
+from typing import Any
 
 import pytest
 from pymavlink import mavutil
@@ -59,53 +59,33 @@ class Forward:
 
 
 class Observer:
-    """A second MAVLink client: the autopilot's GLOBAL_POSITION_INT and HEARTBEAT, on their own link."""
+    """The autopilot's GLOBAL_POSITION_INT and HEARTBEAT, read on a second link (:class:`tests.sitl.SecondLink`)."""
 
     def __init__(self, url: str) -> None:
-        self.link = mavutil.mavlink_connection(url, source_system=203)
         self.home: tuple[float, float] | None = None
         """(lat, lon) of the last position before arming."""
         self.farthest_m = 0.0
         """The largest horizontal distance from :attr:`home` while armed."""
         self.armed = False
         self.flown_and_disarmed = False
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._read, name="envelope-observer", daemon=True)
-        self._thread.start()
+        self.link = sitl.SecondLink(url, 203, "GLOBAL_POSITION_INT", ["GLOBAL_POSITION_INT", "HEARTBEAT"],
+                                    self._on_message, "envelope-observer")
 
-    def _ask(self) -> None:
-        """Heartbeat (PX4 answers the last sender on its GCS port) and 10 Hz GLOBAL_POSITION_INT (ArduCopter
-        streams nothing until asked)."""
-        mav = self.link.mav
-        mav.heartbeat_send(mavutil.mavlink.MAV_TYPE_GCS, mavutil.mavlink.MAV_AUTOPILOT_INVALID, 0, 0, 0)
-        mav.command_long_send(1, 1, mavutil.mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, 0,
-                              mavutil.mavlink.MAVLINK_MSG_ID_GLOBAL_POSITION_INT, 100_000, 0, 0, 0, 0, 0)
-
-    def _read(self) -> None:
-        asked = 0.0
-        while not self._stop.is_set():
-            if time.monotonic() - asked > 1.0:
-                self._ask()
-                asked = time.monotonic()
-            msg = self.link.recv_match(type=["GLOBAL_POSITION_INT", "HEARTBEAT"], blocking=True, timeout=0.2)
-            if msg is None or msg.get_srcSystem() != 1 or msg.get_srcComponent() != 1:
-                continue
-            if msg.get_type() == "HEARTBEAT":
-                armed = bool(msg.base_mode & mavutil.mavlink.MAV_MODE_FLAG_SAFETY_ARMED)
-                self.flown_and_disarmed |= self.armed and not armed and self.farthest_m > 1.0
-                self.armed = armed
-                continue
-            position = (msg.lat / 1e7, msg.lon / 1e7)
-            if position == (0.0, 0.0):
-                continue  # ArduCopter before its first fix
-            if not self.armed and self.farthest_m == 0.0:
-                self.home = position
-            elif self.home is not None:
-                self.farthest_m = max(self.farthest_m, distance_m(self.home, position))
+    def _on_message(self, msg: Any) -> None:
+        if msg.get_type() == "HEARTBEAT":
+            armed = bool(msg.base_mode & mavutil.mavlink.MAV_MODE_FLAG_SAFETY_ARMED)
+            self.flown_and_disarmed |= self.armed and not armed and self.farthest_m > 1.0
+            self.armed = armed
+            return
+        position = (msg.lat / 1e7, msg.lon / 1e7)
+        if position == (0.0, 0.0):
+            return  # ArduCopter before its first fix
+        if not self.armed and self.farthest_m == 0.0:
+            self.home = position
+        elif self.home is not None:
+            self.farthest_m = max(self.farthest_m, distance_m(self.home, position))
 
     def close(self) -> None:
-        self._stop.set()
-        self._thread.join(timeout=2)
         self.link.close()
 
 

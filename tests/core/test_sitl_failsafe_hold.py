@@ -17,11 +17,11 @@ from __future__ import annotations
 
 import math
 import signal
-import threading
 import time
 from collections.abc import Callable
 from contextlib import AbstractContextManager
 from pathlib import Path
+from typing import Any
 
 import pytest
 from pymavlink import mavutil
@@ -46,39 +46,24 @@ Sample = tuple[float, float, float, float]
 
 
 class Track:
-    """A second MAVLink client recording LOCAL_POSITION_NED and the flight mode on its own link."""
+    """LOCAL_POSITION_NED at 20 Hz and the flight mode, recorded on a second link (:class:`tests.sitl.SecondLink`)."""
 
     def __init__(self, url: str) -> None:
-        self.link = mavutil.mavlink_connection(url, source_system=202)
         self.samples: list[Sample] = []
         self.mode = ""
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._read, name="failsafe-observer", daemon=True)
-        self._thread.start()
+        self.link = sitl.SecondLink(url, 202, "LOCAL_POSITION_NED", ["LOCAL_POSITION_NED", "HEARTBEAT"],
+                                    self._on_message, "failsafe-observer", rate_hz=20.0)
 
-    def _read(self) -> None:
-        asked = 0.0
-        while not self._stop.is_set():
-            if time.monotonic() - asked > 1.0:  # PX4 answers the last sender on its GCS port; ArduCopter needs asking
-                mav = self.link.mav
-                mav.heartbeat_send(mavutil.mavlink.MAV_TYPE_GCS, mavutil.mavlink.MAV_AUTOPILOT_INVALID, 0, 0, 0)
-                mav.command_long_send(1, 1, mavutil.mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, 0,
-                                      mavutil.mavlink.MAVLINK_MSG_ID_LOCAL_POSITION_NED, 50_000, 0, 0, 0, 0, 0)
-                asked = time.monotonic()
-            msg = self.link.recv_match(type=["LOCAL_POSITION_NED", "HEARTBEAT"], blocking=True, timeout=0.2)
-            if msg is None or msg.get_srcSystem() != 1 or msg.get_srcComponent() != 1:
-                continue
-            if msg.get_type() == "LOCAL_POSITION_NED":
-                self.samples.append((time.monotonic(), msg.x, msg.y, -msg.z))
-            else:
-                self.mode = mavutil.mode_string_v10(msg)
+    def _on_message(self, msg: Any) -> None:
+        if msg.get_type() == "LOCAL_POSITION_NED":
+            self.samples.append((time.monotonic(), msg.x, msg.y, -msg.z))
+        else:
+            self.mode = mavutil.mode_string_v10(msg)
 
     def since(self, t: float) -> list[Sample]:
         return [s for s in list(self.samples) if s[0] >= t]
 
     def close(self) -> None:
-        self._stop.set()
-        self._thread.join(timeout=2)
         self.link.close()
 
 

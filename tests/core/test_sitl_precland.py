@@ -23,12 +23,12 @@ import os
 import signal
 import subprocess
 import sys
-import threading
 import time
 from collections.abc import Callable, Iterator
 from contextlib import AbstractContextManager
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 from urllib.parse import urlparse
 
 import pytest
@@ -76,57 +76,37 @@ class Track:
 
 
 class Observer:
-    """A second MAVLink client: the autopilot's LOCAL_POSITION_NED, HEARTBEAT and STATUSTEXT on their own link."""
+    """The autopilot's LOCAL_POSITION_NED, HEARTBEAT and STATUSTEXT, read on a second link
+    (:class:`tests.sitl.SecondLink`)."""
 
     def __init__(self, url: str) -> None:
-        self.link = mavutil.mavlink_connection(url, source_system=201)
         self.track = Track()
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._read, name="precland-observer", daemon=True)
-        self._thread.start()
+        self.link = sitl.SecondLink(url, 201, "LOCAL_POSITION_NED", ["LOCAL_POSITION_NED", "HEARTBEAT", "STATUSTEXT"],
+                                    self._on_message, "precland-observer")
 
-    def _ask(self) -> None:
-        """Heartbeat (PX4 answers the last sender on its GCS port) and 10 Hz LOCAL_POSITION_NED (ArduCopter streams
-        nothing until asked)."""
-        mav = self.link.mav
-        mav.heartbeat_send(mavutil.mavlink.MAV_TYPE_GCS, mavutil.mavlink.MAV_AUTOPILOT_INVALID, 0, 0, 0)
-        mav.command_long_send(1, 1, mavutil.mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, 0,
-                              mavutil.mavlink.MAVLINK_MSG_ID_LOCAL_POSITION_NED, 100_000, 0, 0, 0, 0, 0)
-
-    def _read(self) -> None:
-        asked = 0.0
-        track = self.track
-        while not self._stop.is_set():
-            if time.monotonic() - asked > 1.0:
-                self._ask()
-                asked = time.monotonic()
-            msg = self.link.recv_match(type=["LOCAL_POSITION_NED", "HEARTBEAT", "STATUSTEXT"], blocking=True,
-                                       timeout=0.2)
-            if msg is None or msg.get_srcSystem() != 1 or msg.get_srcComponent() != 1:
-                continue
-            kind = msg.get_type()
-            if kind == "LOCAL_POSITION_NED":
-                track.position = (msg.x, msg.y, msg.z)
-                if not track.armed and track.highest_m < 1.0:  # on the ground, before the flight
-                    track.ground_z = msg.z
-                height = track.ground_z - msg.z
-                track.highest_m = max(track.highest_m, height)
-                if track.at_height is None and height > ALTITUDE_M - 0.5:
-                    track.at_height = (msg.x, msg.y)
-                if track.at_height is not None and track.touchdown is None and height < GROUND_M:
-                    track.touchdown = (msg.x, msg.y)
-            elif kind == "HEARTBEAT":
-                armed = bool(msg.base_mode & mavutil.mavlink.MAV_MODE_FLAG_SAFETY_ARMED)
-                if track.armed and not armed and track.highest_m > ALTITUDE_M - 1:
-                    track.landed_disarmed = True
-                track.armed = armed
-            else:
-                track.texts.append(msg.text)
+    def _on_message(self, msg: Any) -> None:
+        track, kind = self.track, msg.get_type()
+        if kind == "LOCAL_POSITION_NED":
+            track.position = (msg.x, msg.y, msg.z)
+            if not track.armed and track.highest_m < 1.0:  # on the ground, before the flight
+                track.ground_z = msg.z
+            height = track.ground_z - msg.z
+            track.highest_m = max(track.highest_m, height)
+            if track.at_height is None and height > ALTITUDE_M - 0.5:
+                track.at_height = (msg.x, msg.y)
+            if track.at_height is not None and track.touchdown is None and height < GROUND_M:
+                track.touchdown = (msg.x, msg.y)
+        elif kind == "HEARTBEAT":
+            armed = bool(msg.base_mode & mavutil.mavlink.MAV_MODE_FLAG_SAFETY_ARMED)
+            if track.armed and not armed and track.highest_m > ALTITUDE_M - 1:
+                track.landed_disarmed = True
+            track.armed = armed
+        else:
+            track.texts.append(msg.text)
 
     def close(self) -> None:
-        self._stop.set()
-        self._thread.join(timeout=2)
         self.link.close()
+
 
 
 def observer_url(vehicle: sitl.Sitl) -> str:
