@@ -104,7 +104,7 @@ async def land_once(pad_ne: tuple[float, float], wind: tuple[float, float], alti
         if result.landing.startswith("refused: "):
             landing.refusals.append(result.landing)
         if result.landing == "sent":
-            sent[result.frame.t_mono_ns] = (result.t_start_ns, result.t_end_ns, time.monotonic_ns())
+            sent[result.frame.t_mono_ns] = (result.outcome.t_start_ns, result.outcome.t_end_ns, time.monotonic_ns())
 
     source = (f"sim:?marker={MARKER_ID}&marker_size={MARKER_SIZE_M:g}&marker_at={pad_ne[0]:.3f},{pad_ne[1]:.3f}")
     with SimVehicle(wind=wind, autopilot=Autopilot.ARDUPILOT, extra_args=["--plnd-enabled"]) as vehicle:

@@ -18,6 +18,7 @@ import psutil
 from controllers.base import BlockingCalls, FlightController, RecordedVehicle
 from controllers.replay_timeline import ReplayTimeline
 from sources import CameraSource
+from sources.buffer import Frame
 from sources.camera_model import CameraModel
 from uav_tui.camera.active import ActiveCamera
 from uav_tui.config import Config
@@ -300,7 +301,7 @@ class UavCore:
         self.worker.attach(source.buffer, camera)
         return old
 
-    def current_frame(self) -> ProcessedFrame | None:
+    def current_frame(self) -> Frame | None:
         """The frame whose ``tmMgr.save`` calls are being made now (the worker's), None between frames."""
         return self.worker.current if self.worker is not None else None
 
@@ -325,9 +326,9 @@ class UavCore:
             self.startup_s = time.time() - psutil.Process().create_time()
             self.events.emit("info", "platform", f"first frame processed {self.startup_s:.1f} s after the "
                              "process started")
-        if result.error:
-            exception = shorten(last_line(result.error), 500)
-            self._processor_errors.report(result.error, exception, result.frame.seq)
+        if result.outcome.error:
+            exception = shorten(last_line(result.outcome.error), 500)
+            self._processor_errors.report(result.outcome.error, exception, result.frame.seq)
             self.processor_error = exception
         self.lock.steer(result)
         if result.frame.image.flags.writeable:

@@ -207,8 +207,8 @@ def core_status(core: ObservedCore) -> CoreStatus:
     landing, pointing = relayed.get("landing_target", {}), relayed.get("gimbal", {})
     assert worker is not None and source is not None
     last = worker.last
-    box = last.box if last is not None else None
-    found = (last.detections or ()) if last is not None else ()
+    box = last.outcome.box if last is not None else None
+    found = (last.outcome.detections or ()) if last is not None else ()
     # where they were seen: with the telemetry at that frame's capture, not the newest (~20 us a box)
     seen = asdict(core.telemetry.at(last.frame.t_mono_ns)[0]) if last is not None and (box or found) else {}
     at_ns = last.frame.t_mono_ns if last is not None else None

@@ -127,7 +127,7 @@ def what_happened(core: UavCore) -> str:
     last, relay = core.worker.last, gimbal_relay(core.relays)
     gimbal = "" if relay is None else f"gimbal setpoints sent {relay.sent}, failed {relay.failed}; "
     frame = "no frame processed" if last is None else (
-        f"last frame: box {last.box}, vector {last.decision!r}, gimbal {last.gimbal!r}")
+        f"last frame: box {last.outcome.box}, vector {last.decision!r}, gimbal {last.gimbal!r}")
     warnings = [e.message for e in core.events.recent if e.level != "info"][-8:]
     return f"{gimbal}{frame}; executed {core.gate.executed}; warnings {warnings}"
 

@@ -145,7 +145,8 @@ async def test_a_polygon_edge_is_slid_along_into_its_corner_never_through_and_a_
         await core.execute("f 4")  # lost, and found again before lost_after_s
         await asyncio.sleep(0.5)
         seen: list[float] = []  # when a frame last reported the target (a frame in flight may still, after "f 4")
-        core.add_frame_listener(lambda r: seen.append(time.monotonic()) if (r.box, r.vector) != (None, None) else None)
+        core.add_frame_listener(lambda r: seen.append(time.monotonic())
+                               if (r.outcome.box, r.outcome.vector) != (None, None) else None)
         await core.execute("f 1")
         await asyncio.sleep(1.5)
         assert core.gate.enabled, core.gate.stop_reason

@@ -23,6 +23,7 @@ from uav_tui.flight.autonomy import AutonomyGate
 from uav_tui.flight.telemetry import TelemetryManager
 from uav_tui.headless import format_status, load_script
 from uav_tui.hosting.host import ProcessedFrame
+from uav_tui.hosting.wire import FrameOutcome
 from uav_tui.recorded.runs_cli import main as tools_main
 from uav_tui.recording import Recorder
 from uav_tui.stats import PipelineStats
@@ -123,8 +124,8 @@ def test_runs_lists_processor_and_source_without_passwords(tmp_path: Path, capsy
 def test_a_rejected_vector_leaves_no_stale_vector_beside_its_decision() -> None:
     gate = AutonomyGate(SafetyConfig(), TelemetryManager(None), EventLog())
     for vector in ((0.5, 0.0, 1.0), (math.nan, 0.0, 1.0)):
-        result = ProcessedFrame(Frame(np.zeros((4, 4, 3), np.uint8), 1, time.monotonic_ns(), time.time_ns()), 0)
-        result.vector = vector
+        result = ProcessedFrame(Frame(np.zeros((4, 4, 3), np.uint8), 1, time.monotonic_ns(), time.time_ns()),
+                                FrameOutcome(0, 0, vector=vector))
         gate.consider(result)
         line = format_status(_status(last_vector=gate.last_vector, last_decision=gate.last_decision), 1.0)
     assert gate.last_vector is None and " vec " not in line and line.endswith(f"auto ON ({gate.last_decision})")

@@ -23,7 +23,8 @@ async def test_switching_sources_keeps_processor_and_link(tmp_path: Path) -> Non
             await wait_until(lambda p=processed: core.worker.stats.frames_processed > p + 10, 30, f"frames from {uri}")
             assert core.status().source_uri == uri
             assert core.worker.last.frame.image.shape[:2] == tuple(reversed(core.source.get_frame_size()))
-        assert core.worker.state().pid == pid and core.worker.last.vector == (0.6, 0.0, 2.0)  # still in "fly" mode
+        assert core.worker.state().pid == pid
+        assert core.worker.last.outcome.vector == (0.6, 0.0, 2.0)  # still in "fly" mode
         assert core.controller is controller and controller.heartbeat_age_s() < core.config.safety.link_timeout
         assert core.telemetry.snapshot().in_air and core.truth.latest()["mode"] == "HOLD"
 

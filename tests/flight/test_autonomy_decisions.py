@@ -16,6 +16,7 @@ from uav_tui.config import SafetyConfig
 from uav_tui.events import EventLog
 from uav_tui.flight.autonomy import AutonomyGate, Verdict
 from uav_tui.hosting.host import ProcessedFrame
+from uav_tui.hosting.wire import FrameOutcome
 
 
 @dataclass
@@ -49,9 +50,8 @@ def _gate(vehicle: _Vehicle) -> AutonomyGate:
 
 
 def _result(vector: object, error: str | None = None) -> ProcessedFrame:
-    result = ProcessedFrame(Frame(np.zeros((4, 4, 3), np.uint8), 1, time.monotonic_ns(), time.time_ns()), 0)
-    result.vector, result.error = vector, error
-    return result
+    return ProcessedFrame(Frame(np.zeros((4, 4, 3), np.uint8), 1, time.monotonic_ns(), time.time_ns()),
+                          FrameOutcome(0, 0, vector=vector, error=error))
 
 
 def test_each_decision_has_its_verdict_and_reads_as_before() -> None:

@@ -20,6 +20,7 @@ from uav_tui.flight.autonomy import AutonomyGate
 from uav_tui.flight.plausibility import REFUSALS_TO_STOP
 from uav_tui.flight.telemetry import TelemetryManager
 from uav_tui.hosting.host import ProcessedFrame
+from uav_tui.hosting.wire import FrameOutcome
 from uav_tui.relays.gimbal import GimbalRelay, say_no_gimbal
 
 
@@ -50,7 +51,7 @@ class _Gimbal:
 
 def _result(pointing: GimbalPointing | None, age_s: float = 0.0) -> ProcessedFrame:
     frame = Frame(np.zeros((4, 4, 3), np.uint8), 1, time.monotonic_ns() - int(age_s * 1e9), time.time_ns())
-    return ProcessedFrame(frame, 0, outputs=FrameOutputs(gimbal=pointing))
+    return ProcessedFrame(frame, FrameOutcome(0, 0, outputs=FrameOutputs(gimbal=pointing)))
 
 
 def _relay(vehicle: _Gimbal) -> tuple[GimbalRelay, AutonomyGate]:

@@ -18,6 +18,7 @@ from uav_tui.errors import UavError
 from uav_tui.flight.plausibility import REFUSALS_TO_STOP
 from uav_tui.flight.telemetry import TelemetryManager
 from uav_tui.hosting.host import ProcessedFrame
+from uav_tui.hosting.wire import FrameOutcome
 from uav_tui.relays.landing_target import LandingTargetRelay
 from uav_tui.relays.precland import LandingTargetFeed
 
@@ -39,7 +40,8 @@ class _Core:
 
 def _frame(seq: int, target: LandingTarget | None = None, status: str = "") -> ProcessedFrame:
     frame = Frame(np.zeros((4, 4, 3), np.uint8), seq, time.monotonic_ns(), time.time_ns())
-    return ProcessedFrame(frame, 0, outputs=FrameOutputs(landing_target=target, landing_status=status))
+    return ProcessedFrame(frame, FrameOutcome(0, 0, outputs=FrameOutputs(landing_target=target,
+                                                                         landing_status=status)))
 
 
 def _too_far(seq: int) -> LandingTarget:

@@ -25,12 +25,16 @@ from uav_tui.hosting.codec import (
     decode_from_child,
 )
 from uav_tui.hosting.pipe import Inbox, PipeCorrupt
-from uav_tui.hosting.wire import Call, Reply, Result, ResultHead
+from uav_tui.hosting.wire import Call, FrameOutcome, Reply, Result, ResultHead, Times
 
 
-def result(vector: object = None, **fields: object) -> Result:
-    return Result(gen=3, t_start_ns=1, t_end_ns=2, t_vector_ns=0, released=("slot-a",), saves_throttled=0,
-                  vector=vector, outputs=None, box=None, detections=None, error=None, saves=(), **fields)
+def result(vector: object = None) -> Result:
+    return Result(gen=3, released=("slot-a",), saves_throttled=0, outcome=FrameOutcome(1, 2, vector=vector), saves=())
+
+
+def crafted(saves: list[object]) -> bytes:
+    """A result as a child could send it, by hand: frame 3, slot-a released, times 1 and 2, these saves."""
+    return msgspec.msgpack.encode([6, 3, ["slot-a"], 0, [1, 2, 0, None, {}, None, None, None, ""], saves])
 
 
 def encoded(message: Result | Reply) -> bytes:
@@ -46,7 +50,7 @@ def test_a_camera_model_reaches_the_child_as_it_was(model: CameraModel | None) -
 def test_values_arrive_as_plain_data() -> None:
     vector = as_data((np.float32(0.5), 10**400, True), arrays=False)
     back = decode_from_child(encoded(result(vector)), [])
-    assert isinstance(back, Result) and back.vector == (0.5, 10**400, True)  # a sequence arrives as a tuple
+    assert isinstance(back, Result) and back.outcome.vector == (0.5, 10**400, True)  # a sequence arrives as a tuple
     assert as_data(np.zeros(3), arrays=False).startswith("array(")  # an array is no vector: its repr
     assert as_data(object()).startswith("<object object")
 
@@ -63,10 +67,10 @@ def ext(code: int, payload: object) -> msgspec.msgpack.Ext:
     (ext(9, ()), "unknown extension type 9"),
 ], ids=["object dtype", "missing buffer", "wrong size", "short inline", "unknown kind"])
 def test_an_array_that_is_not_one_is_the_frame_error(value: object, reason: str) -> None:
-    data = msgspec.msgpack.encode([6, 3, 1, 2, 0, ["slot-a"], 0, None, None, None, None, None, [[value, {}]]])
+    data = crafted([[value, {}]])
     with pytest.raises(UnreadableResult, match=reason) as caught:
         decode_from_child(data, [bytearray(4)])
-    assert caught.value.head == ResultHead(3, 1, 2, 0, ("slot-a",), 0)  # what frees the frame and counts it
+    assert caught.value.head == ResultHead(3, ("slot-a",), 0, Times(1, 2, 0))  # what frees the frame and counts it
 
 
 def test_a_message_that_is_none_at_all_is_refused() -> None:
@@ -89,15 +93,13 @@ def nested(depth: int) -> bytes:
 
 
 @pytest.mark.parametrize("data, reason", [
-    (b"\x9d" + b"".join(msgspec.msgpack.encode(v) for v in (6, 3, 1, 2, 0, ["slot-a"], 0)) + nested(100_000)
-     + msgspec.msgpack.encode(None) * 4 + msgspec.msgpack.encode([]), "recursion limit|nested|depth"),
-    (msgspec.msgpack.encode([6, 3, 1, 2, 0, ["slot-a"], 0, None, None, None, None, None,
-                             [[ext(OUT_OF_BAND, (-1, "|u1", (4,))), {}]]]), "was not sent"),
-    (msgspec.msgpack.encode([6, 3, 1, 2, 0, ["slot-a"], 0, None, None, None, None, None,
-                             [[ext(OUT_OF_BAND, (0, "|u1", (2**62, 4))), {}]]]), "does not match"),
-    (msgspec.msgpack.encode([6, 3, 1, 2, 0, ["slot-a"], 0, None, None, None, None, None,
-                             [[ext(OUT_OF_BAND, (0, "<f8", (1, 1))), {}]]]), "8-bit"),
-    (msgspec.msgpack.encode([6, 3, 1, 2, 0, ["slot-a"], 0, None, None, None, None, None, [[None, {"frame": 1}]]]),
+    (b"\x96" + b"".join(msgspec.msgpack.encode(v) for v in (6, 3, ["slot-a"], 0)) + b"\x99"
+     + b"".join(msgspec.msgpack.encode(v) for v in (1, 2, 0)) + nested(100_000)
+     + b"".join(msgspec.msgpack.encode(v) for v in ({}, None, None, None, "", [])), "recursion limit|nested|depth"),
+    (crafted([[ext(OUT_OF_BAND, (-1, "|u1", (4,))), {}]]), "was not sent"),
+    (crafted([[ext(OUT_OF_BAND, (0, "|u1", (2**62, 4))), {}]]), "does not match"),
+    (crafted([[ext(OUT_OF_BAND, (0, "<f8", (1, 1))), {}]]), "8-bit"),
+    (crafted([[None, {"frame": 1}]]),
      "other than 'frame'"),
 ], ids=["deep", "negative buffer", "overflowing shape", "float image", "frame field"])
 def test_what_a_hostile_child_crafts_is_that_frames_error(data: bytes, reason: str) -> None:

@@ -52,7 +52,7 @@ async def test_a_replay_puts_its_next_frame_while_the_child_processes_this_one(t
         source.close()
     assert [r.frame.seq for r in results] == list(range(1, len(results) + 1))  # none skipped
     assert source.get_properties()["frames_dropped"] == 0
-    put_while_processing = [nxt.frame.t_mono_ns < cur.t_end_ns for cur, nxt in itertools.pairwise(results[1:])]
+    put_while_processing = [nxt.frame.t_mono_ns < cur.outcome.t_end_ns for cur, nxt in itertools.pairwise(results[1:])]
     assert all(put_while_processing), put_while_processing
 
 

@@ -185,10 +185,11 @@ async def test_a_call_is_stamped_when_the_processor_began_it(tmp_path: Path, iso
             feeding.set()
             feeder.join()
             task.cancel()
-    signs = [result.vector[0] for result in results]
-    expected = [(-1.0) ** sum(stamp < result.t_start_ns for stamp in stamps) for result in results]
+    signs = [result.outcome.vector[0] for result in results]
+    expected = [(-1.0) ** sum(stamp < result.outcome.t_start_ns for stamp in stamps) for result in results]
     assert signs == expected
-    assert not [(stamp, r.frame.seq) for stamp in stamps for r in results if r.t_start_ns <= stamp <= r.t_end_ns]
+    assert not [(stamp, r.frame.seq) for stamp in stamps for r in results
+                if r.outcome.t_start_ns <= stamp <= r.outcome.t_end_ns]
 
 
 def _feed(buffer: FrameBuffer, stop: threading.Event) -> None:
@@ -205,10 +206,10 @@ async def test_exceptions_are_caught_counted_and_keep_the_loop_alive(tmp_path: P
     results: list[ProcessedFrame] = []
     async with running_worker(isolation, f"{tmp_path}/failing.py:Failing", results.append) as worker:
         await one_at_a_time(worker, buffer, results, 6)
-    failed = [r for r in results if r.error]
+    failed = [r for r in results if r.outcome.error]
     assert len(failed) == 3 and worker.snapshot().errors == 3
-    assert "failing.py\", line 10" in failed[0].error and "ValueError: bad frame 1" in failed[0].error
-    assert all(r.vector is None for r in failed)
-    assert all(r.vector == (0.1, 0.0, 0.5) and r.t_vector_ns >= r.t_end_ns >= r.t_start_ns
-               for r in results if not r.error)
+    assert "failing.py\", line 10" in failed[0].outcome.error and "ValueError: bad frame 1" in failed[0].outcome.error
+    assert all(r.outcome.vector is None for r in failed)
+    assert all(o.vector == (0.1, 0.0, 0.5) and o.t_vector_ns >= o.t_end_ns >= o.t_start_ns
+               for o in (r.outcome for r in results) if not o.error)
     assert worker.consecutive_errors == 0  # the last frame succeeded

@@ -271,11 +271,11 @@ async def test_reload_swaps_only_a_processor_that_loads(tmp_path: Path) -> None:
         path.write_text("class Versioned:\n    def photo_processing(self, frame)\n")
         with pytest.raises(ProcessorLoadError, match="reload failed, .* keeps running: .*SyntaxError"):
             await core.execute("reload")
-        assert core.worker.state().pid == pid and core.worker.last.vector == (0.1, 0.0, 1.0)
+        assert core.worker.state().pid == pid and core.worker.last.outcome.vector == (0.1, 0.0, 1.0)
         path.write_text(version.format(v=0.2))
         assert "reloaded" in await core.execute("reload")
         assert core.worker.state().pid != pid
-        await wait_until(lambda: core.worker.last.vector == (0.2, 0.0, 1.0), 5, "the new code's vector")
+        await wait_until(lambda: core.worker.last.outcome.vector == (0.2, 0.0, 1.0), 5, "the new code's vector")
     finally:
         await core.stop()
 

@@ -105,7 +105,7 @@ async def test_a_replay_goes_on_with_the_restarted_processor_after_the_frame_the
         source.close()
     seqs = [r.frame.seq for r in results]
     assert seqs == [1, 2, *range(4, len(seqs) + 2)]
-    ids = [r.detections[0].track_id for r in results if r.detections]
+    ids = [r.outcome.detections[0].track_id for r in results if r.outcome.detections]
     assert ids == [0, 0, *[1] * (len(seqs) - 2)], ids
 
 

@@ -68,7 +68,7 @@ async def test_either_host_numbers_a_processors_detections(isolation: str) -> No
             await collect(worker, results, 5)
     finally:
         source.close()
-    assert {found.track_id for r in results[:5] for found in r.detections or ()} == {0}  # one object, one track
+    assert {found.track_id for r in results[:5] for found in r.outcome.detections or ()} == {0}  # one object, one track
 
 
 def test_the_yolo_references_person_is_one_track_as_she_moves() -> None:

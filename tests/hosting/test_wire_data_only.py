@@ -68,10 +68,11 @@ async def test_a_processor_returning_code_gets_frame_errors_and_the_platform_run
         await one_at_a_time(worker, buffer, results, 6)
         assert worker.phase == HostPhase(HostState.RUNNING)  # the same child throughout: nothing ended it
     first, second, third, *rest = results
+    first, second, third = first.outcome, second.outcome, third.outcome
     assert isinstance(first.vector, str) and "Exits object" in first.vector  # its repr: the gate rejects text
     target = second.outputs.landing_target
     assert type(target).__name__ == "LandingTarget" and target.distance_m == 5.0  # its data, none of its code
     assert third.error and "could not be read" in third.error and "landing target distance" in third.error
     assert third.outputs.landing_target is None and third.vector is None  # nothing of that frame is used
     assert worker.snapshot().errors == 1
-    assert all(r.vector == (0.1, 0.0, 0.5) and not r.error for r in rest)  # the junk cost no frame
+    assert all(r.outcome.vector == (0.1, 0.0, 0.5) and not r.outcome.error for r in rest)  # the junk cost no frame

@@ -111,7 +111,7 @@ async def follow_the_demo_car(tmp_path: Path, processor: str, by_iou: bool) -> N
             drawn[frame.seq] = outline_now()
 
         def on_result(result: ProcessedFrame) -> None:
-            scored.append((result.frame.seq, result.box))
+            scored.append((result.frame.seq, result.outcome.box))
 
         source.buffer.add_listener(on_capture)
         truth = core.truth  # type: ignore[attr-defined]

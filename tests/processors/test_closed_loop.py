@@ -114,7 +114,7 @@ async def test_tracker_follows_a_target_driving_on_the_ground(tmp_path: Path, si
             distances.append(horizontal_distance(pose, t["n"], t["e"]))
             # the car's outline in the newest frame (the pose and instant it was drawn with); the box is from
             # the newest processed frame, at most a frame or two older: its centre may be 20 px off the car
-            box = core.worker.last.box
+            box = core.worker.last.outcome.box
             outline = car_outline(t, Pose.from_mapping(props["pose"]), source.camera)
             off, size = centre_off_car(box, outline), box_over_car(box, outline)
             samples.append((off, size, f"{time.monotonic() - start:.1f} s: box {box}, {off and round(off)} px off, "
@@ -131,4 +131,5 @@ async def test_tracker_follows_a_target_driving_on_the_ground(tmp_path: Path, si
         in_view = 12 * math.tan(math.radians(62 / 2)) * 360 / 480  # ground covered by half the frame's height, m
         assert max(distances) < in_view, \
             f"the car left the frame: distances {distances[-10:]}; {what_happened(core)}"  # ... in view
-        assert core.gate.executed > 10 and core.worker.last.box is not None, what_happened(core)  # still tracking
+        tracking = core.worker.last.outcome.box is not None
+        assert core.gate.executed > 10 and tracking, what_happened(core)  # still tracking

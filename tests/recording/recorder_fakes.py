@@ -5,17 +5,34 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 from sources.buffer import Frame
 from uav_tui.events import EventLog
 from uav_tui.flight.telemetry import TelemetryManager
 from uav_tui.hosting.host import ProcessedFrame
+from uav_tui.hosting.wire import FrameOutcome
+from uav_values.box import PixelBox
+from uav_values.detections import Detected
 
 
 @dataclass
 class _Worker:
-    current: ProcessedFrame | None = None
+    current: Frame | None = None
     busy_s: float = 0.0
+
+
+@dataclass
+class Draft:
+    """What a test's stand-in for the processor is given (``frame``) and sets: its outcome's fields and the gate's
+    decision."""
+
+    frame: Frame
+    vector: Any = None
+    error: str | None = None
+    box: PixelBox | None = None
+    detections: tuple[Detected, ...] | None = None
+    decision: str = ""
 
 
 class FakeCore:
@@ -29,22 +46,24 @@ class FakeCore:
         self.camera = None
         self._listeners: list[Callable[[ProcessedFrame], None]] = []
 
-    def current_frame(self) -> ProcessedFrame | None:
+    def current_frame(self) -> Frame | None:
         return self.worker.current
 
     def add_frame_listener(self, listener: Callable[[ProcessedFrame], None]) -> None:
         self._listeners.append(listener)
 
-    def process(self, image, seq: int, processor: Callable[[ProcessedFrame], None]) -> ProcessedFrame:
-        """Run ``processor(result)`` as photo_processing would run, then deliver the result."""
+    def process(self, image, seq: int, processor: Callable[[Draft], None]) -> ProcessedFrame:
+        """Run ``processor(draft)`` as photo_processing would run, then deliver the frame with the draft's outcome."""
         frame = Frame(image, seq, time.monotonic_ns(), time.time_ns())
-        result = ProcessedFrame(frame, t_start_ns=frame.t_mono_ns + 500_000)
-        self.worker.current, self.worker.busy_s = result, 0.001
+        draft = Draft(frame)
+        self.worker.current, self.worker.busy_s = frame, 0.001
         try:
-            processor(result)
+            processor(draft)
         finally:
             self.worker.current, self.worker.busy_s = None, 0.0
-        result.t_end_ns = result.t_end_ns or frame.t_mono_ns + 3_000_000
+        outcome = FrameOutcome(frame.t_mono_ns + 500_000, frame.t_mono_ns + 3_000_000, vector=draft.vector,
+                               box=draft.box, detections=draft.detections, error=draft.error)
+        result = ProcessedFrame(frame, outcome, decision=draft.decision)
         for listener in self._listeners:
             listener(result)
         return result

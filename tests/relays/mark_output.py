@@ -55,7 +55,7 @@ class MarkRelay:
         core.gate.stop_listeners.append(self.stop)
 
     def consider(self, result: ProcessedFrame) -> None:
-        mark = result.outputs.get(self.field)
+        mark = result.outcome.outputs.get(self.field)
         if mark is None:
             return
         if not self.gate.enabled:
@@ -77,7 +77,7 @@ class MarkRelay:
 
 def say_unmarked(result: ProcessedFrame) -> None:
     """The stand-in's words on a frame with a mark, for a controller without :class:`Beats`."""
-    if result.outputs.get("mark") is not None:
+    if result.outcome.outputs.get("mark") is not None:
         result.relayed["mark"] = "not sent: the flight controller has no heartbeat"
 
 

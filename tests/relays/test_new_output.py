@@ -19,6 +19,7 @@ from tests.core.flight_helpers import steering_config, wait_until
 from tests.relays.mark_output import ENTRY, Mark, MarkRelay, register
 from uav_tui.core import UavCore
 from uav_tui.hosting.host import ProcessedFrame
+from uav_tui.hosting.wire import FrameOutcome
 
 MARKING_PROCESSOR = '''
 from tests.relays.mark_output import Mark
@@ -70,7 +71,7 @@ async def test_a_registered_output_is_relayed_said_and_counted_through_a_real_co
 def test_without_the_capability_the_entry_s_stand_in_says_so() -> None:
     stand_in = ENTRY.absent(None)  # type: ignore[arg-type]  # the stand-in reads nothing of the core
     frame = Frame(np.zeros((4, 4, 3), np.uint8), 1, time.monotonic_ns(), time.time_ns())
-    result = ProcessedFrame(frame, 0, outputs=FrameOutputs(more={"mark": Mark(2, 2)}))
+    result = ProcessedFrame(frame, FrameOutcome(0, 0, outputs=FrameOutputs(more={"mark": Mark(2, 2)})))
     stand_in.consider(result)
     assert result.relayed == {"mark": "not sent: the flight controller has no heartbeat"} and stand_in.counts == {}
 

@@ -11,12 +11,13 @@ from aiortc.mediastreams import MediaStreamError
 
 from sources.buffer import Frame
 from uav_tui.hosting.host import ProcessedFrame
+from uav_tui.hosting.wire import FrameOutcome
 from uav_tui.web.tracks import ProcessedVideoTrack, VideoHub, to_video_frame
 
 
 def processed(seq: int, width: int = 640, height: int = 480) -> ProcessedFrame:
     image = np.full((height, width, 3), seq % 256, dtype=np.uint8)
-    return ProcessedFrame(Frame(image, seq, time.monotonic_ns(), time.time_ns()), t_start_ns=0)
+    return ProcessedFrame(Frame(image, seq, time.monotonic_ns(), time.time_ns()), FrameOutcome(0, 0))
 
 
 @pytest.mark.parametrize(("size", "width", "expected"), [

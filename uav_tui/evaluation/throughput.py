@@ -69,9 +69,10 @@ async def platform_run(source: str, processor: str, isolation: str, seconds: flo
     selected: list[int] = []
 
     def record(r: ProcessedFrame) -> None:
-        results.append((r.frame.seq, r.frame.t_mono_ns, r.t_start_ns, r.t_vector_ns or r.t_end_ns))
-        boxes.append(r.box)
-        if r.box is not None and not selected:
+        done = r.outcome
+        results.append((r.frame.seq, r.frame.t_mono_ns, done.t_start_ns, done.t_vector_ns or done.t_end_ns))
+        boxes.append(r.outcome.box)
+        if r.outcome.box is not None and not selected:
             selected.append(r.frame.seq)  # the first frame tracked: the one the target was selected on
 
     await core.start()

@@ -216,12 +216,13 @@ class AutonomyGate:
     def consider(self, result: ProcessedFrame) -> None:
         """Decide on ``result``'s vector (on the loop, right after processing); sets ``result.decision``."""
         if self.enabled:
-            self.envelope.saw(result.box is not None or result.vector is not None, self.telemetry.snapshot())
-        if result.vector is None:
-            result.decision = Decision(Verdict.ERROR, "error") if result.error else Decision(Verdict.NO_VECTOR,
+            self.envelope.saw(result.outcome.box is not None or result.outcome.vector is not None,
+                              self.telemetry.snapshot())
+        if result.outcome.vector is None:
+            result.decision = Decision(Verdict.ERROR, "error") if result.outcome.error else Decision(Verdict.NO_VECTOR,
                                                                                              "no vector")
             return
-        vector, note = check_vector(result.vector, self.safety)
+        vector, note = check_vector(result.outcome.vector, self.safety)
         key, why_not = note, "" if vector is None else self._why_not(result)
         if vector is not None and not why_not:  # a vector that would fly: within the envelope?
             confined = self.envelope.confine(vector, self.telemetry.snapshot())

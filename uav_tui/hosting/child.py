@@ -256,9 +256,10 @@ class ChildRunner:
         except (TypeError, ValueError, OverflowError) as exc:
             reason = f"the processor's outputs are not data: {exc}"
             if isinstance(message, Result):
-                send_message(self.conn, msgspec.structs.replace(
-                    message, vector=None, outputs=None, box=None, detections=None, saves=(),
-                    error=f"{message.error}\n{reason}" if message.error else reason))
+                error = message.outcome.error
+                send_message(self.conn, msgspec.structs.replace(message, saves=(), outcome=msgspec.structs.replace(
+                    message.outcome, vector=None, outputs=NO_OUTPUTS, box=None, detections=None,
+                    error=f"{error}\n{reason}" if error else reason)))
             else:
                 send_message(self.conn, msgspec.structs.replace(message, ok=False, value=reason, saves=()))
 
@@ -277,20 +278,9 @@ class ChildRunner:
         image = self.slots.view(offer.slot, offer.shape)
         outcome = call_frame(self.instance, image, vector=self.has_vector, outputs=self.outputs,
                              let_through=(MemoryError,), frame_seq=offer.seq, tracks=self.tracks,
-                             seen_ns=offer.t_mono_ns)
+                             seen_ns=offer.t_mono_ns, as_data=_plain)
         del image
-        released, throttled = tuple(self.slots.released()), self._take_throttled()
-        try:
-            outputs = outcome.outputs if outcome.outputs != NO_OUTPUTS else None
-            return Result(offer.gen, outcome.t_start_ns, outcome.t_end_ns, outcome.t_vector_ns, released, throttled,
-                          as_data(outcome.vector, arrays=False), outputs, outcome.box, outcome.detections,
-                          outcome.error, self._take_saves())
-        except MemoryError:
-            raise
-        except Exception as exc:  # noqa: BLE001 - a returned object's own methods raised: that frame's error
-            return Result(offer.gen, outcome.t_start_ns, outcome.t_end_ns, outcome.t_vector_ns, released, throttled,
-                          None, None, None, None, f"the processor's outputs are not data: {type(exc).__name__}: {exc}",
-                          ())
+        return Result(offer.gen, tuple(self.slots.released()), self._take_throttled(), outcome, self._take_saves())
 
     def _keep_save(self, image: np.ndarray, extra: dict[str, Any]) -> None:
         # A copy: the image as it is now, not with what photo_processing draws on it afterwards.
@@ -316,6 +306,11 @@ class ChildRunner:
         except Exception as exc:  # noqa: BLE001 - handed to the operator as the command's error
             value, ok = f"{type(exc).__name__}: {exc}", False
         return Reply(call.call_id, ok, taken, tuple(self.slots.released()), value, self._take_saves())
+
+
+def _plain(vector: Any) -> Any:
+    """A vector as the wire takes it (its ``repr`` when it is not data, an array's too)."""
+    return as_data(vector, arrays=False)
 
 
 def main(fd: int, mailbox_address: str) -> int:

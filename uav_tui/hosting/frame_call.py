@@ -13,71 +13,48 @@ from __future__ import annotations
 
 import time
 import traceback
-from collections.abc import Collection
-from dataclasses import dataclass
+from collections.abc import Callable, Collection
 from pathlib import Path
 from typing import Any
 
 from processors.base import read_box
 from processors.detections import read_detections
-from processors.outputs import NO_OUTPUTS, FrameOutputs, read_outputs
+from processors.outputs import NO_OUTPUTS, read_outputs
 from uav_tui.hosting.tracks import DetectionTracks
-from uav_values.box import PixelBox
-from uav_values.detections import Detected
-
-
-@dataclass(slots=True)
-class FrameOutcome:
-    """What one call did (monotonic ns)."""
-
-    t_start_ns: int
-    t_end_ns: int
-    """When ``photo_processing`` returned, or when it (or what followed) raised."""
-    t_vector_ns: int = 0
-    """When ``getPreparedVector`` returned (0 when not called)."""
-    vector: Any = None
-    """What ``getPreparedVector`` returned, unchecked."""
-    outputs: FrameOutputs = NO_OUTPUTS
-    """What the output methods returned, checked (None each when not called or nothing this frame)."""
-    box: PixelBox | None = None
-    detections: tuple[Detected, ...] | None = None
-    """The processor's ``detections`` attribute, checked (None without one)."""
-    error: str | None = None
-    """The traceback's text when the processor raised."""
-    raised: str = ""
-    """The exception in one line (:func:`describe`) when the processor raised."""
+from uav_tui.hosting.wire import FrameOutcome
 
 
 def call_frame(instance: Any, image: Any, *, vector: bool, outputs: Collection[str] = (),
                let_through: tuple[type[BaseException], ...] = (), frame_seq: int | None = None,
-               tracks: DetectionTracks | None = None, seen_ns: int | None = None) -> FrameOutcome:
+               tracks: DetectionTracks | None = None, seen_ns: int | None = None,
+               as_data: Callable[[Any], Any] | None = None) -> FrameOutcome:
     """Process ``image`` (the frame ``frame_seq``) with ``instance``; ``vector``: call ``getPreparedVector`` too;
     ``outputs``: these output methods (:func:`processors.outputs.read_outputs`: a value of the wrong type is the
     processor's error; a landing target is stamped with ``frame_seq``); ``tracks``: the processor's tracks, which
-    number its ``detections`` as seen at ``seen_ns`` (the frame's capture, monotonic; the call's start when None).
-    Exceptions
-    of the types in ``let_through`` propagate (the processor's process ends on a MemoryError); any other is kept in
-    the outcome."""
+    number its ``detections`` as seen at ``seen_ns`` (the frame's capture, monotonic; the call's start when None);
+    ``as_data``: what the vector becomes in the record (the processor's process: plain data for the wire).
+    Exceptions of the types in ``let_through`` propagate (the processor's process ends on a MemoryError); any other
+    is kept in the outcome."""
     start = time.monotonic_ns()
-    outcome = FrameOutcome(start, 0)
+    end, t_vector, found, read, box, detections = 0, 0, None, NO_OUTPUTS, None, None
     try:
         instance.photo_processing(image)
-        outcome.t_end_ns = time.monotonic_ns()
+        end = time.monotonic_ns()
         if vector:
-            outcome.vector = instance.getPreparedVector()
-            outcome.t_vector_ns = time.monotonic_ns()
-        outcome.outputs = read_outputs(instance, outputs, frame_seq)
-        outcome.box = read_box(instance)
-        outcome.detections = read_detections(instance)
+            returned = instance.getPreparedVector()
+            t_vector = time.monotonic_ns()
+            found = returned if as_data is None else as_data(returned)
+        read = read_outputs(instance, outputs, frame_seq)
+        box = read_box(instance)
+        detections = read_detections(instance)
         if tracks is not None:
-            outcome.detections = tracks.assign(outcome.detections, start if seen_ns is None else seen_ns)
+            detections = tracks.assign(detections, start if seen_ns is None else seen_ns)
     except let_through:
         raise
     except Exception as exc:  # noqa: BLE001 - counted and reported by the caller, never fatal
-        outcome.t_end_ns = outcome.t_end_ns or time.monotonic_ns()
-        outcome.error = traceback.format_exc()
-        outcome.raised = describe(exc)
-    return outcome
+        return FrameOutcome(start, end or time.monotonic_ns(), t_vector, found, read, box, detections,
+                            traceback.format_exc(), describe(exc))
+    return FrameOutcome(start, end, t_vector, found, read, box, detections)
 
 
 def describe(exc: BaseException) -> str:

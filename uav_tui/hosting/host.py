@@ -8,11 +8,9 @@ from dataclasses import dataclass, field
 from enum import StrEnum
 from typing import TYPE_CHECKING, Any, Protocol
 
-from processors.outputs import NO_OUTPUTS, FrameOutputs
 from sources.buffer import Frame
 from uav_tui.config import Isolation
-from uav_values.box import PixelBox
-from uav_values.detections import Detected
+from uav_tui.hosting.wire import FrameOutcome
 
 if TYPE_CHECKING:
     from processors import LoadedProcessor
@@ -25,21 +23,13 @@ if TYPE_CHECKING:
 
 @dataclass(slots=True)
 class ProcessedFrame:
-    """One frame's trip through the processor, with the time of each stage (monotonic ns)."""
+    """One frame's trip through the processor: the frame, its :class:`~uav_tui.hosting.wire.FrameOutcome` as the
+    call made it (frozen, handed on untouched), and what the platform did with it (set on the loop)."""
 
     frame: Frame
     """The frame as captured; the processor may have drawn its overlay on ``frame.image``."""
-    t_start_ns: int
-    t_end_ns: int = 0
-    t_vector_ns: int = 0
-    """When getPreparedVector returned (0 if the processor has none)."""
-    vector: Any = None
-    """What getPreparedVector returned, unchecked (the autonomy gate validates it)."""
-    outputs: FrameOutputs = NO_OUTPUTS
-    """What the output methods returned: ``outputs.landing_target`` (getLandingTarget), ``outputs.gimbal``
-    (getGimbalPointing), ``outputs.get(field)`` for any; None each without the method, or nothing in this frame."""
-    error: str | None = None
-    """Traceback text if the processor raised."""
+    outcome: FrameOutcome
+    """What the processor did with it: stage times (monotonic ns), vector, outputs, box, detections, error."""
     decision: str = ""
     """What the autonomy gate did with the vector: ``executed`` or why not."""
     landing: str = ""
@@ -48,14 +38,6 @@ class ProcessedFrame:
     """What the platform did with the gimbal pointing: ``sent`` or why not ("" without one)."""
     relayed: dict[str, str] = field(default_factory=dict)
     """What the platform did with each further output (:data:`~uav_tui.relays.registry.REGISTRY`), by its field."""
-    extra: dict[str, Any] = field(default_factory=dict)
-    """Fields the processor stored with ``tmMgr.save(frame, **extra)`` for this frame."""
-    saved: bool = False
-    """True when the processor saved this frame's image."""
-    box: PixelBox | None = None
-    """The processor's ``box`` attribute after this frame (what it tracks), or None."""
-    detections: tuple[Detected, ...] | None = None
-    """The processor's ``detections`` after this frame, checked; None without the attribute (or on an error)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -117,21 +99,31 @@ class ProcessorState:
         return ", ".join(parts)
 
 
+StageClock = Callable[[Frame, FrameOutcome], FrameOutcome]
+"""A replay's clock: ``frame``'s outcome with its stage times moved onto the replay's clock."""
+
+
 class DeliversResults:
-    """What both hosts do with a finished frame, on the loop: its stage times moved onto a replay's clock
-    (``stage_clock``), counted in ``stats``, kept as ``last``, handed to the core."""
+    """What both hosts do with a frame's outcome, on the loop: its stage times moved onto a replay's clock
+    (``stage_clock``), counted in ``stats`` (an error once, here), kept as ``last``, handed to the core."""
 
     stats: RollingStats
-    stage_clock: Callable[[ProcessedFrame], None] | None
+    stage_clock: StageClock | None
     last: ProcessedFrame | None
+    consecutive_errors: int
     _on_result: Callable[[ProcessedFrame], None]
 
-    def _deliver(self, result: ProcessedFrame) -> None:
+    def _deliver(self, frame: Frame, outcome: FrameOutcome) -> None:
         if self.stage_clock is not None:
-            self.stage_clock(result)
-        self.stats.add(result.frame.seq, result.frame.t_mono_ns, result.t_start_ns, result.t_end_ns,
-                       result.t_vector_ns or result.t_end_ns)
-        self.last = result
+            outcome = self.stage_clock(frame, outcome)
+        self.stats.add(frame.seq, frame.t_mono_ns, outcome.t_start_ns, outcome.t_end_ns,
+                       outcome.t_vector_ns or outcome.t_end_ns)
+        if outcome.error is None:
+            self.consecutive_errors = 0
+        else:
+            self.stats.errors += 1
+            self.consecutive_errors += 1
+        self.last = result = ProcessedFrame(frame, outcome)
         self._on_result(result)
 
 
@@ -141,9 +133,9 @@ class ProcessorHost(Protocol):
 
     isolation: Isolation
     stats: RollingStats
-    stage_clock: Callable[[ProcessedFrame], None] | None
+    stage_clock: StageClock | None
     """Set in a replay: moves a result's stage times onto the replay's clock (before they are counted)."""
-    current: ProcessedFrame | None
+    current: Frame | None
     """The frame whose ``tmMgr.save`` calls are being stored (None between frames)."""
     last: ProcessedFrame | None
     """The newest processed frame."""

@@ -18,8 +18,7 @@ from typing import TYPE_CHECKING, Any
 from processors import LoadedProcessor
 from processors.base import ProcessorInfo
 from processors.frame_telemetry import DEFAULT_SAVE_MAX_HZ
-from processors.outputs import NO_OUTPUTS
-from sources.buffer import FrameBuffer
+from sources.buffer import Frame, FrameBuffer
 from uav_tui.config import Isolation
 from uav_tui.errors import UavError
 from uav_tui.events import EventLog
@@ -28,9 +27,9 @@ from uav_tui.hosting.child_link import ChildLink
 from uav_tui.hosting.child_process import ChildProcess, rss_mb
 from uav_tui.hosting.codec import UnreadableResult
 from uav_tui.hosting.frame_feeder import FrameFeeder
-from uav_tui.hosting.host import Answer, DeliversResults, HostPhase, ProcessedFrame, ProcessorState
+from uav_tui.hosting.host import Answer, DeliversResults, HostPhase, ProcessedFrame, ProcessorState, StageClock
 from uav_tui.hosting.supervisor import ChildSupervisor
-from uav_tui.hosting.wire import Result, ResultHead, Save
+from uav_tui.hosting.wire import FrameOutcome, Result, ResultHead, Save
 from uav_tui.stats import PipelineStats, RollingStats
 
 if TYPE_CHECKING:
@@ -63,9 +62,9 @@ class SubprocessHost(DeliversResults):
                  save_max_hz: float = DEFAULT_SAVE_MAX_HZ, first_backoff_s: float = 1.0) -> None:
         self.spec, self.kwargs = spec, dict(kwargs)
         self.stats = RollingStats()
-        self.stage_clock: Callable[[ProcessedFrame], None] | None = None
+        self.stage_clock: StageClock | None = None
         """Set in a replay: moves a result's stage times onto the replay's clock (before they are counted)."""
-        self.current: ProcessedFrame | None = None
+        self.current: Frame | None = None
         """The frame whose ``tmMgr.save`` requests are being stored (None between frames)."""
         self.last: ProcessedFrame | None = None
         self.consecutive_errors = 0
@@ -183,39 +182,32 @@ class SubprocessHost(DeliversResults):
         frame = self._feeder.take(child, message)
         if frame is None:
             return
-        result = ProcessedFrame(frame=frame, t_start_ns=message.t_start_ns, t_end_ns=message.t_end_ns,
-                                t_vector_ns=message.t_vector_ns, vector=message.vector,
-                                outputs=message.outputs or NO_OUTPUTS, error=message.error,
-                                box=message.box, detections=message.detections)
-        self._store(message.saves, result)
-        if message.detections:
+        outcome = message.outcome
+        self._store(message.saves, frame)
+        if outcome.detections:
             self._supervisor.next_track_id = max(self._supervisor.next_track_id, 1 + max(
-                (found.track_id for found in message.detections if found.track_id is not None), default=-1))
-        if result.error:
-            self.stats.errors += 1
-            self.consecutive_errors += 1
-        else:
-            self.consecutive_errors = 0
-        self._deliver(result)
+                (found.track_id for found in outcome.detections if found.track_id is not None), default=-1))
+        self._deliver(frame, outcome)
 
     def _unreadable(self, child: ChildProcess, unreadable: UnreadableResult) -> None:
         """A result whose outputs did not decode: that frame's error, its slots freed, nothing of it used."""
         head = unreadable.head
         assert isinstance(head, ResultHead)
-        self._take_result(child, Result(head.gen, head.t_start_ns, head.t_end_ns, head.t_vector_ns, head.released,
-                                        head.saves_throttled, None, None, None, None,
-                                        f"the processor's outputs could not be read: {unreadable.reason}", ()))
+        times = head.outcome
+        error = f"the processor's outputs could not be read: {unreadable.reason}"
+        self._take_result(child, Result(head.gen, head.released, head.saves_throttled, FrameOutcome(
+            times.t_start_ns, times.t_end_ns, times.t_vector_ns, error=error), ()))
 
     def _spent(self, child: ChildProcess, saves: tuple[Save, ...], released: tuple[str, ...]) -> None:
         """A reply's slots let go and its ``tmMgr.save`` calls."""
         self._feeder.release(child, released)
         self._store(saves, None)
 
-    def _store(self, saves: tuple[Save, ...], result: ProcessedFrame | None) -> None:
-        """Replay the child's ``tmMgr.save`` calls here, where the recorder is."""
+    def _store(self, saves: tuple[Save, ...], frame: Frame | None) -> None:
+        """Replay the child's ``tmMgr.save`` calls of ``frame`` here, where the recorder is."""
         if not saves or self.telemetry is None:
             return
-        self.current = result
+        self.current = frame
         try:
             for save in saves:
                 try:

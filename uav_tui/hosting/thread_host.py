@@ -25,9 +25,18 @@ from uav_tui.config import Isolation
 from uav_tui.events import EventLog
 from uav_tui.flight.telemetry import TelemetryManager
 from uav_tui.hosting.frame_call import call_frame
-from uav_tui.hosting.host import Answer, DeliversResults, HostPhase, HostState, ProcessedFrame, ProcessorState
+from uav_tui.hosting.host import (
+    Answer,
+    DeliversResults,
+    HostPhase,
+    HostState,
+    ProcessedFrame,
+    ProcessorState,
+    StageClock,
+)
 from uav_tui.hosting.thread_logs import ThreadLogBudget
 from uav_tui.hosting.tracks import DetectionTracks
+from uav_tui.hosting.wire import FrameOutcome
 from uav_tui.stats import PipelineStats, RollingStats
 
 if TYPE_CHECKING:
@@ -66,9 +75,9 @@ class ThreadHost(DeliversResults):
         self._fields: tuple[Telemetry | None, dict[str, Any]] = (None, {})
         """The telemetry last given to the processor and its fields as a dict (telemetry changes slower than frames)."""
         self.stats = RollingStats()
-        self.stage_clock: Callable[[ProcessedFrame], None] | None = None
+        self.stage_clock: StageClock | None = None
         """Set in a replay: moves a result's stage times onto the replay's clock (before they are counted)."""
-        self.current: ProcessedFrame | None = None
+        self.current: Frame | None = None
         """The frame being processed (read on the processor thread by ``tmMgr.save``); None between frames."""
         self.last: ProcessedFrame | None = None
         """The newest finished frame."""
@@ -142,9 +151,10 @@ class ThreadHost(DeliversResults):
         """Swap in another processor between two frames; returns the old one."""
         def swap() -> LoadedProcessor:
             old, self.processor = self.processor, processor
-            self.consecutive_errors = 0
             return old
-        return await self._submit(swap)
+        old = await self._submit(swap)
+        self.consecutive_errors = 0  # on the loop, after the old processor's results (posted before the swap)
+        return old
 
     async def reload(self) -> ProcessorInfo:
         """Re-import the processor's code and swap the new instance in; a load error keeps the old one."""
@@ -218,10 +228,10 @@ class ThreadHost(DeliversResults):
             if frame is None or frame.seq <= last_seq:
                 continue
             last_seq = frame.seq
-            result = self._process(frame)
+            outcome = self._process(frame)
             loop = self._loop
             if loop is not None and not loop.is_closed():
-                loop.call_soon_threadsafe(self._deliver, result)
+                loop.call_soon_threadsafe(self._deliver, frame, outcome)
 
     def _ready(self, seq: int, buffer: FrameBuffer | None) -> bool:
         """Something for the processor thread: a stop, a job, or a frame newer than ``seq`` of ``buffer``."""
@@ -234,30 +244,18 @@ class ThreadHost(DeliversResults):
             return True
         return self._buffer.newest_seq > seq
 
-    def _process(self, frame: Frame) -> ProcessedFrame:
-        instance = self.processor.instance
+    def _process(self, frame: Frame) -> FrameOutcome:
         self._busy_since_ns = time.monotonic_ns()
-        result = ProcessedFrame(frame=frame, t_start_ns=self._busy_since_ns)
-        self.current = result
+        self.current = frame
         self._begin(frame)
         try:
             capabilities = self.processor.info.capabilities
-            outcome = call_frame(instance, frame.image, vector="getPreparedVector" in capabilities,
-                                 outputs=output_methods(capabilities), frame_seq=frame.seq, tracks=self._tracks,
-                                 seen_ns=frame.t_mono_ns)
+            return call_frame(self.processor.instance, frame.image, vector="getPreparedVector" in capabilities,
+                              outputs=output_methods(capabilities), frame_seq=frame.seq, tracks=self._tracks,
+                              seen_ns=frame.t_mono_ns)
         finally:
             self._busy_since_ns = None
             self.current = None
-        result.t_start_ns, result.t_end_ns = outcome.t_start_ns, outcome.t_end_ns
-        result.t_vector_ns, result.vector = outcome.t_vector_ns, outcome.vector
-        result.outputs = outcome.outputs
-        result.box, result.detections, result.error = outcome.box, outcome.detections, outcome.error
-        if outcome.error is None:
-            self.consecutive_errors = 0
-        else:
-            self.stats.errors += 1
-            self.consecutive_errors += 1
-        return result
 
     def _begin(self, frame: Frame) -> None:
         """Tell the processor's ``tmMgr`` which frame it is processing and the telemetry at its capture."""

@@ -23,7 +23,7 @@ import msgspec
 import numpy as np
 
 from processors.base import ProcessorInfo
-from processors.outputs import FrameOutputs
+from processors.outputs import NO_OUTPUTS, FrameOutputs
 from uav_values.box import PixelBox
 from uav_values.detections import Detected
 
@@ -119,31 +119,58 @@ class LoadError(_Record, frozen=True, tag=5):
     missing: str | None
 
 
-class Result(_Record, frozen=True, tag=6):
-    """One claimed frame's outcome (monotonic ns times; ``t_vector_ns`` 0 without ``getPreparedVector``).
+class FrameOutcome(msgspec.Struct, frozen=True, array_like=True):
+    """What one call into the processor did with one frame (:func:`~uav_tui.hosting.frame_call.call_frame`): the
+    frame's one record, from that call to the relays, handed on untouched (monotonic ns times).
 
-    The fields up to ``saves_throttled`` are :class:`ResultHead`'s: what the platform still reads when the rest
+    The thread host hands the record the call made; the processor's process sends it inside its :class:`Result`
+    and the platform decodes the same type, checked.
+    """
+
+    t_start_ns: int
+    t_end_ns: int
+    """When ``photo_processing`` returned, or when it (or what followed) raised."""
+    t_vector_ns: int = 0
+    """When ``getPreparedVector`` returned (0 when not called)."""
+    vector: Value = None
+    """What ``getPreparedVector`` returned, unchecked (the autonomy gate checks it); from the processor's process,
+    as plain data (:data:`Value`)."""
+    outputs: FrameOutputs = NO_OUTPUTS
+    """What the output methods returned, checked (:mod:`processors.outputs`): ``outputs.landing_target``
+    (getLandingTarget), ``outputs.gimbal`` (getGimbalPointing), ``outputs.get(field)`` for any; None each without
+    the method, or nothing this frame."""
+    box: PixelBox | None = None
+    """The processor's ``box`` attribute after this frame (what it tracks), or None."""
+    detections: tuple[Detected, ...] | None = None
+    """The processor's ``detections``, checked and numbered (None without the attribute, or on an error)."""
+    error: str | None = None
+    """The traceback's text when the processor raised."""
+    raised: str = ""
+    """The exception in one line (:func:`~uav_tui.hosting.frame_call.describe`) when the processor raised."""
+
+
+class Times(msgspec.Struct, frozen=True, array_like=True):
+    """The leading fields of a :class:`FrameOutcome`: read alone when the whole does not decode."""
+
+    t_start_ns: int
+    t_end_ns: int
+    t_vector_ns: int
+
+
+class Result(_Record, frozen=True, tag=6):
+    """One claimed frame's outcome, with what the platform needs beside it.
+
+    The fields up to ``outcome``'s times are :class:`ResultHead`'s: what the platform still reads when the rest
     does not decode, to free the frame's slots and count its error.
     """
 
     gen: int
-    t_start_ns: int
-    t_end_ns: int
-    t_vector_ns: int
     released: tuple[str, ...]
     """Slots the child no longer references: a processor may keep a frame (the previous one, for optical flow) and
     the platform must not reuse its slot until it lets go."""
     saves_throttled: int
     """``tmMgr.save`` calls dropped above ``save_max_hz`` since the last result (in the child, before any copy)."""
-    vector: Value
-    """What ``getPreparedVector`` returned, as plain data (the gate checks it)."""
-    outputs: FrameOutputs | None
-    """What the output methods returned, checked (:mod:`processors.outputs`); None when none gave anything."""
-    box: PixelBox | None
-    detections: tuple[Detected, ...] | None
-    """The processor's ``detections``, checked (None without the attribute)."""
-    error: str | None
-    """Traceback text if the processor raised."""
+    outcome: FrameOutcome
     saves: tuple[Save, ...]
     """The ``tmMgr.save`` calls made since the last message."""
 
@@ -152,11 +179,9 @@ class ResultHead(_Record, frozen=True, tag=6):
     """The leading fields of a :class:`Result`: read alone when the whole does not decode."""
 
     gen: int
-    t_start_ns: int
-    t_end_ns: int
-    t_vector_ns: int
     released: tuple[str, ...]
     saves_throttled: int
+    outcome: Times
 
 
 class Reply(_Record, frozen=True, tag=7):

@@ -95,14 +95,14 @@ class RecordedCore(Protocol):
     @property
     def camera(self) -> CameraModel | None: ...
 
-    def current_frame(self) -> ProcessedFrame | None: ...
+    def current_frame(self) -> Frame | None: ...
 
     def add_frame_listener(self, listener: Callable[[ProcessedFrame], None]) -> None: ...
 
 
 @dataclass(slots=True)
 class _Save:
-    result: ProcessedFrame
+    frame: Frame
     pending: str = ""
     """Provisional image name (``.pending/<n>.jpg``), empty when the image was dropped."""
     extra: dict[str, Any] = field(default_factory=dict)
@@ -135,7 +135,7 @@ class Recorder:
         """Disk space held for the final ``run.json`` while the run is open (set by :meth:`open`)."""
         """Where a crash of this process writes its stacks while the run is open (set by :meth:`open`)."""
         self._emit: Callable[[Level, str], object] = lambda level, message: None
-        self._current: Callable[[], ProcessedFrame | None] = lambda: None
+        self._current: Callable[[], Frame | None] = lambda: None
         self._camera: Callable[[], CameraModel | None] = lambda: None
         self._ids = itertools.count(1)
         self._provisional = itertools.count(1)
@@ -225,8 +225,8 @@ class Recorder:
         the next frame) while the writer thread encodes, and a copy (~0.3 ms for 640x480) costs far
         less than encoding on this thread would.
         """
-        result = self._current()
-        if result is None:
+        frame = self._current()
+        if frame is None:
             self.misplaced_saves += 1
             if self.misplaced_saves == 1:
                 self._emit("warning", "tmMgr.save() called outside photo_processing(): ignored (it stores "
@@ -235,15 +235,13 @@ class Recorder:
         image = image.image if isinstance(image, Frame) else image  # a sources Frame is fine too
         if not isinstance(image, np.ndarray) or image.ndim not in (2, 3):
             raise TypeError(f"tmMgr.save(frame, **extra): frame must be an image array, got {type(image).__name__}")
-        entry = self._saves.get(id(result))
-        if entry is None or entry.result is not result:
-            entry = self._saves[id(result)] = _Save(result)
+        entry = self._saves.get(id(frame))
+        if entry is None or entry.frame is not frame:
+            entry = self._saves[id(frame)] = _Save(frame)
         entry.extra.update(extra)
-        result.extra.update(extra)
         name = entry.pending or f"{PENDING}/{next(self._provisional)}.jpg"
         if self.writer.put_image(name, image, copy=True):
             entry.pending = name
-            result.saved = True
 
     # -- event loop ------------------------------------------------------------------------------
 
@@ -251,8 +249,8 @@ class Recorder:
         """Queue the frame's row (and every Nth frame's image when ``record_every`` is set)."""
         frame_id = next(self._ids)
         name = image_name(frame_id)
-        entry = self._saves.pop(id(result), None)
-        if entry is not None and entry.result is result:
+        entry = self._saves.pop(id(result.frame), None)
+        if entry is not None and entry.frame is result.frame:
             extra = extra_json(entry.extra)
             image = name if entry.pending and self.writer.put(Rename(entry.pending, name)) else ""
         else:

@@ -106,14 +106,14 @@ def frame_record(result: ProcessedFrame, frame_id: int, image: str, extra_json: 
                  camera: CameraModel | None = None) -> FrameRecord:
     """The own columns of a processed frame (:data:`FRAME_OWN_COLUMNS` up to ``extra``) and its camera model."""
     frame = result.frame
-    vx, vy, vt = _vector(result.vector)
-    error = shorten(last_line(result.error), MAX_ERROR_CHARS) if result.error else ""
-    box = result.box or (None, None, None, None)
-    values = [frame_id, frame.seq, frame.t_wall_ns, frame.t_mono_ns, result.t_start_ns, result.t_end_ns,
-              result.t_vector_ns or None, vx, vy, vt, *box, result.decision, result.landing, result.gimbal,
+    vx, vy, vt = _vector(result.outcome.vector)
+    error = shorten(last_line(result.outcome.error), MAX_ERROR_CHARS) if result.outcome.error else ""
+    box = result.outcome.box or (None, None, None, None)
+    values = [frame_id, frame.seq, frame.t_wall_ns, frame.t_mono_ns, result.outcome.t_start_ns, result.outcome.t_end_ns,
+              result.outcome.t_vector_ns or None, vx, vy, vt, *box, result.decision, result.landing, result.gimbal,
               json.dumps(result.relayed) if result.relayed else "", error,
               bool(image), image, extra_json]
-    return FrameRecord(values, frame.t_mono_ns, camera, result.detections or ())
+    return FrameRecord(values, frame.t_mono_ns, camera, result.outcome.detections or ())
 
 
 def event_row(event: Event) -> Row:

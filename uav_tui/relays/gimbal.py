@@ -76,7 +76,7 @@ class GimbalRelay:
 
     def consider(self, result: ProcessedFrame) -> None:
         """Send ``result``'s pointing if the gate allows it now; ``result.gimbal`` says what was done."""
-        given = result.outputs.gimbal
+        given = result.outcome.outputs.gimbal
         if given is None:
             if self.turning and not self._blocked(result):
                 self._send(STOP)
@@ -163,5 +163,5 @@ class GimbalRelay:
 
 def say_no_gimbal(result: ProcessedFrame) -> None:
     """The flight controller has no gimbal control: ``result``'s pointing, if any, is said not sent."""
-    if result.outputs.gimbal is not None:
+    if result.outcome.outputs.gimbal is not None:
         result.gimbal = "not sent: the flight controller has no gimbal control"

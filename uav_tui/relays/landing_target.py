@@ -70,10 +70,10 @@ class LandingTargetRelay:
 
     def consider(self, result: ProcessedFrame) -> None:
         core = self.core
-        target = result.outputs.landing_target
+        target = result.outcome.outputs.landing_target
         landing = core.landing
         if target is None:
-            status = result.outputs.landing_status
+            status = result.outcome.outputs.landing_status
             landing.why_none = f"the processor says: {status}" if status else ""  # not an older frame's reason
             return
         if core.camera is None:

@@ -5,17 +5,20 @@ from __future__ import annotations
 import asyncio
 import bisect
 import csv
-from collections.abc import Callable
 from pathlib import Path
 from typing import Protocol
 
+import msgspec
+
 from controllers.base import FlightController, RecordedVehicle
 from controllers.replay_timeline import ReplayTimeline
+from sources.buffer import Frame
 from uav_tui.config import SafetyConfig
 from uav_tui.events import EventLog
 from uav_tui.flight.autonomy import AutonomyGate
 from uav_tui.flight.telemetry import TelemetryManager
-from uav_tui.hosting.host import ProcessedFrame
+from uav_tui.hosting.host import ProcessedFrame, StageClock
+from uav_tui.hosting.wire import FrameOutcome
 
 
 class ReplayedController(FlightController, RecordedVehicle, Protocol):
@@ -54,7 +57,7 @@ def _switch_in_message(row: dict[str, str]) -> bool | None:
     return message.startswith("autonomy ON")
 
 
-def stage_clock(timeline: ReplayTimeline) -> Callable[[ProcessedFrame], None]:
+def stage_clock(timeline: ReplayTimeline) -> StageClock:
     """What moves a replayed frame's stage times onto the replay's clock, where its capture time is.
 
     The stages keep their real durations, and so does the frame's wait for the processor: a paced replay shows a
@@ -64,12 +67,12 @@ def stage_clock(timeline: ReplayTimeline) -> Callable[[ProcessedFrame], None]:
     computer's uptime minus the recorded one.
     """
 
-    def on_replay_clock(result: ProcessedFrame) -> None:
-        shown = timeline.real_ns(result.frame.t_mono_ns)
-        shift = result.frame.t_mono_ns - (result.t_start_ns if shown is None else shown)
-        result.t_start_ns += shift
-        result.t_end_ns += shift if result.t_end_ns else 0
-        result.t_vector_ns += shift if result.t_vector_ns else 0
+    def on_replay_clock(frame: Frame, outcome: FrameOutcome) -> FrameOutcome:
+        shown = timeline.real_ns(frame.t_mono_ns)
+        shift = frame.t_mono_ns - (outcome.t_start_ns if shown is None else shown)
+        return msgspec.structs.replace(outcome, t_start_ns=outcome.t_start_ns + shift,
+                                       t_end_ns=outcome.t_end_ns + shift if outcome.t_end_ns else 0,
+                                       t_vector_ns=outcome.t_vector_ns + shift if outcome.t_vector_ns else 0)
 
     return on_replay_clock
 

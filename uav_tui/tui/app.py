@@ -207,7 +207,7 @@ class UavApp(App[None]):
 
     def _newest_frame(self) -> tuple[int, np.ndarray, tuple[int, int, int, int] | None] | None:
         last = self.core.worker.last if self.core.worker is not None else None
-        return None if last is None else (last.frame.t_mono_ns, last.frame.image, last.box)
+        return None if last is None else (last.frame.t_mono_ns, last.frame.image, last.outcome.box)
 
     # -- commands --------------------------------------------------------------------------------
 
