@@ -13,8 +13,7 @@ import itertools
 import logging
 import threading
 import time
-from collections.abc import Callable
-from typing import Any
+from typing import Any, Protocol
 
 from processors.errors import ProcessorLoadError
 from uav_tui.hosting.child_process import ChildProcess, PendingCall
@@ -36,23 +35,31 @@ class ProcessorRaised(Exception):
     """The researcher's method raised in the child; the message is ``Type: message``."""
 
 
+class TakesResults(Protocol):
+    """Where :class:`ChildLink` hands what a child sent, on the loop: the
+    :class:`~uav_tui.hosting.process_host.SubprocessHost`."""
+
+    def take_result(self, child: ChildProcess, message: Result) -> None:
+        """A frame's :class:`~uav_tui.hosting.wire.Result`."""
+
+    def take_unreadable(self, child: ChildProcess, unreadable: UnreadableResult) -> None:
+        """A result that did not decode: what could be read of it, and why."""
+
+    def take_spent(self, child: ChildProcess, saves: tuple[Save, ...], released: tuple[str, ...]) -> None:
+        """A reply's ``tmMgr.save`` calls and the slots it released."""
+
+
 class ChildLink:
     """Sends to the children and reads what they send, on the event loop.
 
     Args:
         spec: the processor, for log lines.
-        on_result: given each :class:`~uav_tui.hosting.wire.Result` (on the loop).
-        on_spent: given a reply's ``tmMgr.save`` calls and the slots it released (on the loop).
-        on_unreadable: given a result that did not decode: what could be read of it, and why (on the loop).
+        host: where results, unreadable results and replies' saves go (on the loop).
     """
 
-    def __init__(self, spec: str, on_result: Callable[[ChildProcess, Result], None],
-                 on_spent: Callable[[ChildProcess, tuple[Save, ...], tuple[str, ...]], None],
-                 on_unreadable: Callable[[ChildProcess, UnreadableResult], None]) -> None:
+    def __init__(self, spec: str, host: TakesResults) -> None:
         self.spec = spec
-        self._on_result = on_result
-        self._on_spent = on_spent
-        self._on_unreadable = on_unreadable
+        self._host = host
         self._send_lock = threading.Lock()
         self._call_ids = itertools.count(1)
         self._loop: asyncio.AbstractEventLoop | None = None
@@ -117,7 +124,7 @@ class ChildLink:
                                    self.spec, child.unreadable, child.pid, exc)
                 continue
             if isinstance(message, Result):
-                self._on_result(child, message)
+                self._host.take_result(child, message)
             else:
                 self._on_message(child, message)
         return len(messages)
@@ -147,9 +154,9 @@ class ChildLink:
     def _unreadable(self, child: ChildProcess, exc: UnreadableResult) -> None:
         """A result or reply whose rest did not decode: the frame's error, or the call's."""
         if not isinstance(exc.head, ReplyHead):
-            self._on_unreadable(child, exc)
+            self._host.take_unreadable(child, exc)
             return
-        self._on_spent(child, (), exc.head.released)
+        self._host.take_spent(child, (), exc.head.released)
         call = child.calls.pop(exc.head.call_id, None)
         if call is not None and not call.future.done():
             call.future.set_exception(ProcessorRaised(f"WireError: the answer is not data: {exc.reason}"))
@@ -163,7 +170,7 @@ class ChildLink:
                 child.ready.set_exception(ProcessorLoadError(message.message, path=message.path,
                                                              class_name=message.class_name, missing=message.missing))
         elif isinstance(message, Reply):
-            self._on_spent(child, message.saves, message.released)
+            self._host.take_spent(child, message.saves, message.released)
             call = child.calls.pop(message.call_id, None)
             if call is not None and not call.future.done():
                 if message.ok:

@@ -14,7 +14,7 @@ import itertools
 import logging
 import threading
 import time
-from collections.abc import Callable, Iterable
+from collections.abc import Iterable
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -27,10 +27,11 @@ from uav_tui.hosting.child_process import ChildProcess, Offered
 from uav_tui.hosting.codec import PLAIN, camera_message
 from uav_tui.hosting.frame_mailbox import TELEMETRY_BYTES, MailboxGone, Offer
 from uav_tui.hosting.frame_ring import FrameRing
-from uav_tui.hosting.wire import Forget, Result, ToChild
+from uav_tui.hosting.wire import Forget, Result
 
 if TYPE_CHECKING:
     from sources.camera_model import CameraModel
+    from uav_tui.hosting.child_link import ChildLink
 
 logger = logging.getLogger(__name__)
 
@@ -45,10 +46,10 @@ class FrameFeeder:
     Args:
         spec: the processor, for log lines.
         events: where a failing hand-off is reported (once).
-        send: sends a message to a child; False when it is gone.
+        link: what sends a message to a child (:meth:`~uav_tui.hosting.child_link.ChildLink.send`).
     """
 
-    def __init__(self, spec: str, events: EventLog, send: Callable[[ChildProcess, ToChild], bool]) -> None:
+    def __init__(self, spec: str, events: EventLog, link: ChildLink) -> None:
         self.spec = spec
         self.events = events
         self.telemetry: TelemetryManager | None = None
@@ -57,7 +58,7 @@ class FrameFeeder:
         """The child frames go to (None while there is none)."""
         self.hand_over_failures = 0
         """Frames that could not be handed to the child (a platform fault; the first is logged)."""
-        self._send = send
+        self._link = link
         self._lock = threading.RLock()
         self._wake = threading.Condition(self._lock)
         self._offer_made = threading.Condition(self._lock)
@@ -92,7 +93,7 @@ class FrameFeeder:
                 self._detach(self._buffer)
             self._buffer, self._camera, child = buffer, camera, self.child
         if child is not None:
-            self._send(child, camera_message(camera))  # before the first frame of the new source is offered
+            self._link.send(child, camera_message(camera))  # before the first frame of the new source is offered
         with self._lock:
             buffer.set_allocator(self._ring.capture_view)  # cameras that can decode into shared memory do
             buffer.set_read_waiter(functools.partial(self._wait_claimed, buffer))
@@ -102,7 +103,7 @@ class FrameFeeder:
     def feed(self, child: ChildProcess | None) -> None:
         """Offer frames to ``child`` from now on (None: to nobody); a new child is told the camera model first."""
         if child is not None and self._camera is not None:  # before it can be offered a frame
-            self._send(child, camera_message(self._camera))
+            self._link.send(child, camera_message(self._camera))
         with self._lock:
             self.child = child
             self._picked, self._offered = (None, 0), (None, 0, 0)
@@ -225,7 +226,7 @@ class FrameFeeder:
         if copied:
             np.copyto(slot.array(), frame.image)  # the slot is ours alone until it is offered
         if forget:
-            self._send(child, Forget(tuple(forget)))
+            self._link.send(child, Forget(tuple(forget)))
         offer = Offer(next(self._gens), slot.name, slot.shape, frame.seq, frame.t_mono_ns, frame.t_wall_ns,
                       *self._telemetry_at(frame.t_mono_ns))
         with self._lock:

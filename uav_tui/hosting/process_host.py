@@ -75,8 +75,8 @@ class SubprocessHost(DeliversResults):
         self.timeout_s = timeout_s
         self._on_result = on_result
         self._running = False
-        self._link = ChildLink(spec, on_result=self._take_result, on_spent=self._spent, on_unreadable=self._unreadable)
-        self._feeder = FrameFeeder(spec, events, send=self._link.send)
+        self._link = ChildLink(spec, self)
+        self._feeder = FrameFeeder(spec, events, self._link)
         self._supervisor = ChildSupervisor(
             spec, self.kwargs, link=self._link, feeder=self._feeder, events=events, on_fault=on_fault,
             timeout_s=timeout_s, memory_mb=memory_mb, save_images=save_images, save_max_hz=save_max_hz,
@@ -175,9 +175,10 @@ class SubprocessHost(DeliversResults):
         self._supervisor.close()
         self._feeder.close(self._supervisor.children)
 
-    # -- what the child sends back (on the loop) ---------------------------------------------------
+    # -- what the child sends back (on the loop; :class:`~uav_tui.hosting.child_link.TakesResults`) ---------------
 
-    def _take_result(self, child: ChildProcess, message: Result) -> None:
+    def take_result(self, child: ChildProcess, message: Result) -> None:
+        """A frame's result: its slots freed, its saves stored, its outcome delivered as it arrived."""
         self.saves_throttled += message.saves_throttled  # dropped in the child, whatever became of the frame
         frame = self._feeder.take(child, message)
         if frame is None:
@@ -189,16 +190,16 @@ class SubprocessHost(DeliversResults):
                 (found.track_id for found in outcome.detections if found.track_id is not None), default=-1))
         self._deliver(frame, outcome)
 
-    def _unreadable(self, child: ChildProcess, unreadable: UnreadableResult) -> None:
+    def take_unreadable(self, child: ChildProcess, unreadable: UnreadableResult) -> None:
         """A result whose outputs did not decode: that frame's error, its slots freed, nothing of it used."""
         head = unreadable.head
         assert isinstance(head, ResultHead)
         times = head.outcome
         error = f"the processor's outputs could not be read: {unreadable.reason}"
-        self._take_result(child, Result(head.gen, head.released, head.saves_throttled, FrameOutcome(
+        self.take_result(child, Result(head.gen, head.released, head.saves_throttled, FrameOutcome(
             times.t_start_ns, times.t_end_ns, times.t_vector_ns, error=error), ()))
 
-    def _spent(self, child: ChildProcess, saves: tuple[Save, ...], released: tuple[str, ...]) -> None:
+    def take_spent(self, child: ChildProcess, saves: tuple[Save, ...], released: tuple[str, ...]) -> None:
         """A reply's slots let go and its ``tmMgr.save`` calls."""
         self._feeder.release(child, released)
         self._store(saves, None)
