@@ -53,6 +53,7 @@ from uav_tui.web.view import ServedCore
 from uav_values.box import PixelBox
 
 if TYPE_CHECKING:
+    from uav_tui.hosting.host import ProcessedFrame
     from uav_tui.web.ground_video import GroundVideo
 
 logger = logging.getLogger(__name__)
@@ -181,16 +182,17 @@ class CameraTracking:
 
     # -- receiving -------------------------------------------------------------------------------
 
-    def _on_frame(self, result: Any) -> None:
+    def _on_frame(self, result: ProcessedFrame) -> None:
         """Frame listener (on the loop): keep what the processor reported for the newest frame."""
         height, width = result.frame.image.shape[:2]
-        self.tracked = (result.box, (width, height), result.error is not None)
-        if result.box is None:
+        box = result.outcome.box
+        self.tracked = (box, (width, height), result.outcome.error is not None)
+        if box is None:
             self.located = NOT_LOCATED
         else:  # where it was at the capture (~40 us)
             t_ns = result.frame.t_mono_ns
             seen = asdict(self.core.telemetry.at(t_ns)[0])
-            self.located = locate_row(self.core.camera, result.box, seen, at_ns=t_ns)
+            self.located = locate_row(self.core.camera, box, seen, at_ns=t_ns)
             self.motion.add(t_ns, self.located)
 
     def received(self, data: bytes, addr: tuple[str, int]) -> None:
