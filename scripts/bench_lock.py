@@ -36,6 +36,7 @@ from uav_tui.flight.appearance import likeness, look  # noqa: E402
 from uav_tui.flight.track_lock import LockState, TrackLock  # noqa: E402
 from uav_tui.flight.track_overlay import draw_tracks  # noqa: E402
 from uav_tui.hosting.host import ProcessedFrame  # noqa: E402
+from uav_tui.hosting.wire import FrameOutcome  # noqa: E402
 from uav_values.detections import Detected  # noqa: E402
 
 CALLS = 2000
@@ -65,15 +66,15 @@ def steer_us(count: int, *, lost: bool) -> float:
     x, y, w, h = found[0].box
     image[y:y + h, x:x + w] = (40, 40, 200)  # a red car among noise: no new track looks like it
     lock = TrackLock(events, lambda: 0.0)
-    lock.steer(ProcessedFrame(Frame(image, 1, 0, 0), 0, detections=found[:1]))
+    lock.steer(ProcessedFrame(Frame(image, 1, 0, 0), FrameOutcome(0, 0, detections=found[:1])))
     lock.lock(0, None)
-    lock.steer(ProcessedFrame(Frame(image, 2, 1, 0), 0, detections=found[:1]))  # its look is kept
+    lock.steer(ProcessedFrame(Frame(image, 2, 1, 0), FrameOutcome(0, 0, detections=found[:1])))  # its look is kept
     shown = found[1:] if lost else found
     n = [2]
 
     def one() -> None:
         n[0] += 1
-        lock.steer(ProcessedFrame(Frame(image, n[0], n[0], 0), 0, detections=shown))
+        lock.steer(ProcessedFrame(Frame(image, n[0], n[0], 0), FrameOutcome(0, 0, detections=shown)))
     us = median_us(one, 500)
     assert lock.track_id == 0 and lock.state is (LockState.LOST if lost else LockState.LOCKED), lock.status()
     return us
@@ -82,7 +83,7 @@ def steer_us(count: int, *, lost: bool) -> float:
 def overlay_us(count: int) -> float:
     image, lock = picture(), TrackLock(EventLog(), lambda: 0.0)
     found = tuple(Detected(box, "car", 0.9, track_id=i) for i, box in enumerate(boxes(count)))
-    lock.steer(ProcessedFrame(Frame(image, 1, 0, 0), 0, detections=found))
+    lock.steer(ProcessedFrame(Frame(image, 1, 0, 0), FrameOutcome(0, 0, detections=found)))
     lock.lock(0, None)
     status = lock.status()
     return median_us(lambda: draw_tracks(image, found, status, (0.5, 0.2, 0.5)), 500)

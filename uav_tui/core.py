@@ -332,7 +332,7 @@ class UavCore:
             self.processor_error = exception
         self.lock.steer(result)
         if result.frame.image.flags.writeable:
-            draw_tracks(result.frame.image, result.detections, self.lock.status(), result.vector)
+            draw_tracks(result.frame.image, result.outcome.detections, self.lock.status(), self.lock.vector)
         self.gate.consider(result)
         consider_all(self.relays, result)
         for listener in tuple(self._frame_listeners):

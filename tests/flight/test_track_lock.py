@@ -25,6 +25,7 @@ from uav_tui.flight.track_overlay import LOCK_COLOUR, NUMBER_COLOUR, draw_tracks
 from uav_tui.hosting.frame_call import call_frame
 from uav_tui.hosting.host import ProcessedFrame
 from uav_tui.hosting.tracks import DetectionTracks
+from uav_tui.hosting.wire import FrameOutcome
 from uav_values.detections import Detected
 
 RED, BLUE, DIM_RED = (40, 40, 200), (200, 60, 30), (30, 30, 150)
@@ -41,7 +42,8 @@ def frame(n: int, cars: dict[int, tuple[tuple[int, int, int, int], tuple[int, in
         image[y:y + h, x:x + w] = colour
         image[y + h // 2, x:x + w] = 255  # a white stripe across the roof
     found = tuple(Detected(box, "car", 0.9, track_id=i) for i, (box, _) in cars.items())
-    return ProcessedFrame(Frame(image, n, round(n * 1e9 / FPS), 0), 0, vector=vector, detections=found)
+    return ProcessedFrame(Frame(image, n, round(n * 1e9 / FPS), 0),
+                          FrameOutcome(0, 0, vector=vector, detections=found))
 
 
 def locked(lost_after_s: float = 1.0) -> tuple[TrackLock, EventLog]:
@@ -59,11 +61,12 @@ def test_the_locked_track_makes_the_vector_and_the_box_instead_of_the_processor(
     for result in seen:
         lock.steer(result)
     last = seen[-1]
-    assert last.box == (211, 60, 40, 30) and lock.state is LockState.LOCKED
+    assert last.outcome.box == (211, 60, 40, 30) and lock.state is LockState.LOCKED
     # The trackers' steering towards the box (right of and above the centre of a down camera), eased in.
-    vx, vy, t = Steering("down", 2.0).vector(last.box, (320, 240))
-    assert last.vector == pytest.approx((vx, vy, t)) and vx > 0 and vy > 0
-    assert seen[0].vector[:2] == (0.0, 0.0) and 0 < seen[1].vector[1] < seen[3].vector[1] < vy  # eased in
+    vx, vy, t = Steering("down", 2.0).vector(last.outcome.box, (320, 240))
+    assert last.outcome.vector == pytest.approx((vx, vy, t)) and vx > 0 and vy > 0
+    eased = [s.outcome.vector for s in seen]
+    assert eased[0][:2] == (0.0, 0.0) and 0 < eased[1][1] < eased[3][1] < vy  # eased in
     assert str(lock.status()) == "locked on #3 car"
 
 
@@ -73,7 +76,7 @@ def test_a_detector_missing_a_frame_neither_says_the_lock_lost_nor_eases_in_agai
     for n in range(1, 13):  # the car missed on every third frame
         result = frame(n, {} if n % 3 == 0 else {3: ((250, 20, 40, 30), RED)})
         lock.steer(result)
-        vectors.append(result.vector)
+        vectors.append(result.outcome.vector)
     assert [v is None for v in vectors] == [n % 3 == 0 for n in range(1, 13)]
     speeds = [math.hypot(v[0], v[1]) for v in vectors if v is not None]
     assert speeds == sorted(speeds) and speeds[-1] > 0.6  # eased in all along: 0.1 m/s a frame at 10 fps
@@ -90,7 +93,7 @@ def test_a_forward_camera_steers_to_keep_the_lock_time_size() -> None:
     for n in range(1, 30):  # it moves away: smaller
         result = frame(n, {1: ((150, 110, 20, 15), RED)})
         lock.steer(result)
-    assert result.vector[0] == pytest.approx(1.0)  # forward at max speed (2 x half the height lost)
+    assert result.outcome.vector[0] == pytest.approx(1.0)  # forward at max speed (2 x half the height lost)
 
 
 def test_only_a_track_on_the_newest_frame_can_be_locked() -> None:
@@ -108,14 +111,14 @@ def test_a_lost_lock_takes_back_a_new_track_that_looks_alike_not_another_car() -
         lock.steer(frame(n, {3: ((200, 60, 40, 30), RED), 5: ((40, 150, 30, 40), BLUE)}))
     hidden = frame(4, {5: ((40, 150, 30, 40), BLUE)})
     lock.steer(hidden)
-    assert lock.state is LockState.LOST and hidden.vector is None and hidden.box is None
+    assert lock.state is LockState.LOST and hidden.outcome.vector is None and hidden.outcome.box is None
     blue = frame(5, {5: ((40, 150, 30, 40), BLUE), 8: ((100, 100, 30, 40), BLUE)})  # a new blue car: not it
     lock.steer(blue)
-    assert lock.state is LockState.LOST and blue.vector is None
+    assert lock.state is LockState.LOST and blue.outcome.vector is None
     back = frame(6, {5: ((40, 150, 30, 40), BLUE), 8: ((100, 100, 30, 40), BLUE), 9: ((230, 70, 44, 33), DIM_RED)})
     lock.steer(back)
-    assert lock.state is LockState.LOCKED and lock.track_id == 9 and back.box == (230, 70, 44, 33)
-    assert back.vector is not None and lock.status().renumbered == 1
+    assert lock.state is LockState.LOCKED and lock.track_id == 9 and back.outcome.box == (230, 70, 44, 33)
+    assert back.outcome.vector is not None and lock.status().renumbered == 1
     assert any("lock: #3 car is now #9" in e.message for e in events.recent)
 
 
@@ -137,7 +140,7 @@ def test_a_lock_lost_longer_than_lost_after_s_is_released() -> None:
     assert any("lock on #3 car released: not seen for 1 s (lost_after_s)" in e.message for e in events.recent)
     after = frame(13, {3: ((200, 60, 40, 30), RED)})
     lock.steer(after)
-    assert after.vector == (0.3, 0.0, 1.0) and after.box is None  # the processor's own again
+    assert after.outcome.vector == (0.3, 0.0, 1.0) and after.outcome.box is None  # the processor's own again
 
 
 def test_without_lost_after_s_a_lost_lock_waits() -> None:
@@ -175,7 +178,7 @@ def test_the_overlay_numbers_each_track_and_marks_the_lock() -> None:
     result = frame(1, {3: ((200, 60, 40, 30), RED), 5: ((40, 150, 30, 40), BLUE)})
     lock.steer(result)
     image = result.frame.image
-    draw_tracks(image, result.detections, lock.status(), result.vector)
+    draw_tracks(image, result.outcome.detections, lock.status(), lock.vector)
     below_blue = image[190:205, 40:70]
     assert (below_blue == NUMBER_COLOUR).all(axis=2).sum() > 10  # "#5" under its box
     assert (image[58:62, 200:240] == LOCK_COLOUR).all(axis=2).sum() > 40  # the locked box's top edge
@@ -189,11 +192,12 @@ def test_the_shipped_yolos_frame_shows_the_numbers_the_platform_gave() -> None:
     for n in range(3):
         image = np.roll(photo, 4 * n, axis=1)
         outcome = call_frame(detector, image, vector=False, tracks=tracks, seen_ns=n * 100_000_000)
-        result = ProcessedFrame(Frame(image, n + 1, n * 100_000_000, 0), 0, detections=outcome.detections)
+        result = ProcessedFrame(Frame(image, n + 1, n * 100_000_000, 0),
+                                FrameOutcome(0, 0, detections=outcome.detections))
         lock.steer(result)
         before = image.copy()
-        draw_tracks(image, result.detections, lock.status(), result.vector)
-    person = next(found for found in result.detections or () if found.label == "person")
+        draw_tracks(image, result.outcome.detections, lock.status(), lock.vector)
+    person = next(found for found in result.outcome.detections or () if found.label == "person")
     x, y, w, h = person.box
     below = image[y + h:y + h + 14, x:x + 40] != before[y + h:y + h + 14, x:x + 40]
     assert person.track_id is not None and below.any(axis=2).sum() > 20  # "#0" under her box
@@ -229,7 +233,7 @@ def test_the_lock_gets_its_sim_car_back_under_a_new_number_after_the_tracker_dro
         found = tracks.assign(tuple(Detected(box, "car", 0.9) for _, box in cars), round(t * 1e9))
         for (car, _), seen in zip(cars, found or (), strict=True):
             numbers[car].add(seen.track_id)
-        lock.steer(ProcessedFrame(Frame(image, n + 1, round(t * 1e9), 0), 0, detections=found))
+        lock.steer(ProcessedFrame(Frame(image, n + 1, round(t * 1e9), 0), FrameOutcome(0, 0, detections=found)))
         if n == 5:
             lock.lock(next(d.track_id for (car, _), d in zip(cars, found or (), strict=True) if car == 0), None)
     assert len(numbers[0]) == len(numbers[1]) == 2, numbers  # both in view renumbered by the gap (the third left)

@@ -31,10 +31,11 @@ from dataclasses import dataclass
 from enum import StrEnum
 from typing import TYPE_CHECKING
 
+import msgspec
 import numpy as np
 
 from processors.follow import FOLLOW_GAIN
-from processors.steering import Ramp, Steering
+from processors.steering import Ramp, Steering, Vector
 from uav_tui.errors import CommandError
 from uav_tui.flight.appearance import Look, blend, likeness, look
 from uav_values.box import PixelBox
@@ -110,6 +111,8 @@ class TrackLock:
         self.track_id: int | None = None
         self.label = ""
         self.renumbered = 0
+        self.vector: Vector | None = None
+        """The vector the lock made the newest frame's (None while lost or off)."""
         self.newest: tuple[Detected, ...] = ()
         """The newest processed frame's detections (what ``lock`` and :meth:`track_at` choose from)."""
         self._look: Look | None = None
@@ -163,24 +166,27 @@ class TrackLock:
         return True
 
     def steer(self, result: ProcessedFrame) -> None:
-        """Note ``result``'s detections; while locked, make its vector and box the locked track's (None each while
-        it is not seen)."""
-        self.newest = result.detections or ()
+        """Note ``result``'s detections; while locked, its outcome becomes a copy whose vector and box are the
+        locked track's (None each while it is not seen): the call's own record stays as the processor made it."""
+        outcome = result.outcome
+        self.newest = outcome.detections or ()
         self._now_s = result.frame.t_mono_ns / 1e9
         if self.state is LockState.OFF:
+            self.vector = None
             return
         image = result.frame.image
         found = next((d for d in self.newest if d.track_id == self.track_id), None) or self._taken_back(image)
-        result.box = None if found is None else found.box
         if found is not None:
             self.state, self._seen_s, self._box, self._said_lost = LockState.LOCKED, self._now_s, found.box, False
             self._look = blend(self._look, look(image, found.box), LOOK_WEIGHT)
             self._present = frozenset(d.track_id for d in self.newest if d.track_id not in (None, self.track_id))
-            vector = self._steering.vector(found.box, (image.shape[1], image.shape[0]), self._ref_height)
-            result.vector = self._ramp(vector, self._now_s)
+            aim = self._steering.vector(found.box, (image.shape[1], image.shape[0]), self._ref_height)
+            self.vector = self._ramp(aim, self._now_s)
+            result.outcome = msgspec.structs.replace(outcome, box=found.box, vector=self.vector)
             return
         self.state, lost_s = LockState.LOST, self._now_s - self._seen_s
-        result.vector = None if lost_s < BRIEF_LOSS_S else self._ramp(None, self._now_s)
+        self.vector = None if lost_s < BRIEF_LOSS_S else self._ramp(None, self._now_s)
+        result.outcome = msgspec.structs.replace(outcome, box=None, vector=self.vector)
         if lost_s >= BRIEF_LOSS_S and not self._said_lost:
             self._said_lost = True
             self.events.emit("warning", "autonomy", f"lock: #{self.track_id} {self.label} lost")

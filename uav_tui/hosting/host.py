@@ -24,8 +24,9 @@ if TYPE_CHECKING:
 @dataclass(slots=True)
 class ProcessedFrame:
     """One frame's trip through the processor: the frame, its :class:`~uav_tui.hosting.wire.FrameOutcome` as the
-    call made it (frozen: nothing after the call changes it; a replay's stage clock puts a re-timed copy here), and
-    what the platform did with it (set on the loop)."""
+    call made it (frozen: nothing after the call changes it; a replay's stage clock puts a re-timed copy here, the
+    operator's lock on a track a copy with the track's box and vector), and what the platform did with it (set on
+    the loop)."""
 
     frame: Frame
     """The frame as captured; the processor may have drawn its overlay on ``frame.image``."""
