@@ -44,7 +44,27 @@ def test_what_is_reported_on_a_hidden_frame_counts_only_as_not_reported_lost() -
     boxed, lost = score_sequence(pred, GT, TIMES), score_sequence(GT.copy(), GT, TIMES)
     assert (boxed.absent_frames, boxed.absent_lost, boxed.absent_lost_share) == (1, 0, 0.0)
     assert (lost.absent_frames, lost.absent_lost, lost.absent_lost_share) == (1, 1, 1.0)
-    assert dataclasses.replace(boxed, absent_lost=1, absent_lost_share=1.0) == lost
+    assert dataclasses.replace(boxed, absent_lost=1, absent_lost_share=1.0, frames_to_lost=0.0) == lost
+
+
+def test_a_reappearance_counts_as_found_again_only_within_a_second() -> None:
+    gt = np.array([[0, 0, 20, 10]] * 2 + [[np.nan] * 4] * 3 + [[0, 0, 20, 10]] * 4, dtype=float)
+    times = np.ones(len(gt))
+    late = gt.copy()
+    late[2:7] = np.nan  # lost from the first absent frame; back 2 frames after the target
+    assert (score_sequence(late, gt, times, fps=3.0).reacquired, score_sequence(late, gt, times, fps=2.0).reacquired,
+            score_sequence(late, gt, times, fps=2.0).reappearances) == (1, 0, 1)
+    slow = gt.copy()
+    slow[2:4] = [40, 40, 20, 10]  # a box on nothing for 2 of the 3 absent frames, then reported lost
+    slow[4:] = np.nan
+    scores = score_sequence(slow, gt, times, fps=2.0)
+    assert (scores.disappearances, scores.frames_to_lost, scores.reacquired) == (1, 2.0, 0)
+    assert scores.reacquired_share == 0.0
+    kept = np.nan_to_num(gt, nan=40.0)  # a box on every absent frame: never reported lost, the whole absence
+    never = score_sequence(kept, gt, times, fps=2.0)
+    assert (never.frames_to_lost, never.reacquired) == (3.0, 1)
+    overall = summarise([scores, never], np.ones(2 * len(gt)))
+    assert (overall.frames_to_lost, overall.reacquired, overall.reappearances) == (2.5, 1, 2)
 
 
 def test_without_absent_frames_there_is_no_share() -> None:

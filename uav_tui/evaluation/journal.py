@@ -63,7 +63,7 @@ def read(folder: Path, sequences: list[Sequence], threads: int) -> list[JobResul
         boxes = np.array([row if row is not None else [math.nan] * 4 for row in entry["boxes"]], np.float64)
         times_ms = np.array(entry["times_ms"], np.float64)
         result = JobResult(sequence.name, entry["tracker"], boxes.reshape(-1, 4), times_ms,
-                           score_sequence(boxes.reshape(-1, 4), sequence.gt, times_ms), saves=entry["saves"],
-                           save_calls=entry["save_calls"], threads=threads)
+                           score_sequence(boxes.reshape(-1, 4), sequence.gt, times_ms, sequence.fps),
+                           saves=entry["saves"], save_calls=entry["save_calls"], threads=threads)
         results[result.key] = result
     return list(results.values())

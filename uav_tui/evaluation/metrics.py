@@ -8,7 +8,12 @@
 * frames lost (lost while visible): frames with a gt box where the tracker reported none (no box scores
   IoU 0 and an infinite centre error);
 * absent reported lost: of the frames whose gt is NaN (target not visible), the share where the tracker
-  reported no box (what a loss signal is for).
+  reported no box (what a loss signal is for);
+* re-acquired: of the target's reappearances (a visible frame after absent ones), those where the tracker
+  reported a box overlapping the gt by IoU :data:`REACQUIRED_IOU` or more within 1 s (the reappearing
+  frame and the ``fps - 1`` after it);
+* frames to report lost: for each disappearance (an absent frame after a visible one), the frames from the
+  first absent one to the first reported lost (the whole absence when none is); their mean.
 
 Frames whose gt is NaN are skipped by every other score. Overall scores average the per-sequence
 curves and shares (as the benchmarks' toolkits do) and add up frame counts.
@@ -27,6 +32,9 @@ PIXEL_THRESHOLDS = np.arange(0, 51, dtype=np.float64)
 NORMALISED_THRESHOLDS = np.linspace(0.0, 0.5, 51)
 """Normalised-precision thresholds (centre error / box size)."""
 PRECISION_AT_PX = 20
+REACQUIRED_IOU = 0.3
+"""Overlap with the gt that counts a reappeared target as found again (half the usual 0.5: a box coming
+back onto a target often takes a few frames to fit it)."""
 
 
 @dataclass(frozen=True)
@@ -57,8 +65,22 @@ class Scores:
     """``absent_lost / absent_frames`` (overall: the mean over the sequences that have absent frames); None
     without absent frames."""
 
+    reappearances: int = 0
+    """Visible frames that follow absent ones."""
+    reacquired: int = 0
+    """Of those, reappearances found again within 1 s (IoU at least :data:`REACQUIRED_IOU`)."""
+    disappearances: int = 0
+    """Absent frames that follow visible ones."""
+    frames_to_lost: float | None = None
+    """Mean over the disappearances of the frames until the target was reported lost (the whole absence when
+    it was not); None without disappearances."""
+
+    @property
+    def reacquired_share(self) -> float | None:
+        return self.reacquired / self.reappearances if self.reappearances else None
+
     def as_dict(self) -> dict:
-        return asdict(self)
+        return {**asdict(self), "reacquired_share": self.reacquired_share}
 
 
 def iou(pred: np.ndarray, gt: np.ndarray) -> np.ndarray:
@@ -83,9 +105,11 @@ def centre_error(pred: np.ndarray, gt: np.ndarray, normalised: bool = False) -> 
     return np.where(np.isnan(error), np.inf, error)
 
 
-def score_sequence(pred: np.ndarray, gt: np.ndarray, times_ms: np.ndarray) -> Scores:
-    """Scores of predicted boxes ``pred`` (NaN rows = no box) against ``gt`` (NaN rows skipped)."""
+def score_sequence(pred: np.ndarray, gt: np.ndarray, times_ms: np.ndarray, fps: float = 30.0) -> Scores:
+    """Scores of predicted boxes ``pred`` (NaN rows = no box) against ``gt`` (NaN rows skipped); ``fps``: the
+    sequence's frames a second (how many frames re-acquisition may take)."""
     visible = ~np.isnan(gt).any(axis=1)
+    reappearances, reacquired, disappearances, frames_to_lost = _absences(pred, gt, visible, max(1, round(fps)))
     absent_lost = int((np.isnan(pred).any(axis=1) & ~visible).sum())
     absent = int((~visible).sum())
     pred, gt = pred[visible], gt[visible]
@@ -101,7 +125,8 @@ def score_sequence(pred: np.ndarray, gt: np.ndarray, times_ms: np.ndarray) -> Sc
         norm_precision=float(np.mean(norm_precision)), **_timing(times_ms),
         success_curve=success.tolist(), precision_curve=precision.tolist(),
         norm_precision_curve=norm_precision.tolist(), absent_frames=absent, absent_lost=absent_lost,
-        absent_lost_share=absent_lost / absent if absent else None,
+        absent_lost_share=absent_lost / absent if absent else None, reappearances=reappearances,
+        reacquired=reacquired, disappearances=disappearances, frames_to_lost=frames_to_lost,
     )
 
 
@@ -110,6 +135,7 @@ def summarise(per_sequence: list[Scores], times_ms: np.ndarray) -> Scores:
     curves = {name: np.mean([getattr(s, name) for s in per_sequence], axis=0)
               for name in ("success_curve", "precision_curve", "norm_precision_curve")}
     shares = [s.absent_lost_share for s in per_sequence if s.absent_lost_share is not None]
+    disappearances = sum(s.disappearances for s in per_sequence)
     return Scores(
         frames=sum(s.frames for s in per_sequence), scored=sum(s.scored for s in per_sequence),
         frames_lost=sum(s.frames_lost for s in per_sequence),
@@ -120,7 +146,31 @@ def summarise(per_sequence: list[Scores], times_ms: np.ndarray) -> Scores:
         norm_precision_curve=curves["norm_precision_curve"].tolist(),
         absent_frames=sum(s.absent_frames for s in per_sequence), absent_lost=sum(s.absent_lost for s in per_sequence),
         absent_lost_share=float(np.mean(shares)) if shares else None,
+        reappearances=sum(s.reappearances for s in per_sequence), reacquired=sum(s.reacquired for s in per_sequence),
+        disappearances=disappearances,
+        frames_to_lost=sum((s.frames_to_lost or 0.0) * s.disappearances for s in per_sequence) / disappearances
+        if disappearances else None,
     )
+
+
+def _absences(pred: np.ndarray, gt: np.ndarray, visible: np.ndarray, second: int
+              ) -> tuple[int, int, int, float | None]:
+    """Reappearances and how many were found again within ``second`` frames; disappearances and the mean frames
+    to report each lost."""
+    reported = ~np.isnan(pred).any(axis=1)
+    change = np.flatnonzero(np.diff(visible.astype(np.int8)))
+    gone = [int(i) + 1 for i in change if visible[i]]
+    back = [int(i) + 1 for i in change if not visible[i]]
+    found = 0
+    for start in back:
+        window = slice(start, start + second)
+        found += bool((iou(pred[window], gt[window]) >= REACQUIRED_IOU).any())
+    delays = []
+    for start in gone:
+        end = next((b for b in back if b > start), len(visible))
+        lost = np.flatnonzero(~reported[start:end])
+        delays.append(int(lost[0]) if len(lost) else end - start)
+    return len(back), found, len(gone), float(np.mean(delays)) if delays else None
 
 
 def _fractions(values: np.ndarray, thresholds: np.ndarray, *, above: bool) -> np.ndarray:

@@ -89,7 +89,8 @@ def write_json(document: dict[str, Any], path: Path) -> Path:
 
 def table(results: list[JobResult]) -> Table:
     """Per sequence and overall: success AUC, precision@20, normalised precision, frames lost while visible,
-    share of absent frames reported lost, ms/frame, FPS, ``tmMgr.save`` images stored / calls; failed jobs say
+    share of absent frames reported lost, reappearances found again within 1 s, mean frames to report a
+    disappearance lost, ms/frame, FPS, ``tmMgr.save`` images stored / calls; failed jobs say
     where and why (under the table: :func:`failures`)."""
     threads = {r.threads for r in results}
     grid = Table(title="one-pass evaluation", caption=f"OpenCV/ONNX threads per job: "
@@ -97,13 +98,14 @@ def table(results: list[JobResult]) -> Table:
     grid.add_column("sequence", no_wrap=True,
                     min_width=max(len(OVERALL), *(len(safe(r.sequence)) for r in results)))
     grid.add_column("tracker", overflow="fold")
-    for name in ("AUC", f"P@{PRECISION_AT_PX}", "NP", "lost visible", "absent lost", "ms mean", "p50", "p95", "FPS",
+    for name in ("AUC", f"P@{PRECISION_AT_PX}", "NP", "lost visible", "absent lost", "re-acquired 1 s",
+                 "frames to lost", "ms mean", "p50", "p95", "FPS",
                  "saved"):
         grid.add_column(name, justify="right", no_wrap=False)
     for result in results:
         if result.scores is None:
             grid.add_row(outside_cell(result.sequence), outside_cell(result.tracker), "[red]failed[/red]",
-                         f"[red]{outside_cell(result.failed_at)}[/red]", *["-"] * 7, _saved(result))
+                         f"[red]{outside_cell(result.failed_at)}[/red]", *["-"] * 9, _saved(result))
         else:
             grid.add_row(outside_cell(result.sequence), outside_cell(result.tracker), *_cells(result.scores),
                          _saved(result))
@@ -155,8 +157,10 @@ def write_plots(results: list[JobResult], folder: Path) -> list[Path]:
 
 def _cells(scores: Scores) -> list[str]:
     absent = "-" if scores.absent_lost_share is None else f"{100 * scores.absent_lost_share:.0f}%"
+    back = f"{scores.reacquired}/{scores.reappearances}" if scores.reappearances else "-"
+    to_lost = "-" if scores.frames_to_lost is None else f"{scores.frames_to_lost:.1f}"
     return [f"{scores.success_auc:.3f}", f"{scores.precision_20:.3f}", f"{scores.norm_precision:.3f}",
-            str(scores.frames_lost), absent, f"{scores.ms_mean:.1f}", f"{scores.ms_p50:.1f}",
+            str(scores.frames_lost), absent, back, to_lost, f"{scores.ms_mean:.1f}", f"{scores.ms_p50:.1f}",
             f"{scores.ms_p95:.1f}", f"{scores.fps:.0f}"]
 
 

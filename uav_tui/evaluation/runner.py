@@ -165,7 +165,8 @@ def run_job(job: Job) -> JobResult:
                          saves=folder.stored, save_calls=telemetry.saves + telemetry.saves_throttled,
                          threads=job.threads)
     times_ms = times_ns / 1e6
-    return JobResult(sequence.name, job.tracker.label, boxes, times_ms, score_sequence(boxes, sequence.gt, times_ms),
+    scores = score_sequence(boxes, sequence.gt, times_ms, sequence.fps)
+    return JobResult(sequence.name, job.tracker.label, boxes, times_ms, scores,
                      saves=folder.stored, save_calls=telemetry.saves + telemetry.saves_throttled, threads=job.threads)
 
 
