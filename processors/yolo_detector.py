@@ -13,6 +13,7 @@ import numpy as np
 from processors.detection import DetectorConfig, load_backend
 from processors.detection.flow import shift_boxes
 from processors.detections import MAX_DETECTIONS
+from processors.detector_help import iou
 from processors.frame_telemetry import frame_time_s
 from processors.steering import Steering, Vector, as_box, draw_target
 from uav_values.box import Box
@@ -22,14 +23,6 @@ logger = logging.getLogger(__name__)
 
 _DETECT_EVERY = {"fast": 3, "paper": 1}
 """Detector keyframe interval per mode; in between, boxes move with optical flow."""
-
-
-def _iou(a: Sequence[float], b: Sequence[float]) -> float:
-    x0, y0 = max(a[0], b[0]), max(a[1], b[1])
-    x1, y1 = min(a[0] + a[2], b[0] + b[2]), min(a[1] + a[3], b[1] + b[3])
-    inter = max(0.0, x1 - x0) * max(0.0, y1 - y0)
-    union = a[2] * a[3] + b[2] * b[3] - inter
-    return inter / union if union > 0 else 0.0
 
 
 class YoloDetector:
@@ -186,8 +179,8 @@ class YoloDetector:
         roi = self._pending_roi
         if roi is None:
             return
-        best = max(self.detections, key=lambda d: _iou(d.box, roi), default=None)
-        if best is not None and _iou(best.box, roi) > 0.05:
+        best = max(self.detections, key=lambda d: iou(d.box, roi), default=None)
+        if best is not None and iou(best.box, roi) > 0.05:
             self._start_following(best)
 
     def _associate(self) -> None:
@@ -196,8 +189,8 @@ class YoloDetector:
             self._pick_from_roi()
         elif (followed := self.followed) is not None:
             same = [d for d in self.detections if d.class_id == followed.class_id]
-            best = max(same, key=lambda d: _iou(d.box, followed.box), default=None)
-            if best is not None and _iou(best.box, followed.box) > 0.1:
+            best = max(same, key=lambda d: iou(d.box, followed.box), default=None)
+            if best is not None and iou(best.box, followed.box) > 0.1:
                 self.followed, self._missed = best, 0
             else:
                 self._missed += 1
