@@ -3,12 +3,13 @@
     .venv/bin/python scripts/build_covered_set.py OUT [--set DIR] [--seconds 2] [--at 0.4] [--only FOLDER ...]
 
 For each sequence of ``--set`` (default: the aerial-tracking set where the tests find it), from frame
-``round(at * frames)`` (earlier where that leaves under 1 s after it) for ``seconds`` of its own time, the target's ground-truth box (grown by
-:data:`MARGIN` a side) is painted over with the patch of the same size beside it (the first of left, right,
-above, below that lies in the frame clear of the box), and those gt rows are NaN. Every other frame and gt row
-is the original's (the video re-encoded, ``mp4v``, as the set's are). A sequence too short to keep 1 s tracked
-before the stretch and 1 s after it is left out (the script says which). Deterministic: the same set gives the
-same copy. ``uav-tui eval OUT`` scores it; ``cover.txt`` in each folder says which frames are covered.
+``round(at * frames)`` (earlier where that leaves under 1 s after it) for ``seconds`` of its own time, the
+target's ground-truth box (grown by :data:`MARGIN` a side) is painted over with the patch of the same size
+beside it (the first of left, right, above, below that lies in the frame clear of the box), and those gt rows
+are NaN. Every other frame and gt row is the original's (the video re-encoded, ``mp4v``, as the set's are). A
+sequence too short to keep 1 s tracked before the stretch and 1 s after it is left out (the script says which).
+Deterministic: the same set gives the same copy. ``uav-tui eval OUT`` scores it; ``cover.txt`` in each folder
+says which frames are covered.
 """
 
 from __future__ import annotations
@@ -57,7 +58,7 @@ def cover(image: np.ndarray, box: np.ndarray) -> np.ndarray:
         return image
     for dx, dy in ((-pw, 0), (pw, 0), (0, -ph), (0, ph)):
         sx, sy = x0 + dx, y0 + dy
-        if 0 <= sx and sx + pw <= width and 0 <= sy and sy + ph <= height:
+        if min(sx, sy) >= 0 and sx + pw <= width and sy + ph <= height:
             image[y0:y1, x0:x1] = image[sy:sy + ph, sx:sx + pw].copy()
             return image
     image[y0:y1, x0:x1] = cv2.blur(image, (31, 31))[y0:y1, x0:x1]  # a box as large as the frame: no patch beside
