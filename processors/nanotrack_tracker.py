@@ -12,6 +12,7 @@ import cv2
 import numpy as np
 
 from processors import target_search
+from processors.detector_help import DetectorHelp
 from processors.follow import FOLLOW_GAIN, TargetFollower
 from processors.nanotrack_net import HOLD_SHARPNESS, RIVAL_LEVEL, NanoTrackNet
 from processors.steering import as_box
@@ -63,8 +64,17 @@ class NanoTrackProcessor(TargetFollower):
 
     While lost, every ``wide_every`` lost frames a coarse correlation search of the whole frame finds the place
     that looks most like the selected target; NanoTrack is tried there (the same template) and moved there only
-    on a frame surer than a tracked one (:data:`_SURE`): at most one search and one extra NanoTrack update a
-    lost frame. F2 runs that search on the next frame.
+    on a frame surer than a tracked one (:data:`_SURE`). F2 runs that search on the next frame.
+
+    With ``detect_every`` (the default), a detector helps too (:class:`~processors.detector_help.DetectorHelp`,
+    the shipped Yolo-Fastest): at selection it finds the target's class, and while the target is lost, every
+    ``detect_every``-th lost frame, the detections of that class near where it was lost are scored by their
+    appearance; NanoTrack is tried at the best one and moved there on the ordinary evidence (sure and there,
+    the appearance at least its median and :data:`_MIN_LOOK`): the detector's class is the evidence the
+    whole-frame search lacks. Not where the target was lost at the frame's edge: it left the view and comes
+    back through the edge, where the wait takes it back, and another of its class inside the view is likelier
+    than the target. Without a class the whole-frame search alone looks for it, as it does anyway. At most one
+    detection, one search and two extra NanoTrack updates a lost frame.
 
     Frames are tracked shrunk by the largest whole factor that keeps the target at least
     :data:`_EXEMPLAR_PX` across (NanoTrack resamples its window to 255 px anyway); boxes are in full-frame
@@ -82,6 +92,7 @@ class NanoTrackProcessor(TargetFollower):
             target may be elsewhere; NanoTrack does not follow such a look-alike when it overtakes the target.
         lost_after: frames of evidence in a row that make the target lost.
         wide_every: lost frames between whole-frame searches.
+        detect_every: lost frames between detections of the target's class; 0: no detector.
     """
 
     def __init__(
@@ -99,12 +110,14 @@ class NanoTrackProcessor(TargetFollower):
         rival: float = RIVAL_LEVEL,
         lost_after: int = 2,
         wide_every: int = 5,
+        detect_every: int = 2,
     ) -> None:
         super().__init__(camera, gain, dead_band, max_speed, vector_t, follow=follow, gimbal_gain=gimbal_gain,
                          gimbal_max_rate=gimbal_max_rate)
         self.hold, self.loss_ratio, self.rival = hold, loss_ratio, rival
         self.lost_after, self.wide_every = max(1, int(lost_after)), max(1, int(wide_every))
         self._net: NanoTrackNet | None = None
+        self._helper = DetectorHelp(every=detect_every) if detect_every > 0 else None
         self._looks: deque[float] = deque(maxlen=_APPEARANCE_HISTORY)
         self.look = 0.0
         """Appearance score (normalised correlation) of the last box: diagnostics."""
@@ -123,7 +136,9 @@ class NanoTrackProcessor(TargetFollower):
         self._net.init(work, tuple(int(round(v)) for v in box))
         self._looks.clear()
         self._on_target(box)
-        self._lost_frames = 0
+        self._lost_frames, self._left_view = 0, False
+        if self._helper is not None:
+            self._helper.select(frame, roi)
         logger.info("NanoTrackProcessor: target %s selected (tracked at 1/%d)", roi, self._shrink)
         return True
 
@@ -141,6 +156,9 @@ class NanoTrackProcessor(TargetFollower):
         else:
             self._lost_frames += 1
             search_due = self._lost_frames % self.wide_every == 0
+            if self._helper is not None and not self._left_view:
+                self._detect(frame, work)
+                search_due = search_due and not self._tracking  # not when the detector took it back
         if search_due or self._force_search:  # one search a frame, F2's or the lost target's
             self._force_search = False
             self._search(work)
@@ -153,6 +171,8 @@ class NanoTrackProcessor(TargetFollower):
     def _on_target(self, box: Box) -> None:
         """The target is tracked at ``box`` (selected, or taken back), with no evidence of loss yet."""
         self._work_box, self._tracking, self._evidence = box, True, 0
+        if self._helper is not None:
+            self._helper.found()
 
     def _step(self, net: NanoTrackNet, work: np.ndarray) -> tuple[Box, bool, bool]:
         """``net`` updated on ``work``: its box, whether NanoTrack is sure of it (a sharp peak) and whether the
@@ -179,7 +199,7 @@ class NanoTrackProcessor(TargetFollower):
                 assert self._net is not None  # a target is selected
                 logger.info("NanoTrackProcessor: target lost (sharpness %.1f, appearance %.2f)",
                             self._net.sharpness, self.look)
-                self._tracking, self._lost_frames = False, 0
+                self._tracking, self._lost_frames, self._left_view = False, 0, at_edge
             return  # the last box is kept until the evidence is conclusive
         self._evidence = 0
         self._work_box = box
@@ -208,21 +228,39 @@ class NanoTrackProcessor(TargetFollower):
     def _search(self, work: np.ndarray) -> None:
         """Coarse correlation search of the whole frame; NanoTrack is tried at the best place and moved there when
         that frame shows the target surely (:data:`_SURE`)."""
-        last, net = self._work_box, self._net
-        assert last is not None and net is not None  # a target was selected
+        last = self._work_box
+        assert last is not None  # a target was selected
         radius = max(work.shape[:2]) / max(last[2], last[3])
         coarse = target_search.search(cv2.cvtColor(work, cv2.COLOR_BGR2GRAY), self._templates, last, radius,
                                       (1.0,), max_side=16)
         found = self._appearance(work, coarse.box, 0.25, (0.8, 1.0, 1.25)) if coarse is not None else None
-        if found is None or found.score < _MIN_LOOK:
-            return
+        if found is not None and found.score >= _MIN_LOOK:
+            self._try(work, found.box, _SURE, "in the whole frame")
+
+    def _detect(self, frame: np.ndarray, work: np.ndarray) -> None:
+        """The detector's candidate that looks most like the target (:data:`_MIN_LOOK` at least); NanoTrack is
+        tried there and moved there on the ordinary evidence (:meth:`_try`)."""
+        assert self._helper is not None and self._work_box is not None  # a target was selected
+        k = self._shrink
+        found = [self._appearance(work, as_box(v / k for v in d.box), 0.25, (0.8, 1.0, 1.25))
+                 for d in self._helper.candidates(frame, as_box(v * k for v in self._work_box))]
+        best = max((f for f in found if f is not None), key=lambda f: f.score, default=None)
+        if best is not None and best.score >= _MIN_LOOK:
+            self._try(work, best.box, 1.0, "by the detector")
+
+    def _try(self, work: np.ndarray, place: Box, sharper: float, how: str) -> None:
+        """NanoTrack tried at ``place``; moved there when that frame shows the target (there, a peak ``sharper``
+        times ``hold`` and an appearance at least its median and :data:`_MIN_LOOK`)."""
+        net = self._net
+        assert net is not None  # a target was selected
         probe = copy.copy(net)
-        probe.move_to(found.box)
+        probe.move_to(place)
         tracked = self.score, self.look
         box, _, there = self._step(probe, work)
-        if there and probe.sharpness >= _SURE * self.hold and self.look >= max(self._look_median(), _MIN_LOOK):
-            logger.info("NanoTrackProcessor: re-acquired in the whole frame (sharpness %.1f, appearance %.2f)",
-                        probe.sharpness, self.look)
+        if there and probe.sharpness >= sharper * self.hold and self.look >= max(self._look_median(), _MIN_LOOK):
+            logger.info("NanoTrackProcessor: re-acquired %s at %s (sharpness %.1f, appearance %.2f, last box %s)",
+                        how, tuple(round(v * self._shrink) for v in box), probe.sharpness, self.look,
+                        tuple(round(v * self._shrink) for v in self._work_box or box))
             self._net = probe
             self._on_target(box)
         else:  # the frame's diagnostics stay those of the tracker kept
