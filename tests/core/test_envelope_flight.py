@@ -182,7 +182,7 @@ async def test_a_lost_target_with_last_seen_flies_back_to_where_it_was_last_seen
         seen: list[tuple[float, float]] = []  # the truth at each frame that reported the target
         core.add_frame_listener(
             lambda r: seen.append((core.truth.latest()["n"], core.truth.latest()["e"]))
-            if (r.box, r.vector) != (None, None) else None)
+            if (r.outcome.box, r.outcome.vector) != (None, None) else None)
         await core.execute("f 3")  # right (east), a box in view
         await core.execute("autonomy on")
         await wait_until(lambda: core.truth.latest()["e"] > 1.0, 10, "the vehicle flying east")
