@@ -91,6 +91,19 @@ def test_outside_the_samples_values_are_held_and_labelled():
     assert TelemetryHistory().at(0) == (dict.fromkeys(FIELDS), "none")
 
 
+def test_a_field_first_reported_later_is_not_known_before_its_first_sample_whenever_asked():
+    """A frame's row is the same whether it was written before or after a late field's first sample arrived (the
+    live recorder writes it when telemetry covers it; a replay may have the sample already): a battery reported
+    0.2 s after the position was not known at 0.1 s, not back-filled."""
+    history = _history((0, {"north_m": 0.0}), (150, {"north_m": 1.5}))
+    early = history.at(100 * MS)[0]
+    history.add(Telemetry(north_m=1.5, battery_v=16.5), 200 * MS)
+    late = history.at(100 * MS)[0]
+    assert early["battery_v"] is None and late["battery_v"] is None and early == late
+    assert history.at(250 * MS)[0]["battery_v"] == 16.5
+    assert history.at(-50 * MS) == ({**dict.fromkeys(FIELDS), "north_m": 0.0}, "before")  # the first snapshot's
+
+
 def test_covers_waits_for_every_changing_field_but_not_for_constant_ones():
     history = _history((0, {"north_m": 0.0, "roll_deg": 0.0}), (100, {"north_m": 1.0, "roll_deg": 1.0}))
     assert history.covers(50 * MS) and not history.covers(150 * MS)

@@ -57,6 +57,9 @@ class TelemetryHistory:
         self._times: list[int] = []
         self._snapshots: list[Telemetry] = []
         self._series: dict[str, tuple[list[int], list[float]]] = {name: ([], []) for name in CONTINUOUS}
+        self._late: dict[str, int] = {}
+        """Continuous fields first reported after the first snapshot, and when: unknown before that (a battery
+        message 0.2 s after the position), whenever the row is written, so a replay computes the same row."""
 
     def __len__(self) -> int:
         return len(self._times)
@@ -77,6 +80,8 @@ class TelemetryHistory:
             gap = given is None and name in GAPS and values and not math.isnan(values[-1])
             value = math.nan if gap else given
             if value is not None and (previous is None or getattr(previous, name) != given or not times):
+                if previous is not None and not times and name not in self._late:
+                    self._late[name] = t_ns
                 if times and before - times[-1] >= STATIC_NS and before < t_ns:
                     times.append(before)  # constant (see covers) until the snapshot before this change
                     values.append(values[-1])
@@ -100,14 +105,17 @@ class TelemetryHistory:
         """Every field of :data:`FIELDS` at ``t_ns`` and how it was obtained.
 
         Returns:
-            ``(values, how)``: values are None where nothing is known; ``how`` is ``interpolated``
-            (samples on both sides of every field: :meth:`covers`), ``held`` (some field has only older
+            ``(values, how)``: values are None where nothing is known (a field first reported after the first
+            snapshot is not known before its first sample, so a row does not depend on when it was written);
+            ``how`` is ``interpolated`` (samples on both sides of every field: :meth:`covers`), ``held`` (some
+            field has only older
             samples: its newest value), ``before`` (only newer samples: the oldest values) or ``none``
             (no telemetry). :meth:`extrapolated_ns` says how far ``held`` and ``before`` reach.
         """
         if not self._times:
             return dict.fromkeys(FIELDS), "none"
-        values: dict[str, Any] = {name: _interpolate(*self._series[name], t_ns, name in ANGLES) for name in CONTINUOUS}
+        values: dict[str, Any] = {name: None if t_ns < self._late.get(name, t_ns) else
+                                  _interpolate(*self._series[name], t_ns, name in ANGLES) for name in CONTINUOUS}
         values.update({name: None for name in GAPS if values[name] is not None and math.isnan(values[name])})
         if values["fc_boot_ms"] is not None:
             values["fc_boot_ms"] = round(values["fc_boot_ms"])
