@@ -91,7 +91,8 @@ def test_the_video_has_one_frame_per_index_row_each_joining_a_frame_row(flight):
         seq = int(encoded["seq"].iloc[position])
         image = decoded[position].astype(np.float64)
         error = {n: np.sqrt(np.mean((image - scene.render(n - 1)) ** 2)) for n in range(seq - 1, seq + 2)}
-        assert min(error, key=error.get) == seq and error[seq] < 16, f"video frame {position}: {error}"
+        # the best match (the synthetic scene draws some neighbouring frames alike: a tie is a match)
+        assert error[seq] == min(error.values()) and error[seq] < 16, f"video frame {position}: {error}"
         assert decoded[position][:16, :16].mean() < 230  # the overlay (white) was drawn after the copy
 
 
