@@ -183,3 +183,14 @@ class SecondLink:
         self._stop.set()
         self._thread.join(timeout=2)
         self.link.close()
+
+
+def stop_uav_tui(process: subprocess.Popen[str]) -> None:
+    """SIGTERM (the platform's safety exit: hold or land, then close), up to 30 s, then SIGKILL; nothing if it ended."""
+    if process.poll() is None:
+        process.send_signal(signal.SIGTERM)
+        try:
+            process.wait(30)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            process.wait()

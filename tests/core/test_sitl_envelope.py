@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import math
 import os
-import signal
 import subprocess
 import sys
 import time
@@ -121,13 +120,7 @@ def test_forward_at_full_speed_stays_within_the_radius_by_an_independent_link(
                     time.sleep(0.2)
             finally:
                 observer.close()
-                if process.poll() is None:
-                    process.send_signal(signal.SIGTERM)
-                    try:
-                        process.wait(30)
-                    except subprocess.TimeoutExpired:
-                        process.kill()
-                        process.wait()
+                sitl.stop_uav_tui(process)
         context = f"\n--- uav-tui ---\n{log_path.read_text()[-4000:]}\n--- {vehicle.name} log ---\n{vehicle.log_tail()}"
     beyond = observer.farthest_m - RADIUS_M
     print(f"{vehicle.name}: farthest {observer.farthest_m:.2f} m from home, {beyond:+.2f} m beyond the "

@@ -20,7 +20,6 @@ from __future__ import annotations
 import contextlib
 import math
 import os
-import signal
 import subprocess
 import sys
 import time
@@ -132,13 +131,7 @@ def uav_tui(vehicle: sitl.Sitl, tmp_path: Path) -> Iterator[subprocess.Popen[str
     try:
         yield process
     finally:
-        if process.poll() is None:
-            process.send_signal(signal.SIGTERM)
-            try:
-                process.wait(30)
-            except subprocess.TimeoutExpired:
-                process.kill()
-                process.wait()
+        sitl.stop_uav_tui(process)
         log.close()
 
 
