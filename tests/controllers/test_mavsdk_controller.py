@@ -299,7 +299,9 @@ async def test_hold_preempts_a_running_vector(airborne: Flight) -> None:
 async def test_a_stalled_loop_stops_the_setpoints_and_the_vehicle_fails_safe(airborne: Flight) -> None:
     """Nothing re-sends setpoints behind our back: when our loop stalls, the vehicle's failsafe holds."""
     await airborne.reset(0.0)
-    await airborne.fc.set_fly_vector(0.5, 0.0, 2.0)
+    # Long enough never to end on its own: under load the stream resumed after the 2 s of a shorter one had passed
+    # and ended it COMPLETED before it saw the mode change.
+    await airborne.fc.set_fly_vector(0.5, 0.0, 30.0)
     await asyncio.sleep(0.3)
     stalled_at = time.monotonic_ns()
     time.sleep(1.5)  # a blocked event loop (the simulator's offboard-loss timeout is 1 s)
@@ -307,7 +309,10 @@ async def test_a_stalled_loop_stops_the_setpoints_and_the_vehicle_fails_safe(air
     assert airborne.now()["mode"] == "HOLD"
     records = (await airborne.request(cmd="setpoints", since_mono_ns=stalled_at))["records"]
     assert [r for r in records if stalled_at + 0.1e9 < r["t_mono_ns"] < resumed_at - 0.1e9] == []
-    await asyncio.sleep(0.2)  # the stream sees the mode change and gives up the vector
+    for _ in range(100):  # the stream sees the mode change and gives up the vector (its next telemetry)
+        if not airborne.fc.vector_active:
+            break
+        await asyncio.sleep(0.05)
     assert not airborne.fc.vector_active
     assert airborne.fc.last_vector_end == VectorEnd(VectorEndKind.LEFT_OFFBOARD, "HOLD")
     since = time.monotonic_ns()
