@@ -232,6 +232,7 @@ class UavCore:
     async def _close_recorder(self) -> None:
         if self.recorder is not None:
             self.telemetry.saver = None
+            self.events.emit_held()  # FFmpeg's last lines, at the camera's close, and a flood's count: recorded
             await asyncio.get_running_loop().run_in_executor(None, self.recorder.close)
 
     def _spawn(self, coro: Any, name: str) -> None:

@@ -48,12 +48,27 @@ class EventLog:
     def __init__(self, keep: int = 500) -> None:
         self.recent: deque[Event] = deque(maxlen=keep)
         self._listeners: list[Callable[[Event], None]] = []
+        self._holders: list[Callable[[], None]] = []
         self._loop: asyncio.AbstractEventLoop | None = None
         self._loop_thread: int | None = None
 
     def bind(self, loop: asyncio.AbstractEventLoop) -> None:
         """Deliver events on ``loop`` from now on."""
         self._loop, self._loop_thread = loop, threading.get_ident()
+
+    def add_holder(self, emit_held: Callable[[], None]) -> None:
+        """``emit_held()`` emits what a source of events holds back (a pipe's unread lines, a flood's count):
+        :meth:`emit_held` calls it."""
+        self._holders.append(emit_held)
+
+    def remove_holder(self, emit_held: Callable[[], None]) -> None:
+        if emit_held in self._holders:
+            self._holders.remove(emit_held)
+
+    def emit_held(self) -> None:
+        """Have every source emit what it holds back now: before a record of the events closes. On the loop."""
+        for emit_held in tuple(self._holders):
+            emit_held()
 
     def add_listener(self, listener: Callable[[Event], None]) -> None:
         self._listeners.append(listener)

@@ -179,8 +179,10 @@ class HeadlessRunner:
         within a line budget (with process isolation its output has one already: ``SubprocessHost``)."""
         if self.core.config.isolation != Isolation.THREAD:
             return output
-        return BudgetedText(output, lambda line: output.write(shorten(safe(line), PRINTED_CHARS) + "\n"),
-                            self._left_out)
+        printed = BudgetedText(output, lambda line: output.write(shorten(safe(line), PRINTED_CHARS) + "\n"),
+                               self._left_out)
+        self.core.events.add_holder(printed.say_count)  # its count goes into the run's record too
+        return printed
 
     def _left_out(self, count: int) -> None:
         self.core.events.emit("warning", "processor",

@@ -97,6 +97,22 @@ async def test_a_flood_is_bounded_and_never_makes_the_writer_wait(tmp_path: Path
                                                                                  "at once)")
 
 
+async def test_what_is_held_back_is_emitted_before_the_record_closes() -> None:
+    # Under load a flood's count came from its timer after the run's events.csv had closed: printed, not recorded.
+    events = EventLog()
+    events.bind(asyncio.get_running_loop())
+    seen = collect(events)
+    with native_stderr_as_events(events):
+        for n in range(BURST_LINES + 5):
+            os.write(2, f"[mpeg4 @ 0x1] damaged block {n}\n".encode())
+        events.emit_held()  # no loop turn since: the pipe was not read yet, and the count's timer is 1 s away
+        held = [e.message for e in seen]
+        await asyncio.sleep(1.2)
+    assert held[:BURST_LINES] == [f"native library: [mpeg4 @ 0x1] damaged block {n}" for n in range(BURST_LINES)]
+    assert held[BURST_LINES:] == ["native library: 5 more lines left out (too many at once)"]
+    assert len(seen) == len(held)  # said once
+
+
 async def test_everything_is_put_back_after(capfd: pytest.CaptureFixture[str]) -> None:
     stderr, dunder = sys.stderr, sys.__stderr__
     handler = logging.StreamHandler(sys.__stderr__)

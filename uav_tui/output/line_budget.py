@@ -68,6 +68,13 @@ class LineBudget(Generic[T]):
         if arm:
             self._loop.call_soon_threadsafe(self._arm)
 
+    def say_count(self) -> None:
+        """Say the count of what was left out so far now (a record of the lines is about to close)."""
+        with self._lock:
+            counted = self._take_count()
+        if counted:
+            self._say_left_out(counted)
+
     def close(self) -> None:
         """Say the count now; no count is said after this. Call it on the loop."""
         with self._lock:
@@ -176,6 +183,10 @@ class BudgetedText:
 
     def flush(self) -> None:
         """Nothing to do: lines are passed on as they end."""
+
+    def say_count(self) -> None:
+        """Say the count of what was left out so far now. On the loop."""
+        self._budget.say_count()
 
     def close(self) -> None:
         """Pass on the unfinished line and say the count. On the loop."""

@@ -61,9 +61,11 @@ def native_stderr_as_events(events: EventLog) -> Iterator[Callable[[], None]]:
     os.close(write_fd)
     moved = _point_at(terminal, _on_fd_2())
     lines = NativeLines(read_fd, events, asyncio.get_running_loop())
+    events.add_holder(lines.emit_held)  # the run's record closes with every line and count written so far
     try:
         yield lines.flush
     finally:
+        events.remove_holder(lines.emit_held)
         os.dup2(terminal_fd, 2)
         for restore in moved:
             restore()
@@ -94,6 +96,11 @@ class NativeLines:
                 return
             for line in self._lines.feed(chunk):
                 self._line(line)
+
+    def emit_held(self) -> None:
+        """Emit what the pipe holds and the count of the lines left out so far, now."""
+        self.flush()
+        self._budget.say_count()
 
     def close(self) -> None:
         """Emit what is left (a child process may still hold the pipe's other end) and stop reading."""
