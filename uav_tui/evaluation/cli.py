@@ -29,6 +29,7 @@ EXAMPLE = """examples:
   uav-tui eval data/ --processor cv:kcf --cluster tcp://10.0.0.5:8786
   uav-tui eval data/ --processor csrt --out eval-results/csrt      # interrupted (Ctrl-C, a crash)? go on:
   uav-tui eval data/ --processor csrt --resume eval-results/csrt
+  uav-tui eval --mot                    # multi-object tracking of yolo's detections (uav-tui eval --mot --help)
 
 Each job's result is written as it finishes (jobs.jsonl, eval.json), so an interrupted evaluation keeps what is
 done and --resume runs only the rest. A processor that raises fails its job alone (the table says where and
@@ -83,6 +84,10 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str]) -> int:
+    if "--mot" in argv:
+        from uav_tui.evaluation import mot_cli
+
+        return mot_cli.main([arg for arg in argv if arg != "--mot"])
     args = build_parser().parse_args(argv)
     console = Console(highlight=False, width=None if sys.stdout.isatty() else 160)
     results: list[JobResult] = []
