@@ -5,7 +5,10 @@
 * :mod:`.metrics` turns boxes into success / precision curves;
 * :mod:`.runner` runs one sequence x tracker job (one-pass protocol) and all jobs through :mod:`.jobs`;
 * :mod:`.report` prints the table and writes the JSON and the plots;
-* :mod:`.journal` appends each finished job to ``jobs.jsonl`` and reads them back for ``--resume``.
+* :mod:`.journal` appends each finished job to ``jobs.jsonl`` and reads them back for ``--resume``;
+* ``--mot``: :mod:`.mot_sequences` reads MOTChallenge-layout sequences, :mod:`.mot_runner` tracks a processor's
+  detections the platform's way and ByteTrack's, :mod:`.mot_metrics` scores them (TrackEval), :mod:`.mot_cli`
+  reports.
 """
 
 from __future__ import annotations
