@@ -1,4 +1,5 @@
-"""YOLO object detection (Ultralytics .pt, ONNX Runtime, Darknet/OpenCV DNN) with an optional follow."""
+"""YOLO object detection (Ultralytics .pt, ONNX Runtime, Darknet on ONNX Runtime or OpenCV DNN) with an optional
+follow."""
 
 from __future__ import annotations
 
@@ -29,9 +30,9 @@ class YoloDetector:
     """Detect objects with a YOLO model; optionally follow one of them.
 
     The backend is chosen by the model file: ``.pt`` Ultralytics (the ``yolo`` extra), ``.onnx``
-    exported by Ultralytics (ONNX Runtime), ``.cfg``/``.weights`` Darknet (OpenCV DNN). Default:
-    the Yolo-Fastest 1.1 Darknet model shipped with the package. Detections are drawn on the frame
-    and, at most every ``save_interval_s``, the drawn frame is saved through ``tmMgr`` with the
+    exported by Ultralytics (ONNX Runtime), ``.cfg``/``.weights`` Darknet (ONNX Runtime on the converted graph, or
+    OpenCV DNN: ``runtime``). Default: the Yolo-Fastest 1.1 Darknet model shipped with the package. Detections are
+    drawn on the frame and, at most every ``save_interval_s``, the drawn frame is saved through ``tmMgr`` with the
     detection count and labels. ``detections`` is the contract's optional attribute: the platform records each one
     (detections.csv), geo-locates it and shows the most confident; at most ``MAX_DETECTIONS``, most confident first.
 
@@ -63,6 +64,8 @@ class YoloDetector:
         max_lost: keyframes without the followed object before it counts as lost.
         save_interval_s: minimum time between saved detection frames; 0 saves every keyframe
             with detections.
+        runtime: what runs a Darknet model: ``"onnxruntime"`` (the ``onnx`` extra) or ``"opencv"`` (OpenCV DNN);
+            None = ONNX Runtime when the ``onnx`` extra is installed, else OpenCV DNN.
     """
 
     def __init__(
@@ -82,6 +85,7 @@ class YoloDetector:
         vector_t: float = 0.5,
         max_lost: int = 5,
         save_interval_s: float = 1.0,
+        runtime: str | None = None,
     ) -> None:
         if mode not in _DETECT_EVERY:
             raise ValueError(f"mode must be one of {sorted(_DETECT_EVERY)}, got {mode!r}")
@@ -89,7 +93,7 @@ class YoloDetector:
             raise ValueError(f"input_size must be a multiple of 32 (e.g. 320, 416, 640), got {input_size}")
         self.tmMgr = None
         self.mode = mode
-        self.backend = load_backend(model, DetectorConfig(conf, nms, input_size))
+        self.backend = load_backend(model, DetectorConfig(conf, nms, input_size), runtime)
         names = self.backend.names
         if classes is not None:
             ids = frozenset(c if isinstance(c, int) else self._class_id(c) for c in classes)

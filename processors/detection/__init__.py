@@ -4,7 +4,7 @@
 |---|---|---|
 | ``*.pt`` | Ultralytics (PyTorch) | the ``yolo`` extra (imported only when asked for) |
 | ``*.onnx`` | ONNX Runtime, Ultralytics export format (1, 4 + classes, N) | ``onnxruntime`` |
-| ``*.cfg`` / ``*.weights`` / a folder with both | OpenCV DNN Darknet reader | nothing extra |
+| ``*.cfg``, ``*.weights`` or their folder | ONNX Runtime (converted graph) or OpenCV DNN | ``onnx`` extra / nothing |
 """
 
 from __future__ import annotations
@@ -84,17 +84,22 @@ def find_data_dir() -> Path:
     )
 
 
-def load_backend(model: str | os.PathLike[str] | None, config: DetectorConfig) -> Backend:
+def load_backend(
+    model: str | os.PathLike[str] | None, config: DetectorConfig, runtime: str | None = None
+) -> Backend:
     """Open the backend that fits the model file (see the module table).
 
     Args:
         model: path to ``.pt``, ``.onnx``, ``.cfg``/``.weights`` or a folder with a Darknet pair;
             None = Yolo-Fastest 1.1, the Darknet model shipped in :mod:`processors.models`.
         config: thresholds and input size.
+        runtime: for a Darknet model, ``"onnxruntime"`` or ``"opencv"``; None = ONNX Runtime when the ``onnx``
+            extra is installed (:func:`processors.detection.darknet.default_runtime`).
 
     Raises:
         FileNotFoundError: the model file is missing.
-        ValueError: the file type is not one of the supported ones.
+        ValueError: the file type is not one of the supported ones, or a runtime is given for another kind of
+            model, or is not one of the two.
         ImportError: the backend's library is not installed (the message says which extra).
     """
     path = Path(model).expanduser() if model is not None else YOLO_FASTEST
@@ -104,7 +109,9 @@ def load_backend(model: str | os.PathLike[str] | None, config: DetectorConfig) -
     if path.is_dir() or suffix in (".cfg", ".weights"):
         from processors.detection.darknet import DarknetBackend
 
-        return DarknetBackend(path, config)
+        return DarknetBackend(path, config, runtime)
+    if runtime is not None:
+        raise ValueError(f"runtime={runtime!r} is for Darknet models; {path.name} has its own backend")
     if suffix == ".onnx":
         from processors.detection.onnx_runtime import OnnxBackend
 

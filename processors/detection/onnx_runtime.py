@@ -6,6 +6,7 @@ import ast
 import logging
 import os
 from pathlib import Path
+from typing import Any
 
 import cv2
 import numpy as np
@@ -39,6 +40,28 @@ def decode(output: np.ndarray, n_classes: int) -> tuple[np.ndarray, np.ndarray]:
     return out[:4].T, out[4:].T
 
 
+def open_session(model: str | bytes, user: str) -> Any:
+    """An ``onnxruntime.InferenceSession`` on the CPU for a model file (or its bytes) whose threads sleep between runs.
+
+    Args:
+        model: the ``.onnx`` file's path, or the serialised model.
+        user: who needs it, for the error (``"the .onnx backend"``).
+
+    Raises:
+        ImportError: onnxruntime is not installed; the message says which extra brings it.
+    """
+    try:
+        import onnxruntime as ort
+    except ImportError as exc:
+        raise ImportError(f"{user} needs onnxruntime: pip install 'uav-tui[onnx]'") from exc
+    options = ort.SessionOptions()
+    # Its threads sleep between runs instead of spinning: the camera decodes on the same cores meanwhile.
+    options.add_session_config_entry("session.intra_op.allow_spinning", "0")
+    if os.environ.get(THREADS_ENV, "").isdigit():
+        options.intra_op_num_threads = int(os.environ[THREADS_ENV])
+    return ort.InferenceSession(model, options, providers=["CPUExecutionProvider"])
+
+
 class OnnxBackend:
     """ONNX Runtime session on a model exported with ``yolo export format=onnx``.
 
@@ -47,16 +70,7 @@ class OnnxBackend:
     """
 
     def __init__(self, path: Path, config: DetectorConfig) -> None:
-        try:
-            import onnxruntime as ort
-        except ImportError as exc:
-            raise ImportError("the .onnx backend needs onnxruntime: pip install 'uav-tui[onnx]'") from exc
-        options = ort.SessionOptions()
-        # Its threads sleep between runs instead of spinning: the camera decodes on the same cores meanwhile.
-        options.add_session_config_entry("session.intra_op.allow_spinning", "0")
-        if os.environ.get(THREADS_ENV, "").isdigit():
-            options.intra_op_num_threads = int(os.environ[THREADS_ENV])
-        self.session = ort.InferenceSession(str(path), options, providers=["CPUExecutionProvider"])
+        self.session = open_session(str(path), "the .onnx backend")
         inp = self.session.get_inputs()[0]
         self.input_name = inp.name
         h, w = inp.shape[2:4]
