@@ -6,8 +6,9 @@ each by cell row, cell column, anchor): cx, cy, w, h as fractions of the input, 
 times the objectness, 0 where that is at or below :data:`SCORE_FLOOR`. So one postprocess serves both runtimes.
 
 Layers: ``convolutional`` (its batch norm folded into the kernel and bias; ``leaky`` or ``linear``), ``shortcut``,
-``route``, ``maxpool``, ``upsample``, ``dropout`` (nothing at inference) and ``yolo``: what Yolo-Fastest and the
-YOLOv3/v4-tiny family use. Any other layer or option value raises ValueError naming it.
+``route``, ``maxpool``, ``upsample``, ``dropout`` (nothing at inference) and ``yolo``: what Yolo-Fastest uses (and
+YOLOv3-tiny; only Yolo-Fastest 1.1 is checked against OpenCV DNN). Any other layer, option or value raises
+ValueError naming it.
 """
 
 from __future__ import annotations
@@ -33,6 +34,15 @@ BN_EPSILON = 1e-6
 """Added to the batch norm's variance before its square root, as Darknet and OpenCV's reader do."""
 LEAKY_SLOPE = 0.1
 """Darknet's ``leaky`` activation: x for x > 0, else 0.1 x."""
+OPTIONS = {
+    "convolutional": {"filters", "size", "stride", "pad", "padding", "groups", "batch_normalize", "activation"},
+    "shortcut": {"from", "activation"},
+    "route": {"layers"},
+    "maxpool": {"size", "stride", "padding"},
+    "upsample": {"stride"},
+}
+"""The options each layer may have (another, such as route's ``groups``, changes what it computes); a yolo or dropout
+layer's other options are training settings."""
 
 
 @dataclass(frozen=True)
@@ -87,6 +97,10 @@ def darknet_to_onnx(cfg: Path, weights: Path, size: int) -> onnx.ModelProto:
     rows: list[_Rows] = []
     for i, section in enumerate(sections[1:]):
         name = f"{section.kind}{i}"
+        unknown = sorted(section.options.keys() - OPTIONS.get(section.kind, section.options.keys()))
+        if unknown:
+            raise ValueError(f"{cfg.name}: layer {i} [{section.kind}] has {', '.join(unknown)}, which the ONNX "
+                             "converter does not support")
         if section.kind == "convolutional":
             x = _convolutional(graph, floats, section, x, name)
         elif section.kind == "shortcut":
@@ -158,7 +172,7 @@ def _convolutional(graph: _Graph, floats: Weights, section: Section, x: _Tensor,
 
 
 def _shortcut(graph: _Graph, section: Section, x: _Tensor, other: _Tensor, name: str) -> _Tensor:
-    if section.get("activation", "linear") != "linear" or "weights_type" in section.options:
+    if section.get("activation", "linear") != "linear":
         raise ValueError("[shortcut] other than a plain linear sum is not supported by the ONNX converter")
     return _Tensor(graph.op("Add", [x.name, other.name], name), x.channels, x.height, x.width)
 

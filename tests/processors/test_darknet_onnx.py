@@ -11,14 +11,17 @@ import cv2
 import numpy as np
 import pytest
 
-from processors import load_processor
-from processors.detection import DetectorConfig, load_backend
-from processors.detection.darknet_cache import cache_folder, darknet_onnx_model
-from processors.detection.darknet_onnx import darknet_to_onnx
-from processors.detection.onnx_runtime import open_session
-from processors.errors import ProcessorLoadError
-from processors.models import YOLO_FASTEST
-from processors.yolo_detector import YoloDetector
+pytest.importorskip("onnx", reason="the onnx extra (onnx) is not installed")
+pytest.importorskip("onnxruntime", reason="the onnx extra (onnxruntime) is not installed")
+
+from processors import load_processor  # noqa: E402
+from processors.detection import DetectorConfig, load_backend  # noqa: E402
+from processors.detection.darknet_cache import cache_folder, darknet_onnx_model  # noqa: E402
+from processors.detection.darknet_onnx import darknet_to_onnx  # noqa: E402
+from processors.detection.onnx_runtime import open_session  # noqa: E402
+from processors.errors import ProcessorLoadError  # noqa: E402
+from processors.models import YOLO_FASTEST  # noqa: E402
+from processors.yolo_detector import YoloDetector  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[2]
 CFG, WEIGHTS = YOLO_FASTEST / "yolo-fastest-1.1.cfg", YOLO_FASTEST / "yolo-fastest-1.1.weights"
@@ -135,6 +138,9 @@ def test_the_converter_names_what_it_cannot_convert(tmp_path: Path) -> None:
     cfg = tmp_path / "odd.cfg"
     cfg.write_text(CFG.read_text() + "\n[sam]\nfrom=-2\n")
     with pytest.raises(ValueError, match=r"odd.cfg: layer 131 \[sam\] is not supported"):
+        darknet_to_onnx(cfg, WEIGHTS, 320)
+    cfg.write_text(CFG.read_text().replace("[route]\nlayers=-1,80", "[route]\nlayers=-1,80\ngroups=2", 1))
+    with pytest.raises(ValueError, match=r"odd.cfg: layer \d+ \[route\] has groups, which the ONNX converter"):
         darknet_to_onnx(cfg, WEIGHTS, 320)
     short = tmp_path / "short.weights"
     short.write_bytes(WEIGHTS.read_bytes()[:500_000])
