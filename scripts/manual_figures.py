@@ -6,6 +6,7 @@
     .venv/bin/uav-tui bench --out scripts/results/bench.json
     .venv/bin/python scripts/bench_video_out.py > scripts/results/video_out.json
     .venv/bin/python scripts/bench_video_out.py --rtsp > scripts/results/video_out_rtsp.json
+    .venv/bin/python scripts/bench_detection.py > scripts/results/detection.json
     .venv/bin/python scripts/manual_figures.py           # rewrites the marked blocks of docs/benchmarks.md
     .venv/bin/python scripts/manual_figures.py --check   # exit 1 when docs/benchmarks.md differs from the JSON
 
@@ -181,9 +182,38 @@ def video_out(result: dict[str, Any]) -> str:
     return "\n".join([*rows, "", *notes]) + "\n"
 
 
+RUNTIME_NAMES = {"opencv": "OpenCV DNN", "onnxruntime": "ONNX Runtime"}
+"""``bench_detection.py``'s runtimes as the manual names them."""
+
+
+def detection(result: dict[str, Any]) -> str:
+    """``bench_detection.py``: FPS and CPU a frame of the shipped ``yolo`` on each runtime, detecting on every frame
+    or every 3rd, the platform's tracker beside it; how long opening the detector takes."""
+    rows = ["| runtime | detector runs on | FPS | CPU ms a frame | tracker CPU ms a frame | tracker / processor |",
+            "| --- | --- | --- | --- | --- | --- |"]
+    for name, run in result["runs"].items():
+        runtime, _, every = name.partition("_every_")
+        on = "every frame" if every == "1" else f"1 frame in {every}, optical flow between"
+        rows.append(f"| {RUNTIME_NAMES[runtime]} | {on} | {run['fps']:g} | {run['cpu_s_per_frame'] * 1000:.2f} | "
+                    f"{run['tracker_cpu_s_per_frame'] * 1000:.3f} | {run['tracker_share_of_detector']:.1%} |")
+    ratio, load, machine = result["opencv_cpu_over_onnxruntime_cpu"], result["load_s"], result["machine"]
+    sequences = ", ".join(f"`{name}`" for name in result["sequences"])
+    notes = [f"{result['frames']} frames of {sequences} at {result['size']}, the round of {result['rounds']} with the "
+             f"least CPU. OpenCV DNN's CPU a frame over ONNX Runtime's: {ratio['every_1']:g}x detecting on every "
+             f"frame, {ratio['every_3']:g}x on every 3rd. Opening the detector: OpenCV DNN {load['opencv']:g} s, ONNX "
+             f"Runtime {load['onnxruntime_first']:g} s the first time (converting the model), "
+             f"{load['onnxruntime_cached']:g} s after. ONNX Runtime {machine['onnxruntime']}, OpenCV "
+             f"{machine['opencv']} ({machine['opencv_threads']} threads); load average "
+             f"{machine['load_average_1min_at_end']:g} on {machine['cores']} cores at the end.", "",
+             f"- the tracker under {result['goal_tracker_share']:.0%} of the processor's CPU a frame: "
+             f"{'met' if result['goal_tracker_share_met'] else 'not met'}"]
+    return "\n".join([*rows, "", *notes]) + "\n"
+
+
 RENDERERS: dict[str, Callable[[dict[str, Any]], str]] = {"tracking": tracking, "precland": precland,
                                                          "geolocation": geolocation, "bench": bench,
-                                                         "video_out": video_out, "video_out_rtsp": video_out}
+                                                         "video_out": video_out, "video_out_rtsp": video_out,
+                                                         "detection": detection}
 """Block name -> how its JSON (``scripts/results/NAME.json``) is written into the page."""
 
 
