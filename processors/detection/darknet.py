@@ -26,7 +26,7 @@ Rows = Callable[[np.ndarray], np.ndarray]
 
 
 def default_runtime() -> str:
-    """``"onnxruntime"`` when it and ``onnx`` are installed (the ``onnx`` extra), else ``"opencv"``.
+    """``"onnxruntime"`` when it and ``onnx`` are installed (uav-tui's dependencies), else ``"opencv"``.
 
     ONNX Runtime takes about half OpenCV DNN's CPU a detection (``scripts/results/detection.json``).
     """

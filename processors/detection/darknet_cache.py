@@ -15,6 +15,8 @@ import logging
 import os
 from pathlib import Path
 
+from processors.detection.onnx_runtime import INSTALL
+
 logger = logging.getLogger(__name__)
 
 CONVERTER = (Path(__file__).with_name("darknet_onnx.py"), Path(__file__).with_name("darknet_cfg.py"))
@@ -43,7 +45,7 @@ def darknet_onnx_model(cfg: Path, weights: Path, size: int) -> str | bytes:
     try:
         from processors.detection.darknet_onnx import darknet_to_onnx
     except ImportError as exc:
-        raise ImportError(f"converting {cfg.name} for ONNX Runtime needs onnx: pip install 'uav-tui[onnx]'") from exc
+        raise ImportError(f"converting {cfg.name} for ONNX Runtime needs onnx: {INSTALL}") from exc
     model: bytes = darknet_to_onnx(cfg, weights, size).SerializeToString()
     part = path.with_name(f"{path.name}.{os.getpid()}.part")  # whole or absent: another process may read it
     try:

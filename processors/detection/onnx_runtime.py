@@ -17,6 +17,9 @@ from uav_values.detections import Detection
 
 logger = logging.getLogger(__name__)
 
+INSTALL = "pip install onnxruntime onnx (uav-tui's own dependencies: bash scripts/setup.sh installs them)"
+"""What installs ONNX Runtime and onnx where they are missing (a venv made by hand)."""
+
 THREADS_ENV = "UAV_TUI_ONNX_THREADS"
 """When set (``uav-tui eval --threads N`` sets it), the threads of each ONNX Runtime session (else its default)."""
 
@@ -48,12 +51,12 @@ def open_session(model: str | bytes, user: str) -> Any:
         user: who needs it, for the error (``"the .onnx backend"``).
 
     Raises:
-        ImportError: onnxruntime is not installed; the message says which extra brings it.
+        ImportError: onnxruntime is not installed; the message says how to install it.
     """
     try:
         import onnxruntime as ort
     except ImportError as exc:
-        raise ImportError(f"{user} needs onnxruntime: pip install 'uav-tui[onnx]'") from exc
+        raise ImportError(f"{user} needs onnxruntime: {INSTALL}") from exc
     options = ort.SessionOptions()
     # Its threads sleep between runs instead of spinning: the camera decodes on the same cores meanwhile.
     options.add_session_config_entry("session.intra_op.allow_spinning", "0")

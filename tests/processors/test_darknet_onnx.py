@@ -11,14 +11,14 @@ import cv2
 import numpy as np
 import pytest
 
-pytest.importorskip("onnx", reason="the onnx extra (onnx) is not installed")
+pytest.importorskip("onnx", reason="onnx is not installed")
 pytest.importorskip("onnxruntime", reason="the onnx extra (onnxruntime) is not installed")
 
 from processors import load_processor  # noqa: E402
 from processors.detection import DetectorConfig, load_backend  # noqa: E402
 from processors.detection.darknet_cache import cache_folder, darknet_onnx_model  # noqa: E402
 from processors.detection.darknet_onnx import darknet_to_onnx  # noqa: E402
-from processors.detection.onnx_runtime import open_session  # noqa: E402
+from processors.detection.onnx_runtime import INSTALL, open_session  # noqa: E402
 from processors.errors import ProcessorLoadError  # noqa: E402
 from processors.models import YOLO_FASTEST  # noqa: E402
 from processors.yolo_detector import YoloDetector  # noqa: E402
@@ -113,14 +113,14 @@ def _runtime(**args: str) -> str:
 def test_a_missing_onnxruntime_says_what_to_install(cache: Path) -> None:
     asked = _without("onnxruntime", _runtime(runtime="onnxruntime"))
     assert asked.returncode == 1
-    assert "runtime='onnxruntime' needs onnxruntime: pip install 'uav-tui[onnx]'" in asked.stderr
+    assert f"runtime='onnxruntime' needs onnxruntime: {INSTALL}" in asked.stderr
     default = _without("onnxruntime", _runtime())
-    assert default.stdout.strip() == "opencv", default.stderr  # without the extra the default is OpenCV DNN
+    assert default.stdout.strip() == "opencv", default.stderr  # without it the default is OpenCV DNN
 
 
 def test_the_cached_graph_needs_no_onnx_and_a_first_conversion_does(cache: Path) -> None:
     before = _without("onnx", _runtime(runtime="onnxruntime"))
-    assert before.returncode == 1 and "needs onnx: pip install 'uav-tui[onnx]'" in before.stderr
+    assert before.returncode == 1 and f"needs onnx: {INSTALL}" in before.stderr
     assert Path(darknet_onnx_model(CFG, WEIGHTS, 320)).parent == cache
     after = _without("onnx", _runtime(runtime="onnxruntime"))
     assert after.stdout.strip() == "onnxruntime", after.stderr
