@@ -23,9 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from processors.detection import DATA_DIR_ENV, find_data_dir
-from uav_tui.errors import ConfigError
-from uav_tui.evaluation.sequences import IMAGE_SUFFIXES, SequenceError
+from uav_tui.evaluation.sequences import IMAGE_SUFFIXES, SequenceError, shared_set
 
 MOT_SET = "aerial-mot"
 """The multi-object set's folder in the data folder (beside ``aerial-tracking``)."""
@@ -124,14 +122,4 @@ def find_mot_sequences(paths: list[Path]) -> list[MotSequence]:
 
 def aerial_mot_set() -> Path:
     """The multi-object set where the tests find it; ConfigError saying how to build it when it is not here."""
-    try:
-        folder = find_data_dir() / MOT_SET
-    except FileNotFoundError as exc:
-        missing = str(exc)
-    else:
-        if folder.is_dir():
-            return folder
-        missing = f"{folder} is not here"
-    raise ConfigError(f"no sequence folder given and the {MOT_SET} set is not here ({missing}): give a folder, set "
-                      f"{DATA_DIR_ENV} to the one holding {MOT_SET}/, or build the set with scripts/build_mot_set.py "
-                      "(docs/evaluation.md#the-multi-object-set)", key="data")
+    return shared_set(MOT_SET, "scripts/build_mot_set.py", "docs/evaluation.md#the-multi-object-set")

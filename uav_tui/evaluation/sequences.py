@@ -197,14 +197,20 @@ def _is_sequence(folder: Path) -> bool:
 
 def aerial_tracking_set() -> Path:
     """The aerial-tracking set, where the tests find it; ConfigError saying how to get it when it is not here."""
+    return shared_set("aerial-tracking", "scripts/build_tracking_set.py", "docs/evaluation.md")
+
+
+def shared_set(name: str, builder: str, manual: str) -> Path:
+    """The folder ``name`` in the shared data folder (:func:`~processors.detection.find_data_dir`); ConfigError
+    naming the ``builder`` script and the ``manual`` page when it is not here."""
     try:
-        folder = find_data_dir() / "aerial-tracking"
+        folder = find_data_dir() / name
     except FileNotFoundError as exc:
         missing = str(exc)
     else:
         if folder.is_dir():
             return folder
         missing = f"{folder} is not here"
-    raise ConfigError(f"no sequence folder given and the aerial-tracking set is not here ({missing}): give a "
-                      f"folder, set {DATA_DIR_ENV} to the one holding aerial-tracking/, or build the set with "
-                      "scripts/build_tracking_set.py (docs/evaluation.md)", key="data")
+    raise ConfigError(f"no sequence folder given and the {name} set is not here ({missing}): give a folder, set "
+                      f"{DATA_DIR_ENV} to the one holding {name}/, or build the set with {builder} ({manual})",
+                      key="data")
