@@ -5,7 +5,8 @@ frame is FRD (forward, right, down). The camera is fixed to the body, tilted dow
 ``Mount.tilt_deg`` (90: looking straight down, the top of the image towards the nose; 0: looking ahead),
 at ``Mount.offset_m`` (FRD metres) from the vehicle's centre. ``sim:`` renders with the same conventions.
 
-Pixels are OpenCV's: the centre of the top-left pixel is ``(0, 0)``.
+Pixels are OpenCV's: the centre of the top-left pixel is ``(0, 0)``; its distortion model is OpenCV's, computed
+in NumPy (:mod:`uav_values.lens`), so a model needs no OpenCV.
 """
 
 from __future__ import annotations
@@ -19,16 +20,13 @@ import numpy as np
 from sources.camera_plausibility import implausibility
 from sources.errors import SourceError
 from sources.sim_geometry import rotation_body_camera
+from uav_values.lens import Lens
 
 MOUNTS = {"down": 90.0, "forward": 0.0}
 """Named mounts and their tilt below the vehicle's nose, degrees."""
 
 GIMBAL = "gimbal"
 """The named mount of a camera on the gimbal (:attr:`Mount.gimbal`)."""
-
-_UNDISTORT_CRITERIA = (1 | 2, 30, 1e-10)
-"""cv2.TERM_CRITERIA_COUNT | EPS: undistortion iterates to 1e-10 (normalized units), so pixel -> ray -> pixel returns
-the pixel. (OpenCV is imported only by a model with distortion: a processor process that never uses it is spared.)"""
 
 
 class CameraModelError(SourceError, ValueError):
@@ -89,7 +87,8 @@ class CameraModel:
     """One camera's intrinsics, image size and mounting; ``origin`` says where they came from.
 
     Built by :meth:`from_hfov`, :meth:`sources.calibration.load_model` or a source (``sim:`` states its own).
-    Each call is a few microseconds without distortion; with distortion OpenCV undistorts (tens of µs).
+    Each call is a few microseconds without distortion; with distortion undistorting a pixel iterates (tens of µs;
+    ``scripts/bench_camera_model.py``).
     """
 
     width: int
@@ -106,7 +105,7 @@ class CameraModel:
     rms_px: float | None = None
     """The calibration's RMS reprojection error in pixels, when calibrated."""
     _k: np.ndarray = field(init=False, repr=False, compare=False)
-    _d: np.ndarray | None = field(init=False, repr=False, compare=False)
+    _lens: Lens | None = field(init=False, repr=False, compare=False)
     _r: np.ndarray = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -122,13 +121,11 @@ class CameraModel:
         if reason := implausibility(self.width, self.height, self.fx, self.fy, self.cx, self.cy, self.distortion):
             raise CameraModelError(f"camera model: {reason}")
         k = np.array([[self.fx, 0.0, self.cx], [0.0, self.fy, self.cy], [0.0, 0.0, 1.0]])
-        d = np.array(self.distortion, float) if any(self.distortion) else None
         r = rotation_body_camera(self.mount.tilt_deg)
-        for array in (k, d, r):
-            if array is not None:
-                array.flags.writeable = False
+        k.flags.writeable = r.flags.writeable = False
         object.__setattr__(self, "_k", k)
-        object.__setattr__(self, "_d", d)
+        object.__setattr__(self, "_lens", Lens(self.fx, self.fy, self.cx, self.cy, self.distortion)
+                           if any(self.distortion) else None)
         object.__setattr__(self, "_r", r)
 
     @classmethod
@@ -171,7 +168,7 @@ class CameraModel:
     @property
     def distortion_array(self) -> np.ndarray:
         """The distortion coefficients as OpenCV takes them (zeros when there is none)."""
-        return self._d if self._d is not None else np.zeros(5)
+        return np.array(self.distortion, float) if self._lens is not None else np.zeros(5)
 
     @property
     def rotation_body_camera(self) -> np.ndarray:
@@ -187,7 +184,7 @@ class CameraModel:
         """One line for the status and the event log."""
         rms = f", RMS {self.rms_px:.2f} px" if self.rms_px is not None else ""
         return (f"{self.width}x{self.height}, fx {self.fx:.1f} fy {self.fy:.1f} px (hfov {self.hfov_deg:.1f} deg)"
-                f"{', distorted' if self._d is not None else ''}, {self.mount.describe()}; {self.origin}{rms}")
+                f"{', distorted' if self._lens is not None else ''}, {self.mount.describe()}; {self.origin}{rms}")
 
     def check_size(self, width: int, height: int) -> None:
         """Raise CameraModelError (saying what to do) when the camera's frames are not the model's size."""
@@ -201,17 +198,17 @@ class CameraModel:
 
     def pixel_to_ray(self, u: float, v: float) -> np.ndarray:
         """The unit ray (camera frame) that pixel ``(u, v)`` sees, distortion removed."""
-        if self._d is None:
+        if self._lens is None:
             x, y = (u - self.cx) / self.fx, (v - self.cy) / self.fy
         else:
-            x, y = self._undistort(np.array([[u, v]], float))[0]
+            x, y = self._lens.undistort_point(float(u), float(v))
         norm = math.sqrt(x * x + y * y + 1.0)
         return np.array([x / norm, y / norm, 1.0 / norm])
 
     def pixels_to_rays(self, pixels: np.ndarray) -> np.ndarray:
         """Unit rays (N x 3, camera frame) for pixels (N x 2)."""
         points = np.asarray(pixels, float).reshape(-1, 2)
-        xy = (points - (self.cx, self.cy)) / (self.fx, self.fy) if self._d is None else self._undistort(points)
+        xy = (points - (self.cx, self.cy)) / (self.fx, self.fy) if self._lens is None else self._lens.undistort(points)
         rays = np.column_stack([xy, np.ones(len(xy))])
         unit: np.ndarray = rays / np.linalg.norm(rays, axis=1, keepdims=True)
         return unit
@@ -221,21 +218,17 @@ class CameraModel:
         x, y, z = (float(c) for c in ray)
         if z <= 1e-9:
             return None
-        if self._d is None:
+        if self._lens is None:
             return self.fx * x / z + self.cx, self.fy * y / z + self.cy
-        u, v = self.rays_to_pixels(np.array([[x, y, z]]))[0]
-        return float(u), float(v)
+        return self._lens.project(x, y, z)
 
     def rays_to_pixels(self, rays: np.ndarray) -> np.ndarray:
         """Pixels (N x 2) for camera-frame rays (N x 3) in front of the camera (z > 0)."""
         rays = np.asarray(rays, float).reshape(-1, 3)
-        if self._d is None:
+        if self._lens is None:
             pinhole: np.ndarray = rays[:, :2] / rays[:, 2:] * (self.fx, self.fy) + (self.cx, self.cy)
             return pinhole
-        import cv2
-
-        pixels, _ = cv2.projectPoints(rays, np.zeros(3), np.zeros(3), self._k, self._d)
-        return pixels.reshape(-1, 2)
+        return np.column_stack(self._lens.project(rays[:, 0], rays[:, 1], rays[:, 2]))
 
     def angles(self, u: float, v: float) -> tuple[float, float]:
         """(right, down) angles in radians of pixel ``(u, v)`` off the optical axis (LANDING_TARGET's angle_x, _y)."""
@@ -246,11 +239,3 @@ class CameraModel:
         """A camera-frame ray in the body frame (FRD)."""
         body: np.ndarray = self._r @ np.asarray(ray, float)
         return body
-
-    def _undistort(self, points: np.ndarray) -> np.ndarray:
-        import cv2
-
-        # R and P may be None (identity: normalised coordinates out); the stub types them as required arrays.
-        normalised: np.ndarray = cv2.undistortPointsIter(  # type: ignore[call-overload]
-            points.reshape(-1, 1, 2), self._k, self.distortion_array, None, None, _UNDISTORT_CRITERIA)
-        return normalised.reshape(-1, 2)
