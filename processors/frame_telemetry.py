@@ -11,7 +11,7 @@ folder) at most ``save_max_hz`` times a second of the frames' time; more calls a
 ``saves_throttled``; eval's table shows it) with one warning, once they have gone on for a second of frame time,
 that says how much disk saving them all would fill in an hour.
 
-``camera()`` is the source's camera model (:class:`sources.camera_model.CameraModel`: intrinsics and mounting), or
+``camera()`` is the source's camera model (:class:`uav_values.camera.CameraModel`: intrinsics and mounting), or
 None when there is none (no calibration file or field of view configured; eval's annotated video): the host sets it
 whenever the source changes.
 """
@@ -28,7 +28,7 @@ import numpy as np
 from uav_values.telemetry import TELEMETRY_FIELDS, Snapshot
 
 if TYPE_CHECKING:
-    from sources.camera_model import CameraModel
+    from uav_values.camera import CameraModel
 
 logger = logging.getLogger(__name__)
 

@@ -15,7 +15,7 @@ from uav_values.landing_target import LandingTarget
 
 if TYPE_CHECKING:
     from processors.frame_telemetry import FrameTelemetry
-    from sources.camera_model import CameraModel
+    from uav_values.camera import CameraModel
 
 logger = logging.getLogger(__name__)
 

@@ -23,7 +23,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from sources.camera_model import CameraModel  # noqa: E402
+from uav_values.camera import CameraModel  # noqa: E402
 from uav_values.lens import EPS_PX, MAX_ITERATIONS, Lens  # noqa: E402
 
 BARREL = (-0.28, 0.09, 0.0008, -0.0005, 0.0)

@@ -35,12 +35,12 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from processors.detections import MAX_DETECTIONS  # noqa: E402
-from sources.camera_model import CameraModel, Mount  # noqa: E402
 from tests.flight.car_flight import GOALS_P95_M, fly_over_the_car  # noqa: E402
 from tests.flight.geo_helpers import car_views  # noqa: E402
 from uav_tui.flight import geolocate  # noqa: E402
 from uav_tui.flight.target_motion import TargetMotion  # noqa: E402
 from uav_tui.recording.located import detection_rows  # noqa: E402
+from uav_values.camera import CameraModel, Mount  # noqa: E402
 from uav_values.detections import Detected  # noqa: E402
 
 CASES = {"down_level": (90.0, 0.0), "down_rolling_pitching": (90.0, 15.0), "oblique60_rolling_pitching": (60.0, 15.0)}

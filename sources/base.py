@@ -12,8 +12,8 @@ import numpy as np
 from sources.buffer import FrameBuffer
 
 if TYPE_CHECKING:
-    from sources.camera_model import CameraModel
     from sources.uri import SourceUri
+    from uav_values.camera import CameraModel
 
 logger = logging.getLogger(__name__)
 

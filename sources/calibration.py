@@ -19,7 +19,7 @@ import numpy as np
 
 from sources.calibration_boards import Board, View
 from sources.calibration_views import coverage_problem
-from sources.camera_model import CameraModel, CameraModelError, Mount
+from uav_values.camera import CameraModel, CameraModelError, Mount
 
 MAX_FILE_BYTES = 1_000_000
 """A calibration file is a few hundred bytes; anything far larger is not one."""
@@ -125,7 +125,7 @@ def calibrate(views: list[View], size: tuple[int, int]) -> Calibration:
     Fits k1, k2, p1, p2 (k3 fixed at 0, as the samples advise for ordinary lenses: it overfits with few views).
     Refused: views that are not tilted or not spread (:func:`~sources.calibration_views.coverage_problem`), a
     result whose intrinsics OpenCV itself reports uncertain by more than :data:`MAX_UNCERTAINTY`, and one that
-    is not a camera (:mod:`sources.camera_plausibility`).
+    is not a camera (:mod:`uav_values.camera_plausibility`).
     """
     if len(views) < 3:
         raise CameraModelError(f"calibration needs at least 3 views of the board, got {len(views)}")

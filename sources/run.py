@@ -24,9 +24,9 @@ import cv2
 import numpy as np
 
 from sources.base import CaptureSource
-from sources.camera_model import CameraModel
 from sources.errors import SourceError
 from sources.uri import SourceUri
+from uav_values.camera import CameraModel
 
 logger = logging.getLogger(__name__)
 

@@ -15,7 +15,6 @@ from typing import Any
 import numpy as np
 
 from sources.base import CaptureSource
-from sources.camera_model import GIMBAL, MOUNTS, CameraModel, Mount
 from sources.errors import SourceUriError
 from sources.ground import default_ground
 from sources.pacing import Pacer
@@ -24,6 +23,7 @@ from sources.sim_geometry import PinholeCamera, Pose
 from sources.sim_marker import GroundMarker, parse_marker
 from sources.sim_render import SimRenderer, default_targets
 from sources.uri import SourceUri
+from uav_values.camera import GIMBAL, MOUNTS, CameraModel, Mount
 
 logger = logging.getLogger(__name__)
 

@@ -15,6 +15,8 @@ from typing import Any
 
 import numpy as np
 
+from uav_values.camera import rotation_body_camera
+
 DEFAULT_ALTITUDE_M = 10.0
 """Altitude of the pose used before the vehicle reports one."""
 
@@ -69,14 +71,6 @@ def rotation_world_body(roll_deg: float, pitch_deg: float, yaw_deg: float) -> np
     rx = np.array([[1.0, 0.0, 0.0], [0.0, cr, -sr], [0.0, sr, cr]])
     rotation: np.ndarray = rz @ ry @ rx
     return rotation
-
-
-def rotation_body_camera(tilt_deg: float) -> np.ndarray:
-    """Camera axes (columns x, y, z) expressed in the body frame for a camera tilted down by ``tilt_deg``."""
-    t = math.radians(tilt_deg)
-    z = np.array([math.cos(t), 0.0, math.sin(t)])
-    x = np.array([0.0, 1.0, 0.0])
-    return np.column_stack([x, np.cross(z, x), z])
 
 
 def rotation_world_camera(pose: Pose, camera: PinholeCamera) -> np.ndarray:

@@ -19,7 +19,6 @@ from controllers.base import BlockingCalls, FlightController, RecordedVehicle
 from controllers.replay_timeline import ReplayTimeline
 from sources import CameraSource
 from sources.buffer import Frame
-from sources.camera_model import CameraModel
 from uav_tui.camera.active import ActiveCamera
 from uav_tui.config import Config
 from uav_tui.events import EventLog
@@ -46,6 +45,7 @@ from uav_tui.replay.operator import CommandReplay, recorded_commands
 from uav_tui.start_parts import load_and_connect
 from uav_tui.status import CoreState, CoreStatus, core_status
 from uav_tui.web.side_channels import SideChannels
+from uav_values.camera import CameraModel
 
 if TYPE_CHECKING:  # aiortc and pymavlink are imported only when the side channels are switched on
     from uav_tui.web import WebServer

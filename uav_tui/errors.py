@@ -1,14 +1,17 @@
 """Errors raised by uav-tui.
 
 Each plug-in level keeps its exception types beside its contract (:mod:`sources.errors`,
-:mod:`processors.errors`, :mod:`controllers.errors`), so no level imports the platform. The platform
-adds its own and catches them all together::
+:mod:`processors.errors`, :mod:`controllers.errors`), and the camera model's is beside it in the value types
+(:mod:`uav_values.camera`), so no level imports the platform. The platform adds its own and catches them all
+together::
 
     UavError                     the platform's own
     └── ConfigError              bad configuration value or file (names the key)
         └── CommandError         an operator command that cannot be parsed
     sources.SourceError          a camera that cannot be opened or stopped delivering
     └── SourceUriError           a camera URI that cannot be parsed (a configuration error, key "source")
+    uav_values.CameraModelError  a camera model that cannot be built (a calibration file, another frame size);
+                                 a ValueError, so a configured file's is a ConfigError naming its key
     processors.ProcessorLoadError  a processor that cannot be loaded (a configuration error, key "processor")
     controllers.ControllerError  anything on the flight-controller side (ConnectError, CommandDenied,
                                  LinkLost, NotSupported, NoVehicle)
@@ -22,9 +25,10 @@ from __future__ import annotations
 from controllers.errors import CommandDenied, ConnectError, ControllerError, LinkLost, NotSupported, NoVehicle
 from processors.errors import ProcessorLoadError
 from sources.errors import SourceError, SourceUriError
+from uav_values.camera import CameraModelError
 
 __all__ = [
-    "CONFIG_ERRORS", "KNOWN_ERRORS", "CommandDenied", "CommandError", "ConfigError", "ConnectError",
+    "CONFIG_ERRORS", "KNOWN_ERRORS", "CameraModelError", "CommandDenied", "CommandError", "ConfigError", "ConnectError",
     "ControllerError", "LinkLost", "NoVehicle", "NotSupported", "ProcessorLoadError", "SourceError",
     "SourceUriError", "UavError", "error_line",
 ]
@@ -49,7 +53,8 @@ class CommandError(ConfigError):
 CONFIG_ERRORS: tuple[type[Exception], ...] = (ConfigError, SourceUriError, ProcessorLoadError)
 """Every configuration mistake, whichever level found it; each has ``.key``."""
 
-KNOWN_ERRORS: tuple[type[Exception], ...] = (UavError, SourceError, ProcessorLoadError, ControllerError)
+KNOWN_ERRORS: tuple[type[Exception], ...] = (UavError, SourceError, CameraModelError, ProcessorLoadError,
+                                              ControllerError)
 """Every error raised on purpose, by the platform or by a level."""
 
 

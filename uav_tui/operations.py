@@ -23,13 +23,13 @@ from uav_tui.hosting.operator_calls import ProcessorCalls
 from uav_tui.hosting.start import say_load_warnings
 from uav_tui.output.text import describe, shorten
 from uav_tui.status import CoreState
+from uav_values.camera import CameraModelError
 
 if TYPE_CHECKING:
     from controllers.base import FlightController
     from processors import LoadedProcessor
     from processors.base import ProcessorInfo
     from sources import CameraSource
-    from sources.camera_model import CameraModel
     from uav_tui.config import Config
     from uav_tui.events import EventLog
     from uav_tui.flight.autonomy import AutonomyGate
@@ -37,6 +37,7 @@ if TYPE_CHECKING:
     from uav_tui.hosting.host import Answer
     from uav_tui.recording import Recorder
     from uav_tui.relays.precland import LandingTargetFeed
+    from uav_values.camera import CameraModel
 
 HANDED_OVER = {"land": "LAND", "precland": "LAND", "rtl": "RETURN_TO_LAUNCH"}
 """Commands that hand the vehicle to the autopilot's own mode (MAVSDK's name): exit leaves it there."""
@@ -304,7 +305,7 @@ class Operations:
         new = await core.active_camera.open(uri)
         try:
             camera = core.active_camera.model_of(new)
-        except SourceError:
+        except (SourceError, CameraModelError):
             await asyncio.get_running_loop().run_in_executor(None, new.close)
             raise
         old = core.switch_source(new, camera)

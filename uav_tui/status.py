@@ -19,7 +19,6 @@ from uav_tui.stats import PipelineStats
 if TYPE_CHECKING:
     from controllers.base import FlightController
     from sources import CameraSource
-    from sources.camera_model import CameraModel
     from uav_tui.config import Config
     from uav_tui.flight.autonomy import AutonomyGate
     from uav_tui.flight.link import LinkWatch
@@ -28,6 +27,7 @@ if TYPE_CHECKING:
     from uav_tui.hosting.host import ProcessorHost
     from uav_tui.relays.contract import OutputRelay
     from uav_tui.relays.precland import LandingTargetFeed
+    from uav_values.camera import CameraModel
 
 
 class CoreState(enum.Enum):

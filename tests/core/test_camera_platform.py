@@ -6,11 +6,11 @@ from __future__ import annotations
 import asyncio
 import math
 import re
+import threading
 from pathlib import Path
 
 import pytest
 
-from sources.camera_model import CameraModelError
 from tests.core.flight_helpers import wait_until
 from tests.sources.test_camera_model import SAMPLE_YAML
 from uav_tui.config import Config, with_overrides
@@ -18,6 +18,7 @@ from uav_tui.core import UavCore
 from uav_tui.errors import ConfigError
 from uav_tui.recorded import dataset
 from uav_tui.replay.runner import ReplayJob, replay_run
+from uav_values.camera import CameraModelError
 
 PROCESSOR = "tests.sources.camera_processor:CameraSeen"
 
@@ -74,6 +75,31 @@ async def test_a_calibration_for_another_frame_size_stops_the_start(tmp_path: Pa
         await core.start()
     await asyncio.sleep(0)
     assert core.source is None or not core.source.get_properties()["running"]
+
+
+@pytest.mark.timeout(60)
+async def test_a_switch_to_a_camera_the_calibration_is_not_for_is_refused_and_closes_it(tmp_path: Path) -> None:
+    calibration = tmp_path / "camera.yaml"
+    calibration.write_text(SAMPLE_YAML)  # 640x480
+    config = with_overrides(Config(), source="synthetic:?width=640&height=480", isolation="thread", record=False,
+                            camera_calibration=str(calibration))
+    core = UavCore(config)
+    await core.start()
+    try:
+        old, capturing = core.source, capture_threads()
+        with pytest.raises(CameraModelError, match="is for 640x480 frames but the camera gives 160x120"):
+            await core.execute("source synthetic:?width=160&height=120")
+        assert core.source is old and capture_threads() == capturing  # the refused camera is closed
+        said = "source synthetic:?width=160&height=120: the camera model is for 640x480 frames"
+        assert any(e.level == "error" and e.message.startswith(said) for e in core.events.recent)
+        processed = core.worker.stats.frames_processed
+        await wait_until(lambda: core.worker.stats.frames_processed > processed + 5, 20, "frames from the old camera")
+    finally:
+        await core.stop()
+
+
+def capture_threads() -> list[str]:
+    return sorted(t.name for t in threading.enumerate() if t.name.startswith("capture-"))
 
 
 def test_a_calibration_file_that_does_not_parse_is_refused_with_the_configuration(tmp_path: Path) -> None:

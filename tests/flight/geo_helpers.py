@@ -9,12 +9,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from controllers.sim.geo import Home
-from sources.camera_model import CameraModel
 from sources.ground import default_ground
 from sources.sim_camera import SimCameraSource
 from sources.sim_geometry import PinholeCamera, Pose
 from sources.sim_render import GroundTarget, SimRenderer
 from uav_tui.flight import geolocate
+from uav_values.camera import CameraModel
 
 HOME = Home()
 

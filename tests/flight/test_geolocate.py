@@ -10,10 +10,10 @@ import pytest
 
 from controllers.base import Telemetry
 from controllers.mavsdk.telemetry import from_distance_sensor, from_position
-from sources.camera_model import CameraModel, Mount
 from tests.flight.geo_helpers import HOME, car_views
 from uav_tui.flight import geolocate
 from uav_tui.recording.rows import FRAME_COLUMNS, FRAME_OWN_COLUMNS, FrameAligner, FrameRecord, TelemetrySample
+from uav_values.camera import CameraModel, Mount
 
 GOAL_P95_M = {20.0: 1.0, 50.0: 2.0}
 """Issue 39's goals for the simulator's perfect attitude."""

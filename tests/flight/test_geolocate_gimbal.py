@@ -9,10 +9,10 @@ import pytest
 
 from controllers.sim.geo import Home
 from sources import create_source
-from sources.camera_model import Mount
 from sources.pose import PoseAt
 from sources.sim_geometry import Pose, project_ground_point
 from uav_tui.flight import geolocate
+from uav_values.camera import Mount
 
 VEHICLE = Pose(n=4.0, e=-3.0, d=-20.0, roll=8.0, pitch=-6.0, yaw=30.0)
 GIMBAL = (0.0, -55.0, 25.0)

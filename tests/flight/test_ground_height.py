@@ -10,10 +10,10 @@ import pytest
 
 from controllers.base import Telemetry
 from controllers.mavsdk.terrain import from_altitude, from_terrain_report
-from sources.camera_model import CameraModel
 from uav_tui.flight import geolocate
 from uav_tui.flight.telemetry import TelemetryManager
 from uav_tui.recording.interpolate import TelemetryHistory
+from uav_values.camera import CameraModel
 
 S = 1_000_000_000
 LEVEL = {"roll_deg": 0.0, "pitch_deg": 0.0, "rel_alt_m": 23.0}

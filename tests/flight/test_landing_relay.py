@@ -13,7 +13,6 @@ import pytest
 from processors import LandingTarget
 from processors.outputs import FrameOutputs
 from sources.buffer import Frame
-from sources.camera_model import CameraModel
 from uav_tui.errors import UavError
 from uav_tui.flight.plausibility import REFUSALS_TO_STOP
 from uav_tui.flight.telemetry import TelemetryManager
@@ -21,6 +20,7 @@ from uav_tui.hosting.host import ProcessedFrame
 from uav_tui.hosting.wire import FrameOutcome
 from uav_tui.relays.landing_target import LandingTargetRelay
 from uav_tui.relays.precland import LandingTargetFeed
+from uav_values.camera import CameraModel
 
 
 class _Core:

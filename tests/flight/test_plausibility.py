@@ -10,8 +10,8 @@ import pytest
 from controllers.base import Telemetry
 from controllers.landing_target_message import rotation_ned_body
 from processors import GimbalPointing, LandingTarget
-from sources.camera_model import CameraModel
 from uav_tui.flight.plausibility import REFUSALS_TO_STOP, LandingCheck, RefusalRun, _ned, judge_gimbal
+from uav_values.camera import CameraModel
 
 CAMERA = CameraModel.from_hfov(640, 480, 62.0)
 """Looking straight down, the top of the image to the nose: camera x = body right, y = body back, z = body down."""

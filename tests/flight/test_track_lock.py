@@ -13,7 +13,6 @@ from skimage import data
 from processors.steering import Steering
 from processors.yolo_detector import YoloDetector
 from sources.buffer import Frame
-from sources.camera_model import CameraModel, Mount
 from sources.ground import default_ground
 from sources.sim_geometry import PinholeCamera, Pose, project_ground_point
 from sources.sim_render import SimRenderer, default_targets
@@ -26,6 +25,7 @@ from uav_tui.hosting.frame_call import call_frame
 from uav_tui.hosting.host import ProcessedFrame
 from uav_tui.hosting.tracks import DetectionTracks
 from uav_tui.hosting.wire import FrameOutcome
+from uav_values.camera import CameraModel, Mount
 from uav_values.detections import Detected
 
 RED, BLUE, DIM_RED = (40, 40, 200), (200, 60, 30), (30, 30, 150)

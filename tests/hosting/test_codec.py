@@ -11,7 +11,6 @@ import msgspec
 import numpy as np
 import pytest
 
-from sources.camera_model import CameraModel
 from uav_tui.hosting.codec import (
     INLINE,
     OUT_OF_BAND,
@@ -26,6 +25,7 @@ from uav_tui.hosting.codec import (
 )
 from uav_tui.hosting.pipe import Inbox, PipeCorrupt
 from uav_tui.hosting.wire import Call, FrameOutcome, Reply, Result, ResultHead, Times
+from uav_values.camera import CameraModel
 
 
 def result(vector: object = None) -> Result:

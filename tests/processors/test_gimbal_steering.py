@@ -7,7 +7,7 @@ import math
 import pytest
 
 from processors.gimbal_steering import GimbalSteering
-from sources.camera_model import CameraModel, Mount
+from uav_values.camera import CameraModel, Mount
 
 SIZE = (640, 480)
 CAMERA = CameraModel.from_hfov(*SIZE, 62.0, Mount(0.0, gimbal=True))

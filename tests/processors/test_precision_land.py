@@ -12,13 +12,13 @@ import pytest
 from processors import load_processor
 from processors.frame_telemetry import FrameTelemetry
 from processors.precision_land import PrecisionLand
-from sources.camera_model import CameraModel
 from sources.ground import default_ground
 from sources.sim_camera import SimCameraSource
 from sources.sim_geometry import PinholeCamera, Pose, camera_centre, rotation_world_camera
 from sources.sim_marker import GroundMarker
 from sources.sim_render import SimRenderer
 from uav_tui.errors import ProcessorLoadError
+from uav_values.camera import CameraModel
 
 CAMERA = PinholeCamera(640, 480, 62.0)
 MODEL = SimCameraSource(camera=CAMERA).camera_model()

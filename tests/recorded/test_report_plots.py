@@ -16,12 +16,12 @@ from matplotlib.collections import LineCollection
 from matplotlib.patches import Rectangle
 from matplotlib.quiver import Quiver
 
-from sources.camera_model import CameraModel
 from tests.recording.recorder_fakes import FakeCore
 from uav_tui.config import RecordingConfig
 from uav_tui.recorded import dataset, report
 from uav_tui.recorded.report import PLOTS, autonomy_spans, draw, processing_rate, write_report
 from uav_tui.recording import Recorder
+from uav_values.camera import CameraModel
 from uav_values.detections import Detected
 
 

@@ -7,7 +7,7 @@ import cv2
 import numpy as np
 
 from sources.calibration_boards import CharucoBoard, Chessboard
-from sources.camera_model import CameraModel
+from uav_values.camera import CameraModel
 
 CHESSBOARD = Chessboard((9, 6), 0.03)
 """The rendered chessboard: 9x6 inner corners (10 x 7 squares) of 3 cm."""

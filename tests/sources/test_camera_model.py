@@ -15,12 +15,12 @@ import pytest
 
 from sources import create_source
 from sources.calibration import calibrate, load_model, read_calibration, write_calibration
-from sources.camera_model import CameraModel, CameraModelError, Mount
 from sources.sim_geometry import Pose, project_ground_point, rotation_world_body
 from tests.sources.chessboard import CHARUCO, CHESSBOARD, render_views
 from uav_tui.cli import main
 from uav_tui.config import add_config_flags, load_config, overrides_from_args
 from uav_tui.errors import ConfigError
+from uav_values.camera import CameraModel, CameraModelError, Mount
 
 BARREL = (-0.28, 0.09, 0.0008, -0.0005, -0.01)
 """A wide-angle lens's distortion (k1, k2, p1, p2, k3)."""

@@ -8,8 +8,8 @@ import cv2
 import numpy as np
 import pytest
 
-from sources.camera_model import CameraModel
 from tests.sources.test_camera_model import BARREL
+from uav_values.camera import CameraModel
 from uav_values.lens import EPS_PX, MAX_ITERATIONS, Lens
 
 MODELS = {

@@ -22,9 +22,9 @@ from uav_tui.errors import SourceError
 if TYPE_CHECKING:
     from controllers.base import FlightController
     from controllers.replay_timeline import ReplayTimeline
-    from sources.camera_model import CameraModel
     from uav_tui.config import CameraConfig
     from uav_tui.events import EventLog
+    from uav_values.camera import CameraModel
 
 
 class CameraKind(StrEnum):

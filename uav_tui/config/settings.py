@@ -15,7 +15,7 @@ from uav_tui.errors import ConfigError
 from uav_tui.token_strength import GENERATE_TOKEN, MIN_TOKEN_BITS
 
 if TYPE_CHECKING:
-    from sources.camera_model import CameraModel
+    from uav_values.camera import CameraModel
 
 
 def _key(help: str, *, minimum: float | None = None, maximum: float | None = None, default: Any = MISSING,
@@ -237,7 +237,7 @@ def _calibration_file(path: str) -> None:
 
 
 def _mount(mount: str, offset: str = "") -> Any:
-    from sources.camera_model import Mount
+    from uav_values.camera import Mount
 
     return Mount.parse(mount, offset)
 
@@ -259,7 +259,7 @@ class CameraConfig:
     def model(self, width: int, height: int) -> CameraModel | None:
         """The configured model for frames of ``width`` x ``height``; None when neither file nor hfov is given."""
         from sources.calibration import load_model
-        from sources.camera_model import CameraModel
+        from uav_values.camera import CameraModel
 
         mount = _mount(self.camera_mount, self.camera_offset)
         if self.camera_calibration.strip():

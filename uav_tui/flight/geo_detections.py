@@ -11,7 +11,7 @@ from uav_tui.output.text import safe
 from uav_values.detections import Detected
 
 if TYPE_CHECKING:
-    from sources.camera_model import CameraModel
+    from uav_values.camera import CameraModel
 
 MAX_SHOWN = 5
 """Detections shown on the status (TUI, headless line, web page): the most confident; the rest are counted."""

@@ -26,8 +26,8 @@ from dataclasses import dataclass
 from typing import Any
 
 from controllers.base import RECEIVE_STAMPS
-from sources.camera_model import CameraModel
 from uav_tui.flight.telemetry_sanity import implausible
+from uav_values.camera import CameraModel
 
 EARTH_RADIUS_M = 6_371_000.0
 """Mean earth radius of the flat-earth conversion (the built-in simulator uses the same)."""

@@ -28,7 +28,7 @@ from uav_values.landing_target import LandingTarget
 
 if TYPE_CHECKING:
     from controllers.base import Telemetry
-    from sources.camera_model import CameraModel
+    from uav_values.camera import CameraModel
 
 REFUSALS_TO_STOP = 10
 """Refusals in a row that stop an output, as a processor fault does (a third of a second at 30 FPS)."""

@@ -42,9 +42,9 @@ from uav_values.box import PixelBox
 from uav_values.detections import Detected
 
 if TYPE_CHECKING:
-    from sources.camera_model import CameraModel
     from uav_tui.events import EventLog
     from uav_tui.hosting.host import ProcessedFrame
+    from uav_values.camera import CameraModel
 
 SAME_LOOK = 0.6
 """The least likeness (:func:`~uav_tui.flight.appearance.likeness`) a new track needs to be taken as the lost one.

@@ -14,15 +14,13 @@ is refused there (:func:`as_data` puts its ``repr`` in its place, as the text it
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import msgspec
 import numpy as np
 
 from uav_tui.hosting.wire import Camera, FromChild, Message, ReplyHead, ResultHead, ToChild
-
-if TYPE_CHECKING:
-    from sources.camera_model import CameraModel
+from uav_values.camera import CameraModel
 
 OUT_OF_BAND = 1
 """Extension code: an array whose bytes are buffer ``index`` after the document: ``[index, dtype, shape]``."""
@@ -190,8 +188,6 @@ def camera_model(message: Camera) -> CameraModel | None:
     """
     if bytes(message.model) == _NONE:
         return None
-    from sources.camera_model import CameraModel  # here: a child imports ``sources`` only once a model comes
-
     return Decoder(CameraModel).decode(message.model)
 
 

@@ -30,8 +30,8 @@ from uav_tui.hosting.frame_ring import FrameRing
 from uav_tui.hosting.wire import Forget, Result
 
 if TYPE_CHECKING:
-    from sources.camera_model import CameraModel
     from uav_tui.hosting.child_link import ChildLink
+    from uav_values.camera import CameraModel
 
 logger = logging.getLogger(__name__)
 

@@ -16,9 +16,9 @@ if TYPE_CHECKING:
     from processors import LoadedProcessor
     from processors.base import ProcessorInfo
     from sources.buffer import FrameBuffer
-    from sources.camera_model import CameraModel
     from uav_tui.flight.telemetry import TelemetryManager
     from uav_tui.stats import PipelineStats, RollingStats
+    from uav_values.camera import CameraModel
 
 
 @dataclass(slots=True)

@@ -33,7 +33,7 @@ from uav_tui.hosting.wire import FrameOutcome, Result, ResultHead, Save
 from uav_tui.stats import PipelineStats, RollingStats
 
 if TYPE_CHECKING:
-    from sources.camera_model import CameraModel
+    from uav_values.camera import CameraModel
 
 
 class SubprocessHost(DeliversResults):

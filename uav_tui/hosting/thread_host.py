@@ -40,7 +40,7 @@ from uav_tui.hosting.wire import FrameOutcome
 from uav_tui.stats import PipelineStats, RollingStats
 
 if TYPE_CHECKING:
-    from sources.camera_model import CameraModel
+    from uav_values.camera import CameraModel
 
 logger = logging.getLogger(__name__)
 

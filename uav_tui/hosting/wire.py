@@ -98,8 +98,8 @@ class Forget(_Record, frozen=True, tag=2):
 
 class Camera(_Record, frozen=True, tag=3):
     """The source's camera model (``tmMgr.camera()``), sent at each change of source: a
-    :class:`~sources.camera_model.CameraModel`, encoded (:func:`uav_tui.hosting.codec.camera_message`) and decoded
-    only when it arrives (:func:`~uav_tui.hosting.codec.camera_model`), so a child imports ``sources`` only then."""
+    :class:`~uav_values.camera.CameraModel`, encoded (:func:`uav_tui.hosting.codec.camera_message`) and decoded
+    when it arrives (:func:`~uav_tui.hosting.codec.camera_model`)."""
 
     model: msgspec.Raw
 

@@ -10,7 +10,7 @@ from uav_tui.flight.geolocate import GeoFix, locate_row
 from uav_values.detections import Detected
 
 if TYPE_CHECKING:
-    from sources.camera_model import CameraModel
+    from uav_values.camera import CameraModel
 
 GEO_COLUMNS: tuple[str, ...] = ("target_lat_deg", "target_lon_deg", "target_alt_m", "target_uncertainty_m",
                                  "target_status", "target_height_from", "target_height_note")

@@ -58,8 +58,8 @@ from uav_tui.recording.writer import MB, DiskWriter, Rename
 
 if TYPE_CHECKING:
     from sources import CameraSource
-    from sources.camera_model import CameraModel
     from uav_tui.flight.telemetry import TelemetryManager
+    from uav_values.camera import CameraModel
 
 logger = logging.getLogger(__name__)
 

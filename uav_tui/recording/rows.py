@@ -22,7 +22,7 @@ from uav_tui.recording.located import DETECTION_COLUMNS, GEO_COLUMNS, detection_
 from uav_tui.recording.writer import Row
 
 if TYPE_CHECKING:
-    from sources.camera_model import CameraModel
+    from uav_values.camera import CameraModel
     from uav_values.detections import Detected
 
 TELEMETRY_COLUMNS: tuple[str, ...] = TELEMETRY_FIELDS

@@ -18,8 +18,8 @@ if TYPE_CHECKING:
     from controllers.base import FlightController
     from processors import LoadedProcessor
     from sources import CameraSource
-    from sources.camera_model import CameraModel
     from uav_tui.config import Config
+    from uav_values.camera import CameraModel
 
 RUN_NAME_FORMAT = "%Y-%m-%dT%H-%M-%SZ"
 """Run folders are named after their UTC start, sortable, without ':' (FAT/exFAT sticks cannot hold it)."""

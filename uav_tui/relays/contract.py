@@ -8,13 +8,13 @@ from typing import TYPE_CHECKING, Protocol
 
 if TYPE_CHECKING:
     from controllers.base import FlightController
-    from sources.camera_model import CameraModel
     from uav_tui.config import Config
     from uav_tui.events import EventLog
     from uav_tui.flight.autonomy import AutonomyGate
     from uav_tui.flight.telemetry import TelemetryManager
     from uav_tui.hosting.host import ProcessedFrame
     from uav_tui.relays.precland import LandingTargetFeed
+    from uav_values.camera import CameraModel
 
 
 class OutputRelay(Protocol):

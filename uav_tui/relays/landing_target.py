@@ -16,9 +16,9 @@ from uav_tui.relays.contract import RelayCore
 
 if TYPE_CHECKING:
     from controllers.base import LandingTargets, Telemetry
-    from sources.camera_model import CameraModel
     from uav_tui.events import EventLog
     from uav_tui.hosting.host import ProcessedFrame, ProcessorHost
+    from uav_values.camera import CameraModel
     from uav_values.landing_target import LandingTarget
 
 

@@ -7,13 +7,13 @@ from typing import TYPE_CHECKING, Protocol
 
 if TYPE_CHECKING:
     from sources import CameraSource
-    from sources.camera_model import CameraModel
     from uav_tui.events import EventLog
     from uav_tui.flight.commands import Command
     from uav_tui.flight.telemetry import TelemetryManager
     from uav_tui.flight.track_lock import TrackLock
     from uav_tui.hosting.host import ProcessedFrame
     from uav_tui.status import CoreState, CoreStatus
+    from uav_values.camera import CameraModel
 
 
 class FrameFeed(Protocol):

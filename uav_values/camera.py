@@ -17,9 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from sources.camera_plausibility import implausibility
-from sources.errors import SourceError
-from sources.sim_geometry import rotation_body_camera
+from uav_values.camera_plausibility import implausibility
 from uav_values.lens import Lens
 
 MOUNTS = {"down": 90.0, "forward": 0.0}
@@ -29,8 +27,12 @@ GIMBAL = "gimbal"
 """The named mount of a camera on the gimbal (:attr:`Mount.gimbal`)."""
 
 
-class CameraModelError(SourceError, ValueError):
-    """A camera model cannot be built: a calibration file that does not parse, or is for another resolution."""
+class CameraModelError(ValueError):
+    """A camera model cannot be built: a calibration file that does not parse, or is for another resolution.
+
+    The platform counts it among its known errors (:data:`uav_tui.errors.KNOWN_ERRORS`); a configuration value
+    that names such a file is a ``ConfigError`` (the ValueError's message, with the key).
+    """
 
     key = "camera"
 
@@ -239,3 +241,11 @@ class CameraModel:
         """A camera-frame ray in the body frame (FRD)."""
         body: np.ndarray = self._r @ np.asarray(ray, float)
         return body
+
+
+def rotation_body_camera(tilt_deg: float) -> np.ndarray:
+    """Camera axes (columns x, y, z) expressed in the body frame for a camera tilted down by ``tilt_deg``."""
+    t = math.radians(tilt_deg)
+    z = np.array([math.cos(t), 0.0, math.sin(t)])
+    x = np.array([0.0, 1.0, 0.0])
+    return np.column_stack([x, np.cross(z, x), z])
