@@ -8,13 +8,15 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
+LEVELS = ("sources", "processors", "controllers")
+"""The plug-in levels."""
 
 
 @pytest.mark.timeout(180)  # a cold import of every module, in a child bounded at 120 s
 def test_levels_load_without_the_platform() -> None:
     script = (
         "import importlib, pkgutil, sys\n"
-        "for level in ('sources', 'processors', 'controllers'):\n"
+        f"for level in {LEVELS!r}:\n"
         "    package = importlib.import_module(level)\n"
         "    for info in pkgutil.walk_packages(package.__path__, level + '.'):\n"
         "        if info.name.endswith('__main__'):\n"
@@ -116,14 +118,29 @@ def test_modules_and_classes_stay_readable_in_one_sitting() -> None:
     assert too_long == []
 
 
+def _roots(path: Path) -> set[str]:
+    """The top-level packages ``path`` imports absolutely, in any import statement (type-only and lazy ones too)."""
+    found = set()
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        if isinstance(node, ast.Import):
+            found |= {alias.name.split(".")[0] for alias in node.names}
+        elif isinstance(node, ast.ImportFrom) and not node.level:
+            found.add((node.module or "").split(".")[0])
+    return found
+
+
 def test_the_value_types_are_a_leaf() -> None:
     """``uav_values`` imports only the standard library and NumPy: every level may import it, it imports none."""
     allowed = set(sys.stdlib_module_names) | {"numpy", "uav_values", "__future__"}
-    found = set()
-    for path in (ROOT / "uav_values").rglob("*.py"):
-        for node in ast.walk(ast.parse(path.read_text())):
-            if isinstance(node, ast.Import):
-                found |= {alias.name.split(".")[0] for alias in node.names}
-            elif isinstance(node, ast.ImportFrom) and not node.level:
-                found.add((node.module or "").split(".")[0])
+    found = set().union(*(_roots(path) for path in (ROOT / "uav_values").rglob("*.py")))
     assert found and found <= allowed, found - allowed
+
+
+@pytest.mark.parametrize("level", LEVELS)
+def test_a_level_imports_no_other_level_and_not_the_platform(level: str) -> None:
+    """What the levels share lives in ``uav_values`` (the camera model, the telemetry, the outputs' types): a
+    processor imports no source, a source no controller, none of them the platform."""
+    forbidden = {*LEVELS, "uav_tui"} - {level}
+    found = sorted(f"{path.relative_to(ROOT)} imports {root}" for path in (ROOT / level).rglob("*.py")
+                   for root in _roots(path) & forbidden)
+    assert found == []
