@@ -7,10 +7,10 @@ stream by the URI the camera component announces, decodes it and hands the frame
 from __future__ import annotations
 
 import asyncio
+import re
 import shutil
 import socket
 import subprocess
-import time
 from pathlib import Path
 from typing import Any
 
@@ -44,12 +44,13 @@ class Marks:
 
 def receive(uri: str, frames: int, folder: Path) -> subprocess.Popen[bytes]:
     """FFmpeg listening on the port of ``uri`` (``udp://0.0.0.0:PORT``, as QGC takes it), ``frames`` BGR frames
-    to stdout."""
+    to stdout, each frame's stream time on stderr (``showinfo``'s ``pts_time:``)."""
     port = int(uri.rpartition(":")[2])
     sdp = folder / "stream.sdp"
     sdp.write_text(Destination("127.0.0.1", port).sdp())
-    return subprocess.Popen(["ffmpeg", "-hide_banner", "-loglevel", "error", "-protocol_whitelist", "file,udp,rtp",
-                             "-i", str(sdp), "-frames:v", str(frames), "-f", "rawvideo", "-pix_fmt", "bgr24", "-"],
+    return subprocess.Popen(["ffmpeg", "-hide_banner", "-loglevel", "info", "-protocol_whitelist", "file,udp,rtp",
+                             "-i", str(sdp), "-frames:v", str(frames), "-vf", "showinfo", "-f", "rawvideo",
+                             "-pix_fmt", "bgr24", "-"],
                             stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
 
 
@@ -68,9 +69,7 @@ async def test_the_ground_station_finds_the_stream_and_sees_the_overlay(tmp_path
         assert info.type == mavlink.VIDEO_STREAM_TYPE_RTPUDP and info.encoding == mavlink.VIDEO_STREAM_ENCODING_H264
         assert info.uri == f"udp://0.0.0.0:{video_port}" and info.framerate == 10
         receiver = receive(info.uri, 20, tmp_path)
-        began = time.monotonic()
         out, err = await asyncio.get_running_loop().run_in_executor(None, receiver.communicate, None, 30)
-        took = time.monotonic() - began
         assert receiver.returncode == 0, err.decode(errors="replace")
         frames = np.frombuffer(out, np.uint8).reshape(-1, SIZE[1], SIZE[0], 3)
         assert len(frames) == 20
@@ -78,7 +77,10 @@ async def test_the_ground_station_finds_the_stream_and_sees_the_overlay(tmp_path
             inside = frame[MARK].reshape(-1, 3).mean(axis=0)
             assert inside[2] > 200 and inside[:2].max() < 60, inside
             assert frame[MARK[0].start - 20, MARK[1].start - 20, 2] < 200
-        assert took < 20 / 10 * 3 + 3  # about the configured 10 a second (a late joiner waits for a key frame)
+        # The configured 10 a second, by the stream's own clock (a wall-clock bound failed under load: the receiver
+        # took 9.3 s to start, join at a key frame and decode 20 frames at load 8).
+        stream_s = np.diff([float(t) for t in re.findall(rb"pts_time:([0-9.]+)", err)])
+        assert len(stream_s) == 19 and 0.08 <= float(np.median(stream_s)) <= 0.12, stream_s
         status = await station_status(station)
         assert status.framerate == 10 and (status.resolution_h, status.resolution_v) == SIZE
         video = core.side_channels.video
