@@ -18,7 +18,6 @@ import psutil
 from controllers.base import BlockingCalls, FlightController, RecordedVehicle
 from controllers.replay_timeline import ReplayTimeline
 from sources import CameraSource
-from sources.buffer import Frame
 from uav_tui.camera.active import ActiveCamera
 from uav_tui.config import Config
 from uav_tui.events import EventLog
@@ -145,7 +144,8 @@ class UavCore:
                     Recorder.open, self.config.recording, describe(self),
                     telemetry_expected=self.controller is not None, started_wall_ns=self.started_wall_ns,
                     replayed=self.replay is not None))
-                self.recorder.attach(self)
+                self.recorder.attach(self.events, self.telemetry, worker, self.active_camera)
+                self.add_frame_listener(self.recorder.on_frame)
             else:
                 self.telemetry.saver = NotRecording(self.events)
         except BaseException:
@@ -301,10 +301,6 @@ class UavCore:
             self.recorder.watch(source)  # before the worker attaches: each frame is copied before it is drawn on
         self.worker.attach(source.buffer, camera)
         return old
-
-    def current_frame(self) -> Frame | None:
-        """The frame whose ``tmMgr.save`` calls are being made now (the worker's), None between frames."""
-        return self.worker.current if self.worker is not None else None
 
     # -- frames ----------------------------------------------------------------------------------
 

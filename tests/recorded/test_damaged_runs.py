@@ -31,7 +31,7 @@ def odd_run(tmp_path_factory) -> Path:
     core = FakeCore()
     recorder = Recorder.open(RecordingConfig(runs_dir=str(tmp_path_factory.mktemp("runs"))),
                              {"processor": {"name": "odd"}}, telemetry_expected=True)
-    recorder.attach(core)
+    core.attach(recorder)
     image = np.zeros((48, 64, 3), np.uint8)
     for i in range(40):
         core.telemetry.apply({"north_m": 0.1 * i, "east_m": 0.0, "rel_alt_m": 5.0, "yaw_deg": 0.0, "vn_ms": 0.5,

@@ -19,7 +19,7 @@ def _record_run(tmp_path):
     core = FakeCore()
     recorder = Recorder.open(RecordingConfig(runs_dir=str(tmp_path)), {"processor": {"name": "test"}},
                              telemetry_expected=True)
-    recorder.attach(core)
+    core.attach(recorder)
     core.telemetry.apply({"north_m": 0.0, "yaw_deg": 179.0, "lat_deg": 47.397742, "armed": False,
                           "flight_mode": "HOLD", "fc_boot_ms": 1_000, "satellites": 10, "battery_v": 16.1})
     time.sleep(0.01)
@@ -91,7 +91,7 @@ def test_load_refuses_a_folder_that_is_not_a_run(tmp_path):
 def test_load_lists_the_frames_whose_telemetry_is_extrapolated_and_by_how_much(tmp_path):
     core = FakeCore()
     recorder = Recorder.open(RecordingConfig(runs_dir=str(tmp_path)), {}, telemetry_expected=True)
-    recorder.attach(core)
+    core.attach(recorder)
     core.telemetry.apply({"north_m": 0.0, "roll_deg": 1.0})
     core.telemetry.apply({"north_m": 1.0, "roll_deg": 1.0})
     image = np.zeros((8, 8, 3), np.uint8)

@@ -24,7 +24,7 @@ def _flown_run(runs_dir: Path) -> Path:
     core = FakeCore()
     recorder = Recorder.open(RecordingConfig(runs_dir=str(runs_dir)), {"processor": {"name": "track"}},
                              telemetry_expected=True)
-    recorder.attach(core)
+    core.attach(recorder)
     image = np.zeros((48, 64, 3), np.uint8)
     for i in range(SAMPLES):
         core.telemetry.apply({"lat_deg": 47.0 + 1e-5 * i, "lon_deg": 8.0, "abs_alt_m": 500.0, "rel_alt_m": 10.0})

@@ -37,7 +37,7 @@ def circle_run(tmp_path):
     core = FakeCore()
     recorder = Recorder.open(RecordingConfig(runs_dir=str(tmp_path)), {"processor": {"name": "circle"}},
                              telemetry_expected=True)
-    recorder.attach(core)
+    core.attach(recorder)
     image = np.zeros((48, 64, 3), np.uint8)
     for i in range(80):
         angle = i / 80 * 2 * math.pi

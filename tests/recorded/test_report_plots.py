@@ -40,7 +40,7 @@ def hover_run(tmp_path):
     info = {"processor": {"name": "hover"}, "config": {"safety": {"max_speed": 0.5}},
             "source": {"uri": "rtsp://pilot:secret@192.0.2.1/cam"}}
     recorder = Recorder.open(RecordingConfig(runs_dir=str(tmp_path)), info, telemetry_expected=True)
-    recorder.attach(core)
+    core.attach(recorder)
     image = np.zeros((48, 64, 3), np.uint8)
     for i in range(60):
         if i == 15:
@@ -110,7 +110,7 @@ def located_run(tmp_path):
     core = FakeCore()
     core.camera = CameraModel.from_hfov(64, 48, 90.0)
     recorder = Recorder.open(RecordingConfig(runs_dir=str(tmp_path)), {}, telemetry_expected=True)
-    recorder.attach(core)
+    core.attach(recorder)
     image = np.zeros((48, 64, 3), np.uint8)
     for i in range(40):
         north = 0.1 * i

@@ -1,4 +1,5 @@
-"""A stand-in for UavCore with the parts the Recorder attaches to (real EventLog and TelemetryManager)."""
+"""A stand-in for UavCore with the parts the Recorder attaches to (real EventLog, TelemetryManager and
+ActiveCamera)."""
 
 from __future__ import annotations
 
@@ -8,10 +9,14 @@ from dataclasses import dataclass
 from typing import Any
 
 from sources.buffer import Frame
+from sources.camera_model import CameraModel
+from uav_tui.camera.active import ActiveCamera
+from uav_tui.config import CameraConfig
 from uav_tui.events import EventLog
 from uav_tui.flight.telemetry import TelemetryManager
 from uav_tui.hosting.host import ProcessedFrame
 from uav_tui.hosting.wire import FrameOutcome
+from uav_tui.recording import Recorder
 from uav_values.box import PixelBox
 from uav_values.detections import Detected
 
@@ -42,12 +47,21 @@ class FakeCore:
         self.events = EventLog()
         self.telemetry = TelemetryManager(None)
         self.worker = _Worker()
-        self.source = None
-        self.camera = None
+        self.active_camera = ActiveCamera(CameraConfig(), self.events, lambda coro, name: None)
         self._listeners: list[Callable[[ProcessedFrame], None]] = []
 
-    def current_frame(self) -> Frame | None:
-        return self.worker.current
+    @property
+    def camera(self) -> CameraModel | None:
+        return self.active_camera.model
+
+    @camera.setter
+    def camera(self, model: CameraModel | None) -> None:
+        self.active_camera.model = model
+
+    def attach(self, recorder: Recorder) -> None:
+        """Attach ``recorder`` as the core does: to its parts, then as a frame listener."""
+        recorder.attach(self.events, self.telemetry, self.worker, self.active_camera)  # type: ignore[arg-type]
+        self.add_frame_listener(recorder.on_frame)
 
     def add_frame_listener(self, listener: Callable[[ProcessedFrame], None]) -> None:
         self._listeners.append(listener)

@@ -205,7 +205,7 @@ def test_a_command_is_due_before_the_first_frame_the_processor_started_after_it(
 async def test_a_replay_reads_the_autonomy_switches_from_their_column_and_old_runs_from_the_text(tmp_path):
     core = FakeCore()
     recorder = Recorder.open(RecordingConfig(runs_dir=str(tmp_path)), {}, telemetry_expected=False)
-    recorder.attach(core)
+    core.attach(recorder)
     gate = AutonomyGate(SafetyConfig(), core.telemetry, core.events)
     gate.controller = object()  # what enable() asks for; nothing is flown here
     gate.enable("tui")

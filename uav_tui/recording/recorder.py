@@ -22,7 +22,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -31,7 +31,7 @@ from sources.buffer import Frame
 from uav_tui.config import RecordingConfig
 from uav_tui.errors import UavError
 from uav_tui.events import Event, EventLog, Level
-from uav_tui.hosting.host import ProcessedFrame
+from uav_tui.hosting.host import ProcessedFrame, ProcessorHost
 from uav_tui.recording.crash import CrashRecord
 from uav_tui.recording.reserve import DiskReserve, free_stale_reserves
 from uav_tui.recording.rows import (
@@ -58,6 +58,7 @@ from uav_tui.recording.writer import MB, DiskWriter, Rename
 
 if TYPE_CHECKING:
     from sources import CameraSource
+    from uav_tui.camera.active import ActiveCamera
     from uav_tui.flight.telemetry import TelemetryManager
     from uav_values.camera import CameraModel
 
@@ -78,26 +79,6 @@ class NotRecording:
         if not self.told:
             self.told = True
             self.events.emit("info", "recorder", "recording is off (--no-record): tmMgr.save() stores nothing")
-
-
-class RecordedCore(Protocol):
-    """What the recorder reads of the core it records (:meth:`Recorder.attach`)."""
-
-    @property
-    def events(self) -> EventLog: ...
-
-    @property
-    def telemetry(self) -> TelemetryManager: ...
-
-    @property
-    def source(self) -> CameraSource | None: ...
-
-    @property
-    def camera(self) -> CameraModel | None: ...
-
-    def current_frame(self) -> Frame | None: ...
-
-    def add_frame_listener(self, listener: Callable[[ProcessedFrame], None]) -> None: ...
 
 
 @dataclass(slots=True)
@@ -183,19 +164,21 @@ class Recorder:
         logger.info("Recorder(%s): recording", run_dir)
         return recorder
 
-    def attach(self, core: RecordedCore) -> None:
-        """Become the core's ``tmMgr`` saver and listen to its frames, telemetry and events."""
-        self._emit = lambda level, message: core.events.emit(level, "recorder", message)
-        self._current = core.current_frame  # the frame whose saves are being made, None between frames
-        self._camera = lambda: core.camera  # the model of the source the frames come from (it follows a switch)
-        core.telemetry.saver = self.save
-        core.telemetry.add_listener(self.on_telemetry)
-        for event in core.events.recent:  # what happened before the recorder existed (e.g. a source warning)
+    def attach(self, events: EventLog, telemetry: TelemetryManager, worker: ProcessorHost,
+               camera: ActiveCamera) -> None:
+        """Record every event and ``telemetry``'s samples, become its ``tmMgr`` saver (a save is of ``worker``'s
+        current frame) and record the video of ``camera``'s source; each processed frame comes to :meth:`on_frame`
+        (a frame listener the core adds)."""
+        self._emit = lambda level, message: events.emit(level, "recorder", message)
+        self._current = lambda: worker.current  # the frame whose saves are being made, None between frames
+        self._camera = lambda: camera.model  # the model of the source the frames come from (it follows a switch)
+        telemetry.saver = self.save
+        telemetry.add_listener(self.on_telemetry)
+        for event in events.recent:  # what happened before the recorder existed (e.g. a source warning)
             self.on_event(event)
-        core.events.add_listener(self.on_event)
-        core.add_frame_listener(self.on_frame)
-        if core.source is not None:
-            self.watch(core.source)
+        events.add_listener(self.on_event)
+        if camera.source is not None:
+            self.watch(camera.source)
 
     def watch(self, source: CameraSource) -> None:
         """Record ``source``'s frames into the video from now on (the camera was switched). Call it before
