@@ -141,7 +141,8 @@ class UavCore:
             source = await self.active_camera.start(self.config.source)
             if self.config.recording.record:
                 self.recorder = await loop.run_in_executor(None, functools.partial(
-                    Recorder.open, self.config.recording, describe(self),
+                    Recorder.open, self.config.recording,
+                    describe(self.config, self.started_wall_ns, self.active_camera, worker.processor, self.controller),
                     telemetry_expected=self.controller is not None, started_wall_ns=self.started_wall_ns,
                     replayed=self.replay is not None))
                 self.recorder.attach(self.events, self.telemetry, worker, self.active_camera)

@@ -9,7 +9,7 @@ import os
 import platform
 from importlib import metadata
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import TYPE_CHECKING, Any
 
 from controllers.base import RecordedVehicle
 from uav_tui.output.text import redact
@@ -17,9 +17,8 @@ from uav_tui.output.text import redact
 if TYPE_CHECKING:
     from controllers.base import FlightController
     from processors import LoadedProcessor
-    from sources import CameraSource
+    from uav_tui.camera.active import ActiveCamera
     from uav_tui.config import Config
-    from uav_values.camera import CameraModel
 
 RUN_NAME_FORMAT = "%Y-%m-%dT%H-%M-%SZ"
 """Run folders are named after their UTC start, sortable, without ':' (FAT/exFAT sticks cannot hold it)."""
@@ -46,51 +45,24 @@ def new_run_dir(runs_dir: Path, started_wall_ns: int) -> Path:
     raise FileExistsError(f"{runs_dir / name} and 999 numbered variants exist")
 
 
-class _Host(Protocol):
-    @property
-    def processor(self) -> LoadedProcessor: ...
-
-
-class DescribedCore(Protocol):
-    """What ``run.json`` reads of a started core (:func:`describe`)."""
-
-    @property
-    def config(self) -> Config: ...
-
-    @property
-    def started_wall_ns(self) -> int: ...
-
-    @property
-    def source(self) -> CameraSource | None: ...
-
-    @property
-    def camera(self) -> CameraModel | None: ...
-
-    @property
-    def controller(self) -> FlightController | None: ...
-
-    @property
-    def worker(self) -> _Host | None: ...
-
-
-def describe(core: DescribedCore) -> dict[str, Any]:
-    """What ``run.json`` says about a started core's run."""
-    source = core.source.get_properties() if core.source is not None else {}
-    processor = core.worker.processor if core.worker is not None else None
-    replayed = core.controller.run_dir if isinstance(core.controller, RecordedVehicle) else None
-    config = dataclasses.asdict(core.config)
-    config["web"]["web_token"] = "***" if core.config.web.web_token else ""  # never recorded
+def describe(config: Config, started_wall_ns: int, camera: ActiveCamera, processor: LoadedProcessor,
+             controller: FlightController | None) -> dict[str, Any]:
+    """What ``run.json`` says about a run started at ``started_wall_ns``: ``config``, the versions, ``camera``'s source
+    and model, the ``processor`` and the ``controller``."""
+    source = camera.source.get_properties() if camera.source is not None else {}
+    replayed = controller.run_dir if isinstance(controller, RecordedVehicle) else None
+    settings = dataclasses.asdict(config)
+    settings["web"]["web_token"] = "***" if config.web.web_token else ""  # never recorded
     return {
-        "start_utc": utc_text(core.started_wall_ns),
-        "config": config,
+        "start_utc": utc_text(started_wall_ns),
+        "config": settings,
         "versions": versions(),
-        "source": {"uri": core.config.source, **{k: _plain(v) for k, v in source.items()}},
-        "camera": core.camera.to_dict() if core.camera is not None else None,
-        "processor": {} if processor is None else {
+        "source": {"uri": config.source, **{k: _plain(v) for k, v in source.items()}},
+        "camera": camera.model.to_dict() if camera.model is not None else None,
+        "processor": {
             "name": processor.info.name, "spec": processor.spec, "path": processor.info.path,
             "capabilities": sorted(processor.info.capabilities), "kwargs": _plain(processor.kwargs)},
-        "controller": {"fc": core.config.fc,
-                       "description": core.controller.description if core.controller is not None else "none"},
+        "controller": {"fc": config.fc, "description": controller.description if controller is not None else "none"},
         **({"replay_of": {"run": str(Path(replayed).resolve()), "name": Path(replayed).name}} if replayed else {}),
     }
 
