@@ -131,7 +131,8 @@ class UavCore:
                 worker.stage_clock = stage_clock(replay)
                 self.add_frame_listener(lambda result: replay.frame_done())
                 commands = recorded_commands(self.controller.run_dir)
-                replay.before_show = CommandReplay(self, loop, commands).before_show
+                replay.before_show = CommandReplay(functools.partial(self.execute, origin="replay"), lambda: self.state,
+                                                   loop, commands).before_show
             self.gate.bind(self.telemetry, self.controller, self.config)
             self.active_camera.controller, self.active_camera.replay = self.controller, self.replay
             self.relays = build_relays(self)

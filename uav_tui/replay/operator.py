@@ -8,8 +8,8 @@ import contextlib
 import csv
 import logging
 import math
+from collections.abc import Awaitable, Callable
 from pathlib import Path
-from typing import Protocol
 
 from uav_tui.errors import KNOWN_ERRORS
 from uav_tui.flight.commands import Command, parse
@@ -69,25 +69,23 @@ def _frame_starts(frames_csv: Path) -> list[tuple[int, int]]:
     return starts
 
 
-class ReplayedCore(Protocol):
-    """What :class:`CommandReplay` uses of the core: its state and its one command entry."""
-
-    @property
-    def state(self) -> CoreState: ...
-
-    async def execute(self, command: Command | str, origin: str = "script") -> str: ...
-
-
 class CommandReplay:
     """Gives the replayed processor each recorded command before the frame it is due at (:func:`recorded_commands`).
 
     :meth:`before_show` runs on the camera thread (the timeline's ``before_show`` hook) and waits for
     the command to finish, so the processor has it before that frame, in lockstep and paced alike.
+
+    Args:
+        execute: runs one command as the operator's (the core's, origin ``replay``).
+        state: where the core is in its life: a command waits while it is still starting.
+        loop: the core's event loop.
+        commands: what :func:`recorded_commands` found.
     """
 
-    def __init__(self, core: ReplayedCore, loop: asyncio.AbstractEventLoop,
-                 commands: list[tuple[int, Command]]) -> None:
-        self.core = core
+    def __init__(self, execute: Callable[[Command], Awaitable[object]], state: Callable[[], CoreState],
+                 loop: asyncio.AbstractEventLoop, commands: list[tuple[int, Command]]) -> None:
+        self.execute = execute
+        self.state = state
         self.loop = loop
         self.commands = commands
         self.replayed = 0
@@ -103,6 +101,6 @@ class CommandReplay:
                 logger.info("replayed command %s failed: %s", command, exc)
 
     async def _execute(self, command: Command) -> None:
-        while self.core.state is CoreState.NEW:  # the camera can run ahead of the core's start
+        while self.state() is CoreState.NEW:  # the camera can run ahead of the core's start
             await asyncio.sleep(0.01)
-        await self.core.execute(command, origin="replay")
+        await self.execute(command)
