@@ -35,9 +35,8 @@ from uav_tui.hosting.malloc_tuning import tune_this_process
 from uav_tui.operations import Operations
 from uav_tui.output.text import last_line, shorten
 from uav_tui.recording import NotRecording, Recorder, describe
-from uav_tui.relays.contract import OutputRelay
-from uav_tui.relays.landing_target import watch_precland
-from uav_tui.relays.precland import LandingTargetFeed, say_precland_end
+from uav_tui.relays.contract import OutputRelay, RelayParts
+from uav_tui.relays.precland import LandingTargetFeed
 from uav_tui.relays.registry import build_relays, consider_all, landing_target_relay
 from uav_tui.replay.gate import ReplayGate, stage_clock
 from uav_tui.replay.operator import CommandReplay, recorded_commands
@@ -68,7 +67,7 @@ class UavCore:
         self.gate = AutonomyGate(config.safety, self.telemetry, self.events)
         self.lock = TrackLock(self.events, lambda: self.gate.envelope.config.lost_after_s)
         """The operator's lock on a track: while on, its vector is the frame's (``lock ID``, ``unlock``)."""
-        self.landing = LandingTargetFeed()
+        self.landing = LandingTargetFeed(self.events)
         """The processor's landing targets and the operator's ``precland`` switch."""
         self.relays: dict[str, OutputRelay] = {}
         """The output relays by field, each for this controller (:func:`~uav_tui.relays.registry.build_relays`)."""
@@ -135,7 +134,8 @@ class UavCore:
                                                    loop, commands).before_show
             self.gate.bind(self.telemetry, self.controller, self.config)
             self.active_camera.controller, self.active_camera.replay = self.controller, self.replay
-            self.relays = build_relays(self)
+            self.relays = build_relays(RelayParts(self.controller, self.gate, self.telemetry, self.events,
+                                                  self.active_camera, self.landing, self.config.safety))
             await self.gate.check_autopilot_failsafe()
             worker.bind_telemetry(self.telemetry)
             await camera_ready
@@ -162,7 +162,8 @@ class UavCore:
         self._spawn(self.gate.run(), "autonomy")
         self._spawn(self.gate.watch(self.newest_frame_age, lambda: worker.busy_s,
                                     lambda: worker.consecutive_errors), "watchdog")
-        self._spawn(watch_precland(self), "precland watchdog")
+        if (landing := landing_target_relay(self.relays)) is not None:
+            self._spawn(landing.watch(self.controller, self.newest_frame_age, worker), "precland watchdog")
         self.state = CoreState.RUNNING
         self.events.emit("info", "platform", f"started: source {self.config.source}, processor "
                          f"{worker.processor.info.name} ({self.config.isolation}), fc {self.config.fc}")
@@ -175,7 +176,7 @@ class UavCore:
     def _on_processor_fault(self, reason: str) -> None:
         """The processor's process died or was killed: autonomy off, and hold if a vector flies."""
         self.processor_error = reason
-        self.stop_precland(f"processor fault: {reason}")
+        self.landing.end(f"processor fault: {reason}")
         if self.gate.enabled:
             self._spawn(self.gate.disable("watchdog", reason), "processor fault")
 
@@ -279,13 +280,6 @@ class UavCore:
     def hand_over(self, mode: str | None) -> None:
         """A vehicle command handed the vehicle to ``mode`` (LAND, RETURN_TO_LAUNCH), or to no mode of its own."""
         self.handed_over = mode
-
-    def stop_precland(self, reason: str, *, landed: bool = False) -> None:
-        """Stop sending landing targets (a fault, another command; ``landed``: the normal end); said when it was on."""
-        if self.landing.release(reason):
-            relay = landing_target_relay(self.relays)
-            landed_with = relay.sender.sent if landed and relay is not None and relay.sender is not None else None
-            say_precland_end(self.events, reason, landed_with)
 
     def clear_processor_error(self) -> None:
         """The processor was reloaded: its last error is history."""

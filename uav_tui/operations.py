@@ -131,8 +131,6 @@ class OperatedCore(Protocol):
 
     def request_quit(self) -> None: ...
 
-    def stop_precland(self, reason: str) -> None: ...
-
 
 class Operations:
     """One coroutine per command word; each returns what happened or raises UavError saying why not."""
@@ -171,7 +169,7 @@ class Operations:
                     await core.gate.disable(origin, f"pre-empted by operator command '{parsed}'", hold=False)
                 core.gate.stop_flying_back()  # and its flight back to where the target was last seen
                 if parsed.word != "precland":  # and a precision landing
-                    core.stop_precland(f"pre-empted by operator command '{parsed}'")
+                    core.landing.end(f"pre-empted by operator command '{parsed}'")
                 core.lock.release(f"pre-empted by operator command '{parsed}'", origin)  # and the lock
             outcome = await self.run(parsed, origin)
         except KNOWN_ERRORS as exc:

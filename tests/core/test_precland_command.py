@@ -16,6 +16,7 @@ from controllers.sim.launcher import SimVehicle
 from tests.core.flight_helpers import flying_core, steering_config, wait_until
 from uav_tui.core import UavCore
 from uav_tui.errors import UavError
+from uav_tui.events import EventLog
 from uav_tui.headless import format_status
 from uav_tui.relays.precland import LandingTargetFeed
 
@@ -144,7 +145,7 @@ async def test_a_pilot_taking_the_vehicle_out_of_land_stops_the_landing_targets(
 
 def test_precland_ends_when_the_vehicle_leaves_its_landing_mode_or_never_reports_it() -> None:
     now = [0]
-    feed = LandingTargetFeed(clock=lambda: now[0])
+    feed = LandingTargetFeed(EventLog(), clock=lambda: now[0])
     feed.engage()
     modes = frozenset({"LAND"})
     assert feed.left_mode("OFFBOARD", modes) == ""  # the old mode, reported before the switch shows

@@ -1,6 +1,7 @@
 """The landing-target relay's refusals (issue 47): a target that cannot be true is never counted as seen, the reason
 is what ``precland`` and the status say, and a run of them turns ``precland`` off; the processor's own reason for
-giving none is said too. On a stand-in core: the relay reads only its landing feed, telemetry and camera here."""
+giving none is said too. On the relay's own parts but the gate and the sender: it reads only its landing feed,
+telemetry and camera here."""
 
 from __future__ import annotations
 
@@ -13,7 +14,10 @@ import pytest
 from processors import LandingTarget
 from processors.outputs import FrameOutputs
 from sources.buffer import Frame
+from uav_tui.camera.active import ActiveCamera
+from uav_tui.config import CameraConfig
 from uav_tui.errors import UavError
+from uav_tui.events import EventLog
 from uav_tui.flight.plausibility import REFUSALS_TO_STOP
 from uav_tui.flight.telemetry import TelemetryManager
 from uav_tui.hosting.host import ProcessedFrame
@@ -24,18 +28,23 @@ from uav_values.camera import CameraModel
 
 
 class _Core:
-    """What the relay reads of the core until a target passes its checks (then it asks the gate and the sender)."""
+    """The parts the relay reads until a target passes its checks (then it asks the gate and the sender)."""
 
     def __init__(self) -> None:
-        self.landing = LandingTargetFeed()
+        events = EventLog()
+        self.landing = LandingTargetFeed(events)
         self.telemetry = TelemetryManager(None)
         self.telemetry.apply({"rel_alt_m": 10.0, "roll_deg": 0.0, "pitch_deg": 0.0, "yaw_deg": 0.0, "t_mono_ns": 1})
-        self.camera = CameraModel.from_hfov(640, 480, 62.0)
-        self.stopped: list[str] = []
+        self.camera = ActiveCamera(CameraConfig(), events, lambda coro, name: None)
+        self.camera.model = CameraModel.from_hfov(640, 480, 62.0)
 
-    def stop_precland(self, reason: str) -> None:
-        if self.landing.release(reason):
-            self.stopped.append(reason)
+    @property
+    def stopped(self) -> list[str]:
+        """Why ``precland`` was turned off ([] while it was not)."""
+        return [self.landing.stop_reason] if self.landing.stop_reason else []
+
+    def relay(self) -> LandingTargetRelay:
+        return LandingTargetRelay(self.landing, self.telemetry, self.camera, None, None)  # type: ignore[arg-type]
 
 
 def _frame(seq: int, target: LandingTarget | None = None, status: str = "") -> ProcessedFrame:
@@ -50,19 +59,19 @@ def _too_far(seq: int) -> LandingTarget:
 
 def test_a_refused_target_is_not_seen_and_precland_says_why() -> None:
     core = _Core()
-    LandingTargetRelay(core, None).consider(result := _frame(1, _too_far(1)))  # type: ignore[arg-type]
+    core.relay().consider(result := _frame(1, _too_far(1)))
     assert result.landing == "refused: distance 5000.0 m puts the pad 5000.0 m below the camera, but the vehicle is " \
                              "10.0 m above home"
     assert core.landing.last_seen_ns is None and core.landing.refusals.refused == 1
     with pytest.raises(UavError, match=r"has not seen a landing target yet \(refused: distance 5000.0 m"):
         core.landing.check_fresh()
-    LandingTargetRelay(core, None).consider(_frame(2, None, "marker 7 not in view"))  # type: ignore[arg-type]
+    core.relay().consider(_frame(2, None, "marker 7 not in view"))
     assert core.landing.why_none == "the processor says: marker 7 not in view"  # the newest reason
 
 
 def test_the_processors_own_reason_for_no_target_is_what_precland_says() -> None:
     core = _Core()
-    LandingTargetRelay(core, None).consider(_frame(1, None, "2 markers with id 7: which is the pad? no target"))  # type: ignore[arg-type]
+    core.relay().consider(_frame(1, None, "2 markers with id 7: which is the pad? no target"))
     assert core.landing.why_none == "the processor says: 2 markers with id 7: which is the pad? no target"
     with pytest.raises(UavError, match=r"yet \(the processor says: 2 markers with id 7: which is the pad\? no"):
         core.landing.check_fresh()
@@ -72,11 +81,11 @@ def test_a_run_of_refusals_turns_precland_off_and_says_the_autopilot_lands_on_it
     core = _Core()
     core.landing.engage()
     for seq in range(1, REFUSALS_TO_STOP):
-        LandingTargetRelay(core, None).consider(_frame(seq, _too_far(seq)))  # type: ignore[arg-type]
+        core.relay().consider(_frame(seq, _too_far(seq)))
     assert core.landing.engaged and not core.stopped
     behind = LandingTarget((0.0, 0.0, 1.0), 10.0, REFUSALS_TO_STOP)
     object.__setattr__(behind, "direction", (0.0, 0.0, -1.0))
-    LandingTargetRelay(core, None).consider(_frame(REFUSALS_TO_STOP, behind))  # type: ignore[arg-type]
+    core.relay().consider(_frame(REFUSALS_TO_STOP, behind))
     assert not core.landing.engaged
     assert core.stopped == [f"{REFUSALS_TO_STOP} landing targets in a row refused, the last: landing target direction "
                             "(0.0, 0.0, -1.0) must be 3 finite numbers with z > 0 (camera frame: x right, y down, "
@@ -86,6 +95,6 @@ def test_a_run_of_refusals_turns_precland_off_and_says_the_autopilot_lands_on_it
 def test_a_vehicle_position_of_inf_reaches_no_consumer() -> None:
     core = _Core()
     core.telemetry.apply({"rel_alt_m": math.inf, "north_m": math.inf, "t_mono_ns": 2})
-    LandingTargetRelay(core, None).consider(result := _frame(1, LandingTarget((0.0, 0.0, 1.0), 10.0, 1)))  # type: ignore[arg-type]
+    core.relay().consider(result := _frame(1, LandingTarget((0.0, 0.0, 1.0), 10.0, 1)))
     assert result.landing == "refused: no height at the capture to check the distance against"
     assert core.telemetry.snapshot().north_m is None

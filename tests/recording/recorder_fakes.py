@@ -9,7 +9,6 @@ from dataclasses import dataclass
 from typing import Any
 
 from sources.buffer import Frame
-from sources.camera_model import CameraModel
 from uav_tui.camera.active import ActiveCamera
 from uav_tui.config import CameraConfig
 from uav_tui.events import EventLog
@@ -18,6 +17,7 @@ from uav_tui.hosting.host import ProcessedFrame
 from uav_tui.hosting.wire import FrameOutcome
 from uav_tui.recording import Recorder
 from uav_values.box import PixelBox
+from uav_values.camera import CameraModel
 from uav_values.detections import Detected
 
 

@@ -13,7 +13,7 @@ import pytest
 import processors.base
 from processors.outputs import READERS, Reader, read_output
 from uav_tui.relays import registry
-from uav_tui.relays.contract import RelayCore, Unserved
+from uav_tui.relays.contract import RelayParts, Unserved
 from uav_tui.relays.registry import RelayEntry
 
 if TYPE_CHECKING:
@@ -45,14 +45,14 @@ class MarkRelay:
 
     field = "mark"
 
-    def __init__(self, core: RelayCore) -> None:
-        assert isinstance(core.controller, Beats)
-        self.controller = core.controller
-        self.gate = core.gate
+    def __init__(self, parts: RelayParts) -> None:
+        assert isinstance(parts.controller, Beats)
+        self.controller = parts.controller
+        self.gate = parts.gate
         self.marked: list[Mark] = []
         self.stops: list[str] = []
         self.closed = False
-        core.gate.stop_listeners.append(self.stop)
+        parts.gate.stop_listeners.append(self.stop)
 
     def consider(self, result: ProcessedFrame) -> None:
         mark = result.outcome.outputs.get(self.field)
@@ -81,7 +81,7 @@ def say_unmarked(result: ProcessedFrame) -> None:
         result.relayed["mark"] = "not sent: the flight controller has no heartbeat"
 
 
-ENTRY = RelayEntry("mark", Beats, MarkRelay, lambda core: Unserved("mark", say_unmarked))
+ENTRY = RelayEntry("mark", Beats, MarkRelay, lambda parts: Unserved("mark", say_unmarked))
 """The registry entry."""
 
 

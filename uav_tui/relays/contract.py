@@ -1,4 +1,5 @@
-"""The contract every output relay keeps: the core builds one per registry entry and calls it on each frame."""
+"""The contract every output relay keeps: the core builds one per registry entry from the run's parts
+(:class:`RelayParts`) and calls it on each frame."""
 
 from __future__ import annotations
 
@@ -8,13 +9,13 @@ from typing import TYPE_CHECKING, Protocol
 
 if TYPE_CHECKING:
     from controllers.base import FlightController
-    from uav_tui.config import Config
+    from uav_tui.camera.active import ActiveCamera
+    from uav_tui.config import SafetyConfig
     from uav_tui.events import EventLog
     from uav_tui.flight.autonomy import AutonomyGate
     from uav_tui.flight.telemetry import TelemetryManager
     from uav_tui.hosting.host import ProcessedFrame
     from uav_tui.relays.precland import LandingTargetFeed
-    from uav_values.camera import CameraModel
 
 
 class OutputRelay(Protocol):
@@ -37,22 +38,21 @@ class OutputRelay(Protocol):
         """What it did so far (``sent``, ``failed``)."""
 
 
-class RelayCore(Protocol):
-    """What a relay's build may read of the core (:class:`~uav_tui.core.UavCore`), once the vehicle is connected."""
+@dataclasses.dataclass(frozen=True, slots=True)
+class RelayParts:
+    """The parts of a run a relay's build may use (:data:`~uav_tui.relays.registry.REGISTRY`), once the vehicle is
+    connected."""
 
-    config: Config
-    events: EventLog
+    controller: FlightController | None
     gate: AutonomyGate
+    """The autonomy gate: its switch, its clock, its stop listeners."""
     telemetry: TelemetryManager
+    events: EventLog
+    camera: ActiveCamera
+    """The source frames come from and its camera model (both follow a switch)."""
     landing: LandingTargetFeed
-
-    @property
-    def controller(self) -> FlightController | None: ...
-
-    @property
-    def camera(self) -> CameraModel | None: ...
-
-    def stop_precland(self, reason: str) -> None: ...
+    """The landing targets seen and the operator's ``precland`` switch."""
+    safety: SafetyConfig
 
 
 @dataclasses.dataclass(slots=True)

@@ -6,18 +6,22 @@ watchdog that turns ``precland`` off.
 from __future__ import annotations
 
 import asyncio
-from typing import TYPE_CHECKING, Protocol
+from collections.abc import Callable
+from typing import TYPE_CHECKING, cast
 
 from controllers.base import PrecisionLanding
 from controllers.landing_target_message import LandingTargetFix
 from uav_tui.flight.autonomy import WATCHDOG_PERIOD_S
 from uav_tui.flight.relay import SEND_TIMEOUT_S, OneAtATime, not_now
-from uav_tui.relays.contract import RelayCore
 
 if TYPE_CHECKING:
-    from controllers.base import LandingTargets, Telemetry
+    from controllers.base import FlightController, LandingTargets, Telemetry
+    from uav_tui.camera.active import ActiveCamera
     from uav_tui.events import EventLog
+    from uav_tui.flight.autonomy import AutonomyGate
+    from uav_tui.flight.telemetry import TelemetryManager
     from uav_tui.hosting.host import ProcessedFrame, ProcessorHost
+    from uav_tui.relays.precland import LandingTargetFeed
     from uav_values.camera import CameraModel
     from uav_values.landing_target import LandingTarget
 
@@ -59,35 +63,41 @@ class LandingTargetRelay:
     :class:`~uav_tui.relays.contract.OutputRelay`).
 
     Args:
-        core: the core (its landing feed, telemetry, camera model, gate and ``stop_precland``).
+        landing: the landing targets seen and the ``precland`` switch.
+        telemetry: the vehicle's attitude and position at each frame's capture.
+        camera: the camera model of the frames (it follows a switch).
+        gate: the autonomy gate (its switch, its clock and its safety settings).
         sender: sends the targets; None: the flight controller takes none (they are still judged and seen).
     """
 
-    def __init__(self, core: RelayCore, sender: LandingTargetSender | None) -> None:
+    def __init__(self, landing: LandingTargetFeed, telemetry: TelemetryManager, camera: ActiveCamera,
+                 gate: AutonomyGate, sender: LandingTargetSender | None) -> None:
         self.field = "landing_target"
-        self.core = core
+        self.landing = landing
+        self.telemetry = telemetry
+        self.camera = camera
+        self.gate = gate
         self.sender = sender
 
     def consider(self, result: ProcessedFrame) -> None:
-        core = self.core
         target = result.outcome.outputs.landing_target
-        landing = core.landing
+        landing, camera = self.landing, self.camera.model
         if target is None:
             status = result.outcome.outputs.landing_status
             landing.why_none = f"the processor says: {status}" if status else ""  # not an older frame's reason
             return
-        if core.camera is None:
+        if camera is None:
             result.landing = "not sent: no camera model to check it against"
             landing.why_none = "no camera model to check the target against (set camera_hfov or a calibration file)"
             return
         capture_ns = result.frame.t_mono_ns
-        at_capture = core.telemetry.at(capture_ns)[0]
-        judged = landing.check.judge(target, result.frame.seq, capture_ns, core.camera, at_capture)
+        at_capture = self.telemetry.at(capture_ns)[0]
+        judged = landing.check.judge(target, result.frame.seq, capture_ns, camera, at_capture)
         if judged.target is None:
             result.landing = landing.why_none = f"refused: {judged.reason}"
             if landing.refusals.refuse(judged.reason) and landing.engaged:
-                core.stop_precland(f"{landing.refusals.in_a_row} landing targets in a row refused, the last: "
-                                   f"{judged.reason}; the autopilot's own landing goes on without them")
+                landing.end(f"{landing.refusals.in_a_row} landing targets in a row refused, the last: "
+                            f"{judged.reason}; the autopilot's own landing goes on without them")
             return
         landing.refusals.accept()
         landing.why_none = ""
@@ -97,19 +107,39 @@ class LandingTargetRelay:
         if why:
             return
         assert self.sender is not None
-        self.sender.send(landing_fix(judged.target, capture_ns, core.camera, at_capture))
+        self.sender.send(landing_fix(judged.target, capture_ns, camera, at_capture))
 
     def _blocked(self, capture_ns: int) -> str:
         """Why a landing target seen in the frame captured at ``capture_ns`` is not sent now, or ""."""
-        core = self.core
-        if not (core.landing.engaged or core.gate.enabled):
+        if not (self.landing.engaged or self.gate.enabled):
             return "precland and autonomy off"
-        if self.sender is None or core.controller is None:
+        if self.sender is None:
             return "the flight controller takes no landing targets"
-        return not_now(core.controller, core.config.safety, (core.gate.clock() - capture_ns) / 1e9, self.sender)
+        age_s = (self.gate.clock() - capture_ns) / 1e9
+        return not_now(cast("FlightController", self.sender.controller), self.gate.safety, age_s, self.sender)
+
+    async def watch(self, controller: FlightController | None, frame_age: Callable[[], float | None],
+                    worker: ProcessorHost) -> None:
+        """Turn ``precland`` off on the faults that stop autonomy (the newest frame's age, the processor's), once the
+        vehicle landed and disarmed, and when it leaves ``controller``'s precision-landing mode
+        (:meth:`LandingTargetFeed.left_mode`)."""
+        landing = self.landing
+        while True:
+            await asyncio.sleep(WATCHDOG_PERIOD_S)
+            if not landing.engaged:
+                continue
+            fault = self.gate.fault(frame_age(), worker.busy_s, worker.consecutive_errors)
+            snapshot = self.telemetry.snapshot()
+            if not fault and snapshot.armed is False:
+                landing.end("landed and disarmed", self.sender.sent if self.sender is not None else None)
+                continue
+            if not fault and isinstance(controller, PrecisionLanding):
+                fault = landing.left_mode(snapshot.flight_mode, controller.landing_modes)
+            if fault:
+                landing.end(fault)
 
     def stop(self, reason: str) -> None:
-        """Nothing to end: each target is sent on its own (``precland`` has its own end, ``stop_precland``)."""
+        """Nothing to end: each target is sent on its own (``precland`` has its own end: the feed's ``end``)."""
 
     async def close(self) -> None:
         """Wait for a send under way."""
@@ -127,34 +157,3 @@ class LandingTargetRelay:
     @property
     def failed(self) -> int:
         return self.sender.failed if self.sender is not None else 0
-
-
-class LandingCore(RelayCore, Protocol):
-    """What :func:`watch_precland` reads of the core besides what the relay reads, and how it stops ``precland``."""
-
-    @property
-    def worker(self) -> ProcessorHost | None: ...
-
-    def newest_frame_age(self) -> float | None: ...
-
-    def stop_precland(self, reason: str, *, landed: bool = False) -> None: ...
-
-
-async def watch_precland(core: LandingCore) -> None:
-    """Turn ``precland`` off on the faults that stop autonomy, once the vehicle landed and disarmed, and when it
-    leaves its precision-landing mode (:meth:`LandingTargetFeed.left_mode`)."""
-    worker = core.worker
-    assert worker is not None
-    while True:
-        await asyncio.sleep(WATCHDOG_PERIOD_S)
-        if not core.landing.engaged:
-            continue
-        fault = core.gate.fault(core.newest_frame_age(), worker.busy_s, worker.consecutive_errors)
-        snapshot = core.telemetry.snapshot()
-        if not fault and snapshot.armed is False:
-            core.stop_precland("landed and disarmed", landed=True)
-            continue
-        if not fault and isinstance(core.controller, PrecisionLanding):
-            fault = core.landing.left_mode(snapshot.flight_mode, core.controller.landing_modes)
-        if fault:
-            core.stop_precland(fault)

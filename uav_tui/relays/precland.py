@@ -32,10 +32,12 @@ class LandingTargetFeed:
     """When the newest landing target was seen, and the operator's ``precland`` switch.
 
     Args:
+        events: where the switch's end is said (:meth:`end`).
         clock: monotonic nanoseconds, the clock frames are stamped with.
     """
 
-    def __init__(self, clock: Callable[[], int] = time.monotonic_ns) -> None:
+    def __init__(self, events: EventLog, clock: Callable[[], int] = time.monotonic_ns) -> None:
+        self.events = events
         self.clock = clock
         self.engaged = False
         """``precland`` is on: the landing targets are sent to the autopilot."""
@@ -98,11 +100,12 @@ class LandingTargetFeed:
             self.stop_reason = reason
         return was
 
-
-def say_precland_end(events: EventLog, reason: str, landed_with: int | None) -> None:
-    """``precland`` was turned off for ``reason``: a warning, or, ``landed_with`` N landing targets sent, the landing's
-    normal end (the vehicle landed and disarmed)."""
-    if landed_with is None:
-        events.emit("warning", "autonomy", f"precland off, landing targets no longer sent: {reason}")
-    else:
-        events.emit("info", "autonomy", f"precland done: {reason} ({landed_with} landing targets sent)")
+    def end(self, reason: str, landed_with: int | None = None) -> None:
+        """Turn ``precland`` off for ``reason`` (a fault, another command) and say so when it was on: a warning, or,
+        ``landed_with`` N landing targets sent, the landing's normal end (the vehicle landed and disarmed)."""
+        if not self.release(reason):
+            return
+        if landed_with is None:
+            self.events.emit("warning", "autonomy", f"precland off, landing targets no longer sent: {reason}")
+        else:
+            self.events.emit("info", "autonomy", f"precland done: {reason} ({landed_with} landing targets sent)")

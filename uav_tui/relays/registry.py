@@ -13,7 +13,7 @@ from uav_tui.relays.landing_target import LandingTargetRelay, LandingTargetSende
 
 if TYPE_CHECKING:
     from uav_tui.hosting.host import ProcessedFrame
-    from uav_tui.relays.contract import OutputRelay, RelayCore
+    from uav_tui.relays.contract import OutputRelay, RelayParts
 
 
 @dataclass(frozen=True, slots=True)
@@ -23,33 +23,38 @@ class RelayEntry:
 
     field: str
     capability: type
-    build: Callable[[RelayCore], OutputRelay]
-    absent: Callable[[RelayCore], OutputRelay]
+    build: Callable[[RelayParts], OutputRelay]
+    absent: Callable[[RelayParts], OutputRelay]
 
 
-def _gimbal(core: RelayCore) -> GimbalRelay:
-    assert core.controller is not None
-    return GimbalRelay(core.controller, core.gate, core.config.safety, core.events)
+def _gimbal(parts: RelayParts) -> GimbalRelay:
+    assert parts.controller is not None
+    return GimbalRelay(parts.controller, parts.gate, parts.safety, parts.events)
 
 
-def _landing_target(core: RelayCore) -> LandingTargetRelay:
-    assert isinstance(core.controller, LandingTargets)
-    return LandingTargetRelay(core, LandingTargetSender(core.controller, core.events))
+def _landing_target(parts: RelayParts, sender: LandingTargetSender | None = None) -> LandingTargetRelay:
+    """The landing targets' relay; without a ``sender`` the controller takes none (they are still judged and seen)."""
+    return LandingTargetRelay(parts.landing, parts.telemetry, parts.camera, parts.gate, sender)
+
+
+def _sent_landing_target(parts: RelayParts) -> LandingTargetRelay:
+    assert isinstance(parts.controller, LandingTargets)
+    return _landing_target(parts, LandingTargetSender(parts.controller, parts.events))
 
 
 REGISTRY: list[RelayEntry] = [
-    RelayEntry("landing_target", LandingTargets, _landing_target, lambda core: LandingTargetRelay(core, None)),
-    RelayEntry("gimbal", GimbalControl, _gimbal, lambda core: Unserved("gimbal", say_no_gimbal)),
+    RelayEntry("landing_target", LandingTargets, _sent_landing_target, _landing_target),
+    RelayEntry("gimbal", GimbalControl, _gimbal, lambda parts: Unserved("gimbal", say_no_gimbal)),
 ]
 """Every output relay, in the order the core calls them each frame (after the autonomy gate)."""
 
 
-def build_relays(core: RelayCore) -> dict[str, OutputRelay]:
-    """The run's relays (field -> relay): each entry's build if ``core.controller`` has its capability, else its
+def build_relays(parts: RelayParts) -> dict[str, OutputRelay]:
+    """The run's relays (field -> relay): each entry's build if ``parts.controller`` has its capability, else its
     ``absent``."""
-    controller = core.controller
-    return {entry.field: entry.build(core) if controller is not None and isinstance(controller, entry.capability)
-            else entry.absent(core) for entry in REGISTRY}
+    controller = parts.controller
+    return {entry.field: entry.build(parts) if controller is not None and isinstance(controller, entry.capability)
+            else entry.absent(parts) for entry in REGISTRY}
 
 
 def consider_all(relays: dict[str, OutputRelay], result: ProcessedFrame) -> None:
