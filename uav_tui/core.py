@@ -20,10 +20,11 @@ from controllers.replay_timeline import ReplayTimeline
 from sources import CameraSource
 from uav_tui.camera.active import ActiveCamera
 from uav_tui.config import Config
+from uav_tui.errors import UavError
 from uav_tui.events import EventLog
 from uav_tui.flight.autonomy import AutonomyGate
 from uav_tui.flight.clock_check import ClockCheck
-from uav_tui.flight.commands import Command
+from uav_tui.flight.commands import Command, parse
 from uav_tui.flight.exit_hold import hold_before_exit, mode_left_at_exit
 from uav_tui.flight.link import LinkWatch
 from uav_tui.flight.telemetry import TelemetryManager
@@ -40,7 +41,7 @@ from uav_tui.relays.precland import LandingTargetFeed
 from uav_tui.relays.registry import build_relays, consider_all, landing_target_relay
 from uav_tui.replay.gate import ReplayGate, stage_clock
 from uav_tui.replay.operator import CommandReplay, recorded_commands
-from uav_tui.start_parts import load_and_connect
+from uav_tui.start_parts import Parts, load_and_connect
 from uav_tui.status import CoreState, CoreStatus, core_status
 from uav_tui.web.side_channels import SideChannels
 from uav_values.camera import CameraModel
@@ -81,8 +82,6 @@ class UavCore:
         """Where a replay is on the recorded clock (``--fc replay:RUN``), else None."""
         self.quit_requested = asyncio.Event()
         """Set by the ``quit`` command; the interface that runs the core then stops it."""
-        self.processor_error: str | None = None
-        """Last line of the newest processor traceback."""
         self.failure: str | None = None
         """Set by :meth:`fail`: an unhandled error ended the run (the interface exits non-zero, after the hold)."""
         self.started_wall_ns = 0
@@ -91,16 +90,13 @@ class UavCore:
         self._frame_listeners: list[Callable[[ProcessedFrame], None]] = []
         self._tasks: list[asyncio.Task[Any]] = []
         self._processor_errors = ProcessorErrors(self.events)
-        self._operations = Operations(self)
+        self._operations: Operations | None = None
         self.side_channels = SideChannels(config.web, self.events)
         """The web page and MAVLink click-to-track, when configured (``web`` and ``camera_tracking`` read it)."""
         self.link: LinkWatch | None = None
         """Link-loss / recovery events and the dead-simulator report (None without a flight controller)."""
         self.abandoned_calls: list[str] = []
         """Flight-controller calls still blocked when the core stopped (the process should exit non-zero)."""
-        self.handed_over: str | None = None
-        """The mode (MAVSDK's name) the last vehicle command handed the vehicle to: LAND after ``land``,
-        RETURN_TO_LAUNCH after ``rtl``; None after any other vehicle command."""
 
     # -- lifecycle -------------------------------------------------------------------------------
 
@@ -164,6 +160,9 @@ class UavCore:
                                     lambda: worker.consecutive_errors), "watchdog")
         if (landing := landing_target_relay(self.relays)) is not None:
             self._spawn(landing.watch(self.controller, self.newest_frame_age, worker), "precland watchdog")
+        parts = Parts(self.config, self.events, self.active_camera, self.lock, self.landing, worker, self.controller,
+                      self.telemetry, self.gate, self.relays, self.replay, self.link)
+        self._operations = Operations(parts, self.recorder, self._processor_errors, self.quit_requested)
         self.state = CoreState.RUNNING
         self.events.emit("info", "platform", f"started: source {self.config.source}, processor "
                          f"{worker.processor.info.name} ({self.config.isolation}), fc {self.config.fc}")
@@ -175,7 +174,7 @@ class UavCore:
 
     def _on_processor_fault(self, reason: str) -> None:
         """The processor's process died or was killed: autonomy off, and hold if a vector flies."""
-        self.processor_error = reason
+        self._processor_errors.last = reason
         self.landing.end(f"processor fault: {reason}")
         if self.gate.enabled:
             self._spawn(self.gate.disable("watchdog", reason), "processor fault")
@@ -198,7 +197,8 @@ class UavCore:
 
     def mode_left_at_exit(self) -> str | None:
         """The mode the vehicle is left in at exit, or None: it is held first (:func:`.mode_left_at_exit`)."""
-        return mode_left_at_exit(self.telemetry.snapshot().flight_mode, self.controller, self.handed_over)
+        handed_over = self._operations.handed_over if self._operations is not None else None
+        return mode_left_at_exit(self.telemetry.snapshot().flight_mode, self.controller, handed_over)
 
     async def _release(self) -> None:
         """Release every part, each one even if another failed (a bug, reported): the dataset is always closed."""
@@ -255,7 +255,7 @@ class UavCore:
             self.events.emit("error", "platform", f"{self.failure}; stopping")
         self.quit_requested.set()
 
-    # -- state the helpers change through the core ------------------------------------------------
+    # -- what the interfaces read ----------------------------------------------------------------
 
     @property
     def source(self) -> CameraSource | None:
@@ -277,26 +277,10 @@ class UavCore:
         """The MAVLink camera component when ``camera_mavlink`` is set, else None."""
         return self.side_channels.camera_tracking
 
-    def hand_over(self, mode: str | None) -> None:
-        """A vehicle command handed the vehicle to ``mode`` (LAND, RETURN_TO_LAUNCH), or to no mode of its own."""
-        self.handed_over = mode
-
-    def clear_processor_error(self) -> None:
-        """The processor was reloaded: its last error is history."""
-        self.processor_error = None
-
-    def request_quit(self) -> None:
-        """Ask the interface that runs the core to stop it (``quit``)."""
-        self.quit_requested.set()
-
-    def switch_source(self, source: CameraSource, camera: CameraModel | None) -> CameraSource | None:
-        """Take frames from ``source`` (with its camera model) from now on; returns the old source, still open."""
-        assert self.worker is not None
-        old = self.active_camera.switch(source, camera)
-        if self.recorder is not None:
-            self.recorder.watch(source)  # before the worker attaches: each frame is copied before it is drawn on
-        self.worker.attach(source.buffer, camera)
-        return old
+    @property
+    def processor_error(self) -> str | None:
+        """Last line of the newest processor traceback (or why its process died); None since a reload."""
+        return self._processor_errors.last
 
     # -- frames ----------------------------------------------------------------------------------
 
@@ -322,7 +306,6 @@ class UavCore:
         if result.outcome.error:
             exception = shorten(last_line(result.outcome.error), 500)
             self._processor_errors.report(result.outcome.error, exception, result.frame.seq)
-            self.processor_error = exception
         self.lock.steer(result)
         if result.frame.image.flags.writeable:
             draw_tracks(result.frame.image, result.outcome.detections, self.lock.status(), self.lock.vector)
@@ -339,7 +322,12 @@ class UavCore:
 
     async def execute(self, command: Command | str, origin: str = "script") -> str:
         """Run one operator command; returns what happened, raises UavError saying why it could not."""
-        return await self._operations.execute(command, origin)
+        parsed = parse(command) if isinstance(command, str) else command
+        if parsed is None:
+            return ""
+        if self._operations is None or self.state is not CoreState.RUNNING:
+            raise UavError(f"{parsed}: the platform is not running")
+        return await self._operations.execute(parsed, origin)
 
     # -- status ----------------------------------------------------------------------------------
 

@@ -1,7 +1,8 @@
-"""What each operator command does to a running core: :meth:`Operations.execute` parses, logs and dispatches.
+"""What each operator command does to a running core's parts: :meth:`Operations.execute` logs and dispatches.
 
-The commands see the core through :class:`OperatedCore`: what they read, and the core's own methods
-for what they change (the vehicle handed over, the processor's error cleared, the camera switched).
+The commands are given the run's parts (:class:`~uav_tui.start_parts.Parts`), its recorder, its processor errors
+and its quit request, and change them directly (the camera switched, the processor's error cleared); the mode a
+vehicle command handed the vehicle to is theirs (:attr:`Operations.handed_over`).
 """
 
 from __future__ import annotations
@@ -9,35 +10,26 @@ from __future__ import annotations
 import asyncio
 import functools
 from collections.abc import Awaitable, Callable
-from typing import TYPE_CHECKING, Any, NamedTuple, Protocol
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 from controllers.base import PrecisionLanding
 from processors.outputs import READERS
 from uav_tui.errors import KNOWN_ERRORS, CommandError, NoVehicle, ProcessorLoadError, SourceError, UavError
 from uav_tui.flight.autonomy import check_vector
-from uav_tui.flight.commands import VEHICLE_COMMANDS, Command, check_limits, parse, unknown_command
+from uav_tui.flight.commands import VEHICLE_COMMANDS, Command, check_limits, unknown_command
 from uav_tui.flight.track_lock import LockState
 from uav_tui.hosting.child_link import ProcessorRaised
 from uav_tui.hosting.host import Answer
 from uav_tui.hosting.operator_calls import ProcessorCalls
 from uav_tui.hosting.start import say_load_warnings
 from uav_tui.output.text import describe, shorten
-from uav_tui.status import CoreState
 from uav_values.camera import CameraModelError
 
 if TYPE_CHECKING:
     from controllers.base import FlightController
-    from processors import LoadedProcessor
-    from processors.base import ProcessorInfo
-    from sources import CameraSource
-    from uav_tui.config import Config
-    from uav_tui.events import EventLog
-    from uav_tui.flight.autonomy import AutonomyGate
-    from uav_tui.flight.track_lock import TrackLock
-    from uav_tui.hosting.host import Answer
+    from uav_tui.hosting.exception_reports import ProcessorErrors
     from uav_tui.recording import Recorder
-    from uav_tui.relays.precland import LandingTargetFeed
-    from uav_values.camera import CameraModel
+    from uav_tui.start_parts import Parts
 
 HANDED_OVER = {"land": "LAND", "precland": "LAND", "rtl": "RETURN_TO_LAUNCH"}
 """Commands that hand the vehicle to the autopilot's own mode (MAVSDK's name): exit leaves it there."""
@@ -65,78 +57,25 @@ Handler = Callable[..., Awaitable[Outcome | str]]
 """One command's coroutine: called with the command's arguments and ``origin=``; returns what happened."""
 
 
-class CameraOpener(Protocol):
-    """How the ``source`` command opens a camera and picks its model (:class:`~uav_tui.camera.active.ActiveCamera`)."""
-
-    async def open(self, uri: str) -> CameraSource: ...
-
-    def model_of(self, source: CameraSource) -> CameraModel | None: ...
-
-
-class CommandedHost(Protocol):
-    """What commands use of the processor's host (thread or process)."""
-
-    @property
-    def processor(self) -> LoadedProcessor: ...
-
-    async def call(self, method: str, *args: Any) -> Answer: ...
-
-    async def reload(self) -> ProcessorInfo: ...
-
-
-class OperatedCore(Protocol):
-    """The part of :class:`~uav_tui.core.UavCore` the commands read, and the methods they change it through."""
-
-    @property
-    def config(self) -> Config: ...
-
-    @property
-    def state(self) -> CoreState: ...
-
-    @property
-    def events(self) -> EventLog: ...
-
-    @property
-    def gate(self) -> AutonomyGate: ...
-
-    @property
-    def controller(self) -> FlightController | None: ...
-
-    @property
-    def source(self) -> CameraSource | None: ...
-
-    @property
-    def recorder(self) -> Recorder | None: ...
-
-    @property
-    def landing(self) -> LandingTargetFeed: ...
-
-    @property
-    def camera(self) -> CameraModel | None: ...
-
-    @property
-    def worker(self) -> CommandedHost | None: ...
-
-    @property
-    def lock(self) -> TrackLock: ...
-
-    @property
-    def active_camera(self) -> CameraOpener: ...
-
-    def switch_source(self, source: CameraSource, camera: CameraModel | None) -> CameraSource | None: ...
-
-    def hand_over(self, mode: str | None) -> None: ...
-
-    def clear_processor_error(self) -> None: ...
-
-    def request_quit(self) -> None: ...
-
-
 class Operations:
-    """One coroutine per command word; each returns what happened or raises UavError saying why not."""
+    """One coroutine per command word; each returns what happened or raises UavError saying why not.
 
-    def __init__(self, core: OperatedCore) -> None:
-        self.core = core
+    Args:
+        parts: the run's parts the commands act on.
+        recorder: the run's recorder (``snapshot``, and a camera switch), None with ``--no-record``.
+        errors: the processor's errors (``reload`` clears the last one).
+        quit_requested: set by ``quit``.
+    """
+
+    def __init__(self, parts: Parts, recorder: Recorder | None, errors: ProcessorErrors,
+                 quit_requested: asyncio.Event) -> None:
+        self.parts = parts
+        self.recorder = recorder
+        self.errors = errors
+        self.quit_requested = quit_requested
+        self.handed_over: str | None = None
+        """The mode (MAVSDK's name) the last vehicle command handed the vehicle to: LAND after ``land``,
+        RETURN_TO_LAUNCH after ``rtl``; None after any other vehicle command."""
         self._processor_calls = ProcessorCalls()
         self.handlers: dict[str, Handler] = {
             **{word: functools.partial(self._plain, call, done) for word, (call, done) in PLAIN_VEHICLE_CALLS.items()},
@@ -147,37 +86,33 @@ class Operations:
         }
         """Each command word's coroutine (every word of :data:`~uav_tui.flight.commands.COMMANDS`)."""
 
-    async def execute(self, command: Command | str, origin: str) -> str:
-        """Run one operator command; returns what happened, raises UavError saying why it could not.
+    async def execute(self, command: Command, origin: str) -> str:
+        """Run one operator command of a running core; returns what happened, raises UavError saying why it could
+        not.
 
         Logged as it comes and as it ends (or fails); a vehicle command needs a flight controller and
         pre-empts autonomy at once.
         """
-        parsed = parse(command) if isinstance(command, str) else command
-        if parsed is None:
-            return ""
-        core = self.core
-        if core.state is not CoreState.RUNNING:
-            raise UavError(f"{parsed}: the platform is not running")
-        core.events.emit("info", "command", str(parsed), origin)
+        parts = self.parts
+        parts.events.emit("info", "command", str(command), origin)
         try:
-            if parsed.word in VEHICLE_COMMANDS:
-                if core.controller is None:
-                    raise NoVehicle(f"{parsed.word}: no flight controller (--fc none); use --fc sim or a "
+            if command.word in VEHICLE_COMMANDS:
+                if parts.controller is None:
+                    raise NoVehicle(f"{command.word}: no flight controller (--fc none); use --fc sim or a "
                                     "MAVLink connection string")
-                if core.gate.enabled:  # any operator command pre-empts autonomy at once
-                    await core.gate.disable(origin, f"pre-empted by operator command '{parsed}'", hold=False)
-                core.gate.stop_flying_back()  # and its flight back to where the target was last seen
-                if parsed.word != "precland":  # and a precision landing
-                    core.landing.end(f"pre-empted by operator command '{parsed}'")
-                core.lock.release(f"pre-empted by operator command '{parsed}'", origin)  # and the lock
-            outcome = await self.run(parsed, origin)
+                if parts.gate.enabled:  # any operator command pre-empts autonomy at once
+                    await parts.gate.disable(origin, f"pre-empted by operator command '{command}'", hold=False)
+                parts.gate.stop_flying_back()  # and its flight back to where the target was last seen
+                if command.word != "precland":  # and a precision landing
+                    parts.landing.end(f"pre-empted by operator command '{command}'")
+                parts.lock.release(f"pre-empted by operator command '{command}'", origin)  # and the lock
+            outcome = await self.run(command, origin)
         except KNOWN_ERRORS as exc:
-            core.events.emit("error", "command", f"{parsed}: {exc}", origin, command=str(parsed))
+            parts.events.emit("error", "command", f"{command}: {exc}", origin, command=str(command))
             raise
         if outcome.message:
-            core.events.emit("info", "command", outcome.message, origin, command=str(parsed),
-                             t_mono_ns=outcome.t_mono_ns)
+            parts.events.emit("info", "command", outcome.message, origin, command=str(command),
+                              t_mono_ns=outcome.t_mono_ns)
         return outcome.message
 
     async def run(self, command: Command, origin: str) -> Outcome:
@@ -185,10 +120,10 @@ class Operations:
         handler = self.handlers.get(command.word)
         if handler is None:
             raise unknown_command(command.word)
-        check_limits(command, self.core.config.safety)
+        check_limits(command, self.parts.config.safety)
         outcome = await handler(*command.args, origin=origin)
         if command.word in VEHICLE_COMMANDS:
-            self.core.hand_over(HANDED_OVER.get(command.word))
+            self.handed_over = HANDED_OVER.get(command.word)
         return outcome if isinstance(outcome, Outcome) else Outcome(outcome)
 
     async def _plain(self, call: Callable[[FlightController], Awaitable[None]], done: str, *, origin: str) -> str:
@@ -196,7 +131,7 @@ class Operations:
         return done
 
     async def _takeoff(self, altitude: float | None = None, *, origin: str) -> str:
-        altitude = altitude or self.core.config.safety.takeoff_alt
+        altitude = altitude or self.parts.config.safety.takeoff_alt
         await self._vehicle().takeoff(altitude)
         return f"taking off to {altitude:g} m"
 
@@ -208,17 +143,15 @@ class Operations:
         controller = self._vehicle()
         if not isinstance(controller, PrecisionLanding):
             raise UavError(f"precland: {controller.description} cannot land on a landing target (use land)")
-        worker = self.core.worker
-        assert worker is not None
-        info = worker.processor.info
+        info = self.parts.worker.processor.info
         if "getLandingTarget" not in info.capabilities:
             raise UavError(f"precland: processor {info.name} has no getLandingTarget() method, so there is no "
                            "landing target to land on (use a processor that reports one, e.g. precision_land; "
                            "or land)")
-        if self.core.camera is None:
+        if self.parts.camera.model is None:
             raise UavError("precland: no camera model, so a landing target seen in the image can't be given in the "
                            "vehicle's frame: set camera_calibration or camera_hfov and camera_mount ([camera])")
-        landing = self.core.landing
+        landing = self.parts.landing
         landing.check_fresh()
         landing.engage()  # the targets flow from the moment the autopilot starts landing
         try:
@@ -228,13 +161,13 @@ class Operations:
             raise
 
     async def _vector(self, vx: float, vy: float, t: float, *, origin: str) -> str:
-        vector, note = check_vector((vx, vy, t), self.core.config.safety)
+        vector, note = check_vector((vx, vy, t), self.parts.config.safety)
         assert vector is not None  # parse() already rejected non-finite values and t <= 0
         await self._vehicle().set_fly_vector(*vector)
         return f"flying vector {vector}" + (f" ({note})" if note else "")
 
     async def _autonomy(self, switch: str, *, origin: str) -> str:
-        gate = self.core.gate
+        gate = self.parts.gate
         if switch == "on" or (switch == "toggle" and not gate.enabled):
             gate.check_can_enable()  # the vehicle's reasons first
             self._check_gives_outputs()
@@ -247,11 +180,9 @@ class Operations:
         """Refuse autonomy for a processor that has nothing it could fly on (no vector nor any output of
         :data:`~processors.outputs.READERS`) while no track is locked: switched on, it would look armed for a flight
         that never comes."""
-        worker = self.core.worker
-        if worker is None or self.core.lock.state is not LockState.OFF or \
-                {"getPreparedVector", *READERS} & worker.processor.info.capabilities:
+        info = self.parts.worker.processor.info
+        if self.parts.lock.state is not LockState.OFF or {"getPreparedVector", *READERS} & info.capabilities:
             return
-        info = worker.processor.info
         close = "; ".join(info.warnings)  # a misspelt getPreparedVector, most likely
         raise UavError(f"autonomy refused: processor {info.name} has no getPreparedVector() (nor getLandingTarget() "
                        "or getGimbalPointing()), so it gives the vehicle nothing to fly (lock a track to fly after it)"
@@ -259,15 +190,14 @@ class Operations:
 
     async def _f(self, button: int, *, origin: str) -> Outcome:
         answer = await self._call_processor("customize_processing", button)
-        assert self.core.worker is not None  # _call_processor needs one
-        info = self.core.worker.processor.info
+        info = self.parts.worker.processor.info
         meaning = dict(info.buttons).get(button)
         returned = "" if answer.value is None else f", returned {describe(answer.value, 100)}"
         call = f"{info.name.rsplit(':', 1)[-1]}.customize_processing({button}) done{returned}"
         return Outcome(f"F{button} {meaning}: {call}" if meaning else f"F{button}: {call}", answer.t_taken_ns)
 
     async def _roi(self, x: int, y: int, w: int, h: int, *, origin: str) -> Outcome:
-        source = self.core.source
+        source = self.parts.camera.source
         width, height = source.get_frame_size() if source else (0, 0)
         if w <= 0 or h <= 0 or x + w > width or y + h > height:
             raise CommandError(f"roi ({x}, {y}, {w}, {h}) is not inside the {width}x{height} frame", key="roi")
@@ -275,38 +205,40 @@ class Operations:
         return Outcome(f"target region ({x}, {y}, {w}, {h}) sent to the processor", answer.t_taken_ns)
 
     async def _lock(self, track_id: int, *, origin: str) -> str:
-        return self.core.lock.lock(track_id, self.core.camera, origin)
+        return self.parts.lock.lock(track_id, self.parts.camera.model, origin)
 
     async def _unlock(self, *, origin: str) -> str:
-        return "" if self.core.lock.release("operator", origin) else "nothing was locked"
+        return "" if self.parts.lock.release("operator", origin) else "nothing was locked"
 
     async def _snapshot(self, *, origin: str) -> str:
-        if self.core.recorder is None:
+        if self.recorder is None:
             raise UavError("snapshot: recording is off (started with --no-record)")
-        return self.core.recorder.snapshot()
+        return self.recorder.snapshot()
 
     async def _reload(self, *, origin: str) -> str:
-        core = self.core
-        assert core.worker is not None
-        name = core.worker.processor.info.name
+        worker = self.parts.worker
+        name = worker.processor.info.name
         try:
-            info = await core.worker.reload()
+            info = await worker.reload()
         except ProcessorLoadError as exc:
             raise ProcessorLoadError(f"reload failed, {name} keeps running: {exc}", path=exc.path,
                                      class_name=exc.class_name, missing=exc.missing) from exc
-        core.clear_processor_error()
-        say_load_warnings(info, core.events)
+        self.errors.last = None  # the reloaded processor's last error is history
+        say_load_warnings(info, self.parts.events)
         return f"processor {info.name} reloaded"
 
     async def _source(self, uri: str, *, origin: str) -> str:
-        core = self.core
-        new = await core.active_camera.open(uri)
+        active = self.parts.camera
+        new = await active.open(uri)
         try:
-            camera = core.active_camera.model_of(new)
+            camera = active.model_of(new)
         except (SourceError, CameraModelError):
             await asyncio.get_running_loop().run_in_executor(None, new.close)
             raise
-        old = core.switch_source(new, camera)
+        old = active.switch(new, camera)
+        if self.recorder is not None:
+            self.recorder.watch(new)  # before the worker attaches: each frame is copied before it is drawn on
+        self.parts.worker.attach(new.buffer, camera)
         if old is not None:
             await asyncio.get_running_loop().run_in_executor(None, old.close)
         width, height = new.get_frame_size()
@@ -316,25 +248,24 @@ class Operations:
         raise CommandError("wait is for --script files only", key="command")
 
     async def _quit(self, *, origin: str) -> str:
-        self.core.request_quit()
+        self.quit_requested.set()
         return "quit requested"
 
     def _vehicle(self) -> FlightController:
-        assert self.core.controller is not None  # execute() refuses vehicle commands without one
-        return self.core.controller
+        assert self.parts.controller is not None  # execute() refuses vehicle commands without one
+        return self.parts.controller
 
     async def _call_processor(self, method: str, *args: Any) -> Answer:
         """Call the processor's ``method`` (in order, bounded: :class:`ProcessorCalls`); its answer: what it returned
         and when it began the call (monotonic ns)."""
-        worker = self.core.worker
-        assert worker is not None
+        worker = self.parts.worker
         loaded = worker.processor
         if method not in loaded.info.capabilities:
             raise UavError(f"processor {loaded.info.name} has no {method}() method")
         what = f"{loaded.info.name}.{method}{describe(args)}"
         try:
             answer = await self._processor_calls.call(what, lambda: worker.call(method, *args),
-                                                      self.core.config.processor_call_timeout)
+                                                      self.parts.config.processor_call_timeout)
         except UavError:
             raise
         except ProcessorRaised as exc:

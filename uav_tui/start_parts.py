@@ -1,16 +1,53 @@
-"""The two slow parts of a start, at once: the processor's host loading and the vehicle connecting."""
+"""A run's parts: the record of them (:class:`Parts`) and the two slow ones started at once (the processor's host
+loading, the vehicle connecting)."""
 
 from __future__ import annotations
 
 import asyncio
 from collections.abc import Callable
+from dataclasses import dataclass
 
 from controllers import connect_controller
 from controllers.base import FlightController
+from controllers.replay_timeline import ReplayTimeline
+from uav_tui.camera.active import ActiveCamera
 from uav_tui.config import Config
 from uav_tui.events import EventLog
+from uav_tui.flight.autonomy import AutonomyGate
+from uav_tui.flight.link import LinkWatch
+from uav_tui.flight.telemetry import TelemetryManager
+from uav_tui.flight.track_lock import TrackLock
 from uav_tui.hosting.host import ProcessedFrame, ProcessorHost
 from uav_tui.hosting.start import start_host
+from uav_tui.relays.contract import OutputRelay
+from uav_tui.relays.precland import LandingTargetFeed
+
+
+@dataclass(frozen=True, slots=True)
+class Parts:
+    """The long-lived parts of a started run, each built once; a helper is given the ones it uses."""
+
+    config: Config
+    events: EventLog
+    camera: ActiveCamera
+    """The source frames come from and its camera model (both follow a switch)."""
+    lock: TrackLock
+    """The operator's lock on a track: while on, its vector is the frame's (``lock ID``, ``unlock``)."""
+    landing: LandingTargetFeed
+    """The processor's landing targets and the operator's ``precland`` switch."""
+    worker: ProcessorHost
+    """The processor's host (a thread or a process)."""
+    controller: FlightController | None
+    """The vehicle; None with ``--fc none``."""
+    telemetry: TelemetryManager
+    gate: AutonomyGate
+    """The autonomy gate (a replay's: :class:`~uav_tui.replay.gate.ReplayGate`)."""
+    relays: dict[str, OutputRelay]
+    """The output relays by field, each for this controller (:func:`~uav_tui.relays.registry.build_relays`)."""
+    replay: ReplayTimeline | None
+    """Where a replay is on the recorded clock (``--fc replay:RUN``), else None."""
+    link: LinkWatch | None
+    """Link-loss / recovery events and the dead-simulator report (None without a flight controller)."""
 
 
 async def load_and_connect(config: Config, on_result: Callable[[ProcessedFrame], None], events: EventLog,

@@ -174,11 +174,13 @@ class ObservedCore(Protocol):
     config: Config
     telemetry: TelemetryManager
     gate: AutonomyGate
-    processor_error: str | None
     startup_s: float | None
     landing: LandingTargetFeed
     relays: dict[str, OutputRelay]
     lock: TrackLock
+
+    @property
+    def processor_error(self) -> str | None: ...
 
     @property
     def camera(self) -> CameraModel | None: ...

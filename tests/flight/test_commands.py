@@ -13,7 +13,9 @@ from uav_tui.core import UavCore
 from uav_tui.errors import CommandError, ConfigError
 from uav_tui.flight.commands import COMMANDS, Command, check_limits, parse
 from uav_tui.headless import load_script
-from uav_tui.operations import OperatedCore, Operations
+from uav_tui.hosting.exception_reports import ProcessorErrors
+from uav_tui.operations import Operations
+from uav_tui.start_parts import Parts
 
 
 @pytest.mark.parametrize(("line", "expected"), [
@@ -67,13 +69,18 @@ def test_every_command_has_usage_and_help() -> None:
         assert spec.usage.split()[0] == word and spec.help
 
 
+def _unbound() -> Operations:
+    """The commands, on no parts: enough to look a word up."""
+    return Operations(cast(Parts, None), None, cast(ProcessorErrors, None), asyncio.Event())
+
+
 def test_every_command_word_has_its_handler() -> None:
-    assert set(Operations(cast(OperatedCore, None)).handlers) == set(COMMANDS)
+    assert set(_unbound().handlers) == set(COMMANDS)
 
 
 async def test_an_unknown_word_is_refused_by_the_commands_as_parse_refuses_it() -> None:
     with pytest.raises(CommandError) as refused:
-        await Operations(cast(OperatedCore, None)).run(Command("takof"), "test")
+        await _unbound().run(Command("takof"), "test")
     with pytest.raises(CommandError) as parsed:
         parse("takof")
     assert str(refused.value) == str(parsed.value) and "did you mean 'takeoff'?" in str(refused.value)

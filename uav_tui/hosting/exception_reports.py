@@ -43,17 +43,21 @@ class _Kind:
 class ProcessorErrors:
     """Says a processor's exceptions as events (``error``, ``processor``) on the event loop: a kind's first in full,
     the rest in a count every :data:`SUMMARY_S`. A kind that did not come back for a whole period is forgotten,
-    and said in full again if it ever does.
+    and said in full again if it ever does. Keeps the newest one's last line (:attr:`last`).
     """
 
     def __init__(self, events: EventLog, period_s: float = SUMMARY_S) -> None:
         self.events = events
         self.period_s = period_s
+        self.last: str | None = None
+        """The newest exception's last line (or why the processor's process died); None: none since the start or
+        the last reload."""
         self._kinds: dict[tuple[str, ...], _Kind] = {}
         self._summary: asyncio.TimerHandle | None = None
 
     def report(self, traceback_text: str, exception: str, frame_seq: int) -> None:
         """One frame's exception: ``traceback_text`` as formatted, ``exception`` its last line (cut)."""
+        self.last = exception
         frames = _FRAME.findall(traceback_text)
         method = frames[1][2] if len(frames) > 1 else frames[0][2] if frames else "the processor"
         type_name = match.group() if (match := _TYPE.match(exception)) else "an exception"
