@@ -91,7 +91,8 @@ def test_cycle_finder_finds_a_circle() -> None:
 
 
 def test_no_import_circle_in_the_platform() -> None:
-    """Helpers (operations, recorder, replay, web) see the core through Protocols and never import it back."""
+    """Helpers (operations, recorder, replay, relays) are given the parts they use, the web page sees the core through a
+    Protocol, and none imports the core back."""
     paths = {_module_name(path): path for path in (ROOT / "uav_tui").rglob("*.py")}
     graph = {name: _imports(path, name, set(paths)) for name, path in paths.items()}
     assert {"uav_tui.operations", "uav_tui.recording", "uav_tui.web"} <= graph["uav_tui.core"]  # edges are seen

@@ -23,10 +23,8 @@ from uav_tui.config import Config
 from uav_tui.errors import UavError
 from uav_tui.events import EventLog
 from uav_tui.flight.autonomy import AutonomyGate
-from uav_tui.flight.clock_check import ClockCheck
 from uav_tui.flight.commands import Command, parse
 from uav_tui.flight.exit_hold import hold_before_exit, mode_left_at_exit
-from uav_tui.flight.link import LinkWatch
 from uav_tui.flight.telemetry import TelemetryManager
 from uav_tui.flight.track_lock import TrackLock
 from uav_tui.flight.track_overlay import draw_tracks
@@ -36,12 +34,11 @@ from uav_tui.hosting.malloc_tuning import tune_this_process
 from uav_tui.operations import Operations
 from uav_tui.output.text import last_line, shorten
 from uav_tui.recording import NotRecording, Recorder, describe
-from uav_tui.relays.contract import OutputRelay, RelayParts
+from uav_tui.relays.contract import OutputRelay
 from uav_tui.relays.precland import LandingTargetFeed
-from uav_tui.relays.registry import build_relays, consider_all, landing_target_relay
-from uav_tui.replay.gate import ReplayGate, stage_clock
+from uav_tui.relays.registry import consider_all, landing_target_relay
 from uav_tui.replay.operator import CommandReplay, recorded_commands
-from uav_tui.start_parts import Parts, load_and_connect
+from uav_tui.start_parts import Parts, build_parts
 from uav_tui.status import CoreState, CoreStatus, core_status
 from uav_tui.web.side_channels import SideChannels
 from uav_values.camera import CameraModel
@@ -64,22 +61,16 @@ class UavCore:
         self.config = config
         self.state = CoreState.NEW
         self.events = EventLog()
-        self.telemetry = TelemetryManager(None)
-        self.gate = AutonomyGate(config.safety, self.telemetry, self.events)
         self.lock = TrackLock(self.events, lambda: self.gate.envelope.config.lost_after_s)
         """The operator's lock on a track: while on, its vector is the frame's (``lock ID``, ``unlock``)."""
         self.landing = LandingTargetFeed(self.events)
         """The processor's landing targets and the operator's ``precland`` switch."""
-        self.relays: dict[str, OutputRelay] = {}
-        """The output relays by field, each for this controller (:func:`~uav_tui.relays.registry.build_relays`)."""
-        self.controller: FlightController | None = None
         self.active_camera = ActiveCamera(config.camera, self.events, self._spawn)
         """The source frames come from and its camera model (``source`` and ``camera`` read it)."""
-        self.worker: ProcessorHost | None = None
+        self.parts: Parts | None = None
+        """The run's parts, once :meth:`start` built them (:func:`~uav_tui.start_parts.build_parts`)."""
         self.recorder: Recorder | None = None
         """Writes the run's dataset (None with ``--no-record``)."""
-        self.replay: ReplayTimeline | None = None
-        """Where a replay is on the recorded clock (``--fc replay:RUN``), else None."""
         self.quit_requested = asyncio.Event()
         """Set by the ``quit`` command; the interface that runs the core then stops it."""
         self.failure: str | None = None
@@ -93,15 +84,13 @@ class UavCore:
         self._operations: Operations | None = None
         self.side_channels = SideChannels(config.web, self.events)
         """The web page and MAVLink click-to-track, when configured (``web`` and ``camera_tracking`` read it)."""
-        self.link: LinkWatch | None = None
-        """Link-loss / recovery events and the dead-simulator report (None without a flight controller)."""
         self.abandoned_calls: list[str] = []
         """Flight-controller calls still blocked when the core stopped (the process should exit non-zero)."""
 
     # -- lifecycle -------------------------------------------------------------------------------
 
     async def start(self) -> None:
-        """Load the processor, connect the vehicle, open the camera, start the loop's tasks.
+        """Build the parts (load the processor, connect the vehicle), open the camera, start the loop's tasks.
 
         Raises a UavError subclass that says what to fix; nothing stays open when it does.
         """
@@ -114,54 +103,41 @@ class UavCore:
         # The camera's one-off preparation (the sim: camera's ground) overlaps loading and connecting.
         camera_ready = self.active_camera.warm_up(self.config.source)
         try:
-            worker, self.controller = await load_and_connect(self.config, self._on_result, self.events,
-                                                             self._on_processor_fault)
-            self.worker = worker
-            self.telemetry = TelemetryManager(self.controller)
-            if self.controller is not None and not isinstance(self.controller, RecordedVehicle):
-                self.telemetry.add_listener(ClockCheck(self.events))  # a replay's clock was the recording's
-            if isinstance(self.controller, RecordedVehicle):
-                replay = self.replay = self.controller.timeline
-                self.gate = ReplayGate(self.config.safety, self.telemetry, self.events, self.controller)
-                worker.stage_clock = stage_clock(replay)
-                self.add_frame_listener(lambda result: replay.frame_done())
-                commands = recorded_commands(self.controller.run_dir)
-                replay.before_show = CommandReplay(functools.partial(self.execute, origin="replay"), lambda: self.state,
-                                                   loop, commands).before_show
-            self.gate.bind(self.telemetry, self.controller, self.config)
-            self.active_camera.controller, self.active_camera.replay = self.controller, self.replay
-            self.relays = build_relays(RelayParts(self.controller, self.gate, self.telemetry, self.events,
-                                                  self.active_camera, self.landing, self.config.safety))
-            await self.gate.check_autopilot_failsafe()
-            worker.bind_telemetry(self.telemetry)
+            self.parts = parts = await build_parts(self.config, self.events, self.active_camera, self.lock,
+                                                   self.landing, self._on_result, self._on_processor_fault)
+            worker, controller, telemetry, gate = parts.worker, parts.controller, parts.telemetry, parts.gate
+            if isinstance(controller, RecordedVehicle):  # a replay: it waits for each frame; the operator's again
+                self.add_frame_listener(lambda result: controller.timeline.frame_done())
+                controller.timeline.before_show = CommandReplay(
+                    functools.partial(self.execute, origin="replay"), lambda: self.state, loop,
+                    recorded_commands(controller.run_dir)).before_show
+            await gate.check_autopilot_failsafe()
+            worker.bind_telemetry(telemetry)
             await camera_ready
             source = await self.active_camera.start(self.config.source)
             if self.config.recording.record:
                 self.recorder = await loop.run_in_executor(None, functools.partial(
                     Recorder.open, self.config.recording,
-                    describe(self.config, self.started_wall_ns, self.active_camera, worker.processor, self.controller),
-                    telemetry_expected=self.controller is not None, started_wall_ns=self.started_wall_ns,
-                    replayed=self.replay is not None))
-                self.recorder.attach(self.events, self.telemetry, worker, self.active_camera)
+                    describe(self.config, self.started_wall_ns, self.active_camera, worker.processor, controller),
+                    telemetry_expected=controller is not None, started_wall_ns=self.started_wall_ns,
+                    replayed=parts.replay is not None))
+                self.recorder.attach(self.events, telemetry, worker, self.active_camera)
                 self.add_frame_listener(self.recorder.on_frame)
             else:
-                self.telemetry.saver = NotRecording(self.events)
+                telemetry.saver = NotRecording(self.events)
         except BaseException:
             await self._release()
             raise
         worker.attach(source.buffer, self.camera)
         self._spawn(worker.run(), "processor")
-        self._spawn(self.telemetry.run(), "telemetry")
-        if self.controller is not None:
-            self.link = LinkWatch(self.controller, self.events, self.config.safety.link_timeout)
-            self._spawn(self.link.run(), "link")
-        self._spawn(self.gate.run(), "autonomy")
-        self._spawn(self.gate.watch(self.newest_frame_age, lambda: worker.busy_s,
-                                    lambda: worker.consecutive_errors), "watchdog")
-        if (landing := landing_target_relay(self.relays)) is not None:
-            self._spawn(landing.watch(self.controller, self.newest_frame_age, worker), "precland watchdog")
-        parts = Parts(self.config, self.events, self.active_camera, self.lock, self.landing, worker, self.controller,
-                      self.telemetry, self.gate, self.relays, self.replay, self.link)
+        self._spawn(telemetry.run(), "telemetry")
+        if parts.link is not None:
+            self._spawn(parts.link.run(), "link")
+        self._spawn(gate.run(), "autonomy")
+        self._spawn(gate.watch(self.newest_frame_age, lambda: worker.busy_s, lambda: worker.consecutive_errors),
+                    "watchdog")
+        if (landing := landing_target_relay(parts.relays)) is not None:
+            self._spawn(landing.watch(controller, self.newest_frame_age, worker), "precland watchdog")
         self._operations = Operations(parts, self.recorder, self._processor_errors, self.quit_requested)
         self.state = CoreState.RUNNING
         self.events.emit("info", "platform", f"started: source {self.config.source}, processor "
@@ -176,8 +152,8 @@ class UavCore:
         """The processor's process died or was killed: autonomy off, and hold if a vector flies."""
         self._processor_errors.last = reason
         self.landing.end(f"processor fault: {reason}")
-        if self.gate.enabled:
-            self._spawn(self.gate.disable("watchdog", reason), "processor fault")
+        if self.parts is not None and self.parts.gate.enabled:
+            self._spawn(self.parts.gate.disable("watchdog", reason), "processor fault")
 
     async def stop(self, reason: str = "quit") -> None:
         """Hold the vehicle if something uav-tui started could be flying it, then release everything. Idempotent.
@@ -189,10 +165,11 @@ class UavCore:
             return
         self._processor_errors.flush()
         self.events.emit("info", "platform", f"stopping: {reason}")
-        await self.gate.disable("platform", reason if self.gate.enabled else None, hold=False)
-        vehicle = self.telemetry.snapshot()
-        if self.controller is not None and (self.controller.vector_active or vehicle.in_air):
-            await hold_before_exit(self.controller, self.mode_left_at_exit(), self.events)
+        if (parts := self.parts) is not None:  # built: the gate is told, the vehicle held if needed
+            await parts.gate.disable("platform", reason if parts.gate.enabled else None, hold=False)
+            vehicle = parts.telemetry.snapshot()
+            if parts.controller is not None and (parts.controller.vector_active or vehicle.in_air):
+                await hold_before_exit(parts.controller, self.mode_left_at_exit(), self.events)
         await self._release()
 
     def mode_left_at_exit(self) -> str | None:
@@ -220,14 +197,14 @@ class UavCore:
         self._tasks.clear()
 
     async def _close_worker(self) -> None:
-        if self.worker is not None:
-            self.worker.close()
+        if self.parts is not None:
+            self.parts.worker.close()
 
     async def _close_controller(self) -> None:
-        if self.controller is not None:
-            await self.controller.close()
-            if isinstance(self.controller, BlockingCalls):
-                self.abandoned_calls = list(self.controller.unfinished_calls)
+        if (controller := self.controller) is not None:
+            await controller.close()
+            if isinstance(controller, BlockingCalls):
+                self.abandoned_calls = list(controller.unfinished_calls)
             if self.abandoned_calls:
                 self.events.emit("error", "link", "flight controller calls still blocked, abandoned: "
                                  + ", ".join(self.abandoned_calls))
@@ -256,6 +233,38 @@ class UavCore:
         self.quit_requested.set()
 
     # -- what the interfaces read ----------------------------------------------------------------
+
+    @property
+    def worker(self) -> ProcessorHost | None:
+        """The processor's host (None before the start)."""
+        return self.parts.worker if self.parts is not None else None
+
+    @property
+    def controller(self) -> FlightController | None:
+        """The vehicle (None before the start, and with ``--fc none``)."""
+        return self.parts.controller if self.parts is not None else None
+
+    @property
+    def replay(self) -> ReplayTimeline | None:
+        """Where a replay is on the recorded clock (``--fc replay:RUN``), else None."""
+        return self.parts.replay if self.parts is not None else None
+
+    @property
+    def relays(self) -> dict[str, OutputRelay]:
+        """The output relays by field ({} before the start)."""
+        return self.parts.relays if self.parts is not None else {}
+
+    @property
+    def telemetry(self) -> TelemetryManager:
+        """The vehicle's telemetry (once started)."""
+        assert self.parts is not None, "the telemetry comes with start()"
+        return self.parts.telemetry
+
+    @property
+    def gate(self) -> AutonomyGate:
+        """The autonomy gate (once started)."""
+        assert self.parts is not None, "the autonomy gate comes with start()"
+        return self.parts.gate
 
     @property
     def source(self) -> CameraSource | None:
@@ -333,4 +342,5 @@ class UavCore:
 
     def status(self) -> CoreStatus:
         """Everything an interface shows, as one immutable snapshot."""
-        return core_status(self)
+        assert self.parts is not None, "a core has a status once started"
+        return core_status(self.parts, self.recorder, self.processor_error, self.startup_s)

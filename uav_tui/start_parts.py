@@ -1,5 +1,6 @@
-"""A run's parts: the record of them (:class:`Parts`) and the two slow ones started at once (the processor's host
-loading, the vehicle connecting)."""
+"""How a run's parts are made: the two slow ones at once (the processor's host loading, the vehicle connecting), then
+each wired to the parts it uses, once (:func:`build_parts`). The core owns the record this returns (:class:`Parts`);
+each helper is given the few parts it uses."""
 
 from __future__ import annotations
 
@@ -8,24 +9,27 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from controllers import connect_controller
-from controllers.base import FlightController
+from controllers.base import FlightController, RecordedVehicle
 from controllers.replay_timeline import ReplayTimeline
 from uav_tui.camera.active import ActiveCamera
 from uav_tui.config import Config
 from uav_tui.events import EventLog
 from uav_tui.flight.autonomy import AutonomyGate
+from uav_tui.flight.clock_check import ClockCheck
 from uav_tui.flight.link import LinkWatch
 from uav_tui.flight.telemetry import TelemetryManager
 from uav_tui.flight.track_lock import TrackLock
 from uav_tui.hosting.host import ProcessedFrame, ProcessorHost
 from uav_tui.hosting.start import start_host
-from uav_tui.relays.contract import OutputRelay
+from uav_tui.relays.contract import OutputRelay, RelayParts
 from uav_tui.relays.precland import LandingTargetFeed
+from uav_tui.relays.registry import build_relays
+from uav_tui.replay.gate import ReplayGate, stage_clock
 
 
 @dataclass(frozen=True, slots=True)
 class Parts:
-    """The long-lived parts of a started run, each built once; a helper is given the ones it uses."""
+    """The long-lived parts of a started run, each built once (:func:`build_parts`)."""
 
     config: Config
     events: EventLog
@@ -48,6 +52,39 @@ class Parts:
     """Where a replay is on the recorded clock (``--fc replay:RUN``), else None."""
     link: LinkWatch | None
     """Link-loss / recovery events and the dead-simulator report (None without a flight controller)."""
+
+
+async def build_parts(config: Config, events: EventLog, camera: ActiveCamera, lock: TrackLock,
+                      landing: LandingTargetFeed, on_result: Callable[[ProcessedFrame], None],
+                      on_fault: Callable[[str], None]) -> Parts:
+    """Start the processor's host and connect the vehicle (:func:`load_and_connect`), then wire the parts: the
+    telemetry to the vehicle, the autonomy gate (a replay's judges on the recorded clock) to both, the camera to the
+    vehicle and the replay's clock, a relay to each output.
+
+    Raises what the first failure says to fix (a ConfigError: an envelope that cannot be used); what did start is
+    closed.
+    """
+    worker, controller = await load_and_connect(config, on_result, events, on_fault)
+    try:
+        telemetry = TelemetryManager(controller)
+        replay = None
+        gate: AutonomyGate
+        if isinstance(controller, RecordedVehicle):
+            replay = controller.timeline
+            gate = ReplayGate(config.safety, telemetry, events, controller)
+            worker.stage_clock = stage_clock(replay)
+        else:
+            gate = AutonomyGate(config.safety, telemetry, events)
+            if controller is not None:
+                telemetry.add_listener(ClockCheck(events))  # a replay's clock was the recording's
+        gate.bind(telemetry, controller, config)
+        camera.controller, camera.replay = controller, replay
+        relays = build_relays(RelayParts(controller, gate, telemetry, events, camera, landing, config.safety))
+        link = None if controller is None else LinkWatch(controller, events, config.safety.link_timeout)
+    except BaseException:
+        await _close(worker, controller)
+        raise
+    return Parts(config, events, camera, lock, landing, worker, controller, telemetry, gate, relays, replay, link)
 
 
 async def load_and_connect(config: Config, on_result: Callable[[ProcessedFrame], None], events: EventLog,
@@ -73,12 +110,17 @@ async def load_and_connect(config: Config, on_result: Callable[[ProcessedFrame],
             parts.create_task(load(), name="load the processor")
             parts.create_task(connect(), name="connect the vehicle")
     except BaseException as exc:
-        if host is not None:
-            host.close()
-        if controller is not None:
-            await controller.close()
+        await _close(host, controller)
         if isinstance(exc, BaseExceptionGroup):
             raise exc.exceptions[0] from None
         raise
     assert host is not None
     return host, controller
+
+
+async def _close(host: ProcessorHost | None, controller: FlightController | None) -> None:
+    """Close what a failed start did start."""
+    if host is not None:
+        host.close()
+    if controller is not None:
+        await controller.close()

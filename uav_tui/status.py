@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import enum
 from dataclasses import asdict, dataclass, field, fields, replace
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import TYPE_CHECKING, Any
 
 from controllers.base import Telemetry
 from uav_tui.flight.autonomy import Verdict
@@ -17,17 +17,8 @@ from uav_tui.relays.registry import gimbal_relay
 from uav_tui.stats import PipelineStats
 
 if TYPE_CHECKING:
-    from controllers.base import FlightController
-    from sources import CameraSource
-    from uav_tui.config import Config
-    from uav_tui.flight.autonomy import AutonomyGate
-    from uav_tui.flight.link import LinkWatch
-    from uav_tui.flight.telemetry import TelemetryManager
-    from uav_tui.flight.track_lock import TrackLock
-    from uav_tui.hosting.host import ProcessorHost
-    from uav_tui.relays.contract import OutputRelay
-    from uav_tui.relays.precland import LandingTargetFeed
-    from uav_values.camera import CameraModel
+    from uav_tui.recording import Recorder
+    from uav_tui.start_parts import Parts
 
 
 class CoreState(enum.Enum):
@@ -162,80 +153,44 @@ class CoreStatus:
         return data
 
 
-class RecorderStatus(Protocol):
-    misplaced_saves: int
-
-    def status(self) -> dict[str, Any]: ...
-
-
-class ObservedCore(Protocol):
-    """What :func:`core_status` reads of a running :class:`~uav_tui.core.UavCore`."""
-
-    config: Config
-    telemetry: TelemetryManager
-    gate: AutonomyGate
-    startup_s: float | None
-    landing: LandingTargetFeed
-    relays: dict[str, OutputRelay]
-    lock: TrackLock
-
-    @property
-    def processor_error(self) -> str | None: ...
-
-    @property
-    def camera(self) -> CameraModel | None: ...
-
-    @property
-    def worker(self) -> ProcessorHost | None: ...
-
-    @property
-    def source(self) -> CameraSource | None: ...
-
-    @property
-    def controller(self) -> FlightController | None: ...
-
-    @property
-    def recorder(self) -> RecorderStatus | None: ...
-
-    @property
-    def link(self) -> LinkWatch | None: ...
-
-
-def core_status(core: ObservedCore) -> CoreStatus:
-    """Everything an interface shows of a running core, as one immutable snapshot."""
-    worker, source, controller, gate, link = core.worker, core.source, core.controller, core.gate, core.link
-    gimbal = gimbal_relay(core.relays)
-    relayed = {name: dict(relay.counts) for name, relay in core.relays.items()}
+def core_status(parts: Parts, recorder: Recorder | None, processor_error: str | None,
+                startup_s: float | None) -> CoreStatus:
+    """Everything an interface shows of a running core (its ``parts``, its ``recorder``, the last line of the newest
+    processor error, the seconds to the first processed frame), as one immutable snapshot."""
+    worker, source, controller, gate, link = parts.worker, parts.camera.source, parts.controller, parts.gate, parts.link
+    camera, landing_feed = parts.camera.model, parts.landing
+    gimbal = gimbal_relay(parts.relays)
+    relayed = {name: dict(relay.counts) for name, relay in parts.relays.items()}
     landing, pointing = relayed.get("landing_target", {}), relayed.get("gimbal", {})
-    assert worker is not None and source is not None
+    assert source is not None
     last = worker.last
     box = last.outcome.box if last is not None else None
     found = (last.outcome.detections or ()) if last is not None else ()
     # where they were seen: with the telemetry at that frame's capture, not the newest (~20 us a box)
-    seen = asdict(core.telemetry.at(last.frame.t_mono_ns)[0]) if last is not None and (box or found) else {}
+    seen = asdict(parts.telemetry.at(last.frame.t_mono_ns)[0]) if last is not None and (box or found) else {}
     at_ns = last.frame.t_mono_ns if last is not None else None
-    target = None if box is None else locate_row(core.camera, box, seen, at_ns=at_ns)
+    target = None if box is None else locate_row(camera, box, seen, at_ns=at_ns)
     return CoreStatus(
-        telemetry=core.telemetry.snapshot(),
+        telemetry=parts.telemetry.snapshot(),
         pipeline=worker.snapshot(),
-        source_uri=source.get_properties().get("uri", core.config.source),
+        source_uri=source.get_properties().get("uri", parts.config.source),
         source=source.get_properties(),
         processor=worker.processor.info.name,
         capabilities=worker.processor.info.capabilities,
-        processor_error=core.processor_error,
+        processor_error=processor_error,
         processor_state=worker.state(),
-        fc=core.config.fc,
+        fc=parts.config.fc,
         fc_description=controller.description if controller is not None else "none",
         heartbeat_age_s=controller.heartbeat_age_s() if controller else None,
         autonomy=gate.enabled,
         autonomy_stop_reason=gate.stop_reason,
-        precland=core.landing.engaged,
-        precland_stop_reason=core.landing.stop_reason,
+        precland=landing_feed.engaged,
+        precland_stop_reason=landing_feed.stop_reason,
         relayed=relayed,
         landing_targets_sent=landing.get("sent", 0),
         landing_targets_failed=landing.get("failed", 0),
-        landing_targets_refused=core.landing.refusals.refused,
-        landing_none_reason=core.landing.why_none,
+        landing_targets_refused=landing_feed.refusals.refused,
+        landing_none_reason=landing_feed.why_none,
         gimbal_sent=pointing.get("sent", 0),
         gimbal_failed=pointing.get("failed", 0),
         gimbal_controlled=gimbal is not None and gimbal.controller.gimbal_controlled,
@@ -244,24 +199,23 @@ def core_status(core: ObservedCore) -> CoreStatus:
         last_verdict=gate.last_decision.verdict,
         vectors_executed=gate.executed,
         vectors_rejected=gate.rejected,
-        recording=core.recorder.status() if core.recorder is not None else {},
-        startup_s=core.startup_s,
+        recording=recorder.status() if recorder is not None else {},
+        startup_s=startup_s,
         link_lost=link is not None and link.lost,
         vehicle_problem=link.vehicle_problem if link is not None else "",
         box=box,
         target=target,
-        detections=locate_shown(found, core.camera, seen, at_ns),
+        detections=locate_shown(found, camera, seen, at_ns),
         detections_total=len(found),
         tracks_total=count_tracks(found),
-        lock="" if core.lock.state is LockState.OFF else str(core.lock.status()),
-        saves_dropped=_saves_dropped(core),
+        lock="" if parts.lock.state is LockState.OFF else str(parts.lock.status()),
+        saves_dropped=_saves_dropped(parts, recorder),
     )
 
 
-def _saves_dropped(core: ObservedCore) -> dict[str, int]:
+def _saves_dropped(parts: Parts, recorder: Recorder | None) -> dict[str, int]:
     """``tmMgr.save`` calls not stored, by why (see ``CoreStatus.saves_dropped``)."""
-    assert core.worker is not None
-    counts = {"throttled": core.worker.saves_throttled,
-              "not recorded": core.telemetry.saves_dropped,
-              "outside a frame": core.recorder.misplaced_saves if core.recorder is not None else 0}
+    counts = {"throttled": parts.worker.saves_throttled,
+              "not recorded": parts.telemetry.saves_dropped,
+              "outside a frame": recorder.misplaced_saves if recorder is not None else 0}
     return {why: count for why, count in counts.items() if count}

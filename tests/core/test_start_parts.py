@@ -1,5 +1,6 @@
 """The core loads the processor and connects the vehicle at once: the part that fails says so, and the part that
-did start is released with it (no processor process, no simulator left behind)."""
+did start is released with it (no processor process, no simulator left behind); so are both when the wiring of the
+parts after them fails."""
 
 from __future__ import annotations
 
@@ -12,8 +13,10 @@ import pytest
 from controllers.errors import ConnectError
 from processors.errors import ProcessorLoadError
 from tests.core.flight_helpers import wait_until
+from tests.flight.test_envelope import polygon_file
 from uav_tui.config import Config, with_overrides
 from uav_tui.core import UavCore
+from uav_tui.errors import ConfigError
 
 SLOW_PROCESSOR = '''
 import time
@@ -63,5 +66,15 @@ async def test_a_processor_that_cannot_load_stops_the_start_and_the_simulator(tm
     before = children()
     core = UavCore(with_overrides(config(tmp_path), processor=f"{tmp_path / 'slow.py'}:NoSuchClass", fc="sim"))
     with pytest.raises(ProcessorLoadError, match="NoSuchClass"):
+        await core.start()
+    await none_left_but(before)
+
+
+async def test_an_envelope_that_cannot_be_used_stops_the_start_and_releases_both(tmp_path: Path) -> None:
+    """Both came up: the parts are wired then, and a polygon without home stops the start there."""
+    before = children()
+    away = polygon_file(tmp_path / "away.geojson", [(50, 50), (50, 80), (80, 80), (80, 50)])
+    core = UavCore(config(tmp_path, fc="sim", polygon=str(away)))
+    with pytest.raises(ConfigError, match="outside the polygon"):
         await core.start()
     await none_left_but(before)
