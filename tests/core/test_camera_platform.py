@@ -65,12 +65,16 @@ async def test_without_a_model_the_processor_is_told_so(tmp_path: Path) -> None:
                for event in core.events.recent)
 
 
-async def test_a_calibration_for_another_frame_size_stops_the_start(tmp_path: Path) -> None:
+def calibrated_core(tmp_path: Path, source: str) -> UavCore:
+    """A core on ``source`` with the sample calibration, which is for 640x480 frames."""
     calibration = tmp_path / "camera.yaml"
-    calibration.write_text(SAMPLE_YAML)  # 640x480
-    config = with_overrides(Config(), source="synthetic:?width=160&height=120", isolation="thread", record=False,
-                            camera_calibration=str(calibration))
-    core = UavCore(config)
+    calibration.write_text(SAMPLE_YAML)
+    return UavCore(with_overrides(Config(), source=source, isolation="thread", record=False,
+                                  camera_calibration=str(calibration)))
+
+
+async def test_a_calibration_for_another_frame_size_stops_the_start(tmp_path: Path) -> None:
+    core = calibrated_core(tmp_path, "synthetic:?width=160&height=120")
     with pytest.raises(CameraModelError, match="is for 640x480 frames but the camera gives 160x120"):
         await core.start()
     await asyncio.sleep(0)
@@ -79,11 +83,7 @@ async def test_a_calibration_for_another_frame_size_stops_the_start(tmp_path: Pa
 
 @pytest.mark.timeout(60)
 async def test_a_switch_to_a_camera_the_calibration_is_not_for_is_refused_and_closes_it(tmp_path: Path) -> None:
-    calibration = tmp_path / "camera.yaml"
-    calibration.write_text(SAMPLE_YAML)  # 640x480
-    config = with_overrides(Config(), source="synthetic:?width=640&height=480", isolation="thread", record=False,
-                            camera_calibration=str(calibration))
-    core = UavCore(config)
+    core = calibrated_core(tmp_path, "synthetic:?width=640&height=480")
     await core.start()
     try:
         old, capturing = core.source, capture_threads()
