@@ -40,7 +40,7 @@ before the many short ones and none is left to run alone at the end. xdist's own
 quick-start follows (one test of 127 s each) last: the parallel step took 800 s for about 1800 s of tests."""
 SOAK = frozenset({"tests/processors/test_csrt_real_video.py", "tests/processors/test_nanotrack_real_video.py"})
 """Modules marked ``soak``: minutes of real video through the trackers (correctness bounds, none on time); .ci/run
-runs them on one worker beside the serial step, at the lowest priority."""
+runs them on one worker beside the serial step."""
 SOAK_TIMEOUT_S = 900
 """A soak test's hang guard: niced beside the tests on a loaded machine, csrt over person12_1 ran past 120 s."""
 
