@@ -24,7 +24,7 @@ from uav_tui.hosting.codec import (
     decode_from_child,
 )
 from uav_tui.hosting.pipe import Inbox, PipeCorrupt
-from uav_tui.hosting.wire import Call, FrameOutcome, Reply, Result, ResultHead, Times
+from uav_tui.hosting.wire import Call, Camera, FrameOutcome, Reply, Result, ResultHead, Times
 from uav_values.camera import CameraModel
 
 
@@ -43,7 +43,8 @@ def encoded(message: Result | Reply) -> bytes:
 
 @pytest.mark.parametrize("model", [CameraModel.from_hfov(640, 480, 60), None], ids=["model", "none"])
 def test_a_camera_model_reaches_the_child_as_it_was(model: CameraModel | None) -> None:
-    message = TO_CHILD.decode(Encoder(out_of_band=False).encode(camera_message(model))[0])
+    message = TO_CHILD.decode(Encoder(out_of_band=False).encode(camera_message(7, model))[0])
+    assert isinstance(message, Camera) and message.gen == 7
     assert camera_model(message) == model
 
 

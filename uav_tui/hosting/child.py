@@ -220,6 +220,8 @@ class ChildRunner:
         self.has_vector = "getPreparedVector" in loaded.info.capabilities
         self.outputs = output_methods(loaded.info.capabilities)
         self.tracks = DetectionTracks(first_track_id)
+        self.camera_gen = 0
+        """The number of the last :class:`~uav_tui.hosting.wire.Camera` message read."""
         self._telemetry: tuple[bytes, dict[str, Any]] = (b"", {})
         """The last frame's encoded telemetry and its fields (telemetry changes slower than frames)."""
         self._messages = select.poll()
@@ -238,15 +240,17 @@ class ChildRunner:
             try:
                 while self._messages.poll(0):  # a message, or the end of the pipe (recv raises EOFError)
                     self.handle(TO_CHILD.decode(self.conn.recv_bytes()))
+                offer = self.mailbox.claim()
+                if offer is None:
+                    self.mailbox.clear_wake()  # an offer made after this wakes the wait below
+                    offer = self.mailbox.claim()
+                if offer is None:
+                    self._idle.poll()  # a call, a notice, EOF or an offer
+                    continue
+                while self.camera_gen < offer.camera_gen:  # its camera model was sent ahead of it: read on to it
+                    self.handle(TO_CHILD.decode(self.conn.recv_bytes()))
             except (EOFError, OSError):
                 return
-            offer = self.mailbox.claim()
-            if offer is None:
-                self.mailbox.clear_wake()  # an offer made after this wakes the wait below
-                offer = self.mailbox.claim()
-            if offer is None:
-                self._idle.poll()  # a call, a notice, EOF or an offer
-                continue
             self.send(self.process(offer))
 
     def send(self, message: Result | Reply) -> None:
@@ -269,7 +273,7 @@ class ChildRunner:
         elif isinstance(message, Forget):
             self.slots.forget(message.slots)
         elif isinstance(message, Camera):
-            self.telemetry.camera_model = camera_model(message)
+            self.telemetry.camera_model, self.camera_gen = camera_model(message), message.gen
 
     def process(self, offer: Offer) -> Result:
         if offer.telemetry != self._telemetry[0]:

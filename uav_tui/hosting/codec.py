@@ -175,9 +175,9 @@ class UnreadableResult(WireError):
         self.reason = reason
 
 
-def camera_message(model: CameraModel | None) -> Camera:
-    """The :class:`~uav_tui.hosting.wire.Camera` message for ``model``."""
-    return Camera(msgspec.Raw(Encoder(out_of_band=False).encode(model)[0]))
+def camera_message(gen: int, model: CameraModel | None) -> Camera:
+    """The :class:`~uav_tui.hosting.wire.Camera` message for ``model``, the ``gen``-th."""
+    return Camera(gen, msgspec.Raw(Encoder(out_of_band=False).encode(model)[0]))
 
 
 def camera_model(message: Camera) -> CameraModel | None:

@@ -69,8 +69,9 @@ class FrameFeeder:
         self._ring = FrameRing(on_free=self._on_slot_free, on_unlink=self._forget)
         self._to_forget: list[str] = []
         self._buffer: FrameBuffer | None = None
-        self._camera: CameraModel | None = None
-        """The camera model of ``_buffer``'s source, sent to each child (``tmMgr.camera()``)."""
+        self._camera: tuple[int, CameraModel | None] = (0, None)
+        """The camera model of ``_buffer``'s source and its number (from 1; 0: none given), sent to each child
+        (``tmMgr.camera()``) and named in each offer."""
         self._picked: tuple[FrameBuffer | None, int] = (None, 0)
         """The newest frame taken for an offer (each frame is offered once)."""
         self._offered: tuple[FrameBuffer | None, int, int] = (None, 0, 0)
@@ -91,9 +92,10 @@ class FrameFeeder:
         with self._lock:
             if self._buffer is not None:
                 self._detach(self._buffer)
-            self._buffer, self._camera, child = buffer, camera, self.child
+            self._buffer, self._camera, child = buffer, (self._camera[0] + 1, camera), self.child
+            message = camera_message(*self._camera)
         if child is not None:
-            self._link.send(child, camera_message(camera))  # before the first frame of the new source is offered
+            self._link.send(child, message)  # its frames' offers name it: the child reads it before their first
         with self._lock:
             buffer.set_allocator(self._ring.capture_view)  # cameras that can decode into shared memory do
             buffer.set_read_waiter(functools.partial(self._wait_claimed, buffer))
@@ -102,8 +104,10 @@ class FrameFeeder:
 
     def feed(self, child: ChildProcess | None) -> None:
         """Offer frames to ``child`` from now on (None: to nobody); a new child is told the camera model first."""
-        if child is not None and self._camera is not None:  # before it can be offered a frame
-            self._link.send(child, camera_message(self._camera))
+        with self._lock:
+            camera = self._camera
+        if child is not None and camera[0]:
+            self._link.send(child, camera_message(*camera))
         with self._lock:
             self.child = child
             self._picked, self._offered = (None, 0), (None, 0, 0)
@@ -223,12 +227,13 @@ class FrameFeeder:
                 return
             self._picked = (buffer, frame.seq)
             forget, self._to_forget = self._to_forget, []
+            camera_gen = self._camera[0]
         if copied:
             np.copyto(slot.array(), frame.image)  # the slot is ours alone until it is offered
         if forget:
             self._link.send(child, Forget(tuple(forget)))
         offer = Offer(next(self._gens), slot.name, slot.shape, frame.seq, frame.t_mono_ns, frame.t_wall_ns,
-                      *self._telemetry_at(frame.t_mono_ns))
+                      *self._telemetry_at(frame.t_mono_ns), camera_gen)
         with self._lock:
             current = child is self.child and not self._closing
             if current and self._offered[0] is buffer and self._offered[1] >= frame.seq:

@@ -38,9 +38,9 @@ _WATCH = struct.Struct("=q")
 """Written by the platform: the gen whose claim it waits for (0: none), so the processor signals it."""
 _WATCH_AT = _CLAIM.size
 _NAME_BYTES = 64
-_OFFER = struct.Struct(f"=qqqq iii {_NAME_BYTES}s d I")
+_OFFER = struct.Struct(f"=qqqq iii {_NAME_BYTES}s d q I")
 """Written by the platform: gen, seq, t_mono_ns, t_wall_ns, shape (0 for no third axis), slot name, heartbeat
-age (NaN for none), telemetry length."""
+age (NaN for none), camera gen, telemetry length."""
 _OFFER_AT = _WATCH_AT + _WATCH.size
 _TELEMETRY_AT = _OFFER_AT + _OFFER.size
 SIZE = _TELEMETRY_AT + TELEMETRY_BYTES
@@ -62,6 +62,8 @@ class Offer(NamedTuple):
     """The telemetry attached to the frame, MessagePack (the same bytes until the telemetry changes)."""
     heartbeat_age_s: float | None = None
     """The autopilot heartbeat's age at the offer (kept out of ``telemetry``: it changes every frame)."""
+    camera_gen: int = 0
+    """The :class:`~uav_tui.hosting.wire.Camera` message the frame is of (0: none was sent)."""
 
 
 class MailboxGone(Exception):
@@ -171,7 +173,7 @@ class FrameMailbox:
             gen = _OFFER.unpack_from(self._buf, _OFFER_AT)[0]
             _OFFER.pack_into(self._buf, _OFFER_AT, offer.gen, offer.seq, offer.t_mono_ns, offer.t_wall_ns,
                              *shape, name, math.nan if offer.heartbeat_age_s is None else offer.heartbeat_age_s,
-                             len(offer.telemetry))
+                             offer.camera_gen, len(offer.telemetry))
             self._buf[_TELEMETRY_AT:_TELEMETRY_AT + len(offer.telemetry)] = offer.telemetry
         os.eventfd_write(self.wake_fd, 1)
         return gen, gen != 0 and claimed == gen
@@ -238,7 +240,8 @@ class FrameMailbox:
         """Take the frame on offer, if there is one not taken yet."""
         with self._lock:
             claimed = _CLAIM.unpack_from(self._buf)[0]
-            gen, seq, t_mono, t_wall, h, w, c, name, age, tel_len = _OFFER.unpack_from(self._buf, _OFFER_AT)
+            gen, seq, t_mono, t_wall, h, w, c, name, age, camera_gen, tel_len = _OFFER.unpack_from(self._buf,
+                                                                                                    _OFFER_AT)
             if gen == 0 or claimed == gen:
                 return None
             _CLAIM.pack_into(self._buf, 0, gen, time.monotonic_ns())
@@ -250,7 +253,7 @@ class FrameMailbox:
             os.eventfd_write(self.claimed_fd, 1)
         shape = (h, w, c) if c else (h, w)
         return Offer(gen, name.rstrip(b"\0").decode(), shape, seq, t_mono, t_wall, telemetry,
-                     None if math.isnan(age) else age)
+                     None if math.isnan(age) else age, camera_gen)
 
     # -- both -------------------------------------------------------------------------------------
 

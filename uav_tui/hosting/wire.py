@@ -97,10 +97,15 @@ class Forget(_Record, frozen=True, tag=2):
 
 
 class Camera(_Record, frozen=True, tag=3):
-    """The source's camera model (``tmMgr.camera()``), sent at each change of source: a
+    """The source's camera model (``tmMgr.camera()``), sent at each change of source and to each new child: a
     :class:`~uav_values.camera.CameraModel`, encoded (:func:`uav_tui.hosting.codec.camera_message`) and decoded
-    when it arrives (:func:`~uav_tui.hosting.codec.camera_model`)."""
+    when it arrives (:func:`~uav_tui.hosting.codec.camera_model`).
 
+    ``gen`` numbers the models from 1; each frame's offer names the one it is of
+    (:attr:`~uav_tui.hosting.frame_mailbox.Offer.camera_gen`). The pipe and the mailbox are two channels, so a child
+    may claim a frame before it has read the message sent ahead of it: it reads the pipe until it has."""
+
+    gen: int
     model: msgspec.Raw
 
 
