@@ -167,7 +167,8 @@ class TrackLock:
 
     def steer(self, result: ProcessedFrame) -> None:
         """Note ``result``'s detections; while locked, its outcome becomes a copy whose vector and box are the
-        locked track's (None each while it is not seen): the call's own record stays as the processor made it."""
+        locked track's (None each while it is not seen; the call's own record stays as the processor made it) and
+        its ``lock`` the lock's status after it (what frames.csv records)."""
         outcome = result.outcome
         self.newest = outcome.detections or ()
         self._now_s = result.frame.t_mono_ns / 1e9
@@ -183,6 +184,7 @@ class TrackLock:
             aim = self._steering.vector(found.box, (image.shape[1], image.shape[0]), self._ref_height)
             self.vector = self._ramp(aim, self._now_s)
             result.outcome = msgspec.structs.replace(outcome, box=found.box, vector=self.vector)
+            result.lock = self.status()
             return
         self.state, lost_s = LockState.LOST, self._now_s - self._seen_s
         self.vector = None if lost_s < BRIEF_LOSS_S else self._ramp(None, self._now_s)
@@ -193,6 +195,8 @@ class TrackLock:
         limit = self.lost_after_s()
         if limit and lost_s > limit:
             self.release(f"not seen for {limit:g} s (lost_after_s)")
+        else:
+            result.lock = self.status()
 
     def _taken_back(self, image: np.ndarray) -> Detected | None:
         """The new track nearest where the lost one went that looks alike enough (its number is then the lock's)."""

@@ -17,6 +17,7 @@ if TYPE_CHECKING:
     from processors.base import ProcessorInfo
     from sources.buffer import FrameBuffer
     from uav_tui.flight.telemetry import TelemetryManager
+    from uav_tui.flight.track_lock import LockStatus
     from uav_tui.stats import PipelineStats, RollingStats
     from uav_values.camera import CameraModel
 
@@ -40,6 +41,8 @@ class ProcessedFrame:
     """What the platform did with the gimbal pointing: ``sent`` or why not ("" without one)."""
     relayed: dict[str, str] = field(default_factory=dict)
     """What the platform did with each further output (:data:`~uav_tui.relays.registry.REGISTRY`), by its field."""
+    lock: LockStatus | None = None
+    """The operator's lock on a track once it steered this frame (None: no lock)."""
 
 
 @dataclass(frozen=True, slots=True)

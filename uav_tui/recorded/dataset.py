@@ -43,12 +43,12 @@ from uav_tui.recorded.run_files import Problem, read_json, read_table
 from uav_tui.recording.located import DETECTION_COLUMNS
 from uav_tui.recording.rows import EVENT_COLUMNS, FRAME_COLUMNS, SNAPSHOT_COLUMNS, TELEMETRY_COLUMNS
 
-_TEXT = ("flight_mode", "gps_fix", "decision", "landing", "gimbal", "relayed", "error", "image", "extra", "telemetry",
-         "level", "kind", "origin", "message", "command", "target_status", "target_height_from", "target_height_note",
-         "label")
+_TEXT = ("flight_mode", "gps_fix", "lock_state", "decision", "landing", "gimbal", "relayed", "error", "image", "extra",
+         "telemetry", "level", "kind", "origin", "message", "command", "target_status", "target_height_from",
+         "target_height_note", "label")
 _FLAGS = ("armed", "in_air", "health_ok", "saved", "autonomy")
 _INTEGERS = ("fc_boot_ms", "fc_clock_offset_ms", "satellites", "frame_id", "seq", "box_x", "box_y", "box_w", "box_h",
-             "rangefinder_t_ns", "terrain_t_ns", "index", "track_id")
+             "rangefinder_t_ns", "terrain_t_ns", "index", "track_id", "lock_track")
 
 
 @dataclass(frozen=True)

@@ -35,12 +35,13 @@ or error row reports on; ``autonomy`` is True or False where autonomy was switch
 
 FRAME_OWN_COLUMNS: tuple[str, ...] = (
     "frame_id", "seq", "t_wall_ns", "t_mono_ns", "t_start_ns", "t_end_ns", "t_vector_ns", "vx", "vy", "vt",
-    "box_x", "box_y", "box_w", "box_h", "decision", "landing", "gimbal", "relayed", "error", "saved", "image", "extra",
-    "telemetry", "extrapolated_ms",
+    "box_x", "box_y", "box_w", "box_h", "lock_track", "lock_state", "decision", "landing", "gimbal", "relayed", "error",
+    "saved", "image", "extra", "telemetry", "extrapolated_ms",
 )
 """frames.csv, the frame's own part: ids, capture times (wall + monotonic ns), processing stage times
-(monotonic ns), the vector, the processor's ``box`` (frame pixels, empty when None), the autonomy
-decision, what was done with the processor's landing target and with its gimbal pointing (each ``sent`` or
+(monotonic ns), the vector, the processor's ``box`` (frame pixels, empty when None; the locked track's while the
+operator's lock is on), the track the lock was on and its state (``locked`` or ``lost``; both empty without one),
+the autonomy decision, what was done with the processor's landing target and with its gimbal pointing (each ``sent`` or
 ``not sent: why``; empty without one) and with any further output (``relayed``: JSON, its field -> what was done;
 empty without), the last line of an exception, whether and where the image was saved, the ``tmMgr.save`` extras
 as JSON, how the telemetry columns were obtained (``interpolated``, ``held``, ``before``, ``none``; see
@@ -109,10 +110,11 @@ def frame_record(result: ProcessedFrame, frame_id: int, image: str, extra_json: 
     vx, vy, vt = _vector(result.outcome.vector)
     error = shorten(last_line(result.outcome.error), MAX_ERROR_CHARS) if result.outcome.error else ""
     box = result.outcome.box or (None, None, None, None)
+    lock = (None, "") if result.lock is None else (result.lock.track_id, result.lock.state.value)
     values = [frame_id, frame.seq, frame.t_wall_ns, frame.t_mono_ns, result.outcome.t_start_ns, result.outcome.t_end_ns,
-              result.outcome.t_vector_ns or None, vx, vy, vt, *box, result.decision, result.landing, result.gimbal,
-              json.dumps(result.relayed) if result.relayed else "", error,
-              bool(image), image, extra_json]
+              result.outcome.t_vector_ns or None, vx, vy, vt, *box, *lock, result.decision, result.landing,
+              result.gimbal, json.dumps(result.relayed) if result.relayed else "", error, bool(image), image,
+              extra_json]
     return FrameRecord(values, frame.t_mono_ns, camera, result.outcome.detections or ())
 
 
