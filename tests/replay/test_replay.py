@@ -344,3 +344,22 @@ def test_the_runs_own_processor_is_found_by_its_full_path_and_its_absence_is_sai
     (run / "run.json").write_text("{}")
     with pytest.raises(UavError, match="does not say which processor the run had: give --processor"):
         recorded_processor(run)
+
+
+def test_a_lock_command_is_due_at_the_frame_the_lock_first_acted_on(tmp_path):
+    given = [("lock 3", 1000), ("arm", 2500), ("hold", 3500), ("lock 9", 3600)]  # as each came (no command column)
+    _write_csv(tmp_path / "events.csv", [{"t_mono_ns": t, "level": "info", "kind": "command", "origin": "tui",
+                                          "message": text, "command": ""} for text, t in given])
+    # Frame 1 ended before the lock (990 ns) but was handled after it (its result on its way to the loop); the hold
+    # released the lock at frame 4; the arm was given while nothing was locked, and track 9 was on no frame.
+    locks = ["", 3, 3, 3, "", "", ""]
+    _write_csv(tmp_path / "frames.csv", [{"t_mono_ns": 100 + 1000 * i, "t_start_ns": 150 + 1000 * i - 500,
+                                          "t_end_ns": 990 + 1000 * (i - 1), "lock_track": lock}
+                                         for i, lock in enumerate(locks)])
+    due = [(t_ns, str(command)) for t_ns, command in recorded_commands(tmp_path)]
+    assert due == [(1100, "lock 3"), (4100, "unlock"), (5100, "lock 9")]
+    # Recorded before the lock column: at the first frame that ended after it; a vehicle command never.
+    _write_csv(tmp_path / "frames.csv", [{"t_mono_ns": 100 + 1000 * i, "t_start_ns": 150 + 1000 * i - 500,
+                                          "t_end_ns": 990 + 1000 * (i - 1)} for i in range(len(locks))])
+    assert [(t_ns, str(command)) for t_ns, command in recorded_commands(tmp_path)] == [(2100, "lock 3"),
+                                                                                        (4100, "lock 9")]
