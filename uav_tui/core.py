@@ -61,8 +61,10 @@ class UavCore:
         self.config = config
         self.state = CoreState.NEW
         self.events = EventLog()
-        self.lock = TrackLock(self.events, lambda: self.gate.envelope.config.lost_after_s)
-        """The operator's lock on a track: while on, its vector is the frame's (``lock ID``, ``unlock``)."""
+        self.lock = TrackLock(self.events, lambda: self.gate.envelope.config.lost_after_s,
+                              lambda t_ns: self.telemetry.at(t_ns)[0].gimbal_pitch_deg)
+        """The operator's lock on a track: while on, its vector (or gimbal pointing) is the frame's (``lock ID``,
+        ``unlock``)."""
         self.landing = LandingTargetFeed(self.events)
         """The processor's landing targets and the operator's ``precland`` switch."""
         self.active_camera = ActiveCamera(config.camera, self.events, self._spawn)

@@ -6,10 +6,13 @@ from __future__ import annotations
 import math
 
 import cv2
+import msgspec
 import numpy as np
 import pytest
 from skimage import data
 
+from processors.gimbal_steering import GimbalSteering
+from processors.outputs import FrameOutputs
 from processors.steering import Steering
 from processors.yolo_detector import YoloDetector
 from sources.buffer import Frame
@@ -27,6 +30,7 @@ from uav_tui.hosting.tracks import DetectionTracks
 from uav_tui.hosting.wire import FrameOutcome
 from uav_values.camera import CameraModel, Mount
 from uav_values.detections import Detected
+from uav_values.gimbal import GimbalPointing
 
 RED, BLUE, DIM_RED = (40, 40, 200), (200, 60, 30), (30, 30, 150)
 """BGR cars: a red one, a blue one, the red one in a shadow."""
@@ -94,6 +98,29 @@ def test_a_forward_camera_steers_to_keep_the_lock_time_size() -> None:
         result = frame(n, {1: ((150, 110, 20, 15), RED)})
         lock.steer(result)
     assert result.outcome.vector[0] == pytest.approx(1.0)  # forward at max speed (2 x half the height lost)
+
+
+def test_a_camera_on_the_gimbal_turns_the_gimbal_towards_the_lock_instead_of_flying() -> None:
+    asked: list[int] = []
+
+    def gimbal_pitch(t_ns: int) -> float:
+        asked.append(t_ns)
+        return -30.0
+
+    lock = TrackLock(EventLog(), lambda: 0.0, gimbal_pitch)
+    camera = CameraModel.from_hfov(320, 240, 60.0, Mount(0.0, gimbal=True))
+    lock.steer(frame(0, {1: ((140, 105, 40, 30), RED)}))
+    lock.lock(1, camera)
+    result = frame(1, {1: ((240, 45, 40, 30), RED)})  # right of and above the centre
+    result.outcome = msgspec.structs.replace(result.outcome, outputs=FrameOutputs(gimbal=GimbalPointing.rates(0, -9)))
+    lock.steer(result)
+    assert result.outcome.vector is None and lock.vector is None and result.outcome.box == (240, 45, 40, 30)
+    expected = GimbalSteering().rates((240, 45, 40, 30), (320, 240), camera, -30.0)
+    assert result.outcome.outputs.gimbal == expected and expected.pitch > 0 and expected.yaw > 0  # up and right
+    assert asked == [result.frame.t_mono_ns]  # the gimbal's pitch at the frame's capture
+    hidden = frame(2, {})
+    lock.steer(hidden)
+    assert hidden.outcome.outputs.gimbal is None and hidden.outcome.vector is None  # the relay stops the gimbal
 
 
 def test_only_a_track_on_the_newest_frame_can_be_locked() -> None:

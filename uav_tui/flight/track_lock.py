@@ -1,4 +1,5 @@
-"""The operator's lock on one track: the locked track drives the vehicle, whichever processor detects it.
+"""The operator's lock on one track: the locked track drives the vehicle or its gimbal, whichever processor detects
+it.
 
 ``lock ID`` (a script line, the web page's click inside a track's box, a ground station's CAMERA_TRACK_POINT inside
 one) locks the track numbered ``ID`` on the newest frame. From the next frame on, :meth:`TrackLock.steer` (on the
@@ -6,7 +7,10 @@ loop, before the autonomy gate) makes that frame's vector and box the locked tra
 (:class:`~processors.steering.Steering` at :data:`~processors.follow.FOLLOW_GAIN`, eased in by
 :class:`~processors.steering.Ramp`) towards its box, or None while it is not seen. The processor's own vector is
 not used meanwhile. The gate then judges the vector as any processor's (autonomy, the vehicle's mode, the frame's
-age, the envelope), and the envelope's ``lost_after_s`` sees the lock's box as the processor's.
+age, the envelope), and the envelope's ``lost_after_s`` sees the lock's box as the processor's. With the camera on
+the gimbal the vehicle holds instead (no vector) and the frame's gimbal pointing is the trackers' ``follow="gimbal"``
+one (:class:`~processors.gimbal_steering.GimbalSteering`) towards the box, from the gimbal's pitch at the frame's
+capture: the gimbal relay sends it as a processor's, and stops the gimbal while the track is not seen.
 
 The lock lives on the platform's side, with the tracks (:mod:`uav_tui.hosting.tracks`), so a researcher's detector
 gets it without a line of code; on the loop, because the operator's commands, the gate and the envelope are there
@@ -25,6 +29,7 @@ a loss longer than the envelope's ``lost_after_s`` (without one, a lost lock wai
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -35,6 +40,7 @@ import msgspec
 import numpy as np
 
 from processors.follow import FOLLOW_GAIN
+from processors.gimbal_steering import GimbalSteering
 from processors.steering import Ramp, Steering, Vector
 from uav_tui.errors import CommandError
 from uav_tui.flight.appearance import Look, blend, likeness, look
@@ -44,7 +50,9 @@ from uav_values.detections import Detected
 if TYPE_CHECKING:
     from uav_tui.events import EventLog
     from uav_tui.hosting.host import ProcessedFrame
+    from uav_tui.hosting.wire import FrameOutcome
     from uav_values.camera import CameraModel
+    from uav_values.gimbal import GimbalPointing
 
 SAME_LOOK = 0.6
 """The least likeness (:func:`~uav_tui.flight.appearance.likeness`) a new track needs to be taken as the lost one.
@@ -102,11 +110,15 @@ class TrackLock:
     Args:
         events: where a lock, its loss, a new number and a release are said.
         lost_after_s: the envelope's ``lost_after_s`` now (0: no release for a loss).
+        gimbal_pitch: the gimbal's pitch from the horizon (degrees) at a capture time (monotonic ns), None when not
+            known (then the image offsets are taken as the angles to turn).
     """
 
-    def __init__(self, events: EventLog, lost_after_s: Callable[[], float]) -> None:
+    def __init__(self, events: EventLog, lost_after_s: Callable[[], float],
+                 gimbal_pitch: Callable[[int], float | None] = lambda t_ns: None) -> None:
         self.events = events
         self.lost_after_s = lost_after_s
+        self.gimbal_pitch = gimbal_pitch
         self.state = LockState.OFF
         self.track_id: int | None = None
         self.label = ""
@@ -122,6 +134,9 @@ class TrackLock:
         self._present: frozenset[int] = frozenset()
         """The other tracks on the frame the locked one was last seen on: none of them can be it."""
         self._steering = Steering()
+        self._gimbal: GimbalSteering | None = None
+        """The gimbal's steering while the locked camera rides the gimbal, else None (the vehicle steers)."""
+        self._camera: CameraModel | None = None
         self._ramp = Ramp()
         self._ref_height = 0.0
         self._box: PixelBox = (0, 0, 1, 1)
@@ -149,8 +164,9 @@ class TrackLock:
         if self.state is not LockState.OFF:
             self.release(f"locked on #{track_id} instead", origin)
         tilt = 90.0 if camera is None else camera.mount.tilt_deg
-        self._steering = Steering("down" if camera is None or camera.mount.gimbal or tilt >= DOWN_TILT_DEG
-                                  else "forward", FOLLOW_GAIN)
+        self._steering = Steering("down" if camera is None or tilt >= DOWN_TILT_DEG else "forward", FOLLOW_GAIN)
+        self._gimbal = GimbalSteering() if camera is not None and camera.mount.gimbal else None
+        self._camera = camera
         self._ramp, self._ref_height = Ramp(), float(found.box[3])
         self.state, self.track_id, self.label, self.renumbered = LockState.LOCKED, track_id, found.label, 0
         self._look, self._seen_s, self._box = None, self._now_s, found.box
@@ -166,9 +182,10 @@ class TrackLock:
         return True
 
     def steer(self, result: ProcessedFrame) -> None:
-        """Note ``result``'s detections; while locked, its outcome becomes a copy whose vector and box are the
-        locked track's (None each while it is not seen; the call's own record stays as the processor made it) and
-        its ``lock`` the lock's status after it (what frames.csv records)."""
+        """Note ``result``'s detections; while locked, its outcome becomes a copy whose vector (the camera on the
+        gimbal: its gimbal pointing, and no vector) and box are the locked track's (None each while it is not seen;
+        the call's own record stays as the processor made it) and its ``lock`` the lock's status after it (what
+        frames.csv records)."""
         outcome = result.outcome
         self.newest = outcome.detections or ()
         self._now_s = result.frame.t_mono_ns / 1e9
@@ -181,14 +198,18 @@ class TrackLock:
             self.state, self._seen_s, self._box, self._said_lost = LockState.LOCKED, self._now_s, found.box, False
             self._look = blend(self._look, look(image, found.box), LOOK_WEIGHT)
             self._present = frozenset(d.track_id for d in self.newest if d.track_id not in (None, self.track_id))
-            aim = self._steering.vector(found.box, (image.shape[1], image.shape[0]), self._ref_height)
-            self.vector = self._ramp(aim, self._now_s)
-            result.outcome = msgspec.structs.replace(outcome, box=found.box, vector=self.vector)
+            size, pointing = (image.shape[1], image.shape[0]), None
+            if self._gimbal is None:
+                self.vector = self._ramp(self._steering.vector(found.box, size, self._ref_height), self._now_s)
+            else:
+                self.vector = None
+                pointing = self._gimbal.rates(found.box, size, self._camera, self.gimbal_pitch(result.frame.t_mono_ns))
+            result.outcome = self._aimed(outcome, found.box, pointing)
             result.lock = self.status()
             return
         self.state, lost_s = LockState.LOST, self._now_s - self._seen_s
-        self.vector = None if lost_s < BRIEF_LOSS_S else self._ramp(None, self._now_s)
-        result.outcome = msgspec.structs.replace(outcome, box=None, vector=self.vector)
+        self.vector = None if lost_s < BRIEF_LOSS_S or self._gimbal is not None else self._ramp(None, self._now_s)
+        result.outcome = self._aimed(outcome, None, None)
         if lost_s >= BRIEF_LOSS_S and not self._said_lost:
             self._said_lost = True
             self.events.emit("warning", "autonomy", f"lock: #{self.track_id} {self.label} lost")
@@ -197,6 +218,11 @@ class TrackLock:
             self.release(f"not seen for {limit:g} s (lost_after_s)")
         else:
             result.lock = self.status()
+
+    def _aimed(self, outcome: FrameOutcome, box: PixelBox | None, pointing: GimbalPointing | None) -> FrameOutcome:
+        """A copy of ``outcome`` with the lock's box, its vector and (the camera on the gimbal) its pointing."""
+        outputs = outcome.outputs if self._gimbal is None else dataclasses.replace(outcome.outputs, gimbal=pointing)
+        return msgspec.structs.replace(outcome, box=box, vector=self.vector, outputs=outputs)
 
     def _taken_back(self, image: np.ndarray) -> Detected | None:
         """The new track nearest where the lost one went that looks alike enough (its number is then the lock's)."""
