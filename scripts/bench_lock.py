@@ -2,7 +2,8 @@
 
 Cost, each the median of many calls on this machine: a look (:func:`uav_tui.flight.appearance.look`) by box size and
 a comparison of two; :meth:`uav_tui.flight.track_lock.TrackLock.steer` a frame while locked and while lost with
-every other detection a new track to compare (the worst case: 31 new tracks at once); the platform's overlay
+every other detection a new track to compare (the worst case: 31 new tracks at once), and locked with the camera on
+the gimbal (its rates instead of a vector); the platform's overlay
 (:func:`uav_tui.flight.track_overlay.draw_tracks`) for 3, 10 and 32 numbered detections and the lock, on 640x480.
 Looks: the likeness of the ``sim:`` camera's car to itself 2 s later (it has turned), to another car (the simulator
 draws all cars with one roof: a look cannot tell them apart, only their numbers and where they were can) and to the
@@ -37,6 +38,7 @@ from uav_tui.flight.track_lock import LockState, TrackLock  # noqa: E402
 from uav_tui.flight.track_overlay import draw_tracks  # noqa: E402
 from uav_tui.hosting.host import ProcessedFrame  # noqa: E402
 from uav_tui.hosting.wire import FrameOutcome  # noqa: E402
+from uav_values.camera import CameraModel, Mount  # noqa: E402
 from uav_values.detections import Detected  # noqa: E402
 
 CALLS = 2000
@@ -59,15 +61,16 @@ def boxes(count: int) -> list[tuple[int, int, int, int]]:
     return [(20 + 60 * (i % 10), 20 + 110 * (i // 10), 50, 30) for i in range(count)]
 
 
-def steer_us(count: int, *, lost: bool) -> float:
-    """``steer`` a frame with ``count`` detections, locked on the first (or it missing and the rest new tracks)."""
+def steer_us(count: int, *, lost: bool, camera: CameraModel | None = None) -> float:
+    """``steer`` a frame with ``count`` detections, locked on the first (or it missing and the rest new tracks), seen
+    by ``camera`` (on the gimbal: the lock makes the gimbal's rates instead of a vector)."""
     image, events = picture(), EventLog()
     found = tuple(Detected(box, "car", 0.9, track_id=i) for i, box in enumerate(boxes(count)))
     x, y, w, h = found[0].box
     image[y:y + h, x:x + w] = (40, 40, 200)  # a red car among noise: no new track looks like it
     lock = TrackLock(events, lambda: 0.0)
     lock.steer(ProcessedFrame(Frame(image, 1, 0, 0), FrameOutcome(0, 0, detections=found[:1])))
-    lock.lock(0, None)
+    lock.lock(0, camera)
     lock.steer(ProcessedFrame(Frame(image, 2, 1, 0), FrameOutcome(0, 0, detections=found[:1])))  # its look is kept
     shown = found[1:] if lost else found
     n = [2]
@@ -130,7 +133,9 @@ def main() -> int:
                     for w, h in ((40, 20), (60, 30), (120, 60), (300, 200))},
         "likeness_us": median_us(lambda: likeness(a, b)),
         "steer_us": {f"locked, {n} detections": steer_us(n, lost=False) for n in (3, 10, 32)}
-        | {f"lost, {n - 1} new tracks": steer_us(n, lost=True) for n in (3, 10, 32)},
+        | {f"lost, {n - 1} new tracks": steer_us(n, lost=True) for n in (3, 10, 32)}
+        | {"locked on the gimbal, 3 detections": steer_us(3, lost=False, camera=CameraModel.from_hfov(
+            640, 480, 62.0, Mount(0.0, gimbal=True)))},
         "overlay_us": {f"{n} numbers and the lock": overlay_us(n) for n in (3, 10, 32)},
         "likeness": {"sim: camera": sim_looks(), "coloured cars on grey": coloured_looks()},
     }
