@@ -31,7 +31,7 @@ from uav_tui.flight.track_overlay import draw_tracks
 from uav_tui.hosting.exception_reports import ProcessorErrors
 from uav_tui.hosting.host import ProcessedFrame, ProcessorHost
 from uav_tui.hosting.malloc_tuning import tune_this_process
-from uav_tui.operations import Operations
+from uav_tui.operations import Operations, build_operations
 from uav_tui.output.text import last_line, shorten
 from uav_tui.recording import NotRecording, Recorder, describe
 from uav_tui.relays.contract import OutputRelay
@@ -140,7 +140,7 @@ class UavCore:
                     "watchdog")
         if (landing := landing_target_relay(parts.relays)) is not None:
             self._spawn(landing.watch(controller, self.newest_frame_age, worker), "precland watchdog")
-        self._operations = Operations(parts, self.recorder, self._processor_errors, self.quit_requested)
+        self._operations = build_operations(parts, self.recorder, self._processor_errors, self.quit_requested)
         self.state = CoreState.RUNNING
         self.events.emit("info", "platform", f"started: source {self.config.source}, processor "
                          f"{worker.processor.info.name} ({self.config.isolation}), fc {self.config.fc}")

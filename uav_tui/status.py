@@ -11,13 +11,21 @@ from uav_tui.flight.autonomy import Verdict
 from uav_tui.flight.geo_detections import LocatedDetection, count_tracks, describe_shown, locate_shown
 from uav_tui.flight.geolocate import GeoFix, describe, locate_row
 from uav_tui.flight.track_lock import LockState
-from uav_tui.hosting.host import ProcessorState
+from uav_tui.hosting.host import ProcessorHost, ProcessorState
 from uav_tui.output.text import safe
 from uav_tui.relays.registry import gimbal_relay
 from uav_tui.stats import PipelineStats
 
 if TYPE_CHECKING:
+    from controllers.base import FlightController
+    from uav_tui.camera.active import ActiveCamera
+    from uav_tui.flight.autonomy import AutonomyGate
+    from uav_tui.flight.link import LinkWatch
+    from uav_tui.flight.telemetry import TelemetryManager
+    from uav_tui.flight.track_lock import TrackLock
     from uav_tui.recording import Recorder
+    from uav_tui.relays.contract import OutputRelay
+    from uav_tui.relays.precland import LandingTargetFeed
     from uav_tui.start_parts import Parts
 
 
@@ -156,66 +164,77 @@ class CoreStatus:
 def core_status(parts: Parts, recorder: Recorder | None, processor_error: str | None,
                 startup_s: float | None) -> CoreStatus:
     """Everything an interface shows of a running core (its ``parts``, its ``recorder``, the last line of the newest
-    processor error, the seconds to the first processed frame), as one immutable snapshot."""
-    worker, source, controller, gate, link = parts.worker, parts.camera.source, parts.controller, parts.gate, parts.link
-    camera, landing_feed = parts.camera.model, parts.landing
-    gimbal = gimbal_relay(parts.relays)
-    relayed = {name: dict(relay.counts) for name, relay in parts.relays.items()}
-    landing, pointing = relayed.get("landing_target", {}), relayed.get("gimbal", {})
+    processor error, the seconds to the first processed frame), as one immutable snapshot: each part of it read by a
+    section given the few parts it shows."""
+    return CoreStatus(
+        **_processor(parts.worker, parts.camera, parts.config.source),
+        **_seen(parts.worker, parts.camera, parts.telemetry),
+        **_vehicle(parts.controller, parts.telemetry, parts.link, parts.config.fc),
+        **_autonomy(parts.gate, parts.lock),
+        **_outputs(parts.relays, parts.landing),
+        processor_error=processor_error,
+        recording=recorder.status() if recorder is not None else {},
+        startup_s=startup_s,
+        saves_dropped=_saves_dropped(parts.worker, parts.telemetry, recorder),
+    )
+
+
+def _processor(worker: ProcessorHost, camera: ActiveCamera, configured: str) -> dict[str, Any]:
+    """The source and the processor: what runs on which frames, and how fast."""
+    source = camera.source
     assert source is not None
+    properties = source.get_properties()
+    return {"pipeline": worker.snapshot(), "source_uri": properties.get("uri", configured), "source": properties,
+            "processor": worker.processor.info.name, "capabilities": worker.processor.info.capabilities,
+            "processor_state": worker.state()}
+
+
+def _seen(worker: ProcessorHost, camera: ActiveCamera, telemetry: TelemetryManager) -> dict[str, Any]:
+    """The newest processed frame's ``box`` and detections, each located on the ground."""
     last = worker.last
     box = last.outcome.box if last is not None else None
     found = (last.outcome.detections or ()) if last is not None else ()
     # where they were seen: with the telemetry at that frame's capture, not the newest (~20 us a box)
-    seen = asdict(parts.telemetry.at(last.frame.t_mono_ns)[0]) if last is not None and (box or found) else {}
+    seen = asdict(telemetry.at(last.frame.t_mono_ns)[0]) if last is not None and (box or found) else {}
     at_ns = last.frame.t_mono_ns if last is not None else None
-    target = None if box is None else locate_row(camera, box, seen, at_ns=at_ns)
-    return CoreStatus(
-        telemetry=parts.telemetry.snapshot(),
-        pipeline=worker.snapshot(),
-        source_uri=source.get_properties().get("uri", parts.config.source),
-        source=source.get_properties(),
-        processor=worker.processor.info.name,
-        capabilities=worker.processor.info.capabilities,
-        processor_error=processor_error,
-        processor_state=worker.state(),
-        fc=parts.config.fc,
-        fc_description=controller.description if controller is not None else "none",
-        heartbeat_age_s=controller.heartbeat_age_s() if controller else None,
-        autonomy=gate.enabled,
-        autonomy_stop_reason=gate.stop_reason,
-        precland=landing_feed.engaged,
-        precland_stop_reason=landing_feed.stop_reason,
-        relayed=relayed,
-        landing_targets_sent=landing.get("sent", 0),
-        landing_targets_failed=landing.get("failed", 0),
-        landing_targets_refused=landing_feed.refusals.refused,
-        landing_none_reason=landing_feed.why_none,
-        gimbal_sent=pointing.get("sent", 0),
-        gimbal_failed=pointing.get("failed", 0),
-        gimbal_controlled=gimbal is not None and gimbal.controller.gimbal_controlled,
-        last_vector=gate.last_vector,
-        last_decision=gate.last_decision,
-        last_verdict=gate.last_decision.verdict,
-        vectors_executed=gate.executed,
-        vectors_rejected=gate.rejected,
-        recording=recorder.status() if recorder is not None else {},
-        startup_s=startup_s,
-        link_lost=link is not None and link.lost,
-        vehicle_problem=link.vehicle_problem if link is not None else "",
-        box=box,
-        target=target,
-        detections=locate_shown(found, camera, seen, at_ns),
-        detections_total=len(found),
-        tracks_total=count_tracks(found),
-        lock="" if parts.lock.state is LockState.OFF else str(parts.lock.status()),
-        saves_dropped=_saves_dropped(parts, recorder),
-    )
+    return {"box": box, "target": None if box is None else locate_row(camera.model, box, seen, at_ns=at_ns),
+            "detections": locate_shown(found, camera.model, seen, at_ns), "detections_total": len(found),
+            "tracks_total": count_tracks(found)}
 
 
-def _saves_dropped(parts: Parts, recorder: Recorder | None) -> dict[str, int]:
+def _vehicle(controller: FlightController | None, telemetry: TelemetryManager, link: LinkWatch | None,
+             fc: str) -> dict[str, Any]:
+    """The vehicle: its telemetry and its link."""
+    return {"telemetry": telemetry.snapshot(), "fc": fc,
+            "fc_description": controller.description if controller is not None else "none",
+            "heartbeat_age_s": controller.heartbeat_age_s() if controller else None,
+            "link_lost": link is not None and link.lost,
+            "vehicle_problem": link.vehicle_problem if link is not None else ""}
+
+
+def _autonomy(gate: AutonomyGate, lock: TrackLock) -> dict[str, Any]:
+    """Autonomy, its vectors and the operator's lock on a track."""
+    return {"autonomy": gate.enabled, "autonomy_stop_reason": gate.stop_reason, "last_vector": gate.last_vector,
+            "last_decision": gate.last_decision, "last_verdict": gate.last_decision.verdict,
+            "vectors_executed": gate.executed, "vectors_rejected": gate.rejected,
+            "lock": "" if lock.state is LockState.OFF else str(lock.status())}
+
+
+def _outputs(relays: dict[str, OutputRelay], landing: LandingTargetFeed) -> dict[str, Any]:
+    """What the output relays did, the landing targets' feed and the gimbal."""
+    gimbal = gimbal_relay(relays)
+    relayed = {name: dict(relay.counts) for name, relay in relays.items()}
+    sent, pointed = relayed.get("landing_target", {}), relayed.get("gimbal", {})
+    return {"relayed": relayed, "precland": landing.engaged, "precland_stop_reason": landing.stop_reason,
+            "landing_targets_sent": sent.get("sent", 0), "landing_targets_failed": sent.get("failed", 0),
+            "landing_targets_refused": landing.refusals.refused, "landing_none_reason": landing.why_none,
+            "gimbal_sent": pointed.get("sent", 0), "gimbal_failed": pointed.get("failed", 0),
+            "gimbal_controlled": gimbal is not None and gimbal.controller.gimbal_controlled}
+
+
+def _saves_dropped(worker: ProcessorHost, telemetry: TelemetryManager, recorder: Recorder | None) -> dict[str, int]:
     """``tmMgr.save`` calls not stored, by why (see ``CoreStatus.saves_dropped``)."""
-    counts = {"throttled": parts.worker.saves_throttled,
-              "not recorded": parts.telemetry.saves_dropped,
+    counts = {"throttled": worker.saves_throttled,
+              "not recorded": telemetry.saves_dropped,
               "outside a frame": recorder.misplaced_saves if recorder is not None else 0}
     return {why: count for why, count in counts.items() if count}

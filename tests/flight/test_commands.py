@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+from dataclasses import fields
 from pathlib import Path
 from typing import cast
 
@@ -14,7 +15,7 @@ from uav_tui.errors import CommandError, ConfigError
 from uav_tui.flight.commands import COMMANDS, Command, check_limits, parse
 from uav_tui.headless import load_script
 from uav_tui.hosting.exception_reports import ProcessorErrors
-from uav_tui.operations import Operations
+from uav_tui.operations import Operations, build_operations
 from uav_tui.start_parts import Parts
 
 
@@ -71,7 +72,9 @@ def test_every_command_has_usage_and_help() -> None:
 
 def _unbound() -> Operations:
     """The commands, on no parts: enough to look a word up."""
-    return Operations(cast(Parts, None), None, cast(ProcessorErrors, None), asyncio.Event())
+    nothing = dict.fromkeys((f.name for f in fields(Parts)), None)
+    return build_operations(Parts(**{**nothing, "config": Config()}), None, cast(ProcessorErrors, None),
+                            asyncio.Event())
 
 
 def test_every_command_word_has_its_handler() -> None:
