@@ -1,10 +1,13 @@
 """A frame's way from capture to the MAVSDK call passes few enough files for a reader to follow it.
 
 Traced with ``sys.settrace`` on a real flight (the built-in simulator through the real MAVSDK controller, nothing
-faked): the project's files on the Python stack where each thread hands the frame on (the capture thread from
-``FrameBuffer.put`` to the processor's host, the host's thread to the processor, the loop to the autonomy gate, the
-gate's task to MAVSDK's ``send_message``), the gate's task holding that very frame. ``docs/architecture.md`` lists
-them ("One frame, capture to MAVSDK"); the trace must find that list.
+faked): the project's files on the Python stack where each thread hands the frame on, the gate's task to MAVSDK's
+``send_message`` holding that very frame. With ``isolation = "thread"``: the capture thread from ``FrameBuffer.put``
+to the processor's host, the host's thread to the processor, the loop to the autonomy gate, the gate's task to
+MAVSDK. With ``"process"`` the platform's process is traced (the processor's is another interpreter): the capture
+thread from ``FrameBuffer.put`` to the feeder, the feeder's offer in the child's mailbox, the loop from the child's
+result to the autonomy gate, the gate's task to MAVSDK. ``docs/architecture.md`` lists them for each ("One frame,
+capture to MAVSDK"); the trace must find those lists.
 """
 
 from __future__ import annotations
@@ -12,14 +15,19 @@ from __future__ import annotations
 import re
 import sys
 import threading
+from collections.abc import Callable
 from pathlib import Path
 from types import CodeType, FrameType
 from typing import Any
+
+import pytest
 
 from sources.buffer import FrameBuffer
 from tests.core.flight_helpers import flying_core, wait_until
 from uav_tui.flight.autonomy import AutonomyGate
 from uav_tui.hosting.frame_call import call_frame
+from uav_tui.hosting.frame_feeder import FrameFeeder
+from uav_tui.hosting.frame_mailbox import FrameMailbox
 from uav_tui.hosting.host import ProcessedFrame
 from uav_tui.hosting.thread_host import ThreadHost
 
@@ -30,44 +38,62 @@ MAX_FILES = 10
 KEPT = 300
 """Frames whose hops are kept (the oldest are let go)."""
 
+Seq = Callable[[dict[str, Any]], int]
+"""Which frame a hand-off's function holds, from its arguments: the frame's ``seq``."""
+
+HANDED: dict[str, dict[CodeType, tuple[str, Seq]]] = {
+    "thread": {ThreadHost._on_frame.__code__: ("capture", lambda args: args["frame"].seq),
+               call_frame.__code__: ("processor", lambda args: args["frame_seq"]),
+               AutonomyGate.consider.__code__: ("gate", lambda args: args["result"].frame.seq)},
+    "process": {FrameFeeder._on_frame.__code__: ("capture", lambda args: args["frame"].seq),
+                FrameMailbox.offer.__code__: ("offer", lambda args: args["offer"].seq),
+                AutonomyGate.consider.__code__: ("gate", lambda args: args["result"].frame.seq)},
+}
+"""Where each thread of the platform's process hands a frame on, by isolation: the function called, the hop's name
+and the frame it holds."""
+
 
 class FramePath:
-    """Records, for each frame (by its image), the project's files on the stack at each hand-off."""
+    """Records, for each frame (by its ``seq``), the project's files on the stack at each hand-off.
 
-    def __init__(self) -> None:
-        self.hops: dict[int, tuple[object, dict[str, list[str]]]] = {}
+    Args:
+        isolation: where the processor runs (:data:`HANDED` has its hand-offs).
+    """
+
+    def __init__(self, isolation: str) -> None:
+        self.hops: dict[int, dict[str, list[str]]] = {}
         self._lock = threading.Lock()  # three threads record
-        self._handed = {ThreadHost._on_frame.__code__: "capture", call_frame.__code__: "processor",
-                        AutonomyGate.consider.__code__: "gate"}
+        self._handed = HANDED[isolation]
+        self.names = [name for name, _ in self._handed.values()] + ["mavsdk"]
 
     def trace(self, frame: FrameType, event: str, arg: Any) -> None:
         if event != "call":
             return None
-        hop = self._handed.get(frame.f_code)
-        if hop is not None:
-            image = frame.f_locals["image"] if hop == "processor" else (
-                frame.f_locals["frame"].image if hop == "capture" else frame.f_locals["result"].frame.image)
-            self._hops(image)[hop] = _files(frame, FrameBuffer.put.__code__ if hop == "capture" else None)
+        handed = self._handed.get(frame.f_code)
+        if handed is not None:
+            name, seq = handed
+            self._hops(seq(frame.f_locals))[name] = _files(frame, FrameBuffer.put.__code__)
         elif frame.f_code.co_name == "send_message" and "site-packages/mavsdk/" in frame.f_code.co_filename:
             result = _held(frame.f_back)
             if result is not None:
-                self._hops(result.frame.image).setdefault("mavsdk", _files(frame.f_back))
+                self._hops(result.frame.seq).setdefault("mavsdk", _files(frame.f_back))
         return None
 
-    def _hops(self, image: object) -> dict[str, list[str]]:
-        """The hops of the frame whose image this is (kept alive with its record: its id is not reused)."""
+    def _hops(self, seq: int) -> dict[str, list[str]]:
+        """The hops of frame ``seq``."""
         with self._lock:
-            kept = self.hops.get(id(image))
+            kept = self.hops.get(seq)
             if kept is None:
-                kept = self.hops[id(image)] = (image, {})
+                kept = self.hops[seq] = {}
                 if len(self.hops) > KEPT:
                     del self.hops[next(iter(self.hops))]
-            return kept[1]
+            return kept
 
-    def flown(self) -> list[dict[str, list[str]]]:
-        """The hops of every frame that went all the way, in the order they happened."""
+    def flown(self) -> list[list[str]]:
+        """The files of every frame that went all the way, in the order they happened: each hop's, each file once."""
         with self._lock:
-            return [hops for _, hops in self.hops.values() if len(hops) == 4]
+            return [list(dict.fromkeys(file for name in self.names for file in hops[name]))
+                    for hops in self.hops.values() if len(hops) == len(self.names)]
 
 
 def _files(frame: FrameType | None, since: CodeType | None = None) -> list[str]:
@@ -84,10 +110,11 @@ def _files(frame: FrameType | None, since: CodeType | None = None) -> list[str]:
     return list(dict.fromkeys(reversed(stack)))
 
 
-def documented() -> list[str]:
-    """The files ``docs/architecture.md`` lists between its ``frame-path`` marks, in order."""
+def documented(isolation: str) -> list[str]:
+    """The files ``docs/architecture.md`` lists between its ``frame-path`` marks of ``isolation``, in order."""
     text = (ROOT / "docs" / "architecture.md").read_text()
-    block = text[text.index("<!-- frame-path"):text.index("<!-- /frame-path -->")]
+    start = text.index(f"<!-- frame-path {isolation}:")
+    block = text[start:text.index("<!-- /frame-path -->", start)]
     return re.findall(r"^\d+\. `([^`]+)`", block, re.MULTILINE)
 
 
@@ -101,19 +128,22 @@ def _held(frame: FrameType | None) -> ProcessedFrame | None:
     return None
 
 
-async def test_a_frame_reaches_the_mavsdk_call_through_at_most_ten_files(tmp_path: Path) -> None:
-    path = FramePath()
-    threading.settrace(path.trace)  # the capture and processor threads, started by the core below
+@pytest.mark.parametrize("isolation", ["thread", "process"])
+async def test_a_frame_reaches_the_mavsdk_call_through_the_files_documented(tmp_path: Path, isolation: str) -> None:
+    path = FramePath(isolation)
+    threading.settrace(path.trace)  # the capture, feeder and processor threads, started by the core below
     sys.settrace(path.trace)
     try:
-        async with flying_core(tmp_path, isolation="thread") as core:
+        async with flying_core(tmp_path, isolation=isolation) as core:
             await core.execute("f 1")
             await core.execute("autonomy on")
             await wait_until(lambda: path.flown(), 20, "a frame's vector sent to the vehicle")
     finally:
         sys.settrace(None)
         threading.settrace(None)  # type: ignore[arg-type]
-    hops = path.flown()[0]
-    files = list(dict.fromkeys(file for hop in ("capture", "processor", "gate", "mavsdk") for file in hops[hop]))
-    assert len(files) <= MAX_FILES, files
-    assert files == documented()
+    files = path.flown()[0]
+    assert files == documented(isolation), files
+    if isolation == "thread":
+        assert len(files) <= MAX_FILES, files
+    else:  # from the processor's result on: the platform's files after the child
+        assert len(files[files.index("uav_tui/hosting/child_link.py"):]) <= MAX_FILES, files
