@@ -269,7 +269,7 @@ async def test_a_stalled_terminal_never_blocks_a_headless_run(tmp_path: Path, mo
     config = load_config(None, {"fc": "sim", "source": "synthetic:?width=160&height=120", "record": False,
                                 "processor": f"{tmp_path / 'chatty.py'}:Chatty"})
     runner = headless.HeadlessRunner(config, duration=9.0, out=out)
-    gaps: list[float] = []
+    gaps: list[tuple[float, float]] = []  # (time, the loop's lag before it)
     processed: list[tuple[float, int]] = []  # (time, frames processed)
     running = threading.Event()
 
@@ -277,7 +277,7 @@ async def test_a_stalled_terminal_never_blocks_a_headless_run(tmp_path: Path, mo
         last = time.monotonic()
         while True:
             await asyncio.sleep(0.02)
-            gaps.append(time.monotonic() - last)
+            gaps.append((time.monotonic(), time.monotonic() - last))
             last = time.monotonic()
             if runner.core.state is CoreState.RUNNING:
                 running.set()
@@ -301,8 +301,11 @@ async def test_a_stalled_terminal_never_blocks_a_headless_run(tmp_path: Path, mo
         out.close()
         reader.join(10)
         os.close(read_fd)
-    assert max(gaps) < 0.5, f"the loop waited {max(gaps):.2f} s"
     stalled_from = processed[0][0]
+    # Blocked by the terminal, the loop would wait out the 6 s stall; a loaded machine's scheduler gives it some
+    # tenths of a second now and then (0.6 s at load 6 on 2 cores), so the bound is a third of the stall.
+    waited = max(gap for t, gap in gaps if stalled_from <= t <= stalled_from + 6)
+    assert waited < 2.0, f"the loop waited {waited:.2f} s while the terminal stalled"
     during = [count for t, count in processed if stalled_from + 2 <= t <= stalled_from + 5]
     assert during[-1] - during[0] > 3 * 15, processed  # the processor kept its 30 FPS (a blocked one: none)
     lines = b"".join(received).decode().splitlines()
