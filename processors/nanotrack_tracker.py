@@ -11,7 +11,7 @@ from collections import deque
 import cv2
 import numpy as np
 
-from processors import target_search
+from processors import colour_contrast, target_search
 from processors.detector_help import DetectorHelp
 from processors.follow import FOLLOW_GAIN, TargetFollower
 from processors.nanotrack_net import HOLD_SHARPNESS, RIVAL_LEVEL, NanoTrackNet
@@ -39,6 +39,15 @@ _ADAPT_RATE = 0.01
 """Weight of the box's patch in the adapted appearance on a sure frame that matches as well as usual: it follows
 the quick start's car as it turns (10 degrees a second), and at 0.02 or more it learned car14's look-alike too."""
 
+COLOUR_RISE = 0.35
+"""Default ``colour_rise``: on the development set a rise of the box's background likeness (-1..1) this far over its
+recent median for :data:`_COLOUR_AFTER` frames comes on no tracked target, and a covered target's rises 0.5-0.7
+over it where the background's colours are not the target's (car14, group3_2); 0.3 and 0.4 score alike."""
+
+_COLOUR_AFTER = 3
+"""Frames in a row whose colours say background that make the target lost: one more than ``lost_after``'s
+default, as NanoTrack is sure on them."""
+
 _EXEMPLAR_PX = 64
 """About how many pixels NanoTrack's 127-px template gives the target (the template spans twice its size):
 shrinking the frame until the target is this size loses nothing the network would have seen."""
@@ -61,6 +70,13 @@ class NanoTrackProcessor(TargetFollower):
     not there and NanoTrack is unsure or the box is at the frame's edge (a target leaving the view, where a
     sharp peak on what is left of it says little); ``lost_after`` such frames in a row make the target lost
     (``box`` None), until then the box is kept. A sure frame where the target is there takes it back.
+
+    A covered target leaves the box on background where NanoTrack is often sure of a peak, and the template's
+    correlation there may be as high as on the target. So the box's colours are judged too
+    (:func:`~processors.colour_contrast.background_likeness`: how much more they are like the ring around the
+    box than like the selection's): :data:`_COLOUR_AFTER` frames in a row where that rises ``colour_rise`` or more
+    above its median over the last tracked frames make the target lost, sure or not, and such a box does not
+    take it back.
 
     While lost, every ``wide_every`` lost frames a coarse correlation search of the whole frame finds the place
     that looks most like the selected target; NanoTrack is tried there (the same template) and moved there only
@@ -91,6 +107,8 @@ class NanoTrackProcessor(TargetFollower):
         rival: a peak this high away from the box (see :func:`~processors.nanotrack_net.rival`) says the
             target may be elsewhere; NanoTrack does not follow such a look-alike when it overtakes the target.
         lost_after: frames of evidence in a row that make the target lost.
+        colour_rise: rise of the box's background likeness over its recent median that says the box shows
+            background (``inf``: colours not judged).
         wide_every: lost frames between whole-frame searches.
         detect_every: lost frames between detections of the target's class; 0: no detector.
     """
@@ -109,6 +127,7 @@ class NanoTrackProcessor(TargetFollower):
         loss_ratio: float = 0.5,
         rival: float = RIVAL_LEVEL,
         lost_after: int = 2,
+        colour_rise: float = COLOUR_RISE,
         wide_every: int = 5,
         detect_every: int = 2,
     ) -> None:
@@ -116,9 +135,14 @@ class NanoTrackProcessor(TargetFollower):
                          gimbal_max_rate=gimbal_max_rate)
         self.hold, self.loss_ratio, self.rival = hold, loss_ratio, rival
         self.lost_after, self.wide_every = max(1, int(lost_after)), max(1, int(wide_every))
+        self.colour_rise = float(colour_rise)
         self._net: NanoTrackNet | None = None
         self._helper = DetectorHelp(every=detect_every) if detect_every > 0 else None
         self._looks: deque[float] = deque(maxlen=_APPEARANCE_HISTORY)
+        self._likeness: deque[float] = deque(maxlen=_APPEARANCE_HISTORY)
+        self._colours: np.ndarray | None = None
+        self._likeness_now: float | None = None
+        self._background = False
         self.look = 0.0
         """Appearance score (normalised correlation) of the last box: diagnostics."""
 
@@ -132,6 +156,8 @@ class NanoTrackProcessor(TargetFollower):
             logger.warning("NanoTrackProcessor: ROI %s is too small to track, ignored", roi)
             return False
         self._templates = [appearance, appearance.copy()]
+        self._colours = colour_contrast.box_histogram(work, box)
+        self._likeness.clear()
         self._net = NanoTrackNet(self.hold, self.rival)
         self._net.init(work, tuple(int(round(v)) for v in box))
         self._looks.clear()
@@ -176,15 +202,26 @@ class NanoTrackProcessor(TargetFollower):
 
     def _step(self, net: NanoTrackNet, work: np.ndarray) -> tuple[Box, bool, bool]:
         """``net`` updated on ``work``: its box, whether NanoTrack is sure of it (a sharp peak) and whether the
-        target is there (its appearance holds and nothing else in the window competes). The diagnostics
-        ``score`` and ``look`` are this frame's."""
+        target is there (its appearance holds and nothing else in the window competes; and, for a lost target, its
+        colours are not the background's). The diagnostics ``score`` and ``look`` are this frame's."""
         _, placed = net.update(work)
         box = as_box(placed)
         self.score = net.score
         found = self._appearance(work, box)
         self.look = found.score if found is not None else -1.0
         there = self.look >= self.loss_ratio * self._look_median() and net.rival < self.rival
-        return box, net.sharpness >= self.hold, there
+        self._background = self._shows_background(work, box)
+        return box, net.sharpness >= self.hold, there and (self._tracking or not self._background)
+
+    def _shows_background(self, work: np.ndarray, box: Box) -> bool:
+        """The box's colours are ``colour_rise`` more like its surroundings than usual (the last tracked frames'
+        median); the frame's likeness is kept in ``_likeness_now`` for :meth:`_update`."""
+        likeness = None if self._colours is None else colour_contrast.background_likeness(work, box, self._colours)
+        self._likeness_now = likeness
+        if likeness is None:
+            return False
+        usual = statistics.median(self._likeness) if self._likeness else likeness
+        return likeness >= usual + self.colour_rise
 
     def _look_median(self) -> float:
         return statistics.median(self._looks) if self._looks else self.look  # numpy's costs 50x on 5 values
@@ -193,16 +230,19 @@ class NanoTrackProcessor(TargetFollower):
         """A tracked frame: count the evidence, else take the box (and on a sure frame learn the appearance's level,
         and move the adapted appearance towards the box's where it matches as well as usual, away from the edge)."""
         at_edge = _at_edge(box, work)
-        if (not sure or at_edge) and not there:
+        weak = (not sure or at_edge) and not there
+        if weak or self._background:
             self._evidence += 1
-            if self._evidence >= self.lost_after:
+            if self._evidence >= (self.lost_after if weak else _COLOUR_AFTER):
                 assert self._net is not None  # a target is selected
-                logger.info("NanoTrackProcessor: target lost (sharpness %.1f, appearance %.2f)",
-                            self._net.sharpness, self.look)
+                logger.info("NanoTrackProcessor: target lost (sharpness %.1f, appearance %.2f, colours %s)",
+                            self._net.sharpness, self.look, "the background's" if self._background else "kept")
                 self._tracking, self._lost_frames, self._left_view = False, 0, at_edge
             return  # the last box is kept until the evidence is conclusive
         self._evidence = 0
         self._work_box = box
+        if self._likeness_now is not None:
+            self._likeness.append(self._likeness_now)
         if sure:
             usual = self._look_median()
             self._looks.append(self.look)

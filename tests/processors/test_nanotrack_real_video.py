@@ -8,11 +8,15 @@ of those frames, where plain NanoTrack reports a box on every one. A correctness
 
 from __future__ import annotations
 
+import itertools
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from processors.nanotrack_tracker import NanoTrackProcessor
+from tests.scripts import script_module
+from tests.videos import aerial_set
 from uav_tui.evaluation import Job, TrackerSpec, load_sequence, run_job
 from uav_tui.evaluation.metrics import iou
 
@@ -64,3 +68,20 @@ def test_nanotrack_keeps_the_gull_when_another_flies_past(aerial_tracking: Path)
     ours = run_job(Job(sequence, TrackerSpec("nanotrack")))
     overlap = iou(ours.boxes[:140], sequence.gt[:140])
     assert (overlap > 0.3).mean() >= 0.9, f"IoU > 0.3 on {(overlap > 0.3).mean():.0%} of frames 0-139"
+
+
+def test_nanotrack_says_lost_while_a_car_is_covered_though_sure_of_the_road() -> None:
+    """car14's car painted over with the road beside it for 2 s (as scripts/build_covered_set.py does, frames
+    120-139): NanoTrack stays sure of a peak on the road and the template's correlation holds there, but the box's
+    colours are the road's, so the car is reported lost on most of those frames, and not before them."""
+    sequence = load_sequence(aerial_set("uav123_10fps-car14"))
+    covered = range(120, 140)
+    processor = NanoTrackProcessor()
+    processor.catch_cmd(tuple(int(round(v)) for v in sequence.gt[0]))
+    lost = []
+    with script_module("build_covered_set") as build:
+        for index, image in enumerate(itertools.islice(sequence.frames(), covered.stop)):
+            processor.photo_processing(build.cover(image, sequence.gt[index]) if index in covered else image)
+            lost.append(processor.box is None)
+    assert not any(lost[: covered.start]), f"lost before the cover on frames {np.flatnonzero(lost[:covered.start])}"
+    assert sum(lost[covered.start :]) >= 15, f"lost on {sum(lost[covered.start:])} of the {len(covered)} covered frames"
