@@ -47,46 +47,15 @@ class FrameProcessor(Protocol):
     Two optional read-only attributes, read by the platform after every frame: ``box``, ``(x, y, w, h)`` in
     frame pixels of what the processor tracks now, or ``None`` (nothing selected, or lost); ``detections``,
     several boxes with a label and a score (:mod:`processors.detections`).
+
+    The platform reads the optional members with ``getattr(instance, name, None)``: ``isinstance`` against a
+    runtime-checkable Protocol asks the same (``hasattr`` of each member) at 5-10 µs a call on Python 3.11,
+    paid on every frame and every detection.
     """
 
     tmMgr: FrameTelemetry | None
 
     def photo_processing(self, frame: np.ndarray) -> Any: ...
-
-
-@runtime_checkable
-class GivesLandingTarget(Protocol):
-    """A processor with the optional ``getLandingTarget()``; its optional ``status`` says why there is no target."""
-
-    def getLandingTarget(self) -> object: ...
-
-
-@runtime_checkable
-class GivesGimbalPointing(Protocol):
-    """A processor with the optional ``getGimbalPointing()``."""
-
-    def getGimbalPointing(self) -> object: ...
-
-
-@runtime_checkable
-class HasBox(Protocol):
-    """A processor with the optional ``box`` attribute (what it tracks now; checked by :func:`read_box`)."""
-
-    box: object
-
-
-@runtime_checkable
-class HasDetections(Protocol):
-    """A processor with the optional ``detections`` attribute (checked by :mod:`processors.detections`)."""
-
-    detections: object
-
-
-@runtime_checkable
-class HasStatus(Protocol):
-    """A processor with the optional ``status`` attribute: why ``getLandingTarget()`` gave no target."""
-
-    status: object
 
 
 @dataclass(frozen=True)
@@ -184,7 +153,7 @@ def read_box(instance: object) -> PixelBox | None:
     A box is 4 finite numbers with positive width and height; anything else reads as None, so a
     researcher's half-finished attribute can never break the frame it belongs to.
     """
-    value: Any = instance.box if isinstance(instance, HasBox) else None
+    value: Any = getattr(instance, "box", None)  # optional: see FrameProcessor
     if value is None:
         return None
     try:

@@ -16,11 +16,10 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from typing import Any, Protocol, runtime_checkable
+from typing import Any
 
 import numpy as np
 
-from processors.base import HasDetections
 from uav_values.box import PixelBox
 from uav_values.detections import Detected
 
@@ -35,22 +34,6 @@ MAX_LABEL_CHARS = 64
 """A longer label is the processor's error: a label is a class name, not a description."""
 
 
-@runtime_checkable
-class DetectionLike(Protocol):
-    """A detection as an object: ``box``, ``label`` and ``score`` attributes (``processors.detection.Detection``)."""
-
-    box: object
-    label: object
-    score: object
-
-
-@runtime_checkable
-class Tracked(Protocol):
-    """A detection object that carries its own ``track_id``."""
-
-    track_id: object
-
-
 def read_detections(instance: object) -> tuple[Detected, ...] | None:
     """The processor's ``detections`` attribute, checked; None when it has none (absent or None).
 
@@ -58,7 +41,7 @@ def read_detections(instance: object) -> tuple[Detected, ...] | None:
         TypeError, ValueError: not a list of detections, more than :data:`MAX_DETECTIONS`, or an item that is not
             a box with a label and a score (the message names the item and what is wrong).
     """
-    value = instance.detections if isinstance(instance, HasDetections) else None
+    value = getattr(instance, "detections", None)  # optional: see processors.base.FrameProcessor
     if value is None:
         return None
     if isinstance(value, str | bytes | Mapping) or not isinstance(value, Sequence):
@@ -82,9 +65,8 @@ def _checked(index: int, item: Any) -> Detected:
     track: Any = None
     if isinstance(item, Mapping):
         box, label, score, track = item.get("box"), item.get("label"), item.get("score"), item.get("track_id")
-    elif isinstance(item, DetectionLike):
-        box, label, score = item.box, item.label, item.score
-        track = item.track_id if isinstance(item, Tracked) else None
+    elif all(hasattr(item, name) for name in ("box", "label", "score")):  # processors.detection.Detection, or alike
+        box, label, score, track = item.box, item.label, item.score, getattr(item, "track_id", None)
     elif isinstance(item, tuple | list) and len(item) in (3, 4) and not isinstance(item[0], int | float | np.number):
         box, label, score, track = (*item, None)[:4]
     else:

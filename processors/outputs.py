@@ -9,7 +9,6 @@ from collections.abc import Callable, Collection
 from dataclasses import dataclass, field, fields
 from typing import Any, TypeVar
 
-from processors.base import GivesGimbalPointing, GivesLandingTarget, HasStatus
 from uav_values.gimbal import GimbalPointing
 from uav_values.landing_target import LandingTarget
 
@@ -70,11 +69,13 @@ class Reader:
 
 
 def _landing_target(instance: object) -> object:
-    return instance.getLandingTarget() if isinstance(instance, GivesLandingTarget) else None
+    method = getattr(instance, "getLandingTarget", None)  # optional: see processors.base.FrameProcessor
+    return method() if method is not None else None
 
 
 def _gimbal_pointing(instance: object) -> object:
-    return instance.getGimbalPointing() if isinstance(instance, GivesGimbalPointing) else None
+    method = getattr(instance, "getGimbalPointing", None)  # optional: see processors.base.FrameProcessor
+    return method() if method is not None else None
 
 
 READERS: dict[str, Reader] = {
@@ -117,7 +118,7 @@ def read_outputs(instance: object, methods: Collection[str], frame_seq: int | No
     if target is not None and frame_seq is not None:
         target.stamp(frame_seq)
     if "getLandingTarget" in methods and target is None:
-        values["landing_status"] = _one_line(instance.status if isinstance(instance, HasStatus) else None)
+        values["landing_status"] = _one_line(getattr(instance, "status", None))
     return FrameOutputs(**values, more=more)
 
 
