@@ -54,6 +54,8 @@ class DetectionTracks:
                                    lifespan_ns=int(KEEP_LOST_S * 1e9))
         self._ids: dict[str, int] = {}
         self._next_id = first_id % MAX_TRACK_ID
+        self._started = False
+        """A detection was seen: from then on every frame updates the tracker (before, it has nothing to age)."""
 
     def assign(self, detections: tuple[Detected, ...] | None, at_ns: int) -> tuple[Detected, ...] | None:
         """``detections`` (seen at ``at_ns``, monotonic) each with its ``track_id``; None stays None (a processor
@@ -61,6 +63,9 @@ class DetectionTracks:
         if detections is not None and any(found.track_id is not None for found in detections):
             return detections
         found = detections or ()
+        if not (found or self._started):
+            return detections  # a processor that reports no detections pays nothing (10 us a frame otherwise)
+        self._started = True
         boxes = np.array([(x, y, x + w, y + h) for (x, y, w, h) in (d.box for d in found)], np.float32).reshape(-1, 4)
         scores = np.array([d.score for d in found], np.float32)
         labels = np.array([zlib.crc32(d.label.encode()) for d in found], np.uint64)
