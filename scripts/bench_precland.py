@@ -48,7 +48,7 @@ from controllers.sim.launcher import SimVehicle  # noqa: E402
 from controllers.sim.truth import TruthClient  # noqa: E402
 from tests.core.flight_helpers import flying_core, wait_until  # noqa: E402
 from uav_tui.flight.plausibility import LandingCheck, judge_gimbal  # noqa: E402
-from uav_tui.hosting.host import ProcessedFrame  # noqa: E402
+from uav_tui.relays.contract import HandledFrame  # noqa: E402
 from uav_values.gimbal import GimbalPointing  # noqa: E402
 
 MARKER_ID = 7
@@ -100,7 +100,7 @@ async def land_once(pad_ne: tuple[float, float], wind: tuple[float, float], alti
     sent: dict[int, tuple[int, int, int]] = {}  # capture ns -> (t_start, t_end, on the loop) of each target sent
     published: dict[int, int] = {}  # capture ns -> when the frame reached the frame buffer (the sim: camera renders)
 
-    def on_frame(result: ProcessedFrame) -> None:  # on the loop, right after the send was started
+    def on_frame(result: HandledFrame) -> None:  # on the loop, right after the send was started
         if result.landing.startswith("refused: "):
             landing.refusals.append(result.landing)
         if result.landing == "sent":

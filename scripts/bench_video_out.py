@@ -32,7 +32,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from uav_tui.config import load_config  # noqa: E402
 from uav_tui.core import UavCore  # noqa: E402
-from uav_tui.hosting.host import ProcessedFrame  # noqa: E402
+from uav_tui.relays.contract import HandledFrame  # noqa: E402
 from uav_tui.web.rtp import Destination  # noqa: E402
 
 WIDTH, HEIGHT, FPS, KBPS = 640, 480, 30, 1500
@@ -112,7 +112,7 @@ async def run(seconds: float, stream: bool, rtsp: bool, folder: Path) -> dict[st
     if stream and rtsp:  # RTSP: the client connects to the platform's server
         listening = receiver(["-rtsp_transport", "tcp", "-i", f"rtsp://127.0.0.1:{port}/video"], decoded, stop)
 
-    def seen(result: ProcessedFrame) -> None:
+    def seen(result: HandledFrame) -> None:
         captured[result.frame.seq] = result.frame.t_mono_ns
 
     core.add_frame_listener(seen)

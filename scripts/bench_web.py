@@ -28,7 +28,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from controllers.sim.launcher import free_ports  # noqa: E402
 from uav_tui.config import load_config  # noqa: E402
 from uav_tui.core import UavCore  # noqa: E402
-from uav_tui.hosting.host import ProcessedFrame  # noqa: E402
+from uav_tui.relays.contract import HandledFrame  # noqa: E402
 
 CHROMIUM = "/usr/bin/chromium"
 CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
@@ -95,7 +95,7 @@ async def bench(seconds: float, source: str) -> dict[str, Any]:
                                       "web_host": "127.0.0.1", "web_port": port}))
     frames: dict[int, tuple[int, int]] = {}
 
-    def on_frame(result: ProcessedFrame) -> None:  # runs before the web track takes the frame
+    def on_frame(result: HandledFrame) -> None:  # runs before the web track takes the frame
         seq = result.frame.seq & 0xFFFF
         stamp(result.frame.image, seq)
         frames[seq] = (result.frame.t_wall_ns, time.time_ns())

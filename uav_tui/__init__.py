@@ -18,6 +18,7 @@ _EXPORTS = {
     "parse_command": "uav_tui.flight.commands:parse",
     "TelemetryManager": "uav_tui.flight.telemetry",
     "ProcessedFrame": "uav_tui.hosting.host",
+    "HandledFrame": "uav_tui.relays.contract",
     "Event": "uav_tui.events",
     "UavError": "uav_tui.errors",
     "ConfigError": "uav_tui.errors",

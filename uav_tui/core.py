@@ -34,7 +34,7 @@ from uav_tui.hosting.malloc_tuning import tune_this_process
 from uav_tui.operations import Operations, build_operations
 from uav_tui.output.text import last_line, shorten
 from uav_tui.recording import NotRecording, Recorder, describe
-from uav_tui.relays.contract import OutputRelay
+from uav_tui.relays.contract import HandledFrame, OutputRelay
 from uav_tui.relays.precland import LandingTargetFeed
 from uav_tui.relays.registry import consider_all, landing_target_relay
 from uav_tui.replay.operator import CommandReplay, recorded_commands
@@ -80,7 +80,9 @@ class UavCore:
         self.started_wall_ns = 0
         self.startup_s: float | None = None
         """Seconds from the process start to the first processed frame (None until it is processed)."""
-        self._frame_listeners: list[Callable[[ProcessedFrame], None]] = []
+        self.last: HandledFrame | None = None
+        """The newest processed frame and what the platform did with it (None before the first)."""
+        self._frame_listeners: list[Callable[[HandledFrame], None]] = []
         self._tasks: list[asyncio.Task[Any]] = []
         self._processor_errors = ProcessorErrors(self.events)
         self._operations: Operations | None = None
@@ -295,11 +297,11 @@ class UavCore:
 
     # -- frames ----------------------------------------------------------------------------------
 
-    def add_frame_listener(self, listener: Callable[[ProcessedFrame], None]) -> None:
-        """Call ``listener(result)`` on the loop for every processed frame, after the autonomy decision."""
+    def add_frame_listener(self, listener: Callable[[HandledFrame], None]) -> None:
+        """Call ``listener(handled)`` on the loop for every processed frame, once the gate and the relays acted."""
         self._frame_listeners.append(listener)
 
-    def remove_frame_listener(self, listener: Callable[[ProcessedFrame], None]) -> None:
+    def remove_frame_listener(self, listener: Callable[[HandledFrame], None]) -> None:
         if listener in self._frame_listeners:
             self._frame_listeners.remove(listener)
 
@@ -317,13 +319,13 @@ class UavCore:
         if result.outcome.error:
             exception = shorten(last_line(result.outcome.error), 500)
             self._processor_errors.report(result.outcome.error, exception, result.frame.seq)
-        self.lock.steer(result)
+        result, lock = self.lock.steer(result), self.lock.held
         if result.frame.image.flags.writeable:
             draw_tracks(result.frame.image, result.outcome.detections, self.lock.status(), self.lock.vector)
-        self.gate.consider(result)
-        consider_all(self.relays, result)
+        decision = self.gate.consider(result)
+        self.last = handled = HandledFrame(result, decision, consider_all(self.relays, result), lock)
         for listener in tuple(self._frame_listeners):
-            listener(result)
+            listener(handled)
 
     def newest_frame_age(self) -> float | None:
         """Seconds since the newest frame's capture (on the gate's clock), None before the first."""
@@ -345,4 +347,4 @@ class UavCore:
     def status(self) -> CoreStatus:
         """Everything an interface shows, as one immutable snapshot."""
         assert self.parts is not None, "a core has a status once started"
-        return core_status(self.parts, self.recorder, self.processor_error, self.startup_s)
+        return core_status(self.parts, self.last, self.recorder, self.processor_error, self.startup_s)

@@ -24,7 +24,7 @@ if TYPE_CHECKING:
     from uav_tui.flight.telemetry import TelemetryManager
     from uav_tui.flight.track_lock import TrackLock
     from uav_tui.recording import Recorder
-    from uav_tui.relays.contract import OutputRelay
+    from uav_tui.relays.contract import HandledFrame, OutputRelay
     from uav_tui.relays.precland import LandingTargetFeed
     from uav_tui.start_parts import Parts
 
@@ -161,14 +161,14 @@ class CoreStatus:
         return data
 
 
-def core_status(parts: Parts, recorder: Recorder | None, processor_error: str | None,
+def core_status(parts: Parts, last: HandledFrame | None, recorder: Recorder | None, processor_error: str | None,
                 startup_s: float | None) -> CoreStatus:
-    """Everything an interface shows of a running core (its ``parts``, its ``recorder``, the last line of the newest
-    processor error, the seconds to the first processed frame), as one immutable snapshot: each part of it read by a
-    section given the few parts it shows."""
+    """Everything an interface shows of a running core (its ``parts``, its newest handled frame, its ``recorder``,
+    the last line of the newest processor error, the seconds to the first processed frame), as one immutable
+    snapshot: each part of it read by a section given the few parts it shows."""
     return CoreStatus(
         **_processor(parts.worker, parts.camera, parts.config.source),
-        **_seen(parts.worker, parts.camera, parts.telemetry),
+        **_seen(last, parts.camera, parts.telemetry),
         **_vehicle(parts.controller, parts.telemetry, parts.link, parts.config.fc),
         **_autonomy(parts.gate, parts.lock),
         **_outputs(parts.relays, parts.landing),
@@ -189,9 +189,9 @@ def _processor(worker: ProcessorHost, camera: ActiveCamera, configured: str) -> 
             "processor_state": worker.state()}
 
 
-def _seen(worker: ProcessorHost, camera: ActiveCamera, telemetry: TelemetryManager) -> dict[str, Any]:
-    """The newest processed frame's ``box`` and detections, each located on the ground."""
-    last = worker.last
+def _seen(last: HandledFrame | None, camera: ActiveCamera, telemetry: TelemetryManager) -> dict[str, Any]:
+    """The newest processed frame's ``box`` (the lock's, while the operator's lock steers) and detections, each
+    located on the ground."""
     box = last.outcome.box if last is not None else None
     found = (last.outcome.detections or ()) if last is not None else ()
     # where they were seen: with the telemetry at that frame's capture, not the newest (~20 us a box)

@@ -124,7 +124,7 @@ autonomy, which is not what those tests are about (``test_safety`` tests the sta
 
 def what_happened(core: UavCore) -> str:
     """For a failure message: the last frame's box and decisions, the gimbal setpoints and the recent warnings."""
-    last, relay = core.worker.last, gimbal_relay(core.relays)
+    last, relay = core.last, gimbal_relay(core.relays)
     gimbal = "" if relay is None else f"gimbal setpoints sent {relay.sent}, failed {relay.failed}; "
     frame = "no frame processed" if last is None else (
         f"last frame: box {last.outcome.box}, vector {last.decision!r}, gimbal {last.gimbal!r}")

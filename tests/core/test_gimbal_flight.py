@@ -142,7 +142,7 @@ async def test_nothing_is_sent_while_autonomy_is_off(tmp_path: Path, sim_vehicle
     (tmp_path / "pointer.py").write_text(POINTING_PROCESSOR)
     async with flying_core(tmp_path, processor=f"{tmp_path / 'pointer.py'}:Pointer", vehicle=sim_vehicle) as core:
         await core.execute("f 1")
-        await wait_until(lambda: core.worker.last is not None and core.worker.last.gimbal, 5, "a frame judged")
+        await wait_until(lambda: core.last is not None and core.last.gimbal, 5, "a frame judged")
         await asyncio.sleep(0.5)
-        assert core.worker.last.gimbal == "not sent: autonomy off"
+        assert core.last.gimbal == "not sent: autonomy off"
         assert not core.truth.latest()["gimbal_controlled"] and gimbal_relay(core.relays).sent == 0

@@ -60,14 +60,12 @@ def test_each_decision_has_its_verdict_and_reads_as_before() -> None:
     decided = []
     nan = float("nan")
     for vector, error in ((None, None), (None, "ValueError"), ((nan, 0.0, 1.0), None), ((0.5, 0.0, 1.0), None)):
-        result = _result(vector, error)
-        gate.consider(result)
-        decided.append((result.decision.verdict, str(result.decision)))
+        decision = gate.consider(_result(vector, error))
+        decided.append((decision.verdict, str(decision)))
     gate.enable("test")
     for vector in ((0.5, 0.0, 1.0), (3.0, 0.0, 1.0)):
-        result = _result(vector)
-        gate.consider(result)
-        decided.append((result.decision.verdict, str(result.decision)))
+        decision = gate.consider(_result(vector))
+        decided.append((decision.verdict, str(decision)))
     assert decided[:2] == [(Verdict.NO_VECTOR, "no vector"), (Verdict.ERROR, "error")]
     assert decided[2][0] is Verdict.REJECTED and decided[2][1].startswith("rejected: non-finite")
     assert decided[3:5] == [(Verdict.NOT_EXECUTED, "not executed: autonomy off"), (Verdict.EXECUTED, "executed")]

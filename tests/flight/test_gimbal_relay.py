@@ -72,10 +72,8 @@ async def test_sent_only_while_autonomy_is_on_the_frame_fresh_and_the_link_alive
         vehicle.heartbeat_s = heartbeat
         if on and not gate.enabled:
             gate.enable("test")
-        result = _result(TURN, age)
-        relay.consider(result)
+        judged.append(relay.consider(_result(TURN, age)))
         await relay.sender.settle()
-        judged.append(result.gimbal)
     assert judged == ["not sent: autonomy off", "sent", "not sent: frame 0.60 s old",
                       "not sent: link lost (heartbeat 2.0 s old)"]
     assert vehicle.calls == [("rate", "-5", "10")] and relay.sent == 1
@@ -85,17 +83,13 @@ async def test_one_send_at_a_time_and_a_stop_when_the_pointing_stops() -> None:
     vehicle = _Gimbal(delay_s=0.05)
     relay, gate = _relay(vehicle)
     gate.enable("test")
-    first, second = _result(TURN), _result(TURN)
-    relay.consider(first)
-    relay.consider(second)
-    assert (first.gimbal, second.gimbal) == ("sent", "not sent: the previous one is still being sent")
+    first, second = relay.consider(_result(TURN)), relay.consider(_result(TURN))
+    assert (first, second) == ("sent", "not sent: the previous one is still being sent")
     await relay.sender.settle()
-    lost = _result(None)
-    relay.consider(lost)  # the target is lost: a gimbal turning at a rate is stopped
+    lost = relay.consider(_result(None))  # the target is lost: a gimbal turning at a rate is stopped
     await relay.sender.settle()
-    again = _result(None)
-    relay.consider(again)  # and told once
-    assert (lost.gimbal, again.gimbal) == ("stopped (no pointing)", "")
+    again = relay.consider(_result(None))  # and told once
+    assert (lost, again) == ("stopped (no pointing)", "")
     assert vehicle.calls == [("rate", "-5", "10"), ("rate", "0", "0")]
 
 
@@ -126,12 +120,8 @@ async def test_a_stop_before_the_send_starts_drops_it() -> None:
 
 
 async def test_without_gimbal_control_the_frame_says_so() -> None:
-    result = _result(TURN)
-    say_no_gimbal(result)
-    assert result.gimbal == "not sent: the flight controller has no gimbal control"
-    nothing = _result(None)
-    say_no_gimbal(nothing)
-    assert nothing.gimbal == ""
+    assert say_no_gimbal(_result(TURN)) == "not sent: the flight controller has no gimbal control"
+    assert say_no_gimbal(_result(None)) == ""
 
 
 @dataclass
@@ -148,14 +138,13 @@ async def test_a_pointing_changed_after_it_was_built_is_refused_and_a_run_stops_
     vehicle = _Gimbal()
     relay, gate = _relay(vehicle)
     gate.enable("test")
-    relay.consider(result := _result(TURN))
+    relay.consider(_result(TURN))
     await relay.sender.settle()
     judged = []
     for _ in range(REFUSALS_TO_STOP + 1):
         pointing = GimbalPointing.angles(-10.0, 0.0)
         object.__setattr__(pointing, "pitch", 1e30)
-        relay.consider(result := _result(pointing))
-        judged.append(result.gimbal)
+        judged.append(relay.consider(_result(pointing)))
     await asyncio.sleep(0)
     assert relay._release is not None
     await relay._release
@@ -164,13 +153,12 @@ async def test_a_pointing_changed_after_it_was_built_is_refused_and_a_run_stops_
     messages = [e.message for e in relay.events.recent]
     assert any(m.startswith(f"gimbal output stopped: {REFUSALS_TO_STOP} gimbal pointings in a row refused") for m in
                messages)
-    relay.consider(result := _result(TURN))  # a true one again: still stopped until autonomy is next turned on
-    assert result.gimbal.startswith("not sent: stopped until autonomy is next turned on")
+    # a true one again: still stopped until autonomy is next turned on
+    assert relay.consider(_result(TURN)).startswith("not sent: stopped until autonomy is next turned on")
     await gate.disable("test", "operator")
     await relay.close()
     gate.enable("test")
-    relay.consider(result := _result(TURN))
-    assert result.gimbal == "sent"
+    assert relay.consider(_result(TURN)) == "sent"
 
 
 async def test_a_send_that_raises_is_an_event_never_a_lost_task_exception(caplog: pytest.LogCaptureFixture) -> None:
@@ -192,8 +180,7 @@ async def test_a_vehicle_without_a_gimbal_is_said_in_every_later_frame() -> None
     gate.enable("test")
     judged = []
     for _ in range(3):
-        relay.consider(result := _result(TURN))
+        judged.append(relay.consider(_result(TURN)))
         await relay.sender.settle()
-        judged.append(result.gimbal)
     assert judged == ["sent"] + ["not sent: gimbal: the vehicle has no gimbal MAVSDK can find"] * 2
     assert relay.failed == 1

@@ -59,9 +59,8 @@ def _too_far(seq: int) -> LandingTarget:
 
 def test_a_refused_target_is_not_seen_and_precland_says_why() -> None:
     core = _Core()
-    core.relay().consider(result := _frame(1, _too_far(1)))
-    assert result.landing == "refused: distance 5000.0 m puts the pad 5000.0 m below the camera, but the vehicle is " \
-                             "10.0 m above home"
+    assert core.relay().consider(_frame(1, _too_far(1))) == "refused: distance 5000.0 m puts the pad 5000.0 m " \
+                                                          "below the camera, but the vehicle is 10.0 m above home"
     assert core.landing.last_seen_ns is None and core.landing.refusals.refused == 1
     with pytest.raises(UavError, match=r"has not seen a landing target yet \(refused: distance 5000.0 m"):
         core.landing.check_fresh()
@@ -95,6 +94,6 @@ def test_a_run_of_refusals_turns_precland_off_and_says_the_autopilot_lands_on_it
 def test_a_vehicle_position_of_inf_reaches_no_consumer() -> None:
     core = _Core()
     core.telemetry.apply({"rel_alt_m": math.inf, "north_m": math.inf, "t_mono_ns": 2})
-    core.relay().consider(result := _frame(1, LandingTarget((0.0, 0.0, 1.0), 10.0, 1)))
-    assert result.landing == "refused: no height at the capture to check the distance against"
+    judged = core.relay().consider(_frame(1, LandingTarget((0.0, 0.0, 1.0), 10.0, 1)))
+    assert judged == "refused: no height at the capture to check the distance against"
     assert core.telemetry.snapshot().north_m is None

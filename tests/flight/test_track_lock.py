@@ -3,6 +3,7 @@ new number by its look, and its releases. Flown on the built-in vehicle: tests/f
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import cv2
@@ -53,17 +54,15 @@ def frame(n: int, cars: dict[int, tuple[tuple[int, int, int, int], tuple[int, in
 def locked(lost_after_s: float = 1.0) -> tuple[TrackLock, EventLog]:
     events = EventLog()
     lock = TrackLock(events, lambda: lost_after_s)
-    first = frame(0, {3: ((200, 60, 40, 30), RED), 5: ((40, 150, 30, 40), BLUE)})
-    lock.steer(first)
+    lock.steer(frame(0, {3: ((200, 60, 40, 30), RED), 5: ((40, 150, 30, 40), BLUE)}))
     assert lock.lock(3, None) == "locked on track #3 (car)"
     return lock, events
 
 
 def test_the_locked_track_makes_the_vector_and_the_box_instead_of_the_processor() -> None:
     lock, _ = locked()
-    seen = [frame(n, {3: ((200 + min(n, 11), 60, 40, 30), RED), 5: ((40, 150, 30, 40), BLUE)}) for n in range(1, 25)]
-    for result in seen:
-        lock.steer(result)
+    seen = [lock.steer(frame(n, {3: ((200 + min(n, 11), 60, 40, 30), RED), 5: ((40, 150, 30, 40), BLUE)}))
+            for n in range(1, 25)]
     last = seen[-1]
     assert last.outcome.box == (211, 60, 40, 30) and lock.state is LockState.LOCKED
     # The trackers' steering towards the box (right of and above the centre of a down camera), eased in.
@@ -78,8 +77,7 @@ def test_a_detector_missing_a_frame_neither_says_the_lock_lost_nor_eases_in_agai
     lock, events = locked()
     vectors = []
     for n in range(1, 13):  # the car missed on every third frame
-        result = frame(n, {} if n % 3 == 0 else {3: ((250, 20, 40, 30), RED)})
-        lock.steer(result)
+        result = lock.steer(frame(n, {} if n % 3 == 0 else {3: ((250, 20, 40, 30), RED)}))
         vectors.append(result.outcome.vector)
     assert [v is None for v in vectors] == [n % 3 == 0 for n in range(1, 13)]
     speeds = [math.hypot(v[0], v[1]) for v in vectors if v is not None]
@@ -95,8 +93,7 @@ def test_a_forward_camera_steers_to_keep_the_lock_time_size() -> None:
     lock.steer(frame(0, {1: ((140, 105, 40, 30), RED)}))
     lock.lock(1, CameraModel.from_hfov(320, 240, 60.0, Mount(tilt_deg=20.0)))
     for n in range(1, 30):  # it moves away: smaller
-        result = frame(n, {1: ((150, 110, 20, 15), RED)})
-        lock.steer(result)
+        result = lock.steer(frame(n, {1: ((150, 110, 20, 15), RED)}))
     assert result.outcome.vector[0] == pytest.approx(1.0)  # forward at max speed (2 x half the height lost)
 
 
@@ -111,15 +108,14 @@ def test_a_camera_on_the_gimbal_turns_the_gimbal_towards_the_lock_instead_of_fly
     camera = CameraModel.from_hfov(320, 240, 60.0, Mount(0.0, gimbal=True))
     lock.steer(frame(0, {1: ((140, 105, 40, 30), RED)}))
     lock.lock(1, camera)
-    result = frame(1, {1: ((240, 45, 40, 30), RED)})  # right of and above the centre
-    result.outcome = msgspec.structs.replace(result.outcome, outputs=FrameOutputs(gimbal=GimbalPointing.rates(0, -9)))
-    lock.steer(result)
+    given = frame(1, {1: ((240, 45, 40, 30), RED)})  # right of and above the centre
+    pointed = msgspec.structs.replace(given.outcome, outputs=FrameOutputs(gimbal=GimbalPointing.rates(0, -9)))
+    result = lock.steer(dataclasses.replace(given, outcome=pointed))
     assert result.outcome.vector is None and lock.vector is None and result.outcome.box == (240, 45, 40, 30)
     expected = GimbalSteering().rates((240, 45, 40, 30), (320, 240), camera, -30.0)
     assert result.outcome.outputs.gimbal == expected and expected.pitch > 0 and expected.yaw > 0  # up and right
     assert asked == [result.frame.t_mono_ns]  # the gimbal's pitch at the frame's capture
-    hidden = frame(2, {})
-    lock.steer(hidden)
+    hidden = lock.steer(frame(2, {}))
     assert hidden.outcome.outputs.gimbal is None and hidden.outcome.vector is None  # the relay stops the gimbal
 
 
@@ -136,14 +132,12 @@ def test_a_lost_lock_takes_back_a_new_track_that_looks_alike_not_another_car() -
     lock, events = locked()
     for n in range(1, 4):
         lock.steer(frame(n, {3: ((200, 60, 40, 30), RED), 5: ((40, 150, 30, 40), BLUE)}))
-    hidden = frame(4, {5: ((40, 150, 30, 40), BLUE)})
-    lock.steer(hidden)
+    hidden = lock.steer(frame(4, {5: ((40, 150, 30, 40), BLUE)}))
     assert lock.state is LockState.LOST and hidden.outcome.vector is None and hidden.outcome.box is None
-    blue = frame(5, {5: ((40, 150, 30, 40), BLUE), 8: ((100, 100, 30, 40), BLUE)})  # a new blue car: not it
-    lock.steer(blue)
+    blue = lock.steer(frame(5, {5: ((40, 150, 30, 40), BLUE), 8: ((100, 100, 30, 40), BLUE)}))  # a new blue car
     assert lock.state is LockState.LOST and blue.outcome.vector is None
-    back = frame(6, {5: ((40, 150, 30, 40), BLUE), 8: ((100, 100, 30, 40), BLUE), 9: ((230, 70, 44, 33), DIM_RED)})
-    lock.steer(back)
+    back = lock.steer(frame(6, {5: ((40, 150, 30, 40), BLUE), 8: ((100, 100, 30, 40), BLUE),
+                                9: ((230, 70, 44, 33), DIM_RED)}))
     assert lock.state is LockState.LOCKED and lock.track_id == 9 and back.outcome.box == (230, 70, 44, 33)
     assert back.outcome.vector is not None and lock.status().renumbered == 1
     assert any("lock: #3 car is now #9" in e.message for e in events.recent)
@@ -165,8 +159,7 @@ def test_a_lock_lost_longer_than_lost_after_s_is_released() -> None:
     lock.steer(frame(12, {}))
     assert lock.state is LockState.OFF and lock.track_id is None
     assert any("lock on #3 car released: not seen for 1 s (lost_after_s)" in e.message for e in events.recent)
-    after = frame(13, {3: ((200, 60, 40, 30), RED)})
-    lock.steer(after)
+    after = lock.steer(frame(13, {3: ((200, 60, 40, 30), RED)}))
     assert after.outcome.vector == (0.3, 0.0, 1.0) and after.outcome.box is None  # the processor's own again
 
 
@@ -202,8 +195,7 @@ def test_looks_tell_the_same_car_from_another() -> None:
 
 def test_the_overlay_numbers_each_track_and_marks_the_lock() -> None:
     lock, _ = locked()
-    result = frame(1, {3: ((200, 60, 40, 30), RED), 5: ((40, 150, 30, 40), BLUE)})
-    lock.steer(result)
+    result = lock.steer(frame(1, {3: ((200, 60, 40, 30), RED), 5: ((40, 150, 30, 40), BLUE)}))
     image = result.frame.image
     draw_tracks(image, result.outcome.detections, lock.status(), lock.vector)
     below_blue = image[190:205, 40:70]
@@ -219,9 +211,8 @@ def test_the_shipped_yolos_frame_shows_the_numbers_the_platform_gave() -> None:
     for n in range(3):
         image = np.roll(photo, 4 * n, axis=1)
         outcome = call_frame(detector, image, vector=False, tracks=tracks, seen_ns=n * 100_000_000)
-        result = ProcessedFrame(Frame(image, n + 1, n * 100_000_000, 0),
-                                FrameOutcome(0, 0, detections=outcome.detections))
-        lock.steer(result)
+        result = lock.steer(ProcessedFrame(Frame(image, n + 1, n * 100_000_000, 0),
+                                           FrameOutcome(0, 0, detections=outcome.detections)))
         before = image.copy()
         draw_tracks(image, result.outcome.detections, lock.status(), lock.vector)
     person = next(found for found in result.outcome.detections or () if found.label == "person")
@@ -235,8 +226,7 @@ def test_a_lost_lock_compares_only_the_new_tracks_nearest_where_it_went() -> Non
     lock, _ = locked()
     lock.steer(frame(1, {3: ((200, 60, 40, 30), RED)}))
     near_blues = {10 + i: ((150 + 30 * (i % 2), 100 + 45 * (i // 2), 25, 35), BLUE) for i in range(NEAREST)}
-    far_red = frame(2, {**near_blues, 20: ((10, 200, 40, 30), RED)})  # alike, but the farthest of five
-    lock.steer(far_red)
+    lock.steer(frame(2, {**near_blues, 20: ((10, 200, 40, 30), RED)}))  # alike, but the farthest of five
     assert lock.state is LockState.LOST
     lock.steer(frame(3, {**near_blues, 21: ((205, 62, 40, 30), RED)}))  # alike and where it went
     assert lock.state is LockState.LOCKED and lock.track_id == 21

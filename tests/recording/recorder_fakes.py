@@ -16,6 +16,7 @@ from uav_tui.flight.telemetry import TelemetryManager
 from uav_tui.hosting.host import ProcessedFrame
 from uav_tui.hosting.wire import FrameOutcome
 from uav_tui.recording import Recorder
+from uav_tui.relays.contract import HandledFrame
 from uav_values.box import PixelBox
 from uav_values.camera import CameraModel
 from uav_values.detections import Detected
@@ -48,7 +49,7 @@ class FakeCore:
         self.telemetry = TelemetryManager(None)
         self.worker = _Worker()
         self.active_camera = ActiveCamera(CameraConfig(), self.events, lambda coro, name: None)
-        self._listeners: list[Callable[[ProcessedFrame], None]] = []
+        self._listeners: list[Callable[[HandledFrame], None]] = []
 
     @property
     def camera(self) -> CameraModel | None:
@@ -63,10 +64,10 @@ class FakeCore:
         recorder.attach(self.events, self.telemetry, self.worker, self.active_camera)  # type: ignore[arg-type]
         self.add_frame_listener(recorder.on_frame)
 
-    def add_frame_listener(self, listener: Callable[[ProcessedFrame], None]) -> None:
+    def add_frame_listener(self, listener: Callable[[HandledFrame], None]) -> None:
         self._listeners.append(listener)
 
-    def process(self, image, seq: int, processor: Callable[[Draft], None]) -> ProcessedFrame:
+    def process(self, image, seq: int, processor: Callable[[Draft], None]) -> HandledFrame:
         """Run ``processor(draft)`` as photo_processing would run, then deliver the frame with the draft's outcome."""
         frame = Frame(image, seq, time.monotonic_ns(), time.time_ns())
         draft = Draft(frame)
@@ -77,7 +78,7 @@ class FakeCore:
             self.worker.current, self.worker.busy_s = None, 0.0
         outcome = FrameOutcome(frame.t_mono_ns + 500_000, frame.t_mono_ns + 3_000_000, vector=draft.vector,
                                box=draft.box, detections=draft.detections, error=draft.error)
-        result = ProcessedFrame(frame, outcome, decision=draft.decision)
+        result = HandledFrame(ProcessedFrame(frame, outcome), draft.decision)
         for listener in self._listeners:
             listener(result)
         return result

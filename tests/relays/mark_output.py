@@ -54,15 +54,14 @@ class MarkRelay:
         self.closed = False
         parts.gate.stop_listeners.append(self.stop)
 
-    def consider(self, result: ProcessedFrame) -> None:
+    def consider(self, result: ProcessedFrame) -> str:
         mark = result.outcome.outputs.get(self.field)
         if mark is None:
-            return
+            return ""
         if not self.gate.enabled:
-            result.relayed[self.field] = "not sent: autonomy off"
-            return
+            return "not sent: autonomy off"
         self.marked.append(mark)
-        result.relayed[self.field] = "sent"
+        return "sent"
 
     def stop(self, reason: str) -> None:
         self.stops.append(reason)
@@ -75,10 +74,9 @@ class MarkRelay:
         return {"sent": len(self.marked)}
 
 
-def say_unmarked(result: ProcessedFrame) -> None:
+def say_unmarked(result: ProcessedFrame) -> str:
     """The stand-in's words on a frame with a mark, for a controller without :class:`Beats`."""
-    if result.outcome.outputs.get("mark") is not None:
-        result.relayed["mark"] = "not sent: the flight controller has no heartbeat"
+    return "" if result.outcome.outputs.get("mark") is None else "not sent: the flight controller has no heartbeat"
 
 
 ENTRY = RelayEntry("mark", Beats, MarkRelay, lambda parts: Unserved("mark", say_unmarked))

@@ -20,6 +20,7 @@ from tests.relays.mark_output import ENTRY, Mark, MarkRelay, register
 from uav_tui.core import UavCore
 from uav_tui.hosting.host import ProcessedFrame
 from uav_tui.hosting.wire import FrameOutcome
+from uav_tui.relays.registry import consider_all
 
 MARKING_PROCESSOR = '''
 from tests.relays.mark_output import Mark
@@ -52,8 +53,8 @@ async def test_a_registered_output_is_relayed_said_and_counted_through_a_real_co
         relay = core.relays["mark"]
         assert isinstance(relay, MarkRelay)  # the simulated controller has the capability
         assert "getMark" in core.status().capabilities
-        await wait_until(lambda: core.worker is not None and core.worker.last is not None
-                         and core.worker.last.relayed.get("mark") == "not sent: autonomy off", 20, "a mark judged")
+        await wait_until(lambda: core.last is not None and core.last.relayed.get("mark") == "not sent: autonomy off",
+                         20, "a mark judged")
         assert relay.marked == []
         await core.execute("autonomy on")
         await wait_until(lambda: core.status().relayed["mark"]["sent"] >= 5, 20, "marks sent")
@@ -72,8 +73,8 @@ def test_without_the_capability_the_entry_s_stand_in_says_so() -> None:
     stand_in = ENTRY.absent(None)  # type: ignore[arg-type]  # the stand-in reads nothing of the core
     frame = Frame(np.zeros((4, 4, 3), np.uint8), 1, time.monotonic_ns(), time.time_ns())
     result = ProcessedFrame(frame, FrameOutcome(0, 0, outputs=FrameOutputs(more={"mark": Mark(2, 2)})))
-    stand_in.consider(result)
-    assert result.relayed == {"mark": "not sent: the flight controller has no heartbeat"} and stand_in.counts == {}
+    assert consider_all({"mark": stand_in}, result) == {"mark": "not sent: the flight controller has no heartbeat"}
+    assert stand_in.counts == {}
 
 
 def test_a_registered_output_never_shadows_a_built_in_one() -> None:

@@ -10,14 +10,17 @@ import pytest
 from aiortc.mediastreams import MediaStreamError
 
 from sources.buffer import Frame
+from uav_tui.flight.autonomy import NO_DECISION
 from uav_tui.hosting.host import ProcessedFrame
 from uav_tui.hosting.wire import FrameOutcome
+from uav_tui.relays.contract import HandledFrame
 from uav_tui.web.tracks import ProcessedVideoTrack, VideoHub, to_video_frame
 
 
-def processed(seq: int, width: int = 640, height: int = 480) -> ProcessedFrame:
+def processed(seq: int, width: int = 640, height: int = 480) -> HandledFrame:
     image = np.full((height, width, 3), seq % 256, dtype=np.uint8)
-    return ProcessedFrame(Frame(image, seq, time.monotonic_ns(), time.time_ns()), FrameOutcome(0, 0))
+    return HandledFrame(ProcessedFrame(Frame(image, seq, time.monotonic_ns(), time.time_ns()), FrameOutcome(0, 0)),
+                        NO_DECISION)
 
 
 @pytest.mark.parametrize(("size", "width", "expected"), [

@@ -17,7 +17,7 @@ import numpy as np
 from uav_tui.config import load_config
 from uav_tui.core import UavCore
 from uav_tui.errors import UavError
-from uav_tui.hosting.host import ProcessedFrame
+from uav_tui.relays.contract import HandledFrame
 from uav_values.box import PixelBox
 
 WARM_UP_S = 3.5
@@ -68,7 +68,7 @@ async def platform_run(source: str, processor: str, isolation: str, seconds: flo
     boxes: list[PixelBox | None] = []
     selected: list[int] = []
 
-    def record(r: ProcessedFrame) -> None:
+    def record(r: HandledFrame) -> None:
         done = r.outcome
         results.append((r.frame.seq, r.frame.t_mono_ns, done.t_start_ns, done.t_vector_ns or done.t_end_ns))
         boxes.append(r.outcome.box)

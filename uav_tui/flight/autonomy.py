@@ -213,15 +213,14 @@ class AutonomyGate:
             except KNOWN_ERRORS as exc:
                 self.events.emit("error", "autonomy", f"hold after stopping autonomy failed: {exc}", origin)
 
-    def consider(self, result: ProcessedFrame) -> None:
-        """Decide on ``result``'s vector (on the loop, right after processing); sets ``result.decision``."""
+    def consider(self, result: ProcessedFrame) -> Decision:
+        """Decide on ``result``'s vector (on the loop, right after processing); returns the decision."""
         if self.enabled:
             self.envelope.saw(result.outcome.box is not None or result.outcome.vector is not None,
                               self.telemetry.snapshot())
         if result.outcome.vector is None:
-            result.decision = Decision(Verdict.ERROR, "error") if result.outcome.error else Decision(Verdict.NO_VECTOR,
-                                                                                             "no vector")
-            return
+            return Decision(Verdict.ERROR, "error") if result.outcome.error else Decision(Verdict.NO_VECTOR,
+                                                                                   "no vector")
         vector, note = check_vector(result.outcome.vector, self.safety)
         key, why_not = note, "" if vector is None else self._why_not(result)
         if vector is not None and not why_not:  # a vector that would fly: within the envelope?
@@ -230,17 +229,17 @@ class AutonomyGate:
             note = confined.note if vector is None else "; ".join(filter(None, (note, confined.note)))
         if vector is None:
             self.rejected += 1
-            result.decision = self.last_decision = Decision(Verdict.REJECTED, note)
+            self.last_decision = Decision(Verdict.REJECTED, note)
             self.last_vector = None  # no stale vector beside this decision
             self._rejections.report(key, f"frame {result.frame.seq}: vector {note}")
-            return
+            return self.last_decision
         self.last_vector = vector
-        result.decision = self.last_decision = (
-            Decision(Verdict.NOT_EXECUTED, why_not) if why_not else
-            Decision(Verdict.EXECUTED, "executed" + (f" ({note})" if note else "")))
+        self.last_decision = (Decision(Verdict.NOT_EXECUTED, why_not) if why_not else
+                              Decision(Verdict.EXECUTED, "executed" + (f" ({note})" if note else "")))
         if self.last_decision.verdict is Verdict.EXECUTED:
             self._pending = (vector, result)
             self._wake.set()
+        return self.last_decision
 
     def _why_not(self, result: ProcessedFrame) -> str:
         if not self.enabled:

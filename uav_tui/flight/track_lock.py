@@ -181,17 +181,16 @@ class TrackLock:
         self.state, self.track_id, self._look = LockState.OFF, None, None
         return True
 
-    def steer(self, result: ProcessedFrame) -> None:
-        """Note ``result``'s detections; while locked, its outcome becomes a copy whose vector (the camera on the
+    def steer(self, result: ProcessedFrame) -> ProcessedFrame:
+        """Note ``result``'s detections; while locked, return a copy whose outcome's vector (the camera on the
         gimbal: its gimbal pointing, and no vector) and box are the locked track's (None each while it is not seen;
-        the call's own record stays as the processor made it) and its ``lock`` the lock's status after it (what
-        frames.csv records)."""
+        ``result`` stays as the processor made it), else ``result``; :attr:`held` is then the lock after it."""
         outcome = result.outcome
         self.newest = outcome.detections or ()
         self._now_s = result.frame.t_mono_ns / 1e9
         if self.state is LockState.OFF:
             self.vector = None
-            return
+            return result
         image = result.frame.image
         found = next((d for d in self.newest if d.track_id == self.track_id), None) or self._taken_back(image)
         if found is not None:
@@ -204,20 +203,21 @@ class TrackLock:
             else:
                 self.vector = None
                 pointing = self._gimbal.rates(found.box, size, self._camera, self.gimbal_pitch(result.frame.t_mono_ns))
-            result.outcome = self._aimed(outcome, found.box, pointing)
-            result.lock = self.status()
-            return
+            return dataclasses.replace(result, outcome=self._aimed(outcome, found.box, pointing))
         self.state, lost_s = LockState.LOST, self._now_s - self._seen_s
         self.vector = None if lost_s < BRIEF_LOSS_S or self._gimbal is not None else self._ramp(None, self._now_s)
-        result.outcome = self._aimed(outcome, None, None)
         if lost_s >= BRIEF_LOSS_S and not self._said_lost:
             self._said_lost = True
             self.events.emit("warning", "autonomy", f"lock: #{self.track_id} {self.label} lost")
         limit = self.lost_after_s()
         if limit and lost_s > limit:
             self.release(f"not seen for {limit:g} s (lost_after_s)")
-        else:
-            result.lock = self.status()
+        return dataclasses.replace(result, outcome=self._aimed(outcome, None, None))
+
+    @property
+    def held(self) -> LockStatus | None:
+        """The lock's status while it is on (what frames.csv records of the newest frame), else None."""
+        return None if self.state is LockState.OFF else self.status()
 
     def _aimed(self, outcome: FrameOutcome, box: PixelBox | None, pointing: GimbalPointing | None) -> FrameOutcome:
         """A copy of ``outcome`` with the lock's box, its vector and (the camera on the gimbal) its pointing."""

@@ -4,7 +4,7 @@ operator call's answer, the host's state."""
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from enum import StrEnum
 from typing import TYPE_CHECKING, Any, Protocol
 
@@ -17,32 +17,21 @@ if TYPE_CHECKING:
     from processors.base import ProcessorInfo
     from sources.buffer import FrameBuffer
     from uav_tui.flight.telemetry import TelemetryManager
-    from uav_tui.flight.track_lock import LockStatus
     from uav_tui.stats import PipelineStats, RollingStats
     from uav_values.camera import CameraModel
 
 
-@dataclass(slots=True)
+@dataclass(frozen=True, slots=True)
 class ProcessedFrame:
-    """One frame's trip through the processor: the frame, its :class:`~uav_tui.hosting.wire.FrameOutcome` as the
+    """One frame's trip through the processor: the frame and its :class:`~uav_tui.hosting.wire.FrameOutcome` as the
     call made it (frozen: nothing after the call changes it; a replay's stage clock puts a re-timed copy here, the
-    operator's lock on a track a copy with the track's box and vector), and what the platform did with it (set on
-    the loop)."""
+    operator's lock on a track a copy with the track's box and vector). What the platform did with it is the core's
+    :class:`~uav_tui.relays.contract.HandledFrame`."""
 
     frame: Frame
     """The frame as captured; the processor may have drawn its overlay on ``frame.image``."""
     outcome: FrameOutcome
     """What the processor did with it: stage times (monotonic ns), vector, outputs, box, detections, error."""
-    decision: str = ""
-    """What the autonomy gate did with the vector: ``executed`` or why not."""
-    landing: str = ""
-    """What the platform did with the landing target: ``sent`` or why not ("" without one)."""
-    gimbal: str = ""
-    """What the platform did with the gimbal pointing: ``sent`` or why not ("" without one)."""
-    relayed: dict[str, str] = field(default_factory=dict)
-    """What the platform did with each further output (:data:`~uav_tui.relays.registry.REGISTRY`), by its field."""
-    lock: LockStatus | None = None
-    """The operator's lock on a track once it steered this frame (None: no lock)."""
 
 
 @dataclass(frozen=True, slots=True)

@@ -31,7 +31,7 @@ from sources.buffer import Frame
 from uav_tui.config import RecordingConfig
 from uav_tui.errors import UavError
 from uav_tui.events import Event, EventLog, Level
-from uav_tui.hosting.host import ProcessedFrame, ProcessorHost
+from uav_tui.hosting.host import ProcessorHost
 from uav_tui.recording.crash import CrashRecord
 from uav_tui.recording.reserve import DiskReserve, free_stale_reserves
 from uav_tui.recording.rows import (
@@ -60,6 +60,7 @@ if TYPE_CHECKING:
     from sources import CameraSource
     from uav_tui.camera.active import ActiveCamera
     from uav_tui.flight.telemetry import TelemetryManager
+    from uav_tui.relays.contract import HandledFrame
     from uav_values.camera import CameraModel
 
 logger = logging.getLogger(__name__)
@@ -121,7 +122,7 @@ class Recorder:
         self._ids = itertools.count(1)
         self._provisional = itertools.count(1)
         self._saves: dict[int, _Save] = {}
-        self._last: tuple[ProcessedFrame, int] | None = None
+        self._last: tuple[HandledFrame, int] | None = None
         self._watched: CameraSource | None = None
         aligner = FrameAligner(telemetry_expected=telemetry_expected, run_dir=run_dir, recorded_clock=replayed)
         tables = {**TABLES, INDEX_TABLE: INDEX_COLUMNS} if config.record_video else TABLES
@@ -228,7 +229,7 @@ class Recorder:
 
     # -- event loop ------------------------------------------------------------------------------
 
-    def on_frame(self, result: ProcessedFrame) -> None:
+    def on_frame(self, result: HandledFrame) -> None:
         """Queue the frame's row (and every Nth frame's image when ``record_every`` is set)."""
         frame_id = next(self._ids)
         name = image_name(frame_id)

@@ -15,13 +15,13 @@ import numpy as np
 from controllers.base import TELEMETRY_FIELDS, Telemetry
 from uav_tui.events import Event
 from uav_tui.flight.geolocate import locate_row
-from uav_tui.hosting.host import ProcessedFrame
 from uav_tui.output.text import last_line, shorten
 from uav_tui.recording.interpolate import FIELDS, KEEP_NS, TelemetryHistory
 from uav_tui.recording.located import DETECTION_COLUMNS, GEO_COLUMNS, detection_rows, geo_cells
 from uav_tui.recording.writer import Row
 
 if TYPE_CHECKING:
+    from uav_tui.relays.contract import HandledFrame
     from uav_values.camera import CameraModel
     from uav_values.detections import Detected
 
@@ -103,7 +103,11 @@ class MarkSaved:
     image: str
 
 
-def frame_record(result: ProcessedFrame, frame_id: int, image: str, extra_json: str,
+OWN_COLUMN_OUTPUTS = ("landing_target", "gimbal")
+"""The outputs whose relay's verdict has its own column (``landing``, ``gimbal``); the others' go in ``relayed``."""
+
+
+def frame_record(result: HandledFrame, frame_id: int, image: str, extra_json: str,
                  camera: CameraModel | None = None) -> FrameRecord:
     """The own columns of a processed frame (:data:`FRAME_OWN_COLUMNS` up to ``extra``) and its camera model."""
     frame = result.frame
@@ -111,9 +115,10 @@ def frame_record(result: ProcessedFrame, frame_id: int, image: str, extra_json: 
     error = shorten(last_line(result.outcome.error), MAX_ERROR_CHARS) if result.outcome.error else ""
     box = result.outcome.box or (None, None, None, None)
     lock = (None, "") if result.lock is None else (result.lock.track_id, result.lock.state.value)
+    further = {name: verdict for name, verdict in result.relayed.items() if name not in OWN_COLUMN_OUTPUTS}
     values = [frame_id, frame.seq, frame.t_wall_ns, frame.t_mono_ns, result.outcome.t_start_ns, result.outcome.t_end_ns,
               result.outcome.t_vector_ns or None, vx, vy, vt, *box, *lock, result.decision, result.landing,
-              result.gimbal, json.dumps(result.relayed) if result.relayed else "", error, bool(image), image,
+              result.gimbal, json.dumps(further) if further else "", error, bool(image), image,
               extra_json]
     return FrameRecord(values, frame.t_mono_ns, camera, result.outcome.detections or ())
 

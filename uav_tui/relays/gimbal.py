@@ -74,27 +74,27 @@ class GimbalRelay:
         """Counts stops: a send begun before a stop is dropped after it."""
         gate.stop_listeners.append(self.stop)
 
-    def consider(self, result: ProcessedFrame) -> None:
-        """Send ``result``'s pointing if the gate allows it now; ``result.gimbal`` says what was done."""
+    def consider(self, result: ProcessedFrame) -> str:
+        """Send ``result``'s pointing if the gate allows it now; returns what was done ("" without a pointing, the
+        gimbal left as it was)."""
         given = result.outcome.outputs.gimbal
         if given is None:
             if self.turning and not self._blocked(result):
                 self._send(STOP)
-                result.gimbal = "stopped (no pointing)"
-            return
+                return "stopped (no pointing)"
+            return ""
         pointing = judge_gimbal(given)
         if isinstance(pointing, str):
-            result.gimbal = f"refused: {pointing}"
             if self.refusals.refuse(pointing) and not self.halted and self.gate.enabled:
                 self.halted = f"{self.refusals.in_a_row} gimbal pointings in a row refused, the last: {pointing}"
                 self.events.emit("warning", "autonomy", f"gimbal output stopped: {self.halted}")
                 self._halt(self.halted)
-            return
+            return f"refused: {pointing}"
         self.refusals.accept()
-        why = self._blocked(result)
-        result.gimbal = f"not sent: {why}" if why else "sent"
-        if not why:
-            self._send(pointing)
+        if why := self._blocked(result):
+            return f"not sent: {why}"
+        self._send(pointing)
+        return "sent"
 
     def _blocked(self, result: ProcessedFrame) -> str:
         if not self.gate.enabled:
@@ -161,7 +161,6 @@ class GimbalRelay:
         await self.sender.close()
 
 
-def say_no_gimbal(result: ProcessedFrame) -> None:
-    """The flight controller has no gimbal control: ``result``'s pointing, if any, is said not sent."""
-    if result.outcome.outputs.gimbal is not None:
-        result.gimbal = "not sent: the flight controller has no gimbal control"
+def say_no_gimbal(result: ProcessedFrame) -> str:
+    """The flight controller has no gimbal control: ``result``'s pointing, if any, is not sent."""
+    return "" if result.outcome.outputs.gimbal is None else "not sent: the flight controller has no gimbal control"

@@ -58,8 +58,8 @@ class LandingTargetSender(OneAtATime):
 
 class LandingTargetRelay:
     """Judges each frame's landing target (:class:`~uav_tui.flight.plausibility.LandingCheck`), then sends it while
-    ``precland`` or autonomy is on, the frame fresh and the link alive; ``result.landing`` says what was done
-    (frames.csv). A run of refusals turns ``precland`` off (the ``landing_target``
+    ``precland`` or autonomy is on, the frame fresh and the link alive; :meth:`consider` returns what was done
+    (frames.csv's ``landing``). A run of refusals turns ``precland`` off (the ``landing_target``
     :class:`~uav_tui.relays.contract.OutputRelay`).
 
     Args:
@@ -79,35 +79,34 @@ class LandingTargetRelay:
         self.gate = gate
         self.sender = sender
 
-    def consider(self, result: ProcessedFrame) -> None:
+    def consider(self, result: ProcessedFrame) -> str:
+        """Judge ``result``'s landing target and send it if allowed now; returns what was done ("" without one)."""
         target = result.outcome.outputs.landing_target
         landing, camera = self.landing, self.camera.model
         if target is None:
             status = result.outcome.outputs.landing_status
             landing.why_none = f"the processor says: {status}" if status else ""  # not an older frame's reason
-            return
+            return ""
         if camera is None:
-            result.landing = "not sent: no camera model to check it against"
             landing.why_none = "no camera model to check the target against (set camera_hfov or a calibration file)"
-            return
+            return "not sent: no camera model to check it against"
         capture_ns = result.frame.t_mono_ns
         at_capture = self.telemetry.at(capture_ns)[0]
         judged = landing.check.judge(target, result.frame.seq, capture_ns, camera, at_capture)
         if judged.target is None:
-            result.landing = landing.why_none = f"refused: {judged.reason}"
+            landing.why_none = f"refused: {judged.reason}"
             if landing.refusals.refuse(judged.reason) and landing.engaged:
                 landing.end(f"{landing.refusals.in_a_row} landing targets in a row refused, the last: "
                             f"{judged.reason}; the autopilot's own landing goes on without them")
-            return
+            return landing.why_none
         landing.refusals.accept()
         landing.why_none = ""
         landing.seen(capture_ns)
-        why = self._blocked(capture_ns)
-        result.landing = f"not sent: {why}" if why else "sent"
-        if why:
-            return
+        if why := self._blocked(capture_ns):
+            return f"not sent: {why}"
         assert self.sender is not None
         self.sender.send(landing_fix(judged.target, capture_ns, camera, at_capture))
+        return "sent"
 
     def _blocked(self, capture_ns: int) -> str:
         """Why a landing target seen in the frame captured at ``capture_ns`` is not sent now, or ""."""

@@ -57,10 +57,11 @@ def build_relays(parts: RelayParts) -> dict[str, OutputRelay]:
             else entry.absent(parts) for entry in REGISTRY}
 
 
-def consider_all(relays: dict[str, OutputRelay], result: ProcessedFrame) -> None:
-    """Each relay acts on ``result``, in the registry's order."""
-    for relay in relays.values():
-        relay.consider(result)
+def consider_all(relays: dict[str, OutputRelay], result: ProcessedFrame) -> dict[str, str]:
+    """Each relay acts on ``result``, in the registry's order; what each did, by field (those that did nothing left
+    out)."""
+    relayed = {field: relay.consider(result) for field, relay in relays.items()}
+    return {field: verdict for field, verdict in relayed.items() if verdict}
 
 
 def gimbal_relay(relays: dict[str, OutputRelay]) -> GimbalRelay | None:

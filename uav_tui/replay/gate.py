@@ -15,7 +15,7 @@ from controllers.replay_timeline import ReplayTimeline
 from sources.buffer import Frame
 from uav_tui.config import SafetyConfig
 from uav_tui.events import EventLog
-from uav_tui.flight.autonomy import AutonomyGate
+from uav_tui.flight.autonomy import AutonomyGate, Decision
 from uav_tui.flight.telemetry import TelemetryManager
 from uav_tui.hosting.host import ProcessedFrame, StageClock
 from uav_tui.hosting.wire import FrameOutcome
@@ -98,10 +98,11 @@ class ReplayGate(AutonomyGate):
         index = bisect.bisect_right(self._times, t_mono_ns)
         return index > 0 and self.switches[index - 1][1]
 
-    def consider(self, result: ProcessedFrame) -> None:
+    def consider(self, result: ProcessedFrame) -> Decision:
         self.enabled = self.enabled_at(result.frame.t_mono_ns)
-        super().consider(result)
+        decision = super().consider(result)
         self._pending = None  # judged and recorded, never sent
+        return decision
 
     async def run(self) -> None:
         """Nothing to send: a replayed vector never leaves the platform."""

@@ -206,7 +206,7 @@ class UavApp(App[None]):
             self.notify(event.message, title=event.kind, severity=event.level, timeout=6, markup=False)
 
     def _newest_frame(self) -> tuple[int, np.ndarray, tuple[int, int, int, int] | None] | None:
-        last = self.core.worker.last if self.core.worker is not None else None
+        last = self.core.last
         return None if last is None else (last.frame.t_mono_ns, last.frame.image, last.outcome.box)
 
     # -- commands --------------------------------------------------------------------------------

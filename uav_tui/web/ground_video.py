@@ -31,7 +31,7 @@ from uav_tui.web.tracks import to_video_frame
 if TYPE_CHECKING:
     import numpy as np
 
-    from uav_tui.hosting.host import ProcessedFrame
+    from uav_tui.relays.contract import HandledFrame
     from uav_tui.web.rtp import Destination
     from uav_tui.web.view import FrameFeed
 
@@ -140,7 +140,7 @@ class GroundVideo:
         """Frames whose encoding or sending failed."""
         self.size: tuple[int, int] = (0, 0)
         """The stream's frame size (0, 0 before its first frame)."""
-        self._newest: ProcessedFrame | None = None
+        self._newest: HandledFrame | None = None
         self._fresh = threading.Event()
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
@@ -154,7 +154,7 @@ class GroundVideo:
         logger.info("GroundVideo(%s): %s, %d px, %g fps, %d kbit/s", self.target.uri, self.encoder, self.width,
                     self.fps, self.kbps)
 
-    def offer(self, result: ProcessedFrame) -> None:
+    def offer(self, result: HandledFrame) -> None:
         """Frame listener (on the loop): keep the newest processed frame."""
         self._newest = result
         self._fresh.set()
@@ -180,7 +180,7 @@ class GroundVideo:
     def _run(self) -> None:
         interval = 1.0 / self.fps
         output: Output | None = None
-        taken: ProcessedFrame | None = None
+        taken: HandledFrame | None = None
         next_slot = 0.0
         try:
             while True:

@@ -53,7 +53,7 @@ from uav_tui.web.view import ServedCore
 from uav_values.box import PixelBox
 
 if TYPE_CHECKING:
-    from uav_tui.hosting.host import ProcessedFrame
+    from uav_tui.relays.contract import HandledFrame
     from uav_tui.web.ground_video import GroundVideo
 
 logger = logging.getLogger(__name__)
@@ -182,7 +182,7 @@ class CameraTracking:
 
     # -- receiving -------------------------------------------------------------------------------
 
-    def _on_frame(self, result: ProcessedFrame) -> None:
+    def _on_frame(self, result: HandledFrame) -> None:
         """Frame listener (on the loop): keep what the processor reported for the newest frame."""
         height, width = result.frame.image.shape[:2]
         box = result.outcome.box

@@ -22,7 +22,7 @@ from aiortc.contrib.media import MediaRelay
 from aiortc.mediastreams import VIDEO_CLOCK_RATE, VIDEO_TIME_BASE, MediaStreamError
 from av import VideoFrame
 
-from uav_tui.hosting.host import ProcessedFrame
+from uav_tui.relays.contract import HandledFrame
 from uav_tui.web.view import FrameFeed
 
 logger = logging.getLogger(__name__)
@@ -56,14 +56,14 @@ class ProcessedVideoTrack(VideoStreamTrack):
         self.interval_s = 1.0 / fps
         self.sent = 0
         """Frames converted and handed to the relay."""
-        self._newest: ProcessedFrame | None = None
-        self._sent_last: ProcessedFrame | None = None
+        self._newest: HandledFrame | None = None
+        self._sent_last: HandledFrame | None = None
         self._fresh = asyncio.Event()
         self._started: float | None = None
         self._last_send = 0.0
         self._executor = ThreadPoolExecutor(max_workers=1, thread_name_prefix="web-video")
 
-    def offer(self, result: ProcessedFrame) -> None:
+    def offer(self, result: HandledFrame) -> None:
         """Frame listener (on the loop): remember the newest processed frame."""
         self._newest = result
         self._fresh.set()

@@ -11,7 +11,7 @@ if TYPE_CHECKING:
     from uav_tui.flight.commands import Command
     from uav_tui.flight.telemetry import TelemetryManager
     from uav_tui.flight.track_lock import TrackLock
-    from uav_tui.hosting.host import ProcessedFrame
+    from uav_tui.relays.contract import HandledFrame
     from uav_tui.status import CoreState, CoreStatus
     from uav_values.camera import CameraModel
 
@@ -19,9 +19,9 @@ if TYPE_CHECKING:
 class FrameFeed(Protocol):
     """Processed frames, delivered on the loop to each listener added."""
 
-    def add_frame_listener(self, listener: Callable[[ProcessedFrame], None]) -> None: ...
+    def add_frame_listener(self, listener: Callable[[HandledFrame], None]) -> None: ...
 
-    def remove_frame_listener(self, listener: Callable[[ProcessedFrame], None]) -> None: ...
+    def remove_frame_listener(self, listener: Callable[[HandledFrame], None]) -> None: ...
 
 
 class ServedCore(FrameFeed, Protocol):
