@@ -65,9 +65,11 @@ def number(frame: np.ndarray) -> int:
 
 
 def play(uri: str, frames: int | None) -> subprocess.Popen[bytes]:
-    """FFmpeg playing ``uri`` over TCP: ``frames`` BGR frames to stdout (None: decodes them for nothing until
-    killed)."""
-    output = ["-frames:v", str(frames), "-f", "rawvideo", "-pix_fmt", "bgr24"] if frames else ["-f", "null"]
+    """FFmpeg playing ``uri`` over TCP: ``frames`` BGR frames to stdout, each decoded frame once (None: decodes them
+    for nothing until killed). Without ``-fps_mode passthrough`` the rawvideo output is filled to a constant rate:
+    under load a late frame came out three times."""
+    output = (["-frames:v", str(frames), "-fps_mode", "passthrough", "-f", "rawvideo", "-pix_fmt", "bgr24"] if frames
+              else ["-f", "null"])
     return subprocess.Popen(["ffmpeg", "-hide_banner", "-loglevel", "error", "-rtsp_transport", "tcp", "-i", uri,
                              *output, "-"], stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
 
